@@ -1,0 +1,66 @@
+# gigascroll: `make demo` and `make test` set everything up on a fresh Debian 12 machine.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+PIP := $(VENV)/bin/pip
+BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
+APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
+  libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
+  libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev
+JOBS ?= $(shell nproc)
+
+.PHONY: all deps venv build demo test ctest pytest sanitize bench clean
+
+all: build
+
+# System packages: install only what is missing; print the command when not root.
+deps:
+	@missing=$$(for p in $(APT_PACKAGES); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    echo "installing Debian packages: $$missing"; \
+	    apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q $$missing; \
+	  else \
+	    echo "missing Debian packages; run as root:"; \
+	    echo "  apt-get update && apt-get install -y $$missing"; exit 1; \
+	  fi; \
+	fi
+
+$(VENV)/.deps-stamp: pyproject.toml | deps
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PIP) install -q --upgrade pip
+	$(PIP) install -q scikit-build-core nanobind ninja "cmake>=3.26"
+	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
+	touch $@
+
+venv: $(VENV)/.deps-stamp
+
+# Editable install; the CMake build tree under build/ is kept, so a second run is incremental.
+build: venv
+	CMAKE_BUILD_PARALLEL_LEVEL=$(JOBS) $(PIP) install -q --no-build-isolation --no-deps -e . 
+
+demo: build
+	$(VENV)/bin/gigascroll demo
+
+ctest: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+pytest: build
+	$(PY) -m pytest -q -m "not slow"
+
+test: ctest pytest
+
+# C++ tests under sanitizers, each in its own build tree.
+sanitize: deps
+	cmake -S . -B build/asan -G Ninja -DGIGASCROLL_PYTHON=OFF -DGIGASCROLL_BENCH=OFF \
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=address,undefined
+	cmake --build build/asan -j $(JOBS)
+	cd build/asan && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
+	cmake -S . -B build/tsan -G Ninja -DGIGASCROLL_PYTHON=OFF -DGIGASCROLL_BENCH=OFF \
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=thread
+	cmake --build build/tsan -j $(JOBS)
+	cd build/tsan && TSAN_OPTIONS=halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+
+clean:
+	rm -rf build

@@ -1,0 +1,10 @@
+#include "bindings/bindings.h"
+
+NB_MODULE(_core, m) {
+    m.doc() = "gigascroll C++ core: virtual texturing and photon mapping";
+    using namespace gigascroll::bindings;
+    bind_common(m);
+    bind_pack(m);
+    bind_runtime(m);
+    bind_photon(m);
+}

@@ -1,0 +1,7 @@
+#include "common/checksum.h"
+
+#include <xxhash.h>
+
+namespace gigascroll {
+std::uint64_t checksum64(const void* data, std::size_t size) { return XXH3_64bits(data, size); }
+}  // namespace gigascroll

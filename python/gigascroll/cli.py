@@ -1,0 +1,46 @@
+"""The `gigascroll` command line. Each subcommand lives in gigascroll.commands.<name>
+and exposes `register(subparsers)`; the parser sets `func(args) -> int` on the namespace.
+Errors the user can fix (bad files, bad parameters) print one line and exit with 2."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# Subcommand modules, in the order `gigascroll --help` lists them.
+COMMANDS = ["demo", "synth", "pack", "info", "bench", "render", "scenario"]
+
+
+class UserError(Exception):
+    """An error caused by the user's input: printed without a traceback."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="gigascroll",
+        description="Gigapixel paintings in VR: virtual texturing and photon mapping.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f"gigascroll.commands.{name}")
+        except ModuleNotFoundError as e:
+            if e.name == f"gigascroll.commands.{name}":
+                continue  # not written yet
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (UserError, ValueError, OSError) as e:
+        print(f"gigascroll {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"gigascroll {args.command}: interrupted", file=sys.stderr)
+        return 130
