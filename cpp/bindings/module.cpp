@@ -6,5 +6,6 @@ NB_MODULE(_core, m) {
     bind_common(m);
     bind_pack(m);
     bind_runtime(m);
+    bind_views(m);
     bind_photon(m);
 }

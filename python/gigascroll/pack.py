@@ -1,0 +1,3 @@
+"""pack"""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""photon"""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""views"""
+
+__all__: list[str] = []
