@@ -1,0 +1,31 @@
+"""`gigascroll bench WHAT`: scenario benchmarks. Each lives in gigascroll.benchmarks.<what>
+with `add_arguments(parser)` and `run(args) -> int`; missing ones are simply not offered."""
+
+from __future__ import annotations
+
+import importlib
+
+# what -> one-line description
+BENCHMARKS = {
+    "pack": "tile-pack build throughput and memory against libvips dzsave",
+    "queues": "lock-free queues against peer queues and a mutex queue",
+    "loader": "seed 000 Table 1: lock-free vs locked tile loading, and VT sampling cost",
+    "views": "tile determination: the four request-processing methods against scale",
+    "photon": "seed 001 Tables 1-5 and run time against error",
+}
+
+
+def register(sub) -> None:
+    parser = sub.add_parser("bench", help="run a scenario benchmark")
+    whats = parser.add_subparsers(dest="what", metavar="WHAT")
+    whats.required = True
+    for what, description in BENCHMARKS.items():
+        try:
+            module = importlib.import_module(f"gigascroll.benchmarks.{what}")
+        except ModuleNotFoundError as e:
+            if e.name == f"gigascroll.benchmarks.{what}":
+                continue
+            raise
+        p = whats.add_parser(what, help=description, description=description)
+        module.add_arguments(p)
+        p.set_defaults(func=module.run)
