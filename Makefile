@@ -29,7 +29,6 @@ deps:
 
 $(VENV)/.deps-stamp: pyproject.toml | deps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PIP) install -q --upgrade pip
 	$(PIP) install -q scikit-build-core nanobind ninja "cmake>=3.26"
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
 	touch $@
