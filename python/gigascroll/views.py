@@ -1,3 +1,379 @@
-"""views"""
+"""Views and tile determination: the exhibition scene, the headset's eyes and the magnifier,
+camera paths shared by scenarios and tests, the feedback pass and the four request-processing
+methods (seed 000 sections 4.1, 5; seed 002's alive/remove lists).
 
-__all__: list[str] = []
+Units are metres; y is up. A painting hanging on a wall faces -z; paintings on tables face +y.
+Request keys are 64-bit: painting << 37 | level << 32 | morton(tile x, tile y).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import _core
+from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, Camera, ExhibitionScene,
+                    FlagArrayProcessor, HashProcessor, PaintingTiles, ResidencyLookup,
+                    ResidentSet, VisibilityLists, mip_level, pack_request, render_feedback,
+                    texel_footprint, unpack_requests)
+
+__all__ = [
+    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "ExhibitionScene",
+    "FlagArrayProcessor", "HashProcessor", "PaintingTiles", "ResidencyLookup", "ResidentSet",
+    "VisibilityLists", "mip_level", "pack_request", "render_feedback", "texel_footprint",
+    "unpack_requests",
+    "HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier", "PaintingSpec",
+    "Exhibition", "CameraPath", "single_scroll", "multi_exhibition", "scroll_path",
+    "multi_route", "frame_cameras", "feedback_buffers", "PROCESSING_METHODS",
+    "make_processor", "run_processor",
+]
+
+FPS = 90.0  # the headset's display rate
+
+
+@dataclass(frozen=True)
+class Headset:
+    """Per-eye display of the seed's headset (Quest Pro: 1800 x 1920 per eye, IPD 63 mm).
+
+    The seed gives no field of view; it says level 0 of the 152089-texel, 12 m scroll is only
+    seen from about 7.2 cm. We take that as one texel per display pixel at 7.2 cm on the view
+    axis: tan(fov_x / 2) = 900 * (12 / 152089) / 0.072 = 0.986 (89.2 degrees), square pixels
+    give tan(fov_y / 2) = 1.052 (92.9 degrees). With it the eye asks level 2 at 40 cm, as in
+    the seed's Table 2 set-up.
+    """
+    width: int = 1800
+    height: int = 1920
+    tan_half_x: float = 900 * (12.0 / 152089) / 0.072
+    ipd: float = 0.063
+    feedback_scale: int = 8  # feedback pass at 1/8 of the display per axis
+
+    @property
+    def tan_half_y(self) -> float:
+        return self.tan_half_x * self.height / self.width
+
+
+@dataclass(frozen=True)
+class Magnifier:
+    """The magnifier: a camera at the lens, between the eye and the painting, whose narrow
+    field shows `field` metres of painting (2.5 cm) on a 512 x 512 target that the 10 cm lens
+    displays; its feedback runs at full 512 x 512."""
+    field: float = 0.025
+    lens_size: float = 0.10
+    resolution: int = 512
+    lens_distance: float = 0.20  # lens-to-painting distance (midway for the 40 cm view)
+
+
+HEADSET = Headset()
+MAGNIFIER = Magnifier()
+
+
+@dataclass(frozen=True)
+class PaintingSpec:
+    name: str
+    width: int   # texels
+    height: int
+    width_m: float
+    height_m: float
+
+    def tiles(self, tile_size: int = 128, border: int = 4) -> PaintingTiles:
+        return PaintingTiles(self.width, self.height, tile_size, border)
+
+
+def _spec(name: str, w: int, h: int) -> PaintingSpec:
+    # Every painting is scanned at the scroll's resolution: 12 m over 152089 texels.
+    texel = 12.0 / 152089
+    return PaintingSpec(name, w, h, w * texel, h * texel)
+
+
+SCROLL = PaintingSpec("qianli_jiangshan", 152089, 6083, 12.0, 0.5)  # 12 m x 0.5 m (seed 000)
+# Seed 000 Table 4 (the first is the scroll itself).
+TABLE4_PAINTINGS = [SCROLL] + [_spec(f"table4_{i}", w, h) for i, (w, h) in enumerate(
+    [(196301, 5197), (159010, 4339), (102680, 5229), (109321, 7183), (117968, 4722),
+     (91403, 11161), (119177, 3858)], start=1)]
+
+
+@dataclass
+class Exhibition:
+    """A committed scene plus what request processing needs to know about its paintings."""
+    scene: ExhibitionScene
+    specs: list[PaintingSpec]          # by painting id
+    tiles: list[PaintingTiles]         # by painting id
+    placements: list[dict] = field(default_factory=list)
+
+    def resident_set(self) -> ResidentSet:
+        return ResidentSet(self.tiles)
+
+
+def single_scroll(spec: PaintingSpec = SCROLL, tile_size: int = 128, border: int = 4,
+                  centre_height: float = 1.5) -> Exhibition:
+    """Seed 000 section 5.3: one scroll on a wall (a box behind it), facing -z; texel (0, 0)
+    at x = 0, the top edge at centre_height + height_m / 2."""
+    tiles = spec.tiles(tile_size, border)
+    scene = ExhibitionScene()
+    top = centre_height + spec.height_m / 2
+    scene.add_painting(0, tiles, (0.0, top, 0.0), (1.0, 0.0, 0.0), (0.0, -1.0, 0.0),
+                       spec.width_m, spec.height_m)
+    scene.add_box((-2.0, 0.0, 0.005), (spec.width_m + 2.0, 3.0, 0.2))  # the wall
+    scene.add_box((-2.0, -0.1, -4.0), (spec.width_m + 2.0, 0.0, 0.2))  # the floor
+    scene.commit()
+    return Exhibition(scene, [spec], [tiles], [scene.painting(0)])
+
+
+def multi_exhibition(n_paintings: int, specs: list[PaintingSpec] | None = None,
+                     tile_size: int = 128, border: int = 4, table_height: float = 0.70,
+                     gap: float = 0.10) -> Exhibition:
+    """Seed 000 section 5.4: the eight Table 4 paintings in copies (painting id i shows
+    specs[i % 8]), eight to a table, laid flat on tables 70 cm high. Table g runs along x at
+    z from 1 + g * (depth + 1) m; its paintings lie side by side across it, long side along x,
+    image top towards -z (towards the visitor)."""
+    specs = specs or TABLE4_PAINTINGS
+    if n_paintings < 1 or n_paintings % len(specs):
+        raise ValueError(f"n_paintings must be a positive multiple of {len(specs)}, "
+                         f"got {n_paintings}")
+    tiles_of = [s.tiles(tile_size, border) for s in specs]
+    length = max(s.width_m for s in specs) + 2 * gap
+    depth = sum(s.height_m for s in specs) + (len(specs) + 1) * gap
+    scene = ExhibitionScene()
+    all_specs, all_tiles = [], []
+    for g in range(n_paintings // len(specs)):
+        z0 = 1.0 + g * (depth + 1.0)
+        scene.add_table(length / 2, z0 + depth / 2, length, depth, table_height)
+        z = z0 + gap
+        for i, s in enumerate(specs):
+            pid = g * len(specs) + i
+            # Painting plane 1 mm above the table top; u along +x, v (image down) along +z.
+            scene.add_painting(pid, tiles_of[i], (gap, table_height + 0.001, z), (1.0, 0.0, 0.0),
+                               (0.0, 0.0, 1.0), s.width_m, s.height_m)
+            all_specs.append(s)
+            all_tiles.append(tiles_of[i])
+            z += s.height_m + gap
+    scene.add_box((-5.0, -0.1, -5.0), (length + 5.0, 0.0, 1.0 + 5 * (depth + 1.0) + 5.0))
+    scene.commit()
+    return Exhibition(scene, all_specs, all_tiles,
+                      [scene.painting(i) for i in range(scene.painting_count)])
+
+
+def _finite(name: str, a: np.ndarray) -> np.ndarray:
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"camera path {name} contains NaN or infinite values")
+    return a
+
+
+@dataclass
+class CameraPath:
+    """Per-frame head pose (position, forward, up; the eyes sit +-ipd/2 along right) and the
+    magnifier's target on the painting (NaN rows: no magnifier that frame). Shared data:
+    scenarios, benchmarks and tests replay the same paths; save()/load() keep them as JSON."""
+    position: np.ndarray   # (n, 3)
+    forward: np.ndarray    # (n, 3)
+    up: np.ndarray         # (n, 3)
+    magnifier_target: np.ndarray | None = None  # (n, 3) point on the painting
+    magnifier_normal: np.ndarray | None = None  # (n, 3) painting normal, towards the viewer
+    fps: float = FPS
+    name: str = ""
+
+    def __post_init__(self):
+        for attr in ("position", "forward", "up"):
+            a = np.ascontiguousarray(getattr(self, attr), dtype=np.float64)
+            if a.ndim != 2 or a.shape[1] != 3 or len(a) == 0:
+                raise ValueError(f"camera path {attr} must have shape (n, 3), n > 0")
+            setattr(self, attr, _finite(attr, a))
+        n = len(self.position)
+        if len(self.forward) != n or len(self.up) != n:
+            raise ValueError("camera path arrays differ in length")
+        if np.any(np.linalg.norm(self.forward, axis=1) == 0):
+            raise ValueError("camera path has a zero forward vector")
+        for attr in ("magnifier_target", "magnifier_normal"):
+            a = getattr(self, attr)
+            if a is not None:
+                a = np.asarray(a, dtype=np.float64).reshape(n, 3)
+                if np.any(np.isinf(a)):
+                    raise ValueError(f"camera path {attr} contains infinite values")
+                setattr(self, attr, a)
+        if not (math.isfinite(self.fps) and self.fps > 0):
+            raise ValueError("camera path fps must be positive")
+
+    def __len__(self) -> int:
+        return len(self.position)
+
+    def then(self, other: "CameraPath") -> "CameraPath":
+        """This path followed by another."""
+        def cat(a, b, n_a, n_b):
+            if a is None and b is None:
+                return None
+            a = np.full((n_a, 3), np.nan) if a is None else a
+            b = np.full((n_b, 3), np.nan) if b is None else b
+            return np.concatenate([a, b])
+        n, m = len(self), len(other)
+        return CameraPath(np.concatenate([self.position, other.position]),
+                          np.concatenate([self.forward, other.forward]),
+                          np.concatenate([self.up, other.up]),
+                          cat(self.magnifier_target, other.magnifier_target, n, m),
+                          cat(self.magnifier_normal, other.magnifier_normal, n, m),
+                          self.fps, self.name)
+
+    def hold(self, frames: int) -> "CameraPath":
+        """This path, then `frames` frames standing still at its last pose (the "stop")."""
+        if frames < 0:
+            raise ValueError("hold frames must be >= 0")
+        if frames == 0:
+            return self
+        rep = lambda a: None if a is None else np.repeat(a[-1:], frames, axis=0)  # noqa: E731
+        return self.then(CameraPath(rep(self.position), rep(self.forward), rep(self.up),
+                                    rep(self.magnifier_target), rep(self.magnifier_normal),
+                                    self.fps))
+
+    def save(self, path: str | Path) -> None:
+        def enc(a):
+            return None if a is None else np.where(np.isnan(a), None, a).tolist()
+        Path(path).write_text(json.dumps({
+            "name": self.name, "fps": self.fps, "position": self.position.tolist(),
+            "forward": self.forward.tolist(), "up": self.up.tolist(),
+            "magnifier_target": enc(self.magnifier_target),
+            "magnifier_normal": enc(self.magnifier_normal)}))
+
+    @classmethod
+    def load(cls, path: str | Path) -> "CameraPath":
+        try:
+            d = json.loads(Path(path).read_text())
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{path}: not a camera path JSON file ({e})") from None
+
+        def dec(a):
+            return None if a is None else np.array(
+                [[np.nan if v is None else v for v in row] for row in a], dtype=np.float64)
+        try:
+            return cls(np.asarray(d["position"], float), np.asarray(d["forward"], float),
+                       np.asarray(d["up"], float), dec(d.get("magnifier_target")),
+                       dec(d.get("magnifier_normal")), float(d.get("fps", FPS)),
+                       d.get("name", ""))
+        except (KeyError, TypeError) as e:
+            raise ValueError(f"{path}: camera path file is missing or mangles {e}") from None
+
+
+def scroll_path(distance: float = 0.40, speed: float = 1.0, duration: float = 10.0,
+                start_x: float = 1.0, stop_frames: int = 0, loops: int = 1,
+                magnifier: bool = True, exhibition: Exhibition | None = None,
+                centre_height: float = 1.5, fps: float = FPS) -> CameraPath:
+    """Seed 000's single-painting behaviour: facing the wall scroll from `distance`, move
+    left to right at constant `speed` for `duration` seconds, `loops` times (jumping back to
+    the start, as in Table 1), then stand still for `stop_frames`. The magnifier looks at the
+    point straight ahead of the head."""
+    for name, v in (("distance", distance), ("speed", speed), ("duration", duration),
+                    ("start_x", start_x), ("centre_height", centre_height)):
+        if not math.isfinite(v):
+            raise ValueError(f"scroll_path {name} must be finite")
+    if distance <= 0 or speed < 0 or duration <= 0 or loops < 1:
+        raise ValueError("scroll_path needs distance > 0, speed >= 0, duration > 0, loops >= 1")
+    width = exhibition.specs[0].width_m if exhibition else SCROLL.width_m
+    n = max(1, int(round(duration * fps)))
+    x = start_x + speed * np.arange(n) / fps
+    if x[-1] > width:
+        raise ValueError(f"scroll_path runs off the {width} m painting (ends at x = {x[-1]:.2f})")
+    x = np.tile(x, loops)
+    n = len(x)
+    pos = np.stack([x, np.full(n, centre_height), np.full(n, -distance)], axis=1)
+    fwd = np.tile([0.0, 0.0, 1.0], (n, 1))
+    up = np.tile([0.0, 1.0, 0.0], (n, 1))
+    target = normal = None
+    if magnifier:
+        target = np.stack([x, np.full(n, centre_height), np.zeros(n)], axis=1)
+        normal = np.tile([0.0, 0.0, -1.0], (n, 1))
+    return CameraPath(pos, fwd, up, target, normal, fps, "scroll").hold(stop_frames)
+
+
+def multi_route(n_paintings: int, speed: float = 1.0, duration: float = 10.0,
+                eye_height: float = 1.70, tilt_deg: float | None = None,
+                fps: float = FPS, specs: list[PaintingSpec] | None = None) -> CameraPath:
+    """Seed 000 section 5.4's routes: the camera 170 cm above the floor walks along the
+    tables' near edge (+x) at `speed`, tilted down so the tables in front are in view; more
+    paintings = more tables behind, so the tilt flattens to take in the farther ones."""
+    specs = specs or TABLE4_PAINTINGS
+    if n_paintings < 1 or n_paintings % len(specs):
+        raise ValueError(f"n_paintings must be a positive multiple of {len(specs)}")
+    if not (speed >= 0 and duration > 0 and math.isfinite(speed) and math.isfinite(duration)):
+        raise ValueError("multi_route needs finite speed >= 0 and duration > 0")
+    gap = 0.10
+    depth = sum(s.height_m for s in specs) + (len(specs) + 1) * gap
+    groups = n_paintings // len(specs)
+    far = 1.0 + groups * (depth + 1.0) - 1.0  # far edge of the last table
+    if tilt_deg is None:
+        # Aim at the middle of the occupied tables' depth.
+        mid = (1.0 + far) / 2
+        tilt_deg = math.degrees(math.atan2(eye_height - 0.70, mid + 0.5))
+    t = math.radians(tilt_deg)
+    n = max(1, int(round(duration * fps)))
+    x = 2.0 + speed * np.arange(n) / fps
+    pos = np.stack([x, np.full(n, eye_height), np.full(n, -0.5)], axis=1)
+    fwd = np.tile([0.0, -math.sin(t), math.cos(t)], (n, 1))
+    up = np.tile([0.0, math.cos(t), math.sin(t)], (n, 1))
+    return CameraPath(pos, fwd, up, None, None, fps, f"multi{n_paintings}")
+
+
+def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
+                  magnifier: Magnifier | None = MAGNIFIER) -> list[tuple[Camera, int, int]]:
+    """The views of one frame as (camera, feedback width, feedback height): left eye, right
+    eye (parallel, +-ipd/2 along the head's right vector), and the magnifier when the path
+    has a target that frame."""
+    if not 0 <= frame < len(path):
+        raise ValueError(f"frame {frame} outside the camera path's {len(path)} frames")
+    p, f, u = path.position[frame], path.forward[frame], path.up[frame]
+    right = np.cross(f, u)
+    right /= np.linalg.norm(right)
+    fw, fh = headset.width // headset.feedback_scale, headset.height // headset.feedback_scale
+    views = []
+    for side in (-1, 1):
+        eye = p + side * headset.ipd / 2 * right
+        views.append((Camera(tuple(eye), tuple(f), tuple(u), headset.tan_half_x,
+                             headset.tan_half_y, headset.width, headset.height), fw, fh))
+    if magnifier is not None and path.magnifier_target is not None \
+            and np.all(np.isfinite(path.magnifier_target[frame])):
+        target, normal = path.magnifier_target[frame], path.magnifier_normal[frame]
+        normal = normal / np.linalg.norm(normal)
+        cam_pos = target + magnifier.lens_distance * normal
+        up_hint = u if abs(np.dot(u, normal)) < 0.99 else right
+        tan_half = magnifier.field / 2 / magnifier.lens_distance
+        r = magnifier.resolution
+        views.append((Camera(tuple(cam_pos), tuple(-normal), tuple(up_hint), tan_half, tan_half,
+                             r, r), r, r))
+    return views
+
+
+def feedback_buffers(exhibition: Exhibition, path: CameraPath, frame: int,
+                     magnifier: Magnifier | None = MAGNIFIER, threads: int = 0,
+                     headset: Headset = HEADSET) -> list[np.ndarray]:
+    """The frame's feedback buffers (left eye, right eye[, magnifier]) as uint64 key images."""
+    return [render_feedback(exhibition.scene, cam, w, h, threads=threads)
+            for cam, w, h in frame_cameras(path, frame, headset, magnifier)]
+
+
+PROCESSING_METHODS = ("basic", "cpu-async", "flag-array", "hash")
+
+
+def make_processor(method: str, tiles: list[PaintingTiles], threads: int = 0,
+                   table_bits: int = 16):
+    """A request processor by name (PROCESSING_METHODS)."""
+    if method == "basic":
+        return BasicProcessor()
+    if method == "cpu-async":
+        return AsyncProcessor()
+    if method == "flag-array":
+        return FlagArrayProcessor(tiles, threads)
+    if method == "hash":
+        return HashProcessor(table_bits, "pow2", threads)
+    raise ValueError(f"unknown request-processing method {method!r}; "
+                     f"choose from {', '.join(PROCESSING_METHODS)}")
+
+
+def run_processor(processor, buffers, lookup: ResidencyLookup, frame: int) -> dict:
+    """One frame through any processor; cpu-async waits for its own result (to compare sets;
+    frame loops poll instead and measure the latency)."""
+    if isinstance(processor, AsyncProcessor):
+        processor.submit(buffers, frame)
+        results = processor.poll(lookup, wait=True)
+        return results[-1]
+    return processor.process(buffers, lookup, frame)

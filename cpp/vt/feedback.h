@@ -1,0 +1,38 @@
+// The feedback pass (tile determination): rays through a view at reduced resolution find,
+// per feedback pixel, the painting texel seen and the mip level a GPU's textureQueryLod
+// would pick for a display pixel there, and write the request key (request.h).
+#pragma once
+#include <cstdint>
+
+#include "vt/exhibition.h"
+#include "vt/view.h"
+
+namespace gigascroll {
+
+struct FeedbackOptions {
+    std::uint32_t width = 0, height = 0;  // feedback resolution; 0 = 1/8 of the display per axis
+    double lod_bias = 0;                  // added to the level of detail before truncation
+    unsigned threads = 0;                 // 0 = all cores
+};
+
+// The footprint of a display pixel on a painting, in level-0 texels, from ray differentials
+// (Igehy 1999) transferred to the painting plane: the largest of |d(u,v)/dx| and |d(u,v)/dy|,
+// as in the OpenGL specification of the level of detail. lambda = log2(rho).
+double texel_footprint(const PaintingPlacement& painting, const Camera& camera, Vec3 direction,
+                       double t);
+
+// The level textureQueryLod(...).y truncated to an integer, as seed 002's shader does:
+// clamp(floor(lambda + bias), 0, levels - 1).
+std::uint32_t mip_level(double lambda, std::uint32_t levels);
+
+// Fills keys[height * width] (row-major) with request keys, kNoRequest where no painting is
+// seen; lod (optional, same size) receives lambda (NaN where no painting). Casts Embree ray
+// streams row by row from `threads` threads.
+void render_feedback(const ExhibitionScene& scene, const Camera& camera,
+                     const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr);
+
+// Resolved feedback resolution for a camera (applies the 1/8 default).
+std::uint32_t feedback_width(const Camera& camera, const FeedbackOptions& options);
+std::uint32_t feedback_height(const Camera& camera, const FeedbackOptions& options);
+
+}  // namespace gigascroll

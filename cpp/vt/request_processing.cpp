@@ -1,0 +1,187 @@
+#include "vt/request_processing.h"
+
+#include <algorithm>
+#include <unordered_set>
+
+#include "common/parallel.h"
+
+namespace gigascroll {
+
+namespace {
+constexpr std::size_t kPixelChunk = 16384;
+constexpr std::size_t kFlagChunk = 1 << 16;
+
+// Calls mark(key) for every requesting pixel of every buffer, from `threads` threads.
+// Runs of equal keys (neighbouring pixels usually see the same tile) are marked once.
+template <typename Mark>
+void for_each_request(std::span<const FeedbackBuffer> buffers, unsigned threads, Mark&& mark) {
+    for (const FeedbackBuffer& buffer : buffers)
+        parallel_for(buffer.size(), kPixelChunk, [&](std::size_t b, std::size_t e) {
+            std::uint64_t last = kNoRequest;
+            for (std::size_t i = b; i < e; ++i) {
+                const std::uint64_t key = buffer[i];
+                if (key == kNoRequest || key == last) continue;
+                last = key;
+                mark(key);
+            }
+        }, threads);
+}
+
+// Marks every requested tile in `flags` (clearing them all again if a key is invalid).
+void mark_flags(const TileIndex& index, std::vector<std::atomic<std::uint8_t>>& flags,
+                std::span<const FeedbackBuffer> buffers, unsigned threads) {
+    try {
+        for_each_request(buffers, threads, [&](std::uint64_t key) {
+            flags[index.index(key)].store(1, std::memory_order_relaxed);
+        });
+    } catch (...) {
+        for (auto& f : flags) f.store(0, std::memory_order_relaxed);
+        throw;
+    }
+}
+}  // namespace
+
+void resolve_requests(RequestSets& sets, const ResidencyLookup& lookup) {
+    sets.responses.resize(sets.requests.size());
+    sets.commands.clear();
+    for (std::size_t i = 0; i < sets.requests.size(); ++i) {
+        const std::uint64_t r = sets.requests[i], s = response_of(lookup, r);
+        sets.responses[i] = s;
+        if (s != r) sets.commands.push_back(r);
+    }
+}
+
+RequestSets BasicProcessor::process(std::span<const FeedbackBuffer> buffers,
+                                    const ResidencyLookup& lookup) {
+    std::unordered_set<std::uint64_t> seen;
+    for (const FeedbackBuffer& buffer : buffers)
+        for (std::uint64_t key : buffer)
+            if (key != kNoRequest) seen.insert(key);
+    RequestSets sets;
+    sets.requests.assign(seen.begin(), seen.end());
+    resolve_requests(sets, lookup);
+    return sets;
+}
+
+FlagArrayProcessor::FlagArrayProcessor(std::vector<PaintingTiles> paintings, unsigned threads)
+    : index_(std::move(paintings)), threads_(threads), flags_(index_.size()) {}
+
+RequestSets FlagArrayProcessor::process(std::span<const FeedbackBuffer> buffers,
+                                        const ResidencyLookup& lookup) {
+    mark_flags(index_, flags_, buffers, threads_);
+    // Compaction: each chunk collects (and clears) its set flags; chunks concatenate in order.
+    const std::size_t chunks = (flags_.size() + kFlagChunk - 1) / kFlagChunk;
+    std::vector<std::vector<std::uint64_t>> found(chunks);
+    parallel_for(flags_.size(), kFlagChunk, [&](std::size_t b, std::size_t e) {
+        auto& out = found[b / kFlagChunk];
+        for (std::size_t i = b; i < e; ++i)
+            if (flags_[i].load(std::memory_order_relaxed)) {
+                flags_[i].store(0, std::memory_order_relaxed);
+                out.push_back(index_.key(i));
+            }
+    }, threads_);
+    RequestSets sets;
+    for (auto& f : found) sets.requests.insert(sets.requests.end(), f.begin(), f.end());
+    resolve_requests(sets, lookup);
+    return sets;
+}
+
+AsyncProcessor::AsyncProcessor() : worker_([this] { run(); }) {}
+
+AsyncProcessor::~AsyncProcessor() {
+    {
+        std::lock_guard lock(mutex_);
+        stop_ = true;
+    }
+    wake_.notify_all();
+    worker_.join();
+}
+
+void AsyncProcessor::submit(std::span<const FeedbackBuffer> buffers, std::uint64_t frame) {
+    Job job{frame, {}};
+    std::size_t n = 0;
+    for (const auto& b : buffers) n += b.size();
+    job.pixels.reserve(n);
+    for (const auto& b : buffers) job.pixels.insert(job.pixels.end(), b.begin(), b.end());
+    {
+        std::lock_guard lock(mutex_);
+        jobs_.push_back(std::move(job));
+    }
+    wake_.notify_one();
+}
+
+void AsyncProcessor::run() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+        wake_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
+        if (stop_) return;
+        Job job = std::move(jobs_.front());
+        jobs_.pop_front();
+        busy_ = true;
+        lock.unlock();
+        std::unordered_set<std::uint64_t> seen;
+        for (std::uint64_t key : job.pixels)
+            if (key != kNoRequest) seen.insert(key);
+        Result result{job.frame, {}};
+        result.sets.requests.assign(seen.begin(), seen.end());
+        lock.lock();
+        done_.push_back(std::move(result));
+        busy_ = false;
+        idle_.notify_all();
+    }
+}
+
+std::vector<AsyncProcessor::Result> AsyncProcessor::poll(const ResidencyLookup& lookup) {
+    std::vector<Result> out;
+    {
+        std::lock_guard lock(mutex_);
+        out.swap(done_);
+    }
+    for (Result& r : out) resolve_requests(r.sets, lookup);
+    return out;
+}
+
+std::vector<AsyncProcessor::Result> AsyncProcessor::drain(const ResidencyLookup& lookup) {
+    {
+        std::unique_lock lock(mutex_);
+        idle_.wait(lock, [&] { return jobs_.empty() && !busy_; });
+    }
+    return poll(lookup);
+}
+
+std::size_t AsyncProcessor::pending() const {
+    std::lock_guard lock(mutex_);
+    return jobs_.size() + (busy_ ? 1 : 0);
+}
+
+VisibilityLists::VisibilityLists(std::vector<PaintingTiles> paintings, unsigned threads)
+    : index_(std::move(paintings)), threads_(threads), current_(index_.size()),
+      previous_(index_.size(), 0) {}
+
+VisibilityLists::Lists VisibilityLists::process(std::span<const FeedbackBuffer> buffers) {
+    mark_flags(index_, current_, buffers, threads_);
+    // Seed 002's ProcessVisibility: alive if visible now, else remove if visible before;
+    // then previous = current, current = 0. Per-chunk lists replace its atomic counters.
+    const std::size_t chunks = (current_.size() + kFlagChunk - 1) / kFlagChunk;
+    std::vector<Lists> parts(chunks);
+    parallel_for(current_.size(), kFlagChunk, [&](std::size_t b, std::size_t e) {
+        Lists& out = parts[b / kFlagChunk];
+        for (std::size_t i = b; i < e; ++i) {
+            const std::uint8_t now = current_[i].load(std::memory_order_relaxed);
+            if (now)
+                out.alive.push_back(index_.key(i));
+            else if (previous_[i])
+                out.remove.push_back(index_.key(i));
+            previous_[i] = now;
+            current_[i].store(0, std::memory_order_relaxed);
+        }
+    }, threads_);
+    Lists lists;
+    for (auto& p : parts) {
+        lists.alive.insert(lists.alive.end(), p.alive.begin(), p.alive.end());
+        lists.remove.insert(lists.remove.end(), p.remove.begin(), p.remove.end());
+    }
+    return lists;
+}
+
+}  // namespace gigascroll

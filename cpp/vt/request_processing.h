@@ -1,0 +1,114 @@
+// Request processing: from this frame's feedback buffers (both eyes and the magnifier) to
+// the request-response set and the load-command set. Four methods, one result:
+//   BasicProcessor      (Barrett)      one thread scans every pixel into a hash set;
+//   AsyncProcessor      (Unreal SVT)   a worker thread deduplicates in the background;
+//   FlagArrayProcessor  (Hollemeersch) parallel marking into one flag per tile, then a
+//                                      parallel compaction scan over all flags;
+//   HashProcessor       (seed 000)     request_hash.h.
+// The response of a request is looked up once per distinct request, after deduplication;
+// a GPU does it per pixel, with the same result.
+#pragma once
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <thread>
+#include <vector>
+
+#include "vt/residency.h"
+
+namespace gigascroll {
+
+using FeedbackBuffer = std::span<const std::uint64_t>;  // kNoRequest pixels are skipped
+
+struct RequestSets {
+    std::vector<std::uint64_t> requests;   // distinct requests
+    std::vector<std::uint64_t> responses;  // responses[i] answers requests[i]
+    std::vector<std::uint64_t> commands;   // requests whose response is not the request
+};
+
+// Fills responses and commands for `requests` (already distinct).
+void resolve_requests(RequestSets& sets, const ResidencyLookup& lookup);
+
+class BasicProcessor {
+public:
+    RequestSets process(std::span<const FeedbackBuffer> buffers, const ResidencyLookup& lookup);
+};
+
+class FlagArrayProcessor {
+public:
+    explicit FlagArrayProcessor(std::vector<PaintingTiles> paintings, unsigned threads = 0);
+    FlagArrayProcessor(const FlagArrayProcessor&) = delete;
+    FlagArrayProcessor& operator=(const FlagArrayProcessor&) = delete;
+    RequestSets process(std::span<const FeedbackBuffer> buffers, const ResidencyLookup& lookup);
+    std::uint64_t flag_count() const { return index_.size(); }
+
+private:
+    TileIndex index_;
+    unsigned threads_;
+    // One flag per tile. Marking stores 1 with relaxed order from many threads; the
+    // compaction scan runs after the marking threads joined, which orders it after them.
+    std::vector<std::atomic<std::uint8_t>> flags_;
+};
+
+// The Unreal SVT way: submit() copies the buffers and returns at once; a worker thread
+// deduplicates them; poll() hands back finished frames, resolved against the page table at
+// poll time on the caller's thread (so the page table is never read concurrently with its
+// updates). The latency of a result in frames is poll frame - submit frame, measured by the
+// caller.
+class AsyncProcessor {
+public:
+    AsyncProcessor();
+    ~AsyncProcessor();
+    AsyncProcessor(const AsyncProcessor&) = delete;
+    AsyncProcessor& operator=(const AsyncProcessor&) = delete;
+
+    void submit(std::span<const FeedbackBuffer> buffers, std::uint64_t frame);
+    struct Result {
+        std::uint64_t frame;  // the frame whose feedback this is
+        RequestSets sets;
+    };
+    // Every result finished since the last poll, oldest first.
+    std::vector<Result> poll(const ResidencyLookup& lookup);
+    // Blocks until every submitted frame is finished, then polls.
+    std::vector<Result> drain(const ResidencyLookup& lookup);
+    std::size_t pending() const;
+
+private:
+    struct Job {
+        std::uint64_t frame;
+        std::vector<std::uint64_t> pixels;
+    };
+    void run();
+
+    mutable std::mutex mutex_;
+    std::condition_variable wake_, idle_;
+    std::deque<Job> jobs_;
+    std::vector<Result> done_;
+    bool busy_ = false, stop_ = false;
+    std::thread worker_;
+};
+
+// Seed 002: alive and remove lists from this frame's and the previous frame's visibility,
+// over a flag array of every tile (alive = visible now; remove = visible last frame only).
+class VisibilityLists {
+public:
+    explicit VisibilityLists(std::vector<PaintingTiles> paintings, unsigned threads = 0);
+    VisibilityLists(const VisibilityLists&) = delete;
+    VisibilityLists& operator=(const VisibilityLists&) = delete;
+    struct Lists {
+        std::vector<std::uint64_t> alive, remove;
+    };
+    Lists process(std::span<const FeedbackBuffer> buffers);
+
+private:
+    TileIndex index_;
+    unsigned threads_;
+    std::vector<std::atomic<std::uint8_t>> current_;
+    std::vector<std::uint8_t> previous_;
+};
+
+}  // namespace gigascroll
