@@ -1,13 +1,10 @@
 #include "vt/request_hash.h"
 
 #include "common/error.h"
-#include "common/parallel.h"
 
 namespace gigascroll {
 
 namespace {
-constexpr std::size_t kPixelChunk = 16384;
-
 // Seed 000's collision rule: the finer level wins; equal levels keep the smaller key so the
 // result does not depend on insertion order.
 bool wins(std::uint64_t key, std::uint64_t held) {
@@ -46,26 +43,19 @@ void HashProcessor::clear_used() {
 RequestSets HashProcessor::process(std::span<const FeedbackBuffer> buffers,
                                    const ResidencyLookup& lookup, std::uint64_t frame) {
     const std::uint64_t salt = frame_salt(frame);
-    for (const FeedbackBuffer& buffer : buffers)
-        parallel_for(buffer.size(), kPixelChunk, [&](std::size_t b, std::size_t e) {
-            std::uint64_t last = kNoRequest;
-            for (std::size_t i = b; i < e; ++i) {
-                const std::uint64_t key = buffer[i];
-                if (key == kNoRequest || key == last) continue;
-                last = key;
-                const std::uint64_t s = slot(key, salt);
-                std::atomic<std::uint64_t>& cell = slots_[s];
-                std::uint64_t held = cell.load(std::memory_order_relaxed);
-                while (held != key && (held == kNoRequest || wins(key, held))) {
-                    if (cell.compare_exchange_weak(held, key, std::memory_order_relaxed)) {
-                        if (held == kNoRequest)
-                            used_[used_count_.fetch_add(1, std::memory_order_relaxed)] =
-                                static_cast<std::uint32_t>(s);
-                        break;
-                    }
-                }
+    for_each_request(buffers, threads_, [&](std::uint64_t key) {
+        const std::uint64_t s = slot(key, salt);
+        std::atomic<std::uint64_t>& cell = slots_[s];
+        std::uint64_t held = cell.load(std::memory_order_relaxed);
+        while (held != key && (held == kNoRequest || wins(key, held))) {
+            if (cell.compare_exchange_weak(held, key, std::memory_order_relaxed)) {
+                if (held == kNoRequest)
+                    used_[used_count_.fetch_add(1, std::memory_order_relaxed)] =
+                        static_cast<std::uint32_t>(s);
+                break;
             }
-        }, threads_);
+        }
+    });
 
     RequestSets sets;
     const std::uint32_t n = used_count_.load(std::memory_order_relaxed);

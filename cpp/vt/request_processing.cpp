@@ -3,29 +3,11 @@
 #include <algorithm>
 #include <unordered_set>
 
-#include "common/parallel.h"
 
 namespace gigascroll {
 
 namespace {
-constexpr std::size_t kPixelChunk = 16384;
 constexpr std::size_t kFlagChunk = 1 << 16;
-
-// Calls mark(key) for every requesting pixel of every buffer, from `threads` threads.
-// Runs of equal keys (neighbouring pixels usually see the same tile) are marked once.
-template <typename Mark>
-void for_each_request(std::span<const FeedbackBuffer> buffers, unsigned threads, Mark&& mark) {
-    for (const FeedbackBuffer& buffer : buffers)
-        parallel_for(buffer.size(), kPixelChunk, [&](std::size_t b, std::size_t e) {
-            std::uint64_t last = kNoRequest;
-            for (std::size_t i = b; i < e; ++i) {
-                const std::uint64_t key = buffer[i];
-                if (key == kNoRequest || key == last) continue;
-                last = key;
-                mark(key);
-            }
-        }, threads);
-}
 
 // Marks every requested tile in `flags` (clearing them all again if a key is invalid).
 void mark_flags(const TileIndex& index, std::vector<std::atomic<std::uint8_t>>& flags,

@@ -8,6 +8,7 @@
 // The response of a request is looked up once per distinct request, after deduplication;
 // a GPU does it per pixel, with the same result.
 #pragma once
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/parallel.h"
 #include "vt/residency.h"
 
 namespace gigascroll {
@@ -32,6 +34,26 @@ struct RequestSets {
 
 // Fills responses and commands for `requests` (already distinct).
 void resolve_requests(RequestSets& sets, const ResidencyLookup& lookup);
+
+// Calls mark(key) for every requesting pixel of every buffer, from `threads` threads (one
+// parallel loop over all buffers together). Runs of equal keys (neighbouring pixels usually
+// see the same tile) are marked once per run.
+template <typename Mark>
+void for_each_request(std::span<const FeedbackBuffer> buffers, unsigned threads, Mark&& mark) {
+    std::vector<std::size_t> start{0};
+    for (const auto& b : buffers) start.push_back(start.back() + b.size());
+    parallel_for(start.back(), 16384, [&](std::size_t begin, std::size_t end) {
+        std::size_t buf = std::upper_bound(start.begin(), start.end(), begin) - start.begin() - 1;
+        std::uint64_t last = kNoRequest;
+        for (std::size_t i = begin; i < end; ++i) {
+            while (i >= start[buf + 1]) ++buf;
+            const std::uint64_t key = buffers[buf][i - start[buf]];
+            if (key == kNoRequest || key == last) continue;
+            last = key;
+            mark(key);
+        }
+    }, threads);
+}
 
 class BasicProcessor {
 public:

@@ -1,0 +1,140 @@
+// Request processing cost of the four methods (seed 000 Fig. 11 / Table 5 "request
+// computation"): the same feedback buffers (the scroll seen from 40 cm by both eyes at 1/8
+// resolution plus the 512 x 512 magnifier) processed while the exhibition holds 8..40
+// paintings (Table 4 sizes, 5 copies) or one painting of 4096..20480 tiles. The flag array
+// scans one flag per tile of every painting, so its cost follows the tile total; the hash
+// table's does not.
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <vector>
+
+#include "vt/exhibition.h"
+#include "vt/feedback.h"
+#include "vt/request_hash.h"
+#include "vt/request_processing.h"
+#include "vt/residency.h"
+
+using namespace gigascroll;
+
+namespace {
+
+const std::pair<std::uint32_t, std::uint32_t> kTable4[] = {
+    {152089, 6083}, {196301, 5197}, {159010, 4339}, {102680, 5229},
+    {109321, 7183}, {117968, 4722}, {91403, 11161}, {119177, 3858}};
+
+std::vector<PaintingTiles> exhibition(int paintings) {
+    std::vector<PaintingTiles> out;
+    for (int i = 0; i < paintings; ++i) out.emplace_back(kTable4[i % 8].first, kTable4[i % 8].second);
+    return out;
+}
+
+// A painting 6083 texels high whose pyramid has about `tiles` tiles in all.
+PaintingTiles painting_with_tiles(std::uint64_t tiles) {
+    std::uint32_t w = 1000;
+    while (PaintingTiles(w, 6083).total_tiles() < tiles) w += 120;
+    return PaintingTiles(w, 6083);
+}
+
+// Both eyes and the magnifier looking at painting 0 (the scroll, 12 m x 0.5 m) from 40 cm.
+struct Feedback {
+    std::vector<std::vector<std::uint64_t>> buffers;
+    std::vector<FeedbackBuffer> views;
+    explicit Feedback(const PaintingTiles& tiles) {
+        ExhibitionScene scene;
+        scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0},
+                           12.0 * tiles.width() / 152089, 0.5);
+        scene.add_box({-2, 0, 0.005}, {20, 3, 0.2});
+        scene.commit();
+        const double th = 900 * (12.0 / 152089) / 0.072;
+        const double x = std::min(6.0, 6.0 * tiles.width() / 152089);
+        for (double eye : {-0.0315, 0.0315}) {
+            const Camera cam({x + eye, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, th, th * 1920 / 1800, 1800, 1920);
+            buffers.emplace_back(225 * 240);
+            render_feedback(scene, cam, {225, 240, 0, 0}, buffers.back().data());
+        }
+        const Camera mag({x, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, 0.0125 / 0.2, 0.0125 / 0.2, 512, 512);
+        buffers.emplace_back(512 * 512);
+        render_feedback(scene, mag, {512, 512, 0, 0}, buffers.back().data());
+        views.assign(buffers.begin(), buffers.end());
+    }
+};
+
+template <typename Run>
+void run_method(benchmark::State& state, const std::vector<PaintingTiles>& paintings, Run&& run) {
+    const Feedback fb(paintings[0]);
+    const ResidentSet resident(paintings);
+    std::uint64_t frame = 0, requests = 0;
+    for (auto _ : state) requests = run(fb.views, resident, ++frame);
+    std::uint64_t tiles = 0;
+    for (const auto& p : paintings) tiles += p.total_tiles();
+    state.counters["tiles"] = double(tiles);
+    state.counters["requests"] = double(requests);
+}
+
+void add_methods(benchmark::State& state, const std::vector<PaintingTiles>& paintings, int method) {
+    switch (method) {
+    case 0: {
+        BasicProcessor p;
+        run_method(state, paintings, [&](auto& v, auto& r, auto) { return p.process(v, r).requests.size(); });
+        break;
+    }
+    case 1: {
+        AsyncProcessor p;  // submit + wait: the work, not the latency
+        run_method(state, paintings, [&](auto& v, auto& r, auto f) {
+            p.submit(v, f);
+            return p.drain(r).back().sets.requests.size();
+        });
+        break;
+    }
+    case 2: {
+        FlagArrayProcessor p(paintings, 2);
+        run_method(state, paintings, [&](auto& v, auto& r, auto) { return p.process(v, r).requests.size(); });
+        break;
+    }
+    default: {
+        HashProcessor p(16, HashModulus::Pow2, 2);
+        run_method(state, paintings, [&](auto& v, auto& r, auto f) { return p.process(v, r, f).requests.size(); });
+        break;
+    }
+    }
+}
+
+const char* kMethods[] = {"basic", "cpu_async", "flag_array", "hash"};
+
+void BM_Paintings(benchmark::State& state) {
+    add_methods(state, exhibition(int(state.range(1))), int(state.range(0)));
+    state.SetLabel(kMethods[state.range(0)]);
+}
+BENCHMARK(BM_Paintings)->ArgsProduct({{0, 1, 2, 3}, {8, 16, 24, 32, 40}})->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+void BM_TileTotal(benchmark::State& state) {
+    add_methods(state, {painting_with_tiles(std::uint64_t(state.range(1)) * 4096)}, int(state.range(0)));
+    state.SetLabel(kMethods[state.range(0)]);
+}
+BENCHMARK(BM_TileTotal)->ArgsProduct({{0, 1, 2, 3}, {1, 2, 3, 4, 5}})->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+// The hash slot alone (eq. 1), per request.
+void BM_HashSlot(benchmark::State& state) {
+    HashProcessor p(16);
+    std::uint64_t key = pack_request(3, 2, 700, 40), acc = 0;
+    for (auto _ : state) benchmark::DoNotOptimize(acc += p.slot(key++, HashProcessor::frame_salt(9)));
+}
+BENCHMARK(BM_HashSlot);
+
+void BM_FeedbackEye(benchmark::State& state) {
+    const PaintingTiles tiles(152089, 6083);
+    ExhibitionScene scene;
+    scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
+    scene.commit();
+    const double th = 900 * (12.0 / 152089) / 0.072;
+    const Camera cam({6, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, th, th * 1920 / 1800, 1800, 1920);
+    std::vector<std::uint64_t> keys(225 * 240);
+    for (auto _ : state) render_feedback(scene, cam, {225, 240, 0, unsigned(state.range(0))}, keys.data());
+    state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
+}
+BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,220 @@
+"""`gigascroll bench views`: request-processing cost of the four methods against the number
+of paintings (seed 000 Fig. 11, 8..40 paintings on tables) and against the tile total (five
+steps of 4096 tiles, static camera 25 cm away, Fig. 12); the cpu-async latency in frames at
+a 90 Hz pace; hash losses per frame and repeated losses against the table size and the salt.
+
+Times are medians over frames of the same run; ratios compare methods within the run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from .. import views as v
+from ..cli import UserError
+
+PAINTING_COUNTS = (8, 16, 24, 32, 40)
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--out", default="bench-views", help="output directory (JSON, PNG)")
+    parser.add_argument("--frames", type=int, default=90,
+                        help="frames per configuration (default 90 = 1 s at 90 Hz)")
+    parser.add_argument("--latency-frames", type=int, default=180,
+                        help="frames of the paced cpu-async latency run")
+    parser.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    parser.add_argument("--quick", action="store_true", help="a few frames of everything")
+
+
+def _time_methods(ex, frames_buffers, threads, resident=None) -> dict:
+    """Median milliseconds per frame of each method over the given feedback frames
+    (cpu-async: submit plus waiting for its result, i.e. its work, not its latency)."""
+    resident = resident or ex.resident_set()
+    out = {}
+    for method in v.PROCESSING_METHODS:
+        proc = v.make_processor(method, ex.tiles, threads)
+        times, requests = [], []
+        for frame, bufs in enumerate(frames_buffers):
+            t0 = time.perf_counter()
+            r = v.run_processor(proc, bufs, resident, frame + 1)
+            times.append(time.perf_counter() - t0)
+            requests.append(len(r["requests"]))
+        out[method] = {"ms": 1e3 * statistics.median(times), "requests": statistics.mean(requests)}
+    return out
+
+
+def _painting_sweep(args, frames) -> list[dict]:
+    rows = []
+    for n in tqdm(PAINTING_COUNTS, desc="paintings 8..40", unit="config"):
+        ex = v.multi_exhibition(n)
+        path = v.multi_route(n, duration=frames / v.FPS)
+        bufs = [v.feedback_buffers(ex, path, f, threads=args.threads) for f in range(len(path))]
+        res = _time_methods(ex, bufs, args.threads)
+        rows.append({"paintings": n, "tiles": sum(t.total_tiles for t in ex.tiles), **res})
+    return rows
+
+
+# Seed 000 Fig. 12's five steps of 4096 tiles, then larger totals where a flag array shows.
+TILE_TOTALS = tuple(4096 * k for k in range(1, 6)) + (1 << 18, 1 << 20, 1 << 22)
+
+
+def _painting_with_tiles(total: int) -> v.PaintingSpec:
+    """The scroll cropped or extended in width (same texel size) to about `total` tiles."""
+    lo, hi = 120, 65535 * 120
+    while lo < hi:  # smallest width whose pyramid has >= total tiles
+        mid = (lo + hi) // 2
+        lo, hi = (mid + 1, hi) if v.PaintingTiles(mid, 6083).total_tiles < total else (lo, mid)
+    return v.PaintingSpec(f"crop{total}", lo, 6083, 12.0 * lo / 152089, 0.5)
+
+
+def _tile_sweep(args, frames) -> list[dict]:
+    rows = []
+    for total in tqdm(TILE_TOTALS, desc="tile totals", unit="config"):
+        spec = _painting_with_tiles(total)
+        ex = v.single_scroll(spec)
+        x = min(6.0, spec.width_m / 2)
+        path = v.scroll_path(distance=0.25, speed=0.0, duration=frames / v.FPS,
+                             start_x=x, magnifier=False, exhibition=ex)
+        bufs = v.feedback_buffers(ex, path, 0, magnifier=None, threads=args.threads)
+        res = _time_methods(ex, [bufs] * len(path), args.threads)
+        rows.append({"tiles": ex.tiles[0].total_tiles, "width": spec.width, **res})
+    return rows
+
+
+def _async_latency(args, frames) -> dict:
+    """cpu-async in a loop paced at 90 Hz: feedback, submit, poll; latency = poll frame -
+    submit frame of each result."""
+    ex = v.single_scroll()
+    path = v.scroll_path(duration=frames / v.FPS)
+    resident = ex.resident_set()
+    proc = v.AsyncProcessor()
+    latencies = []
+    period = 1.0 / v.FPS
+    start = time.perf_counter()
+    for frame in tqdm(range(len(path)), desc="cpu-async at 90 Hz", unit="frame"):
+        proc.submit(v.feedback_buffers(ex, path, frame, threads=args.threads), frame)
+        for r in proc.poll(resident):
+            latencies.append(frame - r["frame"])
+        # Pace: sleep to the next 90 Hz boundary.
+        delay = start + (frame + 1) * period - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+    tail = proc.poll(resident, wait=True)
+    latencies += [len(path) - r["frame"] for r in tail]
+    return {"frames": len(path), "mean": statistics.mean(latencies),
+            "max": max(latencies), "min": min(latencies),
+            "overran_frames": int(time.perf_counter() - start > len(path) * period * 1.05)}
+
+
+def _hash_losses(args, frames) -> list[dict]:
+    ex = v.single_scroll()
+    path = v.scroll_path(duration=frames / v.FPS)
+    resident = ex.resident_set()
+    basic = v.BasicProcessor()
+    bits_list = (12, 14, 16, 18)
+    salted = {b: v.HashProcessor(b, threads=args.threads) for b in bits_list}
+    fixed = {b: v.HashProcessor(b, threads=args.threads) for b in bits_list}
+    stats = {b: {"lost": 0, "repeat": 0, "fixed_lost": 0, "fixed_repeat": 0} for b in bits_list}
+    prev = {b: set() for b in bits_list}
+    prev_fixed = {b: set() for b in bits_list}
+    requests = []
+    for frame in tqdm(range(len(path)), desc="hash losses", unit="frame"):
+        bufs = v.feedback_buffers(ex, path, frame, threads=args.threads)
+        ref = set(basic.process(bufs, resident)["requests"].tolist())
+        requests.append(len(ref))
+        for b in bits_list:
+            lost = ref - set(salted[b].process(bufs, resident, frame)["requests"].tolist())
+            lf = ref - set(fixed[b].process(bufs, resident, 1)["requests"].tolist())
+            s = stats[b]
+            s["lost"] += len(lost)
+            s["repeat"] += len(lost & prev[b])
+            s["fixed_lost"] += len(lf)
+            s["fixed_repeat"] += len(lf & prev_fixed[b])
+            prev[b], prev_fixed[b] = lost, lf
+    n = len(path)
+    return [{"table_bits": b, "slots": 1 << b, "requests_per_frame": statistics.mean(requests),
+             "lost_per_frame": s["lost"] / n, "repeated_losses": s["repeat"],
+             "fixed_salt_lost_per_frame": s["fixed_lost"] / n,
+             "fixed_salt_repeated_losses": s["fixed_repeat"], "frames": n}
+            for b, s in stats.items()]
+
+
+def _plot(rows, key, xlabel, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    xs = [r[key] for r in rows]
+    for m in v.PROCESSING_METHODS:
+        ax.plot(xs, [r[m]["ms"] for r in rows], marker="o", label=m)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("processing time per frame (ms, median)")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _table(rows, key, label) -> str:
+    lines = [f"| {label} | tiles | requests/frame | basic | cpu-async | flag-array | hash | "
+             f"flag/hash |", "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r[key]} | {r['tiles']} | {r['hash']['requests']:.0f} | " +
+                     " | ".join(f"{r[m]['ms']:.3f}" for m in v.PROCESSING_METHODS) +
+                     f" | {r['flag-array']['ms'] / r['hash']['ms']:.2f} |")
+    first, last = rows[0], rows[-1]
+    lines.append("")
+    lines.append("growth first -> last: " + ", ".join(
+        f"{m} x{last[m]['ms'] / first[m]['ms']:.2f}" for m in v.PROCESSING_METHODS))
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    if args.frames < 1 or args.latency_frames < 1:
+        raise UserError("--frames and --latency-frames must be >= 1")
+    if args.threads < 0:
+        raise UserError("--threads must be >= 0")
+    frames = 5 if args.quick else args.frames
+    latency_frames = 20 if args.quick else args.latency_frames
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    results = {"frames": frames, "machine_threads": v._core.hardware_threads()}
+    results["paintings"] = _painting_sweep(args, frames)
+    results["tile_totals"] = _tile_sweep(args, frames)
+    results["async_latency"] = _async_latency(args, latency_frames)
+    results["hash_losses"] = _hash_losses(args, max(frames, 20) if args.quick else 900)
+
+    _plot(results["paintings"], "paintings", "paintings in the exhibition",
+          out / "views_paintings.png")
+    _plot(results["tile_totals"], "tiles", "tiles in the pack (all levels)", out / "views_tiles.png")
+    tmp = out / "views.json.tmp"
+    tmp.write_text(json.dumps(results, indent=1))
+    tmp.replace(out / "views.json")
+
+    print("## Request processing vs painting count (ms per frame, median)\n")
+    print(_table(results["paintings"], "paintings", "paintings"))
+    print("\n## Request processing vs tile total (static camera 25 cm, ms per frame)\n")
+    print(_table(results["tile_totals"], "tiles", "tile total"))
+    a = results["async_latency"]
+    print(f"\n## cpu-async latency at 90 Hz over {a['frames']} frames: mean {a['mean']:.2f}, "
+          f"min {a['min']}, max {a['max']} frames\n")
+    print("## Hash losses on the 10 s scroll path (eyes + magnifier)\n")
+    print("| slots | requests/frame | lost/frame | lost 2 frames in a row | "
+          "fixed salt: lost/frame | fixed salt: in a row |")
+    print("|---|---|---|---|---|---|")
+    for h in results["hash_losses"]:
+        print(f"| 2^{h['table_bits']} | {h['requests_per_frame']:.0f} | "
+              f"{h['lost_per_frame']:.3f} | {h['repeated_losses']} | "
+              f"{h['fixed_salt_lost_per_frame']:.3f} | {h['fixed_salt_repeated_losses']} |")
+    print(f"\nwrote {out / 'views.json'}, {out / 'views_paintings.png'}, {out / 'views_tiles.png'}")
+    return 0
