@@ -106,13 +106,13 @@ void BM_Paintings(benchmark::State& state) {
     add_methods(state, exhibition(int(state.range(1))), int(state.range(0)));
     state.SetLabel(kMethods[state.range(0)]);
 }
-BENCHMARK(BM_Paintings)->ArgsProduct({{0, 1, 2, 3}, {8, 16, 24, 32, 40}})->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_Paintings)->ArgsProduct({{0, 1, 2, 3}, {8, 16, 24, 32, 40}})->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
 
 void BM_TileTotal(benchmark::State& state) {
     add_methods(state, {painting_with_tiles(std::uint64_t(state.range(1)) * 4096)}, int(state.range(0)));
     state.SetLabel(kMethods[state.range(0)]);
 }
-BENCHMARK(BM_TileTotal)->ArgsProduct({{0, 1, 2, 3}, {1, 2, 3, 4, 5}})->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_TileTotal)->ArgsProduct({{0, 1, 2, 3}, {1, 2, 3, 4, 5}})->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // The hash slot alone (eq. 1), per request.
 void BM_HashSlot(benchmark::State& state) {
@@ -133,7 +133,7 @@ void BM_FeedbackEye(benchmark::State& state) {
     for (auto _ : state) render_feedback(scene, cam, {225, 240, 0, unsigned(state.range(0))}, keys.data());
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
-BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
 
 }  // namespace
 

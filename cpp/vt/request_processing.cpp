@@ -1,6 +1,8 @@
 #include "vt/request_processing.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstring>
 #include <unordered_set>
 
 
@@ -10,16 +12,32 @@ namespace {
 constexpr std::size_t kFlagChunk = 1 << 16;
 
 // Marks every requested tile in `flags` (clearing them all again if a key is invalid).
-void mark_flags(const TileIndex& index, std::vector<std::atomic<std::uint8_t>>& flags,
+void mark_flags(const TileIndex& index, std::vector<std::uint8_t>& flags,
                 std::span<const FeedbackBuffer> buffers, unsigned threads) {
     try {
         for_each_request(buffers, threads, [&](std::uint64_t key) {
-            flags[index.index(key)].store(1, std::memory_order_relaxed);
+            std::atomic_ref<std::uint8_t>(flags[index.index(key)]).store(1, std::memory_order_relaxed);
         });
     } catch (...) {
-        for (auto& f : flags) f.store(0, std::memory_order_relaxed);
+        std::fill(flags.begin(), flags.end(), 0);
         throw;
     }
+}
+
+// Calls f(i) for every i in [b, e) with a[i] | c[i] != 0, eight bytes at a time.
+template <typename F>
+void for_each_set(const std::uint8_t* a, const std::uint8_t* c, std::size_t b, std::size_t e, F&& f) {
+    std::size_t i = b;
+    for (; i + 8 <= e; i += 8) {
+        std::uint64_t wa, wc = 0;
+        std::memcpy(&wa, a + i, 8);
+        if (c) std::memcpy(&wc, c + i, 8);
+        if ((wa | wc) == 0) continue;
+        for (std::size_t j = i; j < i + 8; ++j)
+            if (a[j] | (c ? c[j] : 0)) f(j);
+    }
+    for (; i < e; ++i)
+        if (a[i] | (c ? c[i] : 0)) f(i);
 }
 }  // namespace
 
@@ -56,11 +74,10 @@ RequestSets FlagArrayProcessor::process(std::span<const FeedbackBuffer> buffers,
     std::vector<std::vector<std::uint64_t>> found(chunks);
     parallel_for(flags_.size(), kFlagChunk, [&](std::size_t b, std::size_t e) {
         auto& out = found[b / kFlagChunk];
-        for (std::size_t i = b; i < e; ++i)
-            if (flags_[i].load(std::memory_order_relaxed)) {
-                flags_[i].store(0, std::memory_order_relaxed);
-                out.push_back(index_.key(i));
-            }
+        for_each_set(flags_.data(), nullptr, b, e, [&](std::size_t i) {
+            flags_[i] = 0;
+            out.push_back(index_.key(i));
+        });
     }, threads_);
     RequestSets sets;
     for (auto& f : found) sets.requests.insert(sets.requests.end(), f.begin(), f.end());
@@ -148,15 +165,15 @@ VisibilityLists::Lists VisibilityLists::process(std::span<const FeedbackBuffer> 
     std::vector<Lists> parts(chunks);
     parallel_for(current_.size(), kFlagChunk, [&](std::size_t b, std::size_t e) {
         Lists& out = parts[b / kFlagChunk];
-        for (std::size_t i = b; i < e; ++i) {
-            const std::uint8_t now = current_[i].load(std::memory_order_relaxed);
+        for_each_set(current_.data(), previous_.data(), b, e, [&](std::size_t i) {
+            const std::uint8_t now = current_[i];
             if (now)
                 out.alive.push_back(index_.key(i));
-            else if (previous_[i])
+            else
                 out.remove.push_back(index_.key(i));
             previous_[i] = now;
-            current_[i].store(0, std::memory_order_relaxed);
-        }
+            current_[i] = 0;
+        });
     }, threads_);
     Lists lists;
     for (auto& p : parts) {

@@ -71,9 +71,10 @@ public:
 private:
     TileIndex index_;
     unsigned threads_;
-    // One flag per tile. Marking stores 1 with relaxed order from many threads; the
-    // compaction scan runs after the marking threads joined, which orders it after them.
-    std::vector<std::atomic<std::uint8_t>> flags_;
+    // One flag per tile. Marking stores 1 through std::atomic_ref (relaxed) from many
+    // threads; the compaction scan runs after the marking threads joined, which orders it
+    // after them, and reads eight flags per word to skip empty stretches.
+    std::vector<std::uint8_t> flags_;
 };
 
 // The Unreal SVT way: submit() copies the buffers and returns at once; a worker thread
@@ -129,7 +130,7 @@ public:
 private:
     TileIndex index_;
     unsigned threads_;
-    std::vector<std::atomic<std::uint8_t>> current_;
+    std::vector<std::uint8_t> current_;  // marked like FlagArrayProcessor's flags
     std::vector<std::uint8_t> previous_;
 };
 
