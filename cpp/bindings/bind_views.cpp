@@ -15,6 +15,7 @@
 #include "common/error.h"
 #include "vt/exhibition.h"
 #include "vt/feedback.h"
+#include "vt/load_strategy.h"
 #include "vt/request.h"
 #include "vt/request_hash.h"
 #include "vt/request_processing.h"
@@ -325,6 +326,36 @@ void bind_views(nb::module_& m) {
              "Finished frames as dicts with 'frame' (submit frame) and the three sets;\n"
              "wait=True blocks until every submitted frame is done.")
         .def_prop_ro("pending", &AsyncProcessor::pending);
+
+    nb::class_<DirectLoading>(m, "DirectLoading",
+                              "Seed 000: load missing requested tiles, at most per_frame a frame.")
+        .def(nb::init<std::size_t>(), "per_frame"_a = 16)
+        .def("set_commands", [](DirectLoading& d, nb::handle keys) {
+            HeldBuffer b = as_buffer(keys, "commands");
+            d.set_commands(b.view);
+        }, "commands"_a)
+        .def("issue", [](DirectLoading& d, const ResidencyLookup& lookup) {
+            return to_numpy(d.issue(lookup));
+        }, "lookup"_a)
+        .def("loaded", [](DirectLoading& d, nb::handle keys) {
+            HeldBuffer b = as_buffer(keys, "keys");
+            d.loaded(b.view);
+        }, "keys"_a)
+        .def_prop_ro("backlog", &DirectLoading::backlog)
+        .def_prop_ro("in_flight", &DirectLoading::in_flight);
+
+    nb::class_<MipByMipLoading>(m, "MipByMipLoading",
+                                "van Waveren: the coarsest missing ancestor of each miss first.")
+        .def(nb::init<std::size_t>(), "per_frame"_a = 16)
+        .def("issue", [](MipByMipLoading& d, nb::handle commands, const ResidencyLookup& lookup) {
+            HeldBuffer b = as_buffer(commands, "commands");
+            return to_numpy(d.issue(b.view, lookup));
+        }, "commands"_a, "lookup"_a)
+        .def("loaded", [](MipByMipLoading& d, nb::handle keys) {
+            HeldBuffer b = as_buffer(keys, "keys");
+            d.loaded(b.view);
+        }, "keys"_a)
+        .def_prop_ro("in_flight", &MipByMipLoading::in_flight);
 
     nb::class_<VisibilityLists>(m, "VisibilityLists",
                                 "Seed 002: alive and remove lists against the previous frame.")
