@@ -16,14 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from . import _core
-from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, Camera, ExhibitionScene,
-                    FlagArrayProcessor, HashProcessor, PaintingTiles, ResidencyLookup,
-                    ResidentSet, VisibilityLists, mip_level, pack_request, render_feedback,
-                    texel_footprint, unpack_requests)
+from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, Camera, DirectLoading,
+                    ExhibitionScene, FlagArrayProcessor, HashProcessor, MipByMipLoading,
+                    PaintingTiles, ResidencyLookup, ResidentSet, VisibilityLists, mip_level,
+                    pack_request, render_feedback, texel_footprint, unpack_requests)
 
 __all__ = [
-    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "ExhibitionScene",
-    "FlagArrayProcessor", "HashProcessor", "PaintingTiles", "ResidencyLookup", "ResidentSet",
+    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "DirectLoading",
+    "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingTiles", "ResidencyLookup", "ResidentSet",
     "VisibilityLists", "mip_level", "pack_request", "render_feedback", "texel_footprint",
     "unpack_requests",
     "HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier", "PaintingSpec",

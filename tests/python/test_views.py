@@ -228,3 +228,20 @@ def test_bad_input_is_rejected(scroll, tmp_path):
         v.render_feedback(scene, v.Camera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
     with pytest.raises(ValueError, match="orthonormal"):
         scene.add_painting(0, v.PaintingTiles(100, 100), (0, 0, 0), (1, 0, 0), (1, 0, 0), 1, 1)
+
+
+def test_loading_strategies_from_python(scroll):
+    resident = scroll.resident_set()
+    keys = np.array([v.pack_request(0, 0, x, 10) for x in range(40)], dtype=np.uint64)
+    direct = v.DirectLoading(16)
+    direct.set_commands(keys)
+    assert direct.issue(resident).tolist() == keys[:16].tolist()
+    assert direct.backlog == 24 and direct.in_flight == 16
+    mip = v.MipByMipLoading(16)
+    first = mip.issue(keys, resident)
+    # Only the coarsest level (11) is resident: every command asks its level-10 ancestor.
+    assert set(v.unpack_requests(first)[1].tolist()) == {10}
+    with pytest.raises(ValueError):
+        v.DirectLoading(0)
+    with pytest.raises(ValueError, match="uint64"):
+        direct.set_commands(keys.astype(np.float64))
