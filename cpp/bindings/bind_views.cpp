@@ -319,11 +319,13 @@ void bind_views(nb::module_& m) {
             for (auto& r : results) {
                 nb::dict d = sets_dict(std::move(r.sets));
                 d["frame"] = r.frame;
+                d["seconds"] = r.seconds;
                 out.append(d);
             }
             return out;
         }, "lookup"_a, "wait"_a = false,
-             "Finished frames as dicts with 'frame' (submit frame) and the three sets;\n"
+             "Finished frames as dicts with 'frame' (submit frame), 'seconds' (submit to\n"
+             "finish) and the three sets;\n"
              "wait=True blocks until every submitted frame is done.")
         .def_prop_ro("pending", &AsyncProcessor::pending);
 

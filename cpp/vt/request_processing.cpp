@@ -97,7 +97,7 @@ AsyncProcessor::~AsyncProcessor() {
 }
 
 void AsyncProcessor::submit(std::span<const FeedbackBuffer> buffers, std::uint64_t frame) {
-    Job job{frame, {}};
+    Job job{frame, std::chrono::steady_clock::now(), {}};
     std::size_t n = 0;
     for (const auto& b : buffers) n += b.size();
     job.pixels.reserve(n);
@@ -121,8 +121,10 @@ void AsyncProcessor::run() {
         std::unordered_set<std::uint64_t> seen;
         for (std::uint64_t key : job.pixels)
             if (key != kNoRequest) seen.insert(key);
-        Result result{job.frame, {}};
+        Result result{job.frame, 0.0, {}};
         result.sets.requests.assign(seen.begin(), seen.end());
+        result.seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - job.submitted).count();
         lock.lock();
         done_.push_back(std::move(result));
         busy_ = false;

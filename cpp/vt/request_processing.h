@@ -10,6 +10,7 @@
 #pragma once
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -92,6 +93,7 @@ public:
     void submit(std::span<const FeedbackBuffer> buffers, std::uint64_t frame);
     struct Result {
         std::uint64_t frame;  // the frame whose feedback this is
+        double seconds;       // from submit() until the worker finished it
         RequestSets sets;
     };
     // Every result finished since the last poll, oldest first.
@@ -103,6 +105,7 @@ public:
 private:
     struct Job {
         std::uint64_t frame;
+        std::chrono::steady_clock::time_point submitted;
         std::vector<std::uint64_t> pixels;
     };
     void run();

@@ -119,6 +119,7 @@ def test_async_latency_is_measured():
         proc.submit(v.feedback_buffers(ex, path, frame), frame)
         for r in proc.poll(resident):
             arrived[r["frame"]] = frame - r["frame"]
+            assert r["seconds"] >= 0
     for r in proc.poll(resident, wait=True):
         arrived[r["frame"]] = len(path) - r["frame"]
     assert sorted(arrived) == list(range(len(path)))  # every frame's result arrives once
