@@ -1,0 +1,63 @@
+#include "vt/mip_texture.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "common/error.h"
+#include "common/parallel.h"
+#include "vt/bilinear.h"
+
+namespace gigascroll {
+
+MipTexture::MipTexture(std::vector<Level> levels) : levels_(std::move(levels)) {
+    require(!levels_.empty(), "MipTexture: no levels");
+    const std::uint32_t W = levels_[0].width, H = levels_[0].height;
+    for (std::uint32_t l = 0; l < levels_.size(); ++l) {
+        const Level& lv = levels_[l];
+        require(lv.width == ((W + (1u << l) - 1) >> l) && lv.height == ((H + (1u << l) - 1) >> l) &&
+                    lv.rgb.size() == std::size_t(lv.width) * lv.height * 3,
+                "MipTexture: level " + std::to_string(l) + " has the wrong size");
+    }
+}
+
+void MipTexture::sample(const SampleRequest& r) const {
+    require(r.u && r.v && r.out, "sample: missing arrays");
+    const std::uint32_t L = level_count();
+    const double W = levels_[0].width, H = levels_[0].height;
+    auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out) {
+        const Level& lv = levels_[l];
+        const Tap tx = bilinear_tap(std::ldexp(x0, -int(l)), lv.width);
+        const Tap ty = bilinear_tap(std::ldexp(y0, -int(l)), lv.height);
+        const std::size_t row = std::size_t(lv.width) * 3;
+        const std::uint8_t* p00 = lv.rgb.data() + std::size_t(ty.i0) * row + std::size_t(tx.i0) * 3;
+        bilerp_rgb8(p00, row, tx.i0 + 1 < lv.width ? 3 : 0, ty.i0 + 1 < lv.height ? 1 : 0, tx.f, ty.f, out);
+    };
+    parallel_for(r.count, 4096, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+            const double u = std::isnan(r.u[i]) ? 0.0 : std::clamp(r.u[i], 0.0, 1.0);
+            const double v = std::isnan(r.v[i]) ? 0.0 : std::clamp(r.v[i], 0.0, 1.0);
+            const double x0 = u * W, y0 = v * H;
+            float lod = r.lod ? r.lod[i] : r.lod_scalar;
+            lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
+            float* out = r.out + 3 * i;
+            std::uint32_t l0;
+            if (r.filter == Filter::Bilinear) {
+                l0 = static_cast<std::uint32_t>(std::lround(lod));
+                bilinear(x0, y0, l0, out);
+            } else {
+                l0 = static_cast<std::uint32_t>(lod);
+                const float f = lod - float(l0);
+                bilinear(x0, y0, l0, out);
+                if (f > 0 && l0 + 1 < L) {
+                    float c[3];
+                    bilinear(x0, y0, l0 + 1, c);
+                    for (int k = 0; k < 3; ++k) out[k] += f * (c[k] - out[k]);
+                }
+            }
+            if (r.level_out) r.level_out[i] = static_cast<std::int8_t>(l0);
+        }
+    }, r.threads);
+}
+
+}  // namespace gigascroll
