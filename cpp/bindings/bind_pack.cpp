@@ -10,6 +10,7 @@
 
 #include "bindings/bindings.h"
 #include "common/error.h"
+#include "vt/ink_landscape.h"
 #include "vt/pack_builder.h"
 #include "vt/pack_geometry.h"
 #include "vt/tile_pack.h"
@@ -166,6 +167,21 @@ void bind_pack(nb::module_& m) {
         .def_prop_ro("rows_done", &PackBuilder::rows_done)
         .def_prop_ro("tiles_written", &PackBuilder::tiles_written)
         .def_prop_ro("bytes_written", &PackBuilder::bytes_written);
+
+    m.def("render_ink_landscape", [](std::uint32_t width, std::uint32_t height, std::uint32_t y0,
+                                     std::uint32_t rows, std::uint64_t seed, unsigned threads) {
+        require(std::uint64_t(y0) + rows <= height && rows > 0 && width > 0,
+                "rows [y0, y0 + rows) must be a non-empty range inside the painting");
+        const std::size_t n = std::size_t(rows) * width * 3;
+        auto* data = new std::uint8_t[n];
+        nb::capsule owner(data, [](void* d) noexcept { delete[] static_cast<std::uint8_t*>(d); });
+        {
+            nb::gil_scoped_release release;
+            render_ink_landscape(width, height, y0, rows, seed, data, threads);
+        }
+        return Tile(data, {rows, width, 3}, owner); },
+        "width"_a, "height"_a, "y0"_a, "rows"_a, "seed"_a = 0, "threads"_a = 0,
+        "Rows [y0, y0 + rows) of the built-in ink-landscape painting as (rows, width, 3) uint8.");
 
     m.def("painting_geometry", [](std::uint32_t w, std::uint32_t h, std::uint32_t tile_size,
                                   std::uint32_t border) {

@@ -21,10 +21,11 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from . import _core
-from ._core import PackPainting, TilePack, painting_geometry
+from ._core import PackPainting, TilePack, painting_geometry, render_ink_landscape
 
 __all__ = ["TilePack", "PackPainting", "build_pack", "open_image", "painting_geometry",
-           "to_rgb8", "plan_layout"]
+           "to_rgb8", "plan_layout", "synth_painting", "render_ink_landscape", "read_level",
+           "pack_summary", "pack_manifest", "verify_pack"]
 
 MANIFEST = "manifest.json"
 
@@ -144,8 +145,10 @@ class FileSource(ImageSource):
             self._format, dtype = oiio.FLOAT, np.float32
         else:  # 16-bit and other integer types: OpenImageIO rescales to uint16
             self._format, dtype = oiio.UINT16, np.uint16
-        if band_rows <= 0:
-            band_rows = spec.tile_height * max(1, 128 // spec.tile_height) if spec.tile_height > 0 else 128
+        if spec.tile_width > 0:
+            band_rows = spec.tile_height * max(1, -(-max(band_rows, 128) // spec.tile_height))
+        elif band_rows <= 0:
+            band_rows = 128
         self._nch = min(spec.nchannels, 4)
         super().__init__(name or path.stem, str(path), spec.width, spec.height,
                          describe_conversion(dtype, spec.nchannels), band_rows)
@@ -156,8 +159,13 @@ class FileSource(ImageSource):
         spec = self._spec
         for y in range(0, self.height, self.band_rows):
             y1 = min(self.height, y + self.band_rows)
-            data = self._inp.read_scanlines(0, 0, spec.y + y, spec.y + y1, spec.z, 0,
-                                            self._nch, self._format)
+            if spec.tile_width > 0:  # tiled: whole tile rows (band_rows is a multiple)
+                data = self._inp.read_tiles(0, 0, spec.x, spec.x + self.width, spec.y + y,
+                                            spec.y + y1, spec.z, spec.z + 1, 0, self._nch,
+                                            self._format)
+            else:
+                data = self._inp.read_scanlines(0, 0, spec.y + y, spec.y + y1, spec.z, 0,
+                                                self._nch, self._format)
             if data is None or (hasattr(data, "size") and data.size == 0):
                 raise OSError(f"{self.source}: corrupt or truncated image near row {y}: "
                               f"{self._inp.geterror() or 'read failed'}")
@@ -179,6 +187,57 @@ def open_image(image, name: str | None = None, band_rows: int = 0) -> ImageSourc
     if isinstance(image, (str, os.PathLike)):
         return FileSource(image, name, band_rows)
     raise ValueError(f"cannot read an image from {type(image).__name__}")
+
+
+# ----------------------------------------------------------------------------- built-in painting
+
+def synth_painting(path, width: int, height: int, seed: int = 0, tile: int = 256,
+                   compression: str = "none", progress: bool = False) -> Path:
+    """Writes the built-in ink landscape (width x height, deterministic for a seed) as a tiled
+    BigTIFF, band by band (one tile row at a time), never holding the whole image. The file is
+    written under a temporary name and renamed when complete."""
+    import OpenImageIO as oiio
+    width, height, tile = int(width), int(height), int(tile)
+    if width <= 0 or height <= 0:
+        raise ValueError(f"painting size must be positive, got {width} x {height}")
+    if width > (1 << 30) or height > (1 << 30):
+        raise ValueError("painting is too large")
+    if tile <= 0 or tile % 16:
+        raise ValueError("TIFF tile size must be a positive multiple of 16")
+    path = Path(path)
+    tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}{path.suffix}")
+    spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
+    spec.tile_width = spec.tile_height = tile
+    spec.attribute("tiff:bigtiff", 1)
+    spec.attribute("compression", compression)
+    spec.attribute("Software", "gigascroll synth")
+    spec.attribute("ImageDescription", f"gigascroll ink landscape, seed {seed}")
+    out = oiio.ImageOutput.create(str(tmp))
+    if out is None or not out.open(str(tmp), spec):
+        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=height, unit="row", desc="synth")
+    try:
+        for y in range(0, height, tile):
+            rows = min(tile, height - y)
+            band = render_ink_landscape(width, height, y, rows, seed)
+            if not out.write_tiles(0, width, y, y + rows, 0, 1, band):
+                raise OSError(f"{path}: write failed: {out.geterror()}")
+            if bar is not None:
+                bar.update(rows)
+        if not out.close():
+            raise OSError(f"{path}: write failed: {out.geterror()}")
+        os.replace(tmp, path)
+    except BaseException:
+        out.close()
+        tmp.unlink(missing_ok=True)
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    return path
 
 
 # ----------------------------------------------------------------------------- layout
@@ -341,3 +400,76 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return TilePack(out)
+
+
+# ----------------------------------------------------------------------------- reading helpers
+
+def pack_manifest(path) -> dict:
+    """The manifest of a pack as a dict (after checking that the pack opens)."""
+    TilePack(path)
+    with open(Path(path) / MANIFEST) as f:
+        return json.load(f)
+
+
+def read_level(pack: TilePack, painting: int, level: int) -> np.ndarray:
+    """Assembles one whole mip level (height, width, 3) from the payloads of its tiles."""
+    p = pack.paintings[painting]
+    if not 0 <= level < p.levels:
+        raise ValueError(f"level {level} out of range (painting has {p.levels})")
+    w, h = p.level_sizes[level]
+    nx, ny = p.level_tiles[level]
+    b, P = pack.border, pack.payload
+    out = np.empty((h, w, 3), np.uint8)
+    for ty in range(ny):
+        for tx in range(nx):
+            t = pack.read_tile(painting, level, tx, ty)
+            ph, pw = min(P, h - ty * P), min(P, w - tx * P)
+            out[ty * P:ty * P + ph, tx * P:tx * P + pw] = t[b:b + ph, b:b + pw]
+    return out
+
+
+def verify_pack(pack: TilePack, progress: bool = False) -> int:
+    """Reads every stored tile, verifying its checksum; returns the number of tiles read.
+    Raises OSError on the first corrupt tile."""
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=pack.tile_count, unit="tile", desc="verify")
+    out = np.empty((pack.tile_size, pack.tile_size, 3), np.uint8)
+    n = 0
+    for i, p in enumerate(pack.paintings):
+        for l, (nx, ny) in enumerate(p.level_tiles):
+            for ty in range(ny):
+                for tx in range(nx):
+                    pack.read_tile_into(i, l, tx, ty, out)
+                    n += 1
+            if bar is not None:
+                bar.update(nx * ny)
+    if bar is not None:
+        bar.close()
+    return n
+
+
+def pack_summary(pack: TilePack) -> str:
+    """A human-readable summary of a pack: geometry, layout and paintings."""
+    m = pack_manifest(pack.path)
+    pt = m["page_table"]
+    size = sum(f.stat().st_size for f in Path(pack.path).iterdir() if f.is_file())
+    lines = [
+        f"tile pack {pack.path}",
+        f"  format {m['format']} v{m['version']}, codec {pack.codec}, tile {pack.tile_size} px "
+        f"(border {pack.border}, payload {pack.payload}), {pack.tile_count} tiles, "
+        f"{size / 2**20:.1f} MiB",
+        f"  merged page table {pack.table_size[0]} x {pack.table_size[1]}"
+        + (f", packer {pt['packer']}" if "packer" in pt else "")
+        + (f", fill {pt['fill_ratio']:.3f}" if "fill_ratio" in pt else "")
+        + (f" (shelf {pt['shelf_fill_ratio']:.3f}, BRKGA {pt['brkga_fill_ratio']:.3f})"
+           if "shelf_fill_ratio" in pt and "brkga_fill_ratio" in pt else ""),
+    ]
+    for i, p in enumerate(pack.paintings):
+        lines.append(
+            f"  [{i}] {p.name}: {p.width} x {p.height}, {p.levels} levels, {p.tile_count} tiles, "
+            f"page table {p.table_size[0]} x {p.table_size[1]} at {p.table_offset}, "
+            f"uv scale ({p.uv_scale[0]:.6f}, {p.uv_scale[1]:.6f})")
+        lines.append(f"      source {p.source}; conversion: {p.conversion}")
+    return "\n".join(lines)
