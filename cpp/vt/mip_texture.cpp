@@ -7,6 +7,7 @@
 #include "common/error.h"
 #include "common/parallel.h"
 #include "vt/bilinear.h"
+#include "vt/tile_pack.h"
 
 namespace gigascroll {
 
@@ -19,6 +20,32 @@ MipTexture::MipTexture(std::vector<Level> levels) : levels_(std::move(levels)) {
                     lv.rgb.size() == std::size_t(lv.width) * lv.height * 3,
                 "MipTexture: level " + std::to_string(l) + " has the wrong size");
     }
+}
+
+MipTexture MipTexture::from_pack(const TilePack& pack, std::uint32_t painting, std::uint32_t count) {
+    require(painting < pack.paintings().size(), "painting out of range");
+    const PaintingGeometry& g = pack.paintings()[painting].geometry;
+    if (count == 0 || count > g.level_count()) count = g.level_count();
+    const std::size_t T = pack.tile_size(), E = pack.border(), P = pack.payload();
+    std::vector<std::uint8_t> tile(pack.tile_bytes());
+    std::vector<Level> levels(count);
+    for (std::uint32_t l = 0; l < count; ++l) {
+        const LevelGeometry& lg = g.levels[l];
+        Level& lv = levels[l];
+        lv.width = lg.width;
+        lv.height = lg.height;
+        lv.rgb.resize(std::size_t(lv.width) * lv.height * 3);
+        for (std::uint32_t ty = 0; ty < lg.tiles_y; ++ty)
+            for (std::uint32_t tx = 0; tx < lg.tiles_x; ++tx) {
+                pack.read_tile(painting, l, tx, ty, tile.data());
+                const std::size_t w = std::min<std::size_t>(P, lv.width - tx * P);
+                const std::size_t h = std::min<std::size_t>(P, lv.height - ty * P);
+                for (std::size_t y = 0; y < h; ++y)
+                    std::copy_n(tile.data() + ((E + y) * T + E) * 3, w * 3,
+                                lv.rgb.data() + ((ty * P + y) * lv.width + tx * P) * 3);
+            }
+    }
+    return MipTexture(std::move(levels));
 }
 
 void MipTexture::sample(const SampleRequest& r) const {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "vt/tile_pack.h"
 
 namespace gigascroll {
 
@@ -43,6 +44,30 @@ VtLayout VtLayout::make(std::uint32_t tile_size, std::uint32_t border,
     }
     layout.table_w = std::bit_ceil(std::max(x, 1u));
     layout.table_h = std::bit_ceil(h);
+    return layout;
+}
+
+VtLayout VtLayout::from_pack(const TilePack& pack) {
+    VtLayout layout;
+    layout.tile_size = pack.tile_size();
+    layout.border = pack.border();
+    layout.table_w = pack.table_width();
+    layout.table_h = pack.table_height();
+    for (const PaintingInfo& info : pack.paintings()) {
+        VtPainting p;
+        p.width = info.width();
+        p.height = info.height();
+        p.table_w = info.geometry.table_width;
+        p.table_h = info.geometry.table_height;
+        p.table_x = info.table_x;
+        p.table_y = info.table_y;
+        for (const LevelGeometry& lv : info.geometry.levels) {
+            p.tiles_x.push_back(lv.tiles_x);
+            p.tiles_y.push_back(lv.tiles_y);
+        }
+        layout.paintings.push_back(std::move(p));
+    }
+    layout.validate();
     return layout;
 }
 
