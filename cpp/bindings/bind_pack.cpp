@@ -130,7 +130,7 @@ void bind_pack(nb::module_& m) {
             check_tile_out(p, out);
             nb::gil_scoped_release release;
             p.read_tile(pi, l, tx, ty, out.data()); },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a, "out"_a,
+            "painting"_a, "level"_a, "tx"_a, "ty"_a, "out"_a.noconvert(),
             "Reads the tile into a C-contiguous (tile_size, tile_size, 3) uint8 array.");
 
     nb::class_<PackBuilder>(m, "PackBuilder",
@@ -161,7 +161,7 @@ void bind_pack(nb::module_& m) {
             nb::gil_scoped_release release;
             b.add_rows(rows.data(), static_cast<std::uint32_t>(rows.shape(0)),
                        static_cast<std::uint32_t>(rows.shape(1))); },
-            "rows"_a, "uint8 array (n, width, 3), the next rows of the current painting")
+            "rows"_a.noconvert(), "uint8 array (n, width, 3), the next rows of the current painting")
         .def("end_painting", &PackBuilder::end_painting)
         .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
              "page_table_json"_a = "{}")

@@ -128,7 +128,10 @@ class FileSource(ImageSource):
         path = Path(path)
         if not path.is_file():
             raise OSError(f"{path}: no such image file")
-        inp = oiio.ImageInput.open(str(path))
+        # Keep colours as stored (no alpha premultiplication): alpha is dropped anyway.
+        config = oiio.ImageSpec()
+        config.attribute("oiio:UnassociatedAlpha", 1)
+        inp = oiio.ImageInput.open(str(path), config)
         if inp is None:
             raise OSError(f"{path}: cannot read image: {oiio.geterror() or 'unknown format'}")
         spec = inp.spec()
