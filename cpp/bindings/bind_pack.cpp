@@ -13,6 +13,7 @@
 #include "vt/ink_landscape.h"
 #include "vt/pack_builder.h"
 #include "vt/pack_geometry.h"
+#include "vt/page_layout.h"
 #include "vt/tile_pack.h"
 
 namespace nb = nanobind;
@@ -129,7 +130,7 @@ void bind_pack(nb::module_& m) {
             check_tile_out(p, out);
             nb::gil_scoped_release release;
             p.read_tile(pi, l, tx, ty, out.data()); },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a, "out"_a,
+            "painting"_a, "level"_a, "tx"_a, "ty"_a, "out"_a.noconvert(),
             "Reads the tile into a C-contiguous (tile_size, tile_size, 3) uint8 array.");
 
     nb::class_<PackBuilder>(m, "PackBuilder",
@@ -160,7 +161,7 @@ void bind_pack(nb::module_& m) {
             nb::gil_scoped_release release;
             b.add_rows(rows.data(), static_cast<std::uint32_t>(rows.shape(0)),
                        static_cast<std::uint32_t>(rows.shape(1))); },
-            "rows"_a, "uint8 array (n, width, 3), the next rows of the current painting")
+            "rows"_a.noconvert(), "uint8 array (n, width, 3), the next rows of the current painting")
         .def("end_painting", &PackBuilder::end_painting)
         .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
              "page_table_json"_a = "{}")
@@ -182,6 +183,37 @@ void bind_pack(nb::module_& m) {
         return Tile(data, {rows, width, 3}, owner); },
         "width"_a, "height"_a, "y0"_a, "rows"_a, "seed"_a = 0, "threads"_a = 0,
         "Rows [y0, y0 + rows) of the built-in ink-landscape painting as (rows, width, 3) uint8.");
+
+    m.def("layout_page_tables", [](const std::vector<std::pair<std::uint32_t, std::uint32_t>>& sizes,
+                                   const std::string& method, std::uint64_t seed) {
+        require(method == "brkga" || method == "shelf",
+                "unknown layout method '" + method + "' (expected brkga or shelf)");
+        std::vector<TableSize> tables;
+        for (auto [w, h] : sizes) tables.push_back({w, h});
+        PageLayout shelf, brkga;
+        {
+            nb::gil_scoped_release release;
+            shelf = shelf_layout(tables);
+            BrkgaOptions o;
+            o.seed = seed;
+            brkga = brkga_layout(tables, o);
+        }
+        const PageLayout& chosen = method == "shelf" ? shelf : brkga;
+        check_layout(tables, chosen);
+        nb::dict info;
+        info["packer"] = method;
+        info["fill_ratio"] = chosen.fill_ratio;
+        info["shelf_fill_ratio"] = shelf.fill_ratio;
+        info["brkga_fill_ratio"] = brkga.fill_ratio;
+        info["shelf_box_fill_ratio"] = shelf.box_fill_ratio;
+        info["brkga_box_fill_ratio"] = brkga.box_fill_ratio;
+        info["shelf_size"] = std::make_pair(shelf.width, shelf.height);
+        info["brkga_size"] = std::make_pair(brkga.width, brkga.height);
+        info["seed"] = seed;
+        return std::make_tuple(chosen.width, chosen.height, chosen.offsets, info); },
+        "sizes"_a, "method"_a = "brkga", "seed"_a = 0,
+        "Packs power-of-two page tables (Mp, Np) into one merged table; returns "
+        "(width, height, offsets, info) with both packers' fill ratios in info.");
 
     m.def("painting_geometry", [](std::uint32_t w, std::uint32_t h, std::uint32_t tile_size,
                                   std::uint32_t border) {

@@ -128,7 +128,10 @@ class FileSource(ImageSource):
         path = Path(path)
         if not path.is_file():
             raise OSError(f"{path}: no such image file")
-        inp = oiio.ImageInput.open(str(path))
+        # Keep colours as stored (no alpha premultiplication): alpha is dropped anyway.
+        config = oiio.ImageSpec()
+        config.attribute("oiio:UnassociatedAlpha", 1)
+        inp = oiio.ImageInput.open(str(path), config)
         if inp is None:
             raise OSError(f"{path}: cannot read image: {oiio.geterror() or 'unknown format'}")
         spec = inp.spec()
@@ -244,31 +247,12 @@ def synth_painting(path, width: int, height: int, seed: int = 0, tile: int = 256
 
 def plan_layout(table_sizes: Sequence[tuple[int, int]], method: str = "brkga", seed: int = 0):
     """Places the paintings' power-of-two page tables (Mp, Np) in one merged power-of-two
-    table, each at offsets that are multiples of its own size. Returns
-    (table_width, table_height, offsets, info) where info holds both packers' fill ratios."""
-    sizes = [(int(w), int(h)) for w, h in table_sizes]
-    if hasattr(_core, "layout_page_tables"):
-        return _core.layout_page_tables(sizes, method, seed)
-    # Shelf packer (baseline): tallest first, shelves of the first table's height.
-    order = sorted(range(len(sizes)), key=lambda i: (-sizes[i][1], -sizes[i][0]))
-    width = max(w for w, _ in sizes)
-    x = y = shelf_h = 0
-    offsets = [(0, 0)] * len(sizes)
-    for i in order:
-        w, h = sizes[i]
-        if x + w > width:
-            x, y, shelf_h = 0, y + shelf_h, 0
-        if y % h:
-            y += h - y % h
-        offsets[i] = (x, y)
-        x += w
-        shelf_h = max(shelf_h, h)
-    height = 1
-    while height < y + shelf_h:
-        height *= 2
-    area = sum(w * h for w, h in sizes)
-    info = {"packer": "shelf", "fill_ratio": area / (width * height)}
-    return width, height, offsets, info
+    table, each at offsets that are multiples of its own size (so eqs 5, 6 stay exact).
+    Returns (table_width, table_height, offsets, info); info holds both packers' fill ratios
+    (BRKGA and the shelf baseline), whichever `method` was chosen."""
+    if method not in ("brkga", "shelf"):
+        raise ValueError(f"unknown layout method '{method}' (expected brkga or shelf)")
+    return _core.layout_page_tables([(int(w), int(h)) for w, h in table_sizes], method, seed)
 
 
 # ----------------------------------------------------------------------------- building
