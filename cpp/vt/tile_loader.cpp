@@ -254,6 +254,8 @@ TileLoader::TileLoader(const TilePack& pack, LoaderMode mode, unsigned threads, 
 
 TileLoader::~TileLoader() { close(); }
 
+std::uint32_t TileLoader::tile_size() const { return pack_.tile_size(); }
+
 void TileLoader::submit(const TileKey* keys, std::size_t n) {
     require(!closed_, "the loader is closed");
     const auto& ps = pack_.paintings();

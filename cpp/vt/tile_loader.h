@@ -67,6 +67,7 @@ public:
     LoaderMode mode() const { return mode_; }
     unsigned threads() const { return threads_; }
     std::size_t tile_bytes() const { return tile_bytes_; }
+    std::uint32_t tile_size() const;
     bool closed() const { return closed_; }
 
     struct Impl;  // the transport of one mode (tile_loader.cpp)
