@@ -24,6 +24,28 @@ inline Tap bilinear_tap(double x, std::uint32_t n) {
     return {static_cast<std::int64_t>(i), static_cast<float>(t - i)};
 }
 
+// Per-level sizes and scales of one painting, so a tap costs a multiply instead of ldexp and
+// a ceil-division. Level l is ceil(W / 2^l) x ceil(H / 2^l) texels; x_l = x0 * 2^-l exactly.
+class LevelAxes {
+public:
+    static constexpr std::uint32_t kMaxLevels = 32;
+    LevelAxes(std::uint32_t width, std::uint32_t height, std::uint32_t levels) {
+        for (std::uint32_t l = 0; l < levels && l < kMaxLevels; ++l) {
+            scale_[l] = 1.0 / double(std::uint64_t(1) << l);
+            w_[l] = (width + (1u << l) - 1) >> l;
+            h_[l] = (height + (1u << l) - 1) >> l;
+        }
+    }
+    Tap tap_x(double x0, std::uint32_t l) const { return bilinear_tap(x0 * scale_[l], w_[l]); }
+    Tap tap_y(double y0, std::uint32_t l) const { return bilinear_tap(y0 * scale_[l], h_[l]); }
+    std::uint32_t width(std::uint32_t l) const { return w_[l]; }
+    std::uint32_t height(std::uint32_t l) const { return h_[l]; }
+
+private:
+    double scale_[kMaxLevels] = {};
+    std::uint32_t w_[kMaxLevels] = {}, h_[kMaxLevels] = {};
+};
+
 // RGB8 bilinear blend of the 2 x 2 texels at p00 (row stride in bytes; dx = 3 bytes to the
 // right neighbour, 0 when clamped) into out[3], in the 0..255 range.
 inline void bilerp_rgb8(const std::uint8_t* p00, std::size_t stride, std::size_t dx,

@@ -12,7 +12,7 @@
 namespace gigascroll {
 
 MipTexture::MipTexture(std::vector<Level> levels) : levels_(std::move(levels)) {
-    require(!levels_.empty(), "MipTexture: no levels");
+    require(!levels_.empty() && levels_.size() <= LevelAxes::kMaxLevels, "MipTexture: 1 to 32 levels");
     const std::uint32_t W = levels_[0].width, H = levels_[0].height;
     for (std::uint32_t l = 0; l < levels_.size(); ++l) {
         const Level& lv = levels_[l];
@@ -52,10 +52,10 @@ void MipTexture::sample(const SampleRequest& r) const {
     require(r.u && r.v && r.out, "sample: missing arrays");
     const std::uint32_t L = level_count();
     const double W = levels_[0].width, H = levels_[0].height;
+    const LevelAxes axes(levels_[0].width, levels_[0].height, L);
     auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out) {
         const Level& lv = levels_[l];
-        const Tap tx = bilinear_tap(std::ldexp(x0, -int(l)), lv.width);
-        const Tap ty = bilinear_tap(std::ldexp(y0, -int(l)), lv.height);
+        const Tap tx = axes.tap_x(x0, l), ty = axes.tap_y(y0, l);
         const std::size_t row = std::size_t(lv.width) * 3;
         const std::uint8_t* p00 = lv.rgb.data() + std::size_t(ty.i0) * row + std::size_t(tx.i0) * 3;
         bilerp_rgb8(p00, row, tx.i0 + 1 < lv.width ? 3 : 0, ty.i0 + 1 < lv.height ? 1 : 0, tx.f, ty.f, out);

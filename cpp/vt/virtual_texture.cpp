@@ -33,6 +33,10 @@ VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
                                    " pinned coarse tiles plus one streamed tile");
     texels_.assign(std::size_t(n) * tile_size_ * tile_size_ * 3, 0);
     key_of_.assign(n, 0);
+    slot_origin_.resize(n);
+    for (std::uint32_t s = 0; s < n; ++s)
+        slot_origin_[s] = (s / slots_x) * std::size_t(tile_size_) * slots_x * tile_size_ * 3 +
+                          (s % slots_x) * std::size_t(tile_size_) * 3;
     pinned_.assign(n, 0);
     prev_.assign(n, kNil);
     next_.assign(n, kNil);
@@ -188,14 +192,10 @@ void VirtualTexture::sample(const SampleRequest& r) const {
 }
 
 namespace {
-// Bilinear taps of one axis at level l: texel position x0 * 2^-l on a level n texels long.
-inline Tap level_tap(double x0, std::uint32_t level, std::uint32_t full) {
-    const std::uint32_t n = (full + (1u << level) - 1) >> level;  // ceil(full / 2^l)
-    return bilinear_tap(std::ldexp(x0, -int(level)), n);
-}
-// Tile column holding the tap's sample point: floor((i0 + 0.5 + f) / P).
+// Tile column holding the tap's sample point: floor((i0 + 0.5 + f) / P) (i0 >= 0 after the
+// clamp; 32-bit division is the cheaper one).
 inline std::uint32_t tap_tile(const Tap& t, std::uint32_t P) {
-    return static_cast<std::uint32_t>((t.i0 + (t.f >= 0.5f ? 1 : 0)) / P);
+    return static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)) / P;
 }
 }  // namespace
 
@@ -213,22 +213,21 @@ void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std
     const std::uint32_t L = pt.level_count();
     const std::size_t row = std::size_t(slots_x_) * T * 3;
     const std::uint8_t* phys = texels_.data();
+    const LevelAxes axes(pt.width, pt.height, L);
 
     // Bilinear sample at level l with page-table fallback; returns the level that answered.
     auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out) -> std::uint32_t {
-        Tap tx = level_tap(x0, l, pt.width), ty = level_tap(y0, l, pt.height);
+        Tap tx = axes.tap_x(x0, l), ty = axes.tap_y(y0, l);
         const std::uint32_t cx = tap_tile(tx, P), cy = tap_tile(ty, P);
         const PageEntry e = table_.lookup(r.painting, l, cx, cy);
         const std::uint32_t al = e.level(), s = al - l;
         if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
-            tx = level_tap(x0, al, pt.width);
-            ty = level_tap(y0, al, pt.height);
+            tx = axes.tap_x(x0, al);
+            ty = axes.tap_y(y0, al);
         }
         const std::int64_t jx = std::clamp<std::int64_t>(tx.i0 - std::int64_t(cx >> s) * P + E, 0, T - 2);
         const std::int64_t jy = std::clamp<std::int64_t>(ty.i0 - std::int64_t(cy >> s) * P + E, 0, T - 2);
-        const std::uint32_t slot = e.slot();
-        const std::uint8_t* p00 = phys + ((slot / slots_x_) * T + jy) * row +
-                                  ((slot % slots_x_) * T + jx) * 3;
+        const std::uint8_t* p00 = phys + slot_origin_[e.slot()] + jy * row + jx * 3;
         bilerp_rgb8(p00, row, 3, 1, tx.f, ty.f, out);
         return al;
     };

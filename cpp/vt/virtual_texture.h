@@ -89,6 +89,7 @@ private:
     std::vector<std::uint8_t> texels_;
     std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;  // packed key -> slot
     std::vector<std::uint64_t> key_of_;                        // slot -> packed key
+    std::vector<std::size_t> slot_origin_;                     // slot -> byte offset of its texel (0, 0)
     std::vector<std::uint8_t> pinned_;
     std::vector<std::uint32_t> free_;
     // LRU list over unpinned resident slots: head = most recently used.

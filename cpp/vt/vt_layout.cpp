@@ -78,7 +78,7 @@ void VtLayout::validate() const {
         const VtPainting& p = paintings[i];
         const std::string who = "layout: painting " + std::to_string(i);
         require(p.level_count() > 0 && p.tiles_y.size() == p.tiles_x.size(), who + " has no levels");
-        require(p.level_count() <= 255, who + " has too many levels");
+        require(p.level_count() <= 32, who + " has more than 32 levels");
         require(std::has_single_bit(p.table_w) && std::has_single_bit(p.table_h),
                 who + ": page table size is not a power of two");
         require(p.table_w >= p.tiles_x[0] && p.table_h >= p.tiles_y[0], who + ": page table too small");

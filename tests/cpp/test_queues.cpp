@@ -130,12 +130,16 @@ static void spsc_stress(std::size_t n) {
         std::vector<std::uint64_t> batch(37);
         std::uint64_t next = 0;
         while (next < n) {
+            // On a full queue, yield: the machine may have fewer free cores than threads.
             if (next % 3 == 0) {
                 if (q.try_push(next)) ++next;
+                else std::this_thread::yield();
             } else {
                 const std::size_t k = std::min<std::size_t>(batch.size(), n - next);
                 for (std::size_t i = 0; i < k; ++i) batch[i] = next + i;
-                next += q.try_push_batch(batch.begin(), k);
+                const std::size_t pushed = q.try_push_batch(batch.begin(), k);
+                next += pushed;
+                if (pushed == 0) std::this_thread::yield();
             }
         }
     });
@@ -146,9 +150,11 @@ static void spsc_stress(std::size_t n) {
         std::uint64_t v;
         if (expect % 2 == 0) {
             if (q.try_pop(v)) ordered &= (v == expect++);
+            else std::this_thread::yield();
         } else {
             const std::size_t k = q.try_pop_batch(out.begin(), out.size());
             for (std::size_t i = 0; i < k; ++i) ordered &= (out[i] == expect++);
+            if (k == 0) std::this_thread::yield();
         }
     }
     producer.join();
@@ -197,6 +203,7 @@ static void mpsc_stress(std::size_t producers, std::size_t per_producer) {
             if (p < producers) next[p] = seq + 1;
         }
         total += k;
+        if (k == 0) std::this_thread::yield();
         std::uint64_t v;
         if (q.try_pop(v)) {
             const std::size_t p = v >> 40;
