@@ -257,25 +257,27 @@ def plan_layout(table_sizes: Sequence[tuple[int, int]], method: str = "brkga", s
 
 # ----------------------------------------------------------------------------- building
 
-def _prefetch(it: Iterator[np.ndarray], depth: int = 1) -> Iterator[np.ndarray]:
+def _prefetch(it: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
     """Runs the band reader one band ahead on a helper thread (OpenImageIO releases the GIL
-    while decoding), so reading overlaps the C++ reduction and tile cutting."""
-    q: queue.Queue = queue.Queue(maxsize=depth)
+    while decoding), so reading overlaps the C++ reduction and tile cutting. At most two
+    bands are alive at once (the one being packed and the one being read): peak memory."""
+    q: queue.Queue = queue.Queue()
+    slots = threading.Semaphore(2)
     stop = threading.Event()
     done = object()
 
     def worker():
         try:
-            for band in it:
-                while not stop.is_set():
-                    try:
-                        q.put(band, timeout=0.1)
-                        break
-                    except queue.Full:
-                        continue
+            while True:
+                while not slots.acquire(timeout=0.1):
+                    if stop.is_set():
+                        return
                 if stop.is_set():
                     return
-            q.put(done)
+                band = next(it, done)
+                q.put(band)
+                if band is done:
+                    return
         except BaseException as e:  # handed to the consumer
             q.put(e)
 
@@ -289,14 +291,11 @@ def _prefetch(it: Iterator[np.ndarray], depth: int = 1) -> Iterator[np.ndarray]:
             if isinstance(item, BaseException):
                 raise item
             yield item
+            del item
+            slots.release()  # the consumer is done with this band
     finally:
         stop.set()
-        while t.is_alive():
-            try:
-                q.get_nowait()
-            except queue.Empty:
-                pass
-            t.join(timeout=0.05)
+        t.join()
 
 
 def _prepare_output(out: Path, force: bool) -> None:
