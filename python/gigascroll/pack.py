@@ -334,6 +334,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     _prepare_output(out, force)
 
     sources: list[ImageSource] = []
+    bar = None
     tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
     try:
         for i, image in enumerate(inputs):
@@ -355,7 +356,6 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         tmp.mkdir(parents=True)
         builder = _core.PackBuilder(tmp, tile_size, border, codec, zstd_level, threads)
         total = sum(s.width * s.height for s in sources)
-        bar = None
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=total / 1e6, unit="Mpx", unit_scale=False, desc="pack",
@@ -363,10 +363,14 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                                   " {rate_fmt}]")
         for s, (ox, oy) in zip(sources, offsets):
             builder.begin_painting(s.name, s.width, s.height, s.source, s.conversion, ox, oy)
-            for band in _prefetch(s.bands()):
-                builder.add_rows(band)
-                if bar is not None:
-                    bar.update(band.shape[0] * band.shape[1] / 1e6)
+            bands = _prefetch(s.bands())
+            try:
+                for band in bands:
+                    builder.add_rows(band)
+                    if bar is not None:
+                        bar.update(band.shape[0] * band.shape[1] / 1e6)
+            finally:
+                bands.close()  # joins the reader thread before the image is closed
             builder.end_painting()
             s.close()
         info = dict(info)
@@ -378,6 +382,8 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
             shutil.rmtree(out)
         os.rename(tmp, out)
     except BaseException:
+        if bar is not None:
+            bar.close()
         for s in sources:
             s.close()
         shutil.rmtree(tmp, ignore_errors=True)
