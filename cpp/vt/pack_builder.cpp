@@ -95,11 +95,22 @@ void PackBuilder::add_rows(const std::uint8_t* rgb, std::uint32_t rows, std::uin
     const PaintingGeometry& g = paintings_.back().geometry;
     require(width == g.width, "add_rows: rows are " + std::to_string(width) +
                                   " pixels wide, the painting is " + std::to_string(g.width));
+    require(std::uint64_t(levels_[0].rows_done) + rows <= g.height,
+            "add_rows: " + std::to_string(rows) + " rows at row " +
+                std::to_string(levels_[0].rows_done) + " overflow the image height " +
+                std::to_string(g.height));
+    // Sub-bands of at most one payload height: the level-0 window then never holds more
+    // than about two tile rows, whatever band size the caller uses.
+    const std::uint32_t step = g.payload;
+    for (std::uint32_t done = 0; done < rows; done += step) {
+        const std::uint32_t n = std::min(step, rows - done);
+        add_sub_band(rgb + std::size_t(done) * width * 3, n);
+    }
+}
+
+void PackBuilder::add_sub_band(const std::uint8_t* rgb, std::uint32_t rows) {
+    const PaintingGeometry& g = paintings_.back().geometry;
     const std::uint32_t y0 = levels_[0].rows_done;
-    require(std::uint64_t(y0) + rows <= g.height,
-            "add_rows: " + std::to_string(rows) + " rows at row " + std::to_string(y0) +
-                " overflow the image height " + std::to_string(g.height));
-    if (rows == 0) return;
 
     // Rows each level completes in this band; grow the windows before the parallel part.
     std::vector<std::uint32_t> done(levels_.size());
@@ -229,11 +240,7 @@ void PackBuilder::emit_tile_row(Level& lv, std::uint32_t ty) {
     const std::uint32_t T = options_.tile_size, b = options_.border, P = T - 2 * b;
     const std::uint32_t W = lv.geo.width, H = lv.geo.height;
     const std::size_t tile_bytes = std::size_t(T) * T * 3;
-    const std::uint32_t n = lv.geo.tiles_x;
     const bool raw = options_.codec == Codec::Raw;
-    row_buffer_.resize(raw ? n * tile_bytes : 0);
-    std::vector<std::vector<std::uint8_t>> packed(raw ? 0 : n);
-    std::vector<std::uint64_t> sums(n);
 
     auto cut = [&](std::uint32_t tx, std::uint8_t* out) {
         const std::int64_t x0 = std::int64_t(tx) * P - b, y0 = std::int64_t(ty) * P - b;
@@ -253,45 +260,54 @@ void PackBuilder::emit_tile_row(Level& lv, std::uint32_t ty) {
         }
     };
 
-    parallel_for(n, 8, [&](std::size_t begin, std::size_t end) {
-        if (raw) {
-            for (std::size_t tx = begin; tx < end; ++tx) {
-                std::uint8_t* out = row_buffer_.data() + tx * tile_bytes;
-                cut(static_cast<std::uint32_t>(tx), out);
-                sums[tx] = checksum64(out, tile_bytes);
-            }
-            return;
-        }
-        std::vector<std::uint8_t> tile(tile_bytes);
-        ZSTD_CCtx* ctx = ZSTD_createCCtx();
-        for (std::size_t tx = begin; tx < end; ++tx) {
-            cut(static_cast<std::uint32_t>(tx), tile.data());
-            auto& out = packed[tx];
-            out.resize(ZSTD_compressBound(tile_bytes));
-            const std::size_t m = ZSTD_compressCCtx(ctx, out.data(), out.size(), tile.data(),
-                                                    tile_bytes, options_.zstd_level);
-            if (ZSTD_isError(m)) {
-                ZSTD_freeCCtx(ctx);
-                throw IoError(std::string("zstd compression failed: ") + ZSTD_getErrorName(m));
-            }
-            out.resize(m);
-            sums[tx] = checksum64(out.data(), m);
-        }
-        ZSTD_freeCCtx(ctx);
-    }, options_.threads);
-
+    // Groups of tiles bound the staging memory; within a group tiles are cut, checksummed
+    // and compressed in parallel, then appended to tiles.bin in tx order.
+    constexpr std::uint32_t kGroup = 64;
+    const std::uint32_t n = lv.geo.tiles_x;
     TileEntry* entries = lv.entries.data() + std::size_t(ty) * n;
-    std::uint64_t offset = sizeof(FileHeader) + data_bytes_;
-    for (std::uint32_t tx = 0; tx < n; ++tx) {
-        const std::uint32_t length =
-            raw ? static_cast<std::uint32_t>(tile_bytes) : static_cast<std::uint32_t>(packed[tx].size());
-        entries[tx] = TileEntry{offset, length, kTileStored, sums[tx]};
-        offset += length;
-        if (!raw) write_all(packed[tx].data(), length);
+    std::vector<std::vector<std::uint8_t>> packed(raw ? 0 : kGroup);
+    std::uint64_t sums[kGroup];
+    for (std::uint32_t g0 = 0; g0 < n; g0 += kGroup) {
+        const std::uint32_t m = std::min(kGroup, n - g0);
+        if (raw) staging_.resize(m * tile_bytes);
+        parallel_for(m, 4, [&](std::size_t begin, std::size_t end) {
+            if (raw) {
+                for (std::size_t i = begin; i < end; ++i) {
+                    std::uint8_t* out = staging_.data() + i * tile_bytes;
+                    cut(static_cast<std::uint32_t>(g0 + i), out);
+                    sums[i] = checksum64(out, tile_bytes);
+                }
+                return;
+            }
+            std::vector<std::uint8_t> tile(tile_bytes);
+            ZSTD_CCtx* ctx = ZSTD_createCCtx();
+            for (std::size_t i = begin; i < end; ++i) {
+                cut(static_cast<std::uint32_t>(g0 + i), tile.data());
+                auto& out = packed[i];
+                out.resize(ZSTD_compressBound(tile_bytes));
+                const std::size_t z = ZSTD_compressCCtx(ctx, out.data(), out.size(), tile.data(),
+                                                        tile_bytes, options_.zstd_level);
+                if (ZSTD_isError(z)) {
+                    ZSTD_freeCCtx(ctx);
+                    throw IoError(std::string("zstd compression failed: ") + ZSTD_getErrorName(z));
+                }
+                out.resize(z);
+                sums[i] = checksum64(out.data(), z);
+            }
+            ZSTD_freeCCtx(ctx);
+        }, options_.threads);
+
+        std::uint64_t offset = sizeof(FileHeader) + data_bytes_;
+        for (std::uint32_t i = 0; i < m; ++i) {
+            const auto length = static_cast<std::uint32_t>(raw ? tile_bytes : packed[i].size());
+            entries[g0 + i] = TileEntry{offset, length, kTileStored, sums[i]};
+            offset += length;
+            if (!raw) write_all(packed[i].data(), length);
+        }
+        if (raw) write_all(staging_.data(), std::size_t(m) * tile_bytes);
+        data_bytes_ = offset - sizeof(FileHeader);
+        tiles_written_ += m;
     }
-    if (raw) write_all(row_buffer_.data(), row_buffer_.size());
-    data_bytes_ = offset - sizeof(FileHeader);
-    tiles_written_ += n;
 }
 
 void PackBuilder::end_painting() {

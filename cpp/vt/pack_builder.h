@@ -67,6 +67,7 @@ private:
     struct Level;
     struct Painting;
 
+    void add_sub_band(const std::uint8_t* rgb, std::uint32_t rows);
     void reduce_strip(std::uint32_t x0, std::uint32_t x1, const std::uint8_t* rgb,
                       std::uint32_t y_begin, std::uint32_t rows);
     void finish_row(std::size_t l, std::uint32_t y, std::uint32_t x0, std::uint32_t x1);
@@ -83,7 +84,7 @@ private:
     std::vector<Level> levels_;   // mip chain state of the painting being built
     bool open_painting_ = false;
     bool finished_ = false;
-    std::vector<std::uint8_t> row_buffer_;  // one emitted tile row (raw codec)
+    std::vector<std::uint8_t> staging_;  // a group of cut tiles before writing (raw codec)
 };
 
 }  // namespace gigascroll

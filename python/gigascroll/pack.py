@@ -257,25 +257,27 @@ def plan_layout(table_sizes: Sequence[tuple[int, int]], method: str = "brkga", s
 
 # ----------------------------------------------------------------------------- building
 
-def _prefetch(it: Iterator[np.ndarray], depth: int = 1) -> Iterator[np.ndarray]:
+def _prefetch(it: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
     """Runs the band reader one band ahead on a helper thread (OpenImageIO releases the GIL
-    while decoding), so reading overlaps the C++ reduction and tile cutting."""
-    q: queue.Queue = queue.Queue(maxsize=depth)
+    while decoding), so reading overlaps the C++ reduction and tile cutting. At most two
+    bands are alive at once (the one being packed and the one being read): peak memory."""
+    q: queue.Queue = queue.Queue()
+    slots = threading.Semaphore(2)
     stop = threading.Event()
     done = object()
 
     def worker():
         try:
-            for band in it:
-                while not stop.is_set():
-                    try:
-                        q.put(band, timeout=0.1)
-                        break
-                    except queue.Full:
-                        continue
+            while True:
+                while not slots.acquire(timeout=0.1):
+                    if stop.is_set():
+                        return
                 if stop.is_set():
                     return
-            q.put(done)
+                band = next(it, done)
+                q.put(band)
+                if band is done:
+                    return
         except BaseException as e:  # handed to the consumer
             q.put(e)
 
@@ -289,14 +291,11 @@ def _prefetch(it: Iterator[np.ndarray], depth: int = 1) -> Iterator[np.ndarray]:
             if isinstance(item, BaseException):
                 raise item
             yield item
+            del item
+            slots.release()  # the consumer is done with this band
     finally:
         stop.set()
-        while t.is_alive():
-            try:
-                q.get_nowait()
-            except queue.Empty:
-                pass
-            t.join(timeout=0.05)
+        t.join()
 
 
 def _prepare_output(out: Path, force: bool) -> None:
@@ -335,6 +334,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     _prepare_output(out, force)
 
     sources: list[ImageSource] = []
+    bar = None
     tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
     try:
         for i, image in enumerate(inputs):
@@ -356,7 +356,6 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         tmp.mkdir(parents=True)
         builder = _core.PackBuilder(tmp, tile_size, border, codec, zstd_level, threads)
         total = sum(s.width * s.height for s in sources)
-        bar = None
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=total / 1e6, unit="Mpx", unit_scale=False, desc="pack",
@@ -364,10 +363,14 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                                   " {rate_fmt}]")
         for s, (ox, oy) in zip(sources, offsets):
             builder.begin_painting(s.name, s.width, s.height, s.source, s.conversion, ox, oy)
-            for band in _prefetch(s.bands()):
-                builder.add_rows(band)
-                if bar is not None:
-                    bar.update(band.shape[0] * band.shape[1] / 1e6)
+            bands = _prefetch(s.bands())
+            try:
+                for band in bands:
+                    builder.add_rows(band)
+                    if bar is not None:
+                        bar.update(band.shape[0] * band.shape[1] / 1e6)
+            finally:
+                bands.close()  # joins the reader thread before the image is closed
             builder.end_painting()
             s.close()
         info = dict(info)
@@ -379,6 +382,8 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
             shutil.rmtree(out)
         os.rename(tmp, out)
     except BaseException:
+        if bar is not None:
+            bar.close()
         for s in sources:
             s.close()
         shutil.rmtree(tmp, ignore_errors=True)

@@ -546,3 +546,16 @@ def test_cli_synth_pack_info(tmp_path):
         assert r.returncode == 2, (args, r.stderr)
         assert msg in r.stderr and "Traceback" not in r.stderr, (args, r.stderr)
     assert not (tmp_path / "q").exists()
+
+
+def test_bench_pack_smoke(tmp_path):
+    pytest.importorskip("pyvips")
+    r = run_cli("bench", "pack", "--width", 700, "--height", 260, "--workdir", tmp_path)
+    assert r.returncode == 0, r.stderr
+    result = json.loads((tmp_path / "bench_pack.json").read_text())
+    assert set(result["builders"]) == {"gigascroll", "libvips dzsave"}
+    assert result["speed_ratio"] > 0
+    assert (tmp_path / "bench_pack.png").stat().st_size > 0
+    # outputs removed, the synthesized input cached
+    assert sorted(f.name for f in tmp_path.iterdir()) == [
+        "bench_pack.json", "bench_pack.png", "ink-700x260.tif"]
