@@ -7,7 +7,7 @@ PIP := $(VENV)/bin/pip
 BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
 APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
-  libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev
+  libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev
 JOBS ?= $(shell nproc)
 
 .PHONY: all deps venv build demo test ctest pytest sanitize bench clean

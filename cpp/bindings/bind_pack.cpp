@@ -1,7 +1,225 @@
+// Tile packs: the reader (TilePack), the streaming builder (PackBuilder) and pack geometry.
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/filesystem.h>
+#include <nanobind/stl/pair.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
+
+#include <filesystem>
+
 #include "bindings/bindings.h"
+#include "common/error.h"
+#include "vt/ink_landscape.h"
+#include "vt/pack_builder.h"
+#include "vt/pack_geometry.h"
+#include "vt/page_layout.h"
+#include "vt/tile_pack.h"
 
 namespace nb = nanobind;
+using namespace nb::literals;
 
 namespace gigascroll::bindings {
-void bind_pack(nb::module_& m) { (void)m; }
+namespace {
+
+using Tile = nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>>;
+using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::device::cpu>;
+using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::device::cpu>;
+
+nb::dict geometry_dict(const PaintingGeometry& g) {
+    nb::dict d;
+    d["width"] = g.width;
+    d["height"] = g.height;
+    d["tile_size"] = g.tile_size;
+    d["border"] = g.border;
+    d["payload"] = g.payload;
+    d["table_size"] = std::make_pair(g.table_width, g.table_height);
+    d["uv_scale"] = std::make_pair(g.uv_scale_u(), g.uv_scale_v());
+    d["tile_count"] = g.tile_count;
+    nb::list levels;
+    for (const auto& lv : g.levels) {
+        nb::dict dl;
+        dl["size"] = std::make_pair(lv.width, lv.height);
+        dl["tiles"] = std::make_pair(lv.tiles_x, lv.tiles_y);
+        dl["first_entry"] = lv.first_entry;
+        levels.append(dl);
+    }
+    d["levels"] = levels;
+    return d;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> level_pairs(const PaintingGeometry& g,
+                                                                  bool tiles) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+    for (const auto& lv : g.levels)
+        out.emplace_back(tiles ? lv.tiles_x : lv.width, tiles ? lv.tiles_y : lv.height);
+    return out;
+}
+
+void check_tile_out(const TilePack& pack, const TileOut& out) {
+    const std::size_t T = pack.tile_size();
+    require(out.shape(0) == T && out.shape(1) == T && out.shape(2) == 3,
+            "out must have shape (" + std::to_string(T) + ", " + std::to_string(T) + ", 3)");
+    require(out.stride(2) == 1 && out.stride(1) == 3 && out.stride(0) == std::int64_t(3 * T),
+            "out must be C-contiguous");
+}
+
+}  // namespace
+
+void bind_pack(nb::module_& m) {
+    nb::class_<PaintingInfo>(m, "PackPainting", "One painting of a tile pack (read-only).")
+        .def_ro("name", &PaintingInfo::name)
+        .def_ro("source", &PaintingInfo::source)
+        .def_ro("conversion", &PaintingInfo::conversion)
+        .def_prop_ro("width", &PaintingInfo::width)
+        .def_prop_ro("height", &PaintingInfo::height)
+        .def_prop_ro("levels", &PaintingInfo::level_count, "number of mip levels")
+        .def_prop_ro("level_sizes", [](const PaintingInfo& p) { return level_pairs(p.geometry, false); },
+                     "(width, height) in texels of each level")
+        .def_prop_ro("level_tiles", [](const PaintingInfo& p) { return level_pairs(p.geometry, true); },
+                     "(tiles_x, tiles_y) real tiles of each level")
+        .def_prop_ro("table_size", [](const PaintingInfo& p) {
+            return std::make_pair(p.geometry.table_width, p.geometry.table_height); },
+            "(Mp, Np): the painting's power-of-two level-0 page table")
+        .def_prop_ro("table_offset", [](const PaintingInfo& p) {
+            return std::make_pair(p.table_x, p.table_y); },
+            "(x, y) offset of its page table in the merged table")
+        .def_prop_ro("uv_scale", [](const PaintingInfo& p) {
+            return std::make_pair(p.geometry.uv_scale_u(), p.geometry.uv_scale_v()); },
+            "(W / (Mp P), H / (Np P)): seed 000 eqs (3, 4)")
+        .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.tile_count; })
+        .def("__repr__", [](const PaintingInfo& p) {
+            return "PackPainting('" + p.name + "', " + std::to_string(p.width()) + " x " +
+                   std::to_string(p.height()) + ", " + std::to_string(p.level_count()) + " levels)";
+        });
+
+    nb::class_<TilePack>(m, "TilePack",
+                         "A tile pack opened for reading. Thread-safe; reads release the GIL.")
+        .def("__init__", [](TilePack* self, const std::filesystem::path& path) {
+            new (self) TilePack(path.string()); }, "path"_a)
+        .def_prop_ro("path", &TilePack::directory)
+        .def_prop_ro("paintings", &TilePack::paintings, nb::rv_policy::reference_internal)
+        .def_prop_ro("tile_size", &TilePack::tile_size)
+        .def_prop_ro("border", &TilePack::border)
+        .def_prop_ro("payload", &TilePack::payload)
+        .def_prop_ro("codec", [](const TilePack& p) { return std::string(codec_name(p.codec())); })
+        .def_prop_ro("table_size", [](const TilePack& p) {
+            return std::make_pair(p.table_width(), p.table_height()); },
+            "(Mc, Nc): size of the merged page table")
+        .def_prop_ro("tile_count", &TilePack::tile_count)
+        .def("has_tile", &TilePack::has_tile, "painting"_a, "level"_a, "tx"_a, "ty"_a)
+        .def("locate", [](const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
+                          std::uint32_t ty) {
+            const TileLocation loc = p.locate(pi, l, tx, ty);
+            return std::make_tuple(loc.offset, loc.length, loc.checksum); },
+            "painting"_a, "level"_a, "tx"_a, "ty"_a, "(offset, length, checksum) in tiles.bin")
+        .def("read_tile", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
+                             std::uint32_t tx, std::uint32_t ty) {
+            const std::size_t T = p.tile_size();
+            auto* data = new std::uint8_t[T * T * 3];
+            nb::capsule owner(data, [](void* d) noexcept { delete[] static_cast<std::uint8_t*>(d); });
+            {
+                nb::gil_scoped_release release;
+                p.read_tile(pi, l, tx, ty, data);  // on throw, `owner` frees the buffer
+            }
+            return Tile(data, {T, T, 3}, owner); },
+            "painting"_a, "level"_a, "tx"_a, "ty"_a,
+            "The tile as a (tile_size, tile_size, 3) uint8 array, checksum verified.")
+        .def("read_tile_into", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
+                                  std::uint32_t tx, std::uint32_t ty, TileOut out) {
+            check_tile_out(p, out);
+            nb::gil_scoped_release release;
+            p.read_tile(pi, l, tx, ty, out.data()); },
+            "painting"_a, "level"_a, "tx"_a, "ty"_a, "out"_a.noconvert(),
+            "Reads the tile into a C-contiguous (tile_size, tile_size, 3) uint8 array.");
+
+    nb::class_<PackBuilder>(m, "PackBuilder",
+                            "Low-level streaming pack writer; use gigascroll.build_pack instead.")
+        .def("__init__", [](PackBuilder* self, const std::filesystem::path& dir,
+                            std::uint32_t tile_size, std::uint32_t border, const std::string& codec,
+                            int zstd_level, unsigned threads) {
+            PackOptions o;
+            o.tile_size = tile_size;
+            o.border = border;
+            o.codec = parse_codec(codec);
+            o.zstd_level = zstd_level;
+            o.threads = threads;
+            new (self) PackBuilder(dir.string(), o); },
+            "directory"_a, "tile_size"_a = 128, "border"_a = 4, "codec"_a = "raw",
+            "zstd_level"_a = 3, "threads"_a = 0)
+        .def("begin_painting", [](PackBuilder& b, const std::string& name, std::uint32_t width,
+                                  std::uint32_t height, const std::string& source,
+                                  const std::string& conversion, std::uint32_t tx, std::uint32_t ty) {
+            b.begin_painting(PaintingSpec{name, source, conversion, width, height, tx, ty}); },
+            "name"_a, "width"_a, "height"_a, "source"_a = "", "conversion"_a = "",
+            "table_x"_a = 0, "table_y"_a = 0)
+        .def("add_rows", [](PackBuilder& b, Rows rows) {
+            require(rows.shape(2) == 3, "rows must have shape (n, width, 3)");
+            require(rows.stride(2) == 1 && rows.stride(1) == 3 &&
+                        rows.stride(0) == std::int64_t(rows.shape(1) * 3),
+                    "rows must be C-contiguous");
+            nb::gil_scoped_release release;
+            b.add_rows(rows.data(), static_cast<std::uint32_t>(rows.shape(0)),
+                       static_cast<std::uint32_t>(rows.shape(1))); },
+            "rows"_a.noconvert(), "uint8 array (n, width, 3), the next rows of the current painting")
+        .def("end_painting", &PackBuilder::end_painting)
+        .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
+             "page_table_json"_a = "{}")
+        .def_prop_ro("rows_done", &PackBuilder::rows_done)
+        .def_prop_ro("tiles_written", &PackBuilder::tiles_written)
+        .def_prop_ro("bytes_written", &PackBuilder::bytes_written);
+
+    m.def("render_ink_landscape", [](std::uint32_t width, std::uint32_t height, std::uint32_t y0,
+                                     std::uint32_t rows, std::uint64_t seed, unsigned threads) {
+        require(std::uint64_t(y0) + rows <= height && rows > 0 && width > 0,
+                "rows [y0, y0 + rows) must be a non-empty range inside the painting");
+        const std::size_t n = std::size_t(rows) * width * 3;
+        auto* data = new std::uint8_t[n];
+        nb::capsule owner(data, [](void* d) noexcept { delete[] static_cast<std::uint8_t*>(d); });
+        {
+            nb::gil_scoped_release release;
+            render_ink_landscape(width, height, y0, rows, seed, data, threads);
+        }
+        return Tile(data, {rows, width, 3}, owner); },
+        "width"_a, "height"_a, "y0"_a, "rows"_a, "seed"_a = 0, "threads"_a = 0,
+        "Rows [y0, y0 + rows) of the built-in ink-landscape painting as (rows, width, 3) uint8.");
+
+    m.def("layout_page_tables", [](const std::vector<std::pair<std::uint32_t, std::uint32_t>>& sizes,
+                                   const std::string& method, std::uint64_t seed) {
+        require(method == "brkga" || method == "shelf",
+                "unknown layout method '" + method + "' (expected brkga or shelf)");
+        std::vector<TableSize> tables;
+        for (auto [w, h] : sizes) tables.push_back({w, h});
+        PageLayout shelf, brkga;
+        {
+            nb::gil_scoped_release release;
+            shelf = shelf_layout(tables);
+            BrkgaOptions o;
+            o.seed = seed;
+            brkga = brkga_layout(tables, o);
+        }
+        const PageLayout& chosen = method == "shelf" ? shelf : brkga;
+        check_layout(tables, chosen);
+        nb::dict info;
+        info["packer"] = method;
+        info["fill_ratio"] = chosen.fill_ratio;
+        info["shelf_fill_ratio"] = shelf.fill_ratio;
+        info["brkga_fill_ratio"] = brkga.fill_ratio;
+        info["shelf_box_fill_ratio"] = shelf.box_fill_ratio;
+        info["brkga_box_fill_ratio"] = brkga.box_fill_ratio;
+        info["shelf_size"] = std::make_pair(shelf.width, shelf.height);
+        info["brkga_size"] = std::make_pair(brkga.width, brkga.height);
+        info["seed"] = seed;
+        return std::make_tuple(chosen.width, chosen.height, chosen.offsets, info); },
+        "sizes"_a, "method"_a = "brkga", "seed"_a = 0,
+        "Packs power-of-two page tables (Mp, Np) into one merged table; returns "
+        "(width, height, offsets, info) with both packers' fill ratios in info.");
+
+    m.def("painting_geometry", [](std::uint32_t w, std::uint32_t h, std::uint32_t tile_size,
+                                  std::uint32_t border) {
+        return geometry_dict(make_geometry(w, h, tile_size, border)); },
+        "width"_a, "height"_a, "tile_size"_a = 128, "border"_a = 4,
+        "Mip levels, tile grids, page-table size and UV scale of a painting.");
+}
+
 }  // namespace gigascroll::bindings

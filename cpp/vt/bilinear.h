@@ -1,0 +1,61 @@
+// The filtering shared by virtual-texture sampling and the plain mip-mapped texture, so the
+// two differ only by the indirection. Coordinates are continuous texel positions (texel i
+// covers [i, i + 1)), kept in double: at u near 1 on a 196301-texel painting a float would
+// be off by ~0.01 texel, a double by ~1e-11.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace gigascroll {
+
+// One axis of a bilinear footprint: texels i0 and i0 + 1, weight f of the second.
+struct Tap {
+    std::int64_t i0;
+    float f;
+};
+
+// Clamp-to-edge on an axis of n texels: clamping the position to [0.5, n - 0.5] gives the
+// same result as clamping texel indices, and keeps i0 + 1 inside [0, n] (weight 0 at n).
+inline Tap bilinear_tap(double x, std::uint32_t n) {
+    x = std::clamp(x, 0.5, double(n) - 0.5);
+    const double t = x - 0.5;
+    const double i = std::floor(t);
+    return {static_cast<std::int64_t>(i), static_cast<float>(t - i)};
+}
+
+// Per-level sizes and scales of one painting, so a tap costs a multiply instead of ldexp and
+// a ceil-division. Level l is ceil(W / 2^l) x ceil(H / 2^l) texels; x_l = x0 * 2^-l exactly.
+class LevelAxes {
+public:
+    static constexpr std::uint32_t kMaxLevels = 32;
+    LevelAxes(std::uint32_t width, std::uint32_t height, std::uint32_t levels) {
+        for (std::uint32_t l = 0; l < levels && l < kMaxLevels; ++l) {
+            scale_[l] = 1.0 / double(std::uint64_t(1) << l);
+            w_[l] = (width + (1u << l) - 1) >> l;
+            h_[l] = (height + (1u << l) - 1) >> l;
+        }
+    }
+    Tap tap_x(double x0, std::uint32_t l) const { return bilinear_tap(x0 * scale_[l], w_[l]); }
+    Tap tap_y(double y0, std::uint32_t l) const { return bilinear_tap(y0 * scale_[l], h_[l]); }
+    std::uint32_t width(std::uint32_t l) const { return w_[l]; }
+    std::uint32_t height(std::uint32_t l) const { return h_[l]; }
+
+private:
+    double scale_[kMaxLevels] = {};
+    std::uint32_t w_[kMaxLevels] = {}, h_[kMaxLevels] = {};
+};
+
+// RGB8 bilinear blend of the 2 x 2 texels at p00 (row stride in bytes; dx = 3 bytes to the
+// right neighbour, 0 when clamped) into out[3], in the 0..255 range.
+inline void bilerp_rgb8(const std::uint8_t* p00, std::size_t stride, std::size_t dx,
+                        std::size_t dy, float fx, float fy, float* out) {
+    const std::uint8_t* p10 = p00 + dx;
+    const std::uint8_t* p01 = p00 + dy * stride;
+    const std::uint8_t* p11 = p01 + dx;
+    const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+    for (int c = 0; c < 3; ++c)
+        out[c] = w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
+}
+
+}  // namespace gigascroll

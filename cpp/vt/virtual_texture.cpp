@@ -1,0 +1,259 @@
+#include "vt/virtual_texture.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <mutex>
+#include <string>
+#include <unordered_set>
+
+#include "common/error.h"
+#include "common/parallel.h"
+#include "vt/bilinear.h"
+
+namespace gigascroll {
+
+VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
+                               std::uint32_t slots_y, const TileSource& pinned_source)
+    : table_(layout), slots_x_(slots_x), slots_y_(slots_y), tile_size_(layout.tile_size) {
+    require(slots_x >= 1 && slots_y >= 1 && std::uint64_t(slots_x) * slots_y < (1u << 24),
+            "slots must be positive and fewer than 2^24 in total");
+    const std::uint32_t n = slots_x * slots_y;
+    // Pinned: every tile of the tail levels (which include the coarsest, single-tile level).
+    std::vector<TileKey> pinned;
+    for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
+        const VtPainting& pt = layout.paintings[p];
+        const std::uint32_t first = std::min(pt.merged_levels(), pt.level_count() - 1);
+        for (std::uint32_t l = first; l < pt.level_count(); ++l)
+            for (std::uint32_t y = 0; y < pt.tiles_y[l]; ++y)
+                for (std::uint32_t x = 0; x < pt.tiles_x[l]; ++x) pinned.push_back({p, l, x, y});
+    }
+    require(pinned.size() < n, "slots=(" + std::to_string(slots_x) + ", " + std::to_string(slots_y) +
+                                   ") cannot hold the " + std::to_string(pinned.size()) +
+                                   " pinned coarse tiles plus one streamed tile");
+    texels_.assign(std::size_t(n) * tile_size_ * tile_size_ * 3, 0);
+    key_of_.assign(n, 0);
+    slot_origin_.resize(n);
+    for (std::uint32_t s = 0; s < n; ++s)
+        slot_origin_[s] = (s / slots_x) * std::size_t(tile_size_) * slots_x * tile_size_ * 3 +
+                          (s % slots_x) * std::size_t(tile_size_) * 3;
+    pinned_.assign(n, 0);
+    prev_.assign(n, kNil);
+    next_.assign(n, kNil);
+    stats_.slots = n;
+    std::vector<std::uint8_t> tile(layout.tile_bytes());
+    std::uint32_t slot = 0;
+    for (const TileKey& k : pinned) {
+        pinned_source(k, tile.data());
+        pinned_[slot] = 1;
+        store(slot, k, tile.data());
+        ++slot;
+    }
+    stats_.pinned = pinned.size();
+    for (std::uint32_t s = n; s-- > slot;) free_.push_back(s);  // hand out low slots first
+}
+
+void VirtualTexture::check_key(const TileKey& k) const {
+    const auto& ps = layout().paintings;
+    require(k.painting < ps.size(), "painting " + std::to_string(k.painting) + " out of range");
+    const VtPainting& p = ps[k.painting];
+    require(k.level < p.level_count(), "level " + std::to_string(k.level) + " out of range");
+    require(k.tx < p.tiles_x[k.level] && k.ty < p.tiles_y[k.level],
+            "tile (" + std::to_string(k.tx) + ", " + std::to_string(k.ty) + ") out of range at level " +
+                std::to_string(k.level));
+}
+
+std::uint32_t VirtualTexture::resident_slot(const TileKey& key) const {
+    auto it = slot_of_.find(key.packed());
+    return it == slot_of_.end() ? PageEntry::kNone : it->second;
+}
+
+void VirtualTexture::store(std::uint32_t slot, const TileKey& key, const std::uint8_t* data) {
+    const std::size_t T = tile_size_, row = std::size_t(slots_x_) * T * 3;
+    std::uint8_t* dst = texels_.data() + (slot / slots_x_) * T * row + (slot % slots_x_) * T * 3;
+    for (std::size_t y = 0; y < T; ++y) std::memcpy(dst + y * row, data + y * T * 3, T * 3);
+    key_of_[slot] = key.packed();
+    slot_of_[key.packed()] = slot;
+    table_.insert(key, slot);
+    ++stats_.insertions;
+}
+
+void VirtualTexture::lru_unlink(std::uint32_t s) {
+    (prev_[s] == kNil ? head_ : next_[prev_[s]]) = next_[s];
+    (next_[s] == kNil ? tail_ : prev_[next_[s]]) = prev_[s];
+    prev_[s] = next_[s] = kNil;
+}
+
+void VirtualTexture::lru_push_front(std::uint32_t s) {
+    prev_[s] = kNil;
+    next_[s] = head_;
+    (head_ == kNil ? tail_ : prev_[head_]) = s;
+    head_ = s;
+}
+
+std::optional<TileKey> VirtualTexture::insert(const TileKey& key, const std::uint8_t* data) {
+    check_key(key);
+    std::unique_lock lock(mutex_);
+    if (const std::uint32_t s = resident_slot(key); s != PageEntry::kNone) {
+        if (!pinned_[s]) {
+            lru_unlink(s);
+            lru_push_front(s);
+        }
+        return std::nullopt;
+    }
+    std::optional<TileKey> evicted;
+    std::uint32_t s;
+    if (!free_.empty()) {
+        s = free_.back();
+        free_.pop_back();
+    } else {
+        s = tail_;  // least recently used
+        lru_unlink(s);
+        evicted = TileKey::unpack(key_of_[s]);
+        slot_of_.erase(key_of_[s]);
+        table_.evict(*evicted);
+        ++stats_.evictions;
+    }
+    store(s, key, data);
+    lru_push_front(s);
+    return evicted;
+}
+
+std::vector<TileKey> VirtualTexture::request(const std::vector<TileKey>& keys) {
+    for (const TileKey& k : keys) check_key(k);
+    std::unique_lock lock(mutex_);
+    std::vector<TileKey> missing;
+    std::unordered_set<std::uint64_t> seen;
+    for (const TileKey& k : keys) {
+        const std::uint32_t s = resident_slot(k);
+        if (s != PageEntry::kNone) {
+            ++stats_.hits;
+            if (!pinned_[s]) {
+                lru_unlink(s);
+                lru_push_front(s);
+            }
+        } else {
+            ++stats_.misses;
+            if (seen.insert(k.packed()).second) missing.push_back(k);
+        }
+    }
+    return missing;
+}
+
+bool VirtualTexture::is_resident(const TileKey& key) const {
+    check_key(key);
+    std::shared_lock lock(mutex_);
+    return resident_slot(key) != PageEntry::kNone;
+}
+
+bool VirtualTexture::is_pinned(const TileKey& key) const {
+    check_key(key);
+    std::shared_lock lock(mutex_);
+    const std::uint32_t s = resident_slot(key);
+    return s != PageEntry::kNone && pinned_[s];
+}
+
+std::vector<TileKey> VirtualTexture::resident_tiles() const {
+    std::shared_lock lock(mutex_);
+    std::vector<TileKey> out;
+    for (const auto& [k, s] : slot_of_) out.push_back(TileKey::unpack(k));
+    std::sort(out.begin(), out.end(), [](const TileKey& a, const TileKey& b) { return a.packed() < b.packed(); });
+    return out;
+}
+
+CacheStats VirtualTexture::stats() const {
+    std::shared_lock lock(mutex_);
+    CacheStats s = stats_;
+    s.resident = slot_of_.size();
+    return s;
+}
+
+PageEntry VirtualTexture::lookup(const TileKey& key) const {
+    const auto& ps = layout().paintings;
+    require(key.painting < ps.size() && key.level < ps[key.painting].level_count() &&
+                key.tx < table_.grid_w(key.painting, key.level) &&
+                key.ty < table_.grid_h(key.painting, key.level),
+            "page-table key out of range");
+    std::shared_lock lock(mutex_);
+    return table_.lookup(key.painting, key.level, key.tx, key.ty);
+}
+
+bool VirtualTexture::page_table_matches_rebuild() const {
+    std::shared_lock lock(mutex_);
+    return table_.equals_rebuild([&](const TileKey& k) { return resident_slot(k); });
+}
+
+void VirtualTexture::sample(const SampleRequest& r) const {
+    require(r.painting < layout().paintings.size(), "painting out of range");
+    require(r.u && r.v && r.out, "sample: missing arrays");
+    std::shared_lock lock(mutex_);
+    parallel_for(r.count, 4096, [&](std::size_t b, std::size_t e) { sample_range(r, b, e); },
+                 r.threads);
+}
+
+namespace {
+// Tile column holding the tap's sample point: floor((i0 + 0.5 + f) / P) (i0 >= 0 after the
+// clamp; 32-bit division is the cheaper one).
+inline std::uint32_t tap_tile(const Tap& t, std::uint32_t P) {
+    return static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)) / P;
+}
+}  // namespace
+
+// Seed 000 eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
+// its padded page table and eq (5,6) normalise by the merged table; we instead keep the
+// level-0 texel position x0 = u W in double, derive the level-l position x0 2^-l exactly, and
+// index the table by the integer tile column floor(x / P) (+ the painting's offset >> l,
+// inside PageTable). Eq (7,8)'s in-tile offset with border E becomes the integer texel
+// i0 - tx P + E plus the fraction, and eq (9,10)'s physical coordinate the slot's texel
+// origin plus that: no normalised float coordinate ever exists, so 1/256 texel holds at u
+// near 1 on the widest painting.
+void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std::size_t end) const {
+    const VtPainting& pt = layout().paintings[r.painting];
+    const std::uint32_t P = layout().payload(), E = layout().border, T = tile_size_;
+    const std::uint32_t L = pt.level_count();
+    const std::size_t row = std::size_t(slots_x_) * T * 3;
+    const std::uint8_t* phys = texels_.data();
+    const LevelAxes axes(pt.width, pt.height, L);
+
+    // Bilinear sample at level l with page-table fallback; returns the level that answered.
+    auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out) -> std::uint32_t {
+        Tap tx = axes.tap_x(x0, l), ty = axes.tap_y(y0, l);
+        const std::uint32_t cx = tap_tile(tx, P), cy = tap_tile(ty, P);
+        const PageEntry e = table_.lookup(r.painting, l, cx, cy);
+        const std::uint32_t al = e.level(), s = al - l;
+        if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
+            tx = axes.tap_x(x0, al);
+            ty = axes.tap_y(y0, al);
+        }
+        const std::int64_t jx = std::clamp<std::int64_t>(tx.i0 - std::int64_t(cx >> s) * P + E, 0, T - 2);
+        const std::int64_t jy = std::clamp<std::int64_t>(ty.i0 - std::int64_t(cy >> s) * P + E, 0, T - 2);
+        const std::uint8_t* p00 = phys + slot_origin_[e.slot()] + jy * row + jx * 3;
+        bilerp_rgb8(p00, row, 3, 1, tx.f, ty.f, out);
+        return al;
+    };
+
+    for (std::size_t i = begin; i < end; ++i) {
+        const double u = std::isnan(r.u[i]) ? 0.0 : std::clamp(r.u[i], 0.0, 1.0);
+        const double v = std::isnan(r.v[i]) ? 0.0 : std::clamp(r.v[i], 0.0, 1.0);
+        const double x0 = u * pt.width, y0 = v * pt.height;
+        float lod = r.lod ? r.lod[i] : r.lod_scalar;
+        lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
+        float* out = r.out + 3 * i;
+        std::uint32_t answered;
+        if (r.filter == Filter::Bilinear) {
+            answered = bilinear(x0, y0, static_cast<std::uint32_t>(std::lround(lod)), out);
+        } else {
+            const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
+            const float f = lod - float(l0);
+            answered = bilinear(x0, y0, l0, out);
+            if (f > 0 && l0 + 1 < L) {
+                float c[3];
+                bilinear(x0, y0, l0 + 1, c);
+                for (int k = 0; k < 3; ++k) out[k] += f * (c[k] - out[k]);
+            }
+        }
+        if (r.level_out) r.level_out[i] = static_cast<std::int8_t>(answered);
+    }
+}
+
+}  // namespace gigascroll

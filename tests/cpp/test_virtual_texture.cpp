@@ -1,0 +1,305 @@
+// Page table, LRU cache and VT sampling against independent references: the brute-force
+// page-table rebuild, a test-built mip chain sampled without indirection, and closed-form
+// texel values at the far end of the widest painting of seed 000 Table 4.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "common/error.h"
+#include "vt/mip_texture.h"
+#include "vt/virtual_texture.h"
+
+using namespace gigascroll;
+
+namespace {
+
+// Mip chain of a random RGB image by the pack's rule: a texel is the rounded mean of the
+// level-0 pixels under it (computed here from level 0 directly, not level by level).
+std::vector<MipTexture::Level> make_levels(std::uint32_t W, std::uint32_t H, std::uint32_t count,
+                                           std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::vector<MipTexture::Level> levels(count);
+    levels[0] = {W, H, std::vector<std::uint8_t>(std::size_t(W) * H * 3)};
+    for (auto& b : levels[0].rgb) b = std::uint8_t(rng());
+    for (std::uint32_t l = 1; l < count; ++l) {
+        auto& lv = levels[l];
+        lv.width = (W + (1u << l) - 1) >> l;
+        lv.height = (H + (1u << l) - 1) >> l;
+        lv.rgb.resize(std::size_t(lv.width) * lv.height * 3);
+        for (std::uint32_t y = 0; y < lv.height; ++y)
+            for (std::uint32_t x = 0; x < lv.width; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    std::uint64_t sum = 0, n = 0;
+                    for (std::uint32_t yy = y << l; yy < std::min(H, (y + 1) << l); ++yy)
+                        for (std::uint32_t xx = x << l; xx < std::min(W, (x + 1) << l); ++xx, ++n)
+                            sum += levels[0].rgb[(std::size_t(yy) * W + xx) * 3 + c];
+                    lv.rgb[(std::size_t(y) * lv.width + x) * 3 + c] = std::uint8_t((2 * sum + n) / (2 * n));
+                }
+    }
+    return levels;
+}
+
+// Cuts tile (tx, ty) of a level with borders clamped to the level's edge, as the pack does.
+void cut_tile(const MipTexture::Level& lv, std::uint32_t T, std::uint32_t E, const TileKey& k,
+              std::uint8_t* out) {
+    const std::int64_t P = T - 2 * E;
+    for (std::uint32_t j = 0; j < T; ++j)
+        for (std::uint32_t i = 0; i < T; ++i) {
+            const std::int64_t x = std::clamp<std::int64_t>(k.tx * P - E + i, 0, lv.width - 1);
+            const std::int64_t y = std::clamp<std::int64_t>(k.ty * P - E + j, 0, lv.height - 1);
+            for (int c = 0; c < 3; ++c)
+                out[(std::size_t(j) * T + i) * 3 + c] = lv.rgb[(std::size_t(y) * lv.width + x) * 3 + c];
+        }
+}
+
+std::vector<TileKey> all_tiles(const VtLayout& layout) {
+    std::vector<TileKey> keys;
+    for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
+        const auto& pt = layout.paintings[p];
+        for (std::uint32_t l = 0; l < pt.level_count(); ++l)
+            for (std::uint32_t y = 0; y < pt.tiles_y[l]; ++y)
+                for (std::uint32_t x = 0; x < pt.tiles_x[l]; ++x) keys.push_back({p, l, x, y});
+    }
+    return keys;
+}
+
+}  // namespace
+
+TEST(VtLayout, TailLevelsOfTheScroll) {
+    // The seed's scroll: Mp = 2048, Np = 64, levels 0..11; levels 7..11 are the tail (21 tiles).
+    const VtLayout layout = VtLayout::make(128, 4, {{152089, 6083}});
+    const VtPainting& p = layout.paintings[0];
+    EXPECT_EQ(p.table_w, 2048u);
+    EXPECT_EQ(p.table_h, 64u);
+    EXPECT_EQ(p.level_count(), 12u);
+    EXPECT_EQ(p.merged_levels(), 7u);
+    std::uint32_t tail = 0;
+    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x[l] * p.tiles_y[l];
+    EXPECT_EQ(tail, 21u);
+    EXPECT_EQ(p.tiles_x[11] * p.tiles_y[11], 1u);
+}
+
+TEST(PageTable, IncrementalUpdatesMatchFullRebuild) {
+    // Three paintings of awkward sizes; a small cache so LRU evictions happen constantly.
+    const VtLayout layout = VtLayout::make(16, 2, {{500, 90}, {37, 301}, {12, 12}});
+    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
+    VirtualTexture vt(layout, 6, 6, [](const TileKey&, std::uint8_t*) {});
+    const auto keys = all_tiles(layout);
+    std::mt19937 rng(7);
+    for (int step = 0; step < 600; ++step) {
+        const TileKey k = keys[rng() % keys.size()];
+        const auto evicted = vt.insert(k, zero.data());
+        EXPECT_TRUE(vt.is_resident(k));
+        if (evicted) EXPECT_FALSE(vt.is_resident(*evicted));
+        if (step % 25 == 0) ASSERT_TRUE(vt.page_table_matches_rebuild()) << "step " << step;
+    }
+    EXPECT_TRUE(vt.page_table_matches_rebuild());
+    const CacheStats s = vt.stats();
+    EXPECT_EQ(s.resident, 36u);
+    EXPECT_GT(s.evictions, 0u);
+}
+
+TEST(PageTable, LookupIsTheFinestResidentAncestor) {
+    const VtLayout layout = VtLayout::make(16, 2, {{300, 200}});
+    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
+    VirtualTexture vt(layout, 8, 8, [](const TileKey&, std::uint8_t*) {});
+    const auto& pt = layout.paintings[0];
+    const std::uint32_t L = pt.level_count();
+    // Nothing streamed yet: every entry falls back to the finest pinned level (the first
+    // tail level, or the coarsest level when there is no tail).
+    const std::uint32_t first_pinned = std::min(pt.merged_levels(), L - 1);
+    EXPECT_EQ(vt.lookup({0, 0, 5, 5}).level(), first_pinned);
+    vt.insert({0, 2, 1, 1}, zero.data());
+    vt.insert({0, 0, 5, 5}, zero.data());
+    EXPECT_EQ(vt.lookup({0, 0, 5, 5}).level(), 0u);
+    EXPECT_EQ(vt.lookup({0, 0, 4, 5}).level(), 2u);  // sibling: its level-2 ancestor (1, 1)
+    EXPECT_EQ(vt.lookup({0, 1, 2, 2}).level(), 2u);
+    EXPECT_EQ(vt.lookup({0, 0, 0, 0}).level(), first_pinned);  // not under (2, 1, 1)
+    EXPECT_EQ(vt.lookup({0, 2, 1, 1}).slot(), vt.lookup({0, 0, 4, 5}).slot());
+}
+
+TEST(VirtualTexture, LruEvictsLeastRecentlyUsedAndKeepsPinned) {
+    const VtLayout layout = VtLayout::make(16, 2, {{200, 30}});
+    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
+    VirtualTexture vt(layout, 4, 3, [](const TileKey&, std::uint8_t*) {});
+    const std::uint64_t pinned = vt.stats().pinned;
+    const std::uint32_t free_slots = 12 - pinned;
+    ASSERT_GE(free_slots, 3u);
+    for (std::uint32_t i = 0; i < free_slots; ++i) EXPECT_FALSE(vt.insert({0, 0, i, 0}, zero.data()));
+    // Touch tile 0, so tile 1 is the least recently used.
+    EXPECT_TRUE(vt.request({{0, 0, 0, 0}, {0, 0, 9, 0}, {0, 0, 9, 0}}).size() == 1);
+    const auto ev = vt.insert({0, 0, 10, 0}, zero.data());
+    ASSERT_TRUE(ev);
+    EXPECT_EQ(*ev, (TileKey{0, 0, 1, 0}));
+    const CacheStats s = vt.stats();
+    EXPECT_EQ(s.hits, 1u);
+    EXPECT_EQ(s.misses, 2u);
+    EXPECT_EQ(s.evictions, 1u);
+    EXPECT_EQ(s.resident, 12u);
+    const auto& pt = layout.paintings[0];
+    EXPECT_TRUE(vt.is_pinned({0, pt.level_count() - 1, 0, 0}));
+}
+
+TEST(VirtualTexture, RejectsTooFewSlotsAndBadKeys) {
+    const VtLayout layout = VtLayout::make(128, 4, {{152089, 6083}});
+    EXPECT_THROW(VirtualTexture(layout, 4, 4, [](const TileKey&, std::uint8_t*) {}), InvalidArgument);
+    VirtualTexture vt(layout, 5, 5, [](const TileKey&, std::uint8_t*) {});
+    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
+    EXPECT_THROW(vt.insert({0, 0, 1268, 0}, zero.data()), InvalidArgument);
+    EXPECT_THROW(vt.insert({1, 0, 0, 0}, zero.data()), InvalidArgument);
+    EXPECT_THROW(vt.insert({0, 12, 0, 0}, zero.data()), InvalidArgument);
+}
+
+// Samples the VT and the plain mip texture at the same points; returns the max difference.
+static float max_difference(const VirtualTexture& vt, const MipTexture& ref, Filter filter,
+                            const std::vector<double>& u, const std::vector<double>& v,
+                            const std::vector<float>& lod, bool use_answered_level) {
+    const std::size_t n = u.size();
+    std::vector<float> a(3 * n), b(3 * n);
+    std::vector<std::int8_t> answered(n);
+    SampleRequest r;
+    r.u = u.data();
+    r.v = v.data();
+    r.lod = lod.data();
+    r.count = n;
+    r.filter = filter;
+    r.out = a.data();
+    r.level_out = answered.data();
+    r.threads = 2;
+    vt.sample(r);
+    std::vector<float> lod_ref(lod);
+    if (use_answered_level)
+        for (std::size_t i = 0; i < n; ++i) lod_ref[i] = answered[i];
+    r.lod = lod_ref.data();
+    r.out = b.data();
+    r.level_out = nullptr;
+    ref.sample(r);
+    float worst = 0;
+    for (std::size_t i = 0; i < 3 * n; ++i) worst = std::max(worst, std::abs(a[i] - b[i]));
+    return worst;
+}
+
+TEST(VirtualTexture, SamplingEqualsPlainMipTextureWhenResident) {
+    const std::uint32_t W = 1001, H = 299, T = 32, E = 2;
+    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
+    const std::uint32_t L = layout.paintings[0].level_count();
+    const auto levels = make_levels(W, H, L, 3);
+    auto source = [&](const TileKey& k, std::uint8_t* out) { cut_tile(levels[k.level], T, E, k, out); };
+    VirtualTexture vt(layout, 24, 24, source);
+    std::vector<std::uint8_t> tile(layout.tile_bytes());
+    for (const TileKey& k : all_tiles(layout))
+        if (!vt.is_resident(k)) {
+            source(k, tile.data());
+            ASSERT_FALSE(vt.insert(k, tile.data())) << "the cache must hold every tile here";
+        }
+    const MipTexture ref(levels);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<double> u, v;
+    std::vector<float> lod;
+    for (int i = 0; i < 20000; ++i) {
+        u.push_back(unit(rng));
+        v.push_back(unit(rng));
+        lod.push_back(float(unit(rng) * (L - 1)));
+    }
+    for (double e : {0.0, 1.0, 0.5 / W, 1 - 0.5 / W, 1e-12, 1 - 1e-12})  // edges and corners
+        for (double f : {0.0, 1.0, 0.5 / H, 1 - 0.5 / H}) {
+            u.push_back(e);
+            v.push_back(f);
+            lod.push_back(0.0f);
+        }
+    EXPECT_LT(max_difference(vt, ref, Filter::Bilinear, u, v, lod, false), 1e-3f);
+    EXPECT_LT(max_difference(vt, ref, Filter::Trilinear, u, v, lod, false), 1e-3f);
+}
+
+TEST(VirtualTexture, MissingTilesFallBackToTheFinestResidentAncestor) {
+    const std::uint32_t W = 777, H = 333, T = 32, E = 3;
+    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
+    const std::uint32_t L = layout.paintings[0].level_count();
+    const auto levels = make_levels(W, H, L, 5);
+    auto source = [&](const TileKey& k, std::uint8_t* out) { cut_tile(levels[k.level], T, E, k, out); };
+    VirtualTexture vt(layout, 12, 12, source);
+    std::mt19937 rng(13);
+    auto keys = all_tiles(layout);
+    std::shuffle(keys.begin(), keys.end(), rng);
+    std::vector<std::uint8_t> tile(layout.tile_bytes());
+    for (std::size_t i = 0; i < keys.size() / 4; ++i) {  // a random quarter, with evictions
+        source(keys[i], tile.data());
+        vt.insert(keys[i], tile.data());
+    }
+    const MipTexture ref(levels);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<double> u, v;
+    std::vector<float> lod;
+    for (int i = 0; i < 20000; ++i) {
+        u.push_back(unit(rng));
+        v.push_back(unit(rng));
+        lod.push_back(std::floor(float(unit(rng) * L)));
+    }
+    // Bilinear at an integer lod answered by level a == bilinear of the plain level a.
+    EXPECT_LT(max_difference(vt, ref, Filter::Bilinear, u, v, lod, true), 1e-3f);
+    std::vector<float> a(3 * u.size());
+    std::vector<std::int8_t> answered(u.size());
+    SampleRequest r;
+    r.u = u.data(); r.v = v.data(); r.lod = lod.data(); r.count = u.size();
+    r.out = a.data(); r.level_out = answered.data();
+    vt.sample(r);
+    std::size_t fell_back = 0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+        EXPECT_GE(answered[i], lod[i]);
+        fell_back += answered[i] > lod[i];
+    }
+    EXPECT_GT(fell_back, 0u);
+}
+
+TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
+    // 196301 x 5197 (seed 000 Table 4). Level 0 alternates 0 / 255 between columns, so a
+    // bilinear sample between two texels reads the fraction directly: value = 255 f or 255 (1-f).
+    const std::uint32_t W = 196301, H = 5197, T = 128, E = 4, P = T - 2 * E;
+    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
+    auto texel = [&](std::int64_t x) -> std::uint8_t { return (std::clamp<std::int64_t>(x, 0, W - 1) % 2) ? 255 : 0; };
+    auto source = [&](const TileKey& k, std::uint8_t* out) {
+        for (std::uint32_t j = 0; j < T; ++j)
+            for (std::uint32_t i = 0; i < T; ++i)
+                for (int c = 0; c < 3; ++c)
+                    out[(std::size_t(j) * T + i) * 3 + c] = k.level == 0 ? texel(std::int64_t(k.tx) * P - E + i) : 77;
+    };
+    VirtualTexture vt(layout, 8, 8, source);
+    std::vector<std::uint8_t> tile(layout.tile_bytes());
+    const std::uint32_t last = layout.paintings[0].tiles_x[0] - 1;
+    for (std::uint32_t tx : {last - 1, last}) {
+        source({0, 0, tx, 20}, tile.data());
+        vt.insert({0, 0, tx, 20}, tile.data());
+    }
+    std::vector<double> u, v;
+    std::vector<double> expect;
+    for (int k = 0; k <= 256; ++k) {  // x0 from texel centre W-3 to W-2 in 1/256 steps
+        const double x0 = (W - 3) + 0.5 + k / 256.0;
+        u.push_back(x0 / W);
+        v.push_back((20 * P + 60.5) / H);
+        const double f = k / 256.0;
+        expect.push_back(texel(W - 3) * (1 - f) + texel(W - 2) * f);
+    }
+    std::vector<float> out(3 * u.size()), out32(3 * u.size());
+    std::vector<std::int8_t> answered(u.size());
+    SampleRequest r;
+    r.u = u.data(); r.v = v.data(); r.count = u.size(); r.out = out.data(); r.level_out = answered.data();
+    vt.sample(r);
+    double worst = 0, worst32 = 0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+        ASSERT_EQ(answered[i], 0);
+        worst = std::max(worst, std::abs(out[3 * i] - expect[i]));
+    }
+    // 1/256 texel of a 0-255 ramp is 1 unit; we require a tenth of that.
+    EXPECT_LT(worst, 0.1);
+    // The same through float32 uv is far off: shows the test can tell.
+    std::vector<double> u32(u.size());
+    for (std::size_t i = 0; i < u.size(); ++i) u32[i] = double(float(u[i]));
+    r.u = u32.data(); r.out = out32.data();
+    vt.sample(r);
+    for (std::size_t i = 0; i < u.size(); ++i) worst32 = std::max(worst32, std::abs(out32[3 * i] - expect[i]));
+    EXPECT_GT(worst32, 1.0);
+}
