@@ -20,6 +20,8 @@
 #include "vt/request_hash.h"
 #include "vt/request_processing.h"
 #include "vt/residency.h"
+#include "vt/virtual_texture.h"
+#include "vt/vt_lookup.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -54,7 +56,7 @@ HeldBuffer as_buffer(nb::handle h, const char* what) {
             std::string(what) + " must have dtype uint64 (request keys)");
     require(a.device_type() == nb::device::cpu::value, std::string(what) + " must be on the CPU");
     std::int64_t expect = 1;
-    for (std::size_t i = a.ndim(); i-- > 0;) {
+    for (std::size_t i = a.ndim(); a.size() > 0 && i-- > 0;) {
         require(a.shape(i) == 1 || a.stride(i) == expect,
                 std::string(what) + " must be C-contiguous");
         expect *= std::int64_t(a.shape(i));
@@ -216,6 +218,28 @@ void bind_views(nb::module_& m) {
           "Feedback pass: (height, width) uint64 request keys (NO_REQUEST where no painting);\n"
           "width/height 0 = 1/8 of the camera's resolution. with_lod also returns lambda.");
 
+    m.def("render_view", [](const ExhibitionScene& scene, const Camera& camera, std::int64_t width,
+                            std::int64_t height, double lod_bias, unsigned threads) {
+        require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
+                "view resolution out of range");
+        FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads};
+        const std::size_t w = feedback_width(camera, o), h = feedback_height(camera, o);
+        std::vector<std::uint64_t> keys(w * h);
+        std::vector<float> lod(w * h);
+        std::vector<double> uv(2 * w * h);
+        {
+            nb::gil_scoped_release release;
+            render_feedback(scene, camera, o, keys.data(), lod.data(), uv.data());
+        }
+        nb::dict d;
+        d["keys"] = nb::cast(to_numpy(std::move(keys))).attr("reshape")(h, w);
+        d["lod"] = nb::cast(to_numpy(std::move(lod))).attr("reshape")(h, w);
+        d["uv"] = nb::cast(to_numpy(std::move(uv))).attr("reshape")(h, w, 2);
+        return d;
+    }, "scene"_a, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
+          "The feedback pass plus what the display pass samples: dict of keys (h, w), lod (h, w)\n"
+          "and uv (h, w, 2) painting coordinates (NaN where no painting).");
+
     m.def("texel_footprint", [](const ExhibitionScene& scene, std::size_t placement,
                                 const Camera& camera, double px, double py) {
         require(placement < scene.paintings().size(), "placement index out of range");
@@ -232,6 +256,10 @@ void bind_views(nb::module_& m) {
         .def("resident_level", &ResidencyLookup::resident_level, "request"_a)
         .def("response", [](const ResidencyLookup& r, std::uint64_t key) { return response_of(r, key); },
              "request"_a);
+
+    nb::class_<VirtualTextureLookup, ResidencyLookup>(
+        m, "VirtualTextureLookup", "Request processing's view of a VirtualTexture's page table.")
+        .def(nb::init<const VirtualTexture&>(), "vt"_a, nb::keep_alive<1, 2>());
 
     nb::class_<ResidentSet, ResidencyLookup>(
         m, "ResidentSet", "Reference residency: a set of tiles plus every painting's coarsest tile.")

@@ -45,7 +45,8 @@ std::uint32_t feedback_height(const Camera& camera, const FeedbackOptions& optio
 }
 
 void render_feedback(const ExhibitionScene& scene, const Camera& camera,
-                     const FeedbackOptions& options, std::uint64_t* keys, float* lod) {
+                     const FeedbackOptions& options, std::uint64_t* keys, float* lod,
+                     double* uv) {
     require(scene.committed(), "commit() the exhibition scene before the feedback pass");
     require(std::isfinite(options.lod_bias), "lod_bias must be finite");
     const std::uint32_t fw = feedback_width(camera, options), fh = feedback_height(camera, options);
@@ -86,6 +87,7 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
 
             std::uint64_t* out = keys + row * fw;
             float* out_lod = lod ? lod + row * fw : nullptr;
+            double* out_uv = uv ? uv + 2 * row * fw : nullptr;
             for (std::uint32_t i = 0; i < fw; ++i) {
                 const RTCRayHit& r = rays[i];
                 const int placement = r.hit.geomID == RTC_INVALID_GEOMETRY_ID
@@ -94,6 +96,8 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                 if (placement < 0) {
                     out[i] = kNoRequest;
                     if (out_lod) out_lod[i] = std::numeric_limits<float>::quiet_NaN();
+                    if (out_uv)
+                        out_uv[2 * i] = out_uv[2 * i + 1] = std::numeric_limits<double>::quiet_NaN();
                     continue;
                 }
                 const PaintingPlacement& p = paintings[placement];
@@ -115,6 +119,7 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                     std::uint32_t(v * p.tiles.height() / scale), p.tiles.tiles_y(level) - 1);
                 out[i] = pack_request(p.painting, level, tx, ty);
                 if (out_lod) out_lod[i] = float(lambda);
+                if (out_uv) out_uv[2 * i] = u, out_uv[2 * i + 1] = v;
             }
         }
     }, options.threads);

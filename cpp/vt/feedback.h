@@ -26,10 +26,12 @@ double texel_footprint(const PaintingPlacement& painting, const Camera& camera, 
 std::uint32_t mip_level(double lambda, std::uint32_t levels);
 
 // Fills keys[height * width] (row-major) with request keys, kNoRequest where no painting is
-// seen; lod (optional, same size) receives lambda (NaN where no painting). Casts Embree ray
-// streams row by row from `threads` threads.
+// seen; lod (optional, same size) receives lambda (NaN where no painting), uv (optional,
+// 2 per pixel) the painting coordinates in [0, 1] that the display pass samples. Casts
+// Embree ray streams row by row from `threads` threads.
 void render_feedback(const ExhibitionScene& scene, const Camera& camera,
-                     const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr);
+                     const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr,
+                     double* uv = nullptr);
 
 // Resolved feedback resolution for a camera (applies the 1/8 default).
 std::uint32_t feedback_width(const Camera& camera, const FeedbackOptions& options);

@@ -19,13 +19,14 @@ from . import _core
 from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, Camera, DirectLoading,
                     ExhibitionScene, FlagArrayProcessor, HashProcessor, MipByMipLoading,
                     PaintingTiles, ResidencyLookup, ResidentSet, VisibilityLists, mip_level,
-                    pack_request, render_feedback, texel_footprint, unpack_requests)
+                    pack_request, render_feedback, render_view, texel_footprint,
+                    unpack_requests)
 
 __all__ = [
     "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "DirectLoading",
     "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingTiles", "ResidencyLookup", "ResidentSet",
-    "VisibilityLists", "mip_level", "pack_request", "render_feedback", "texel_footprint",
-    "unpack_requests",
+    "VisibilityLists", "mip_level", "pack_request", "render_feedback", "render_view",
+    "texel_footprint", "unpack_requests", "FrameLoop", "LOADING_STRATEGIES",
     "HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier", "PaintingSpec",
     "Exhibition", "CameraPath", "single_scroll", "multi_exhibition", "scroll_path",
     "multi_route", "frame_cameras", "feedback_buffers", "PROCESSING_METHODS",
@@ -377,3 +378,7 @@ def run_processor(processor, buffers, lookup: ResidencyLookup, frame: int) -> di
         results = processor.poll(lookup, wait=True)
         return results[-1]
     return processor.process(buffers, lookup, frame)
+
+
+# The frame loop builds on everything above (imported last: it imports this module).
+from .frame_loop import LOADING_STRATEGIES, FrameLoop  # noqa: E402

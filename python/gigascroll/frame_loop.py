@@ -1,0 +1,218 @@
+"""The frame loop (seed 000 §4, issue 4 §4, first version): per frame the feedback pass,
+request processing, command issue, loader drain, physical-cache and page-table update, and a
+display pass that samples the views through the virtual texture; the loader runs in its own
+threads. Per frame it records each stage's time, the hit rate (share of this frame's
+requests answered at the level asked), the request-processing latency in frames, and after
+the camera stops the display latency (frames until every visible tile is resident at its
+requested level).
+
+Not yet here (issue 4 §4): the Ma VT and seed 003 LOD-mapping baselines.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import views as v
+from ._core import VirtualTextureLookup
+
+__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES"]
+
+LOADING_STRATEGIES = ("direct", "mip-by-mip")
+# The columns of seed 000 Table 5 (physical and page-table update are one call here: the
+# runtime's VirtualTexture.insert updates both).
+STAGES = ("feedback", "processing", "issue", "drain", "update", "display")
+
+
+@dataclass
+class FrameLoop:
+    """Runs a camera path over an exhibition whose painting p is painting p of `pack`.
+
+    method: a views.PROCESSING_METHODS name; strategy: "direct" (seed 000, at most
+    `per_frame` requested tiles a frame) or "mip-by-mip" (van Waveren, same cap).
+    pace: sleep to 90 Hz frame boundaries (False: run flat out, for tests).
+    wait_loads: block each frame until that frame's loads arrived (deterministic tests;
+    a real loop leaves it False and drains what is ready)."""
+    exhibition: v.Exhibition
+    pack: object
+    path: v.CameraPath
+    method: str = "hash"
+    strategy: str = "direct"
+    per_frame: int = 16
+    slots: tuple[int, int] = (30, 30)
+    loader_mode: str = "lockfree"
+    loader_threads: int = 1
+    pace: bool = True
+    wait_loads: bool = False
+    magnifier: bool = True
+    threads: int = 0
+    records: list = field(default_factory=list, init=False)
+
+    def __post_init__(self):
+        if self.strategy not in LOADING_STRATEGIES:
+            raise ValueError(f"unknown loading strategy {self.strategy!r}; choose from "
+                             f"{', '.join(LOADING_STRATEGIES)}")
+        if self.per_frame <= 0:
+            raise ValueError("per_frame (the direct-loading threshold) must be > 0")
+        if self.method not in v.PROCESSING_METHODS:
+            raise ValueError(f"unknown request-processing method {self.method!r}; choose from "
+                             f"{', '.join(v.PROCESSING_METHODS)}")
+        paintings = self.pack.paintings
+        if len(paintings) < len(self.exhibition.tiles):
+            raise ValueError(f"the pack has {len(paintings)} paintings, the exhibition shows "
+                             f"{len(self.exhibition.tiles)}: a painting is missing from the pack")
+        for i, t in enumerate(self.exhibition.tiles):
+            p = paintings[i]
+            if (p.width, p.height) != (t.width, t.height) or \
+                    (self.pack.tile_size, self.pack.border) != (t.tile_size, t.border):
+                raise ValueError(f"painting {i}: the pack holds {p.width} x {p.height} "
+                                 f"(tile {self.pack.tile_size}, border {self.pack.border}), "
+                                 f"the exhibition expects {t.width} x {t.height} "
+                                 f"(tile {t.tile_size}, border {t.border})")
+
+    def run(self, progress: bool = False) -> dict:
+        from . import runtime
+        vt = runtime.VirtualTexture(self.pack, self.slots)
+        lookup = VirtualTextureLookup(vt)
+        proc = v.make_processor(self.method, self.exhibition.tiles, self.threads)
+        is_async = isinstance(proc, v.AsyncProcessor)
+        direct = v.DirectLoading(self.per_frame) if self.strategy == "direct" else None
+        mip = v.MipByMipLoading(self.per_frame) if self.strategy == "mip-by-mip" else None
+        loading = direct if direct is not None else mip
+        commands = np.zeros(0, np.uint64)
+        latency = 0
+        period = 1.0 / self.path.fps
+        self.records = []
+        bar = None
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(total=len(self.path), unit="frame", desc=f"{self.method}/{self.strategy}")
+        with runtime.TileLoader(self.pack, mode=self.loader_mode,
+                                threads=self.loader_threads) as loader:
+            start = time.perf_counter()
+            for frame in range(len(self.path)):
+                t = {}
+                t0 = time.perf_counter()
+                views = [v.render_view(self.exhibition.scene, cam, w, h, threads=self.threads)
+                         for cam, w, h in v.frame_cameras(self.path, frame,
+                                                          magnifier=v.MAGNIFIER if self.magnifier
+                                                          else None)]
+                buffers = [d["keys"] for d in views]
+                t["feedback"] = time.perf_counter() - t0
+
+                t0 = time.perf_counter()
+                new_set = None
+                if is_async:
+                    proc.submit(buffers, frame)
+                    results = proc.poll(lookup)
+                    if results:
+                        new_set = results[-1]
+                        latency = frame - new_set["frame"]
+                else:
+                    new_set = proc.process(buffers, lookup, frame)
+                    latency = 0
+                t["processing"] = time.perf_counter() - t0
+
+                t0 = time.perf_counter()
+                if new_set is not None:
+                    commands = new_set["commands"]
+                    if direct is not None:
+                        direct.set_commands(commands)
+                issue = direct.issue(lookup) if direct is not None else mip.issue(commands, lookup)
+                if issue.size:
+                    loader.submit(np.stack(v.unpack_requests(issue), axis=1).astype(np.int64))
+                t["issue"] = time.perf_counter() - t0
+
+                t0 = time.perf_counter()
+                loaded = loader.poll()
+                if self.wait_loads:
+                    while len(loaded) < issue.size:
+                        time.sleep(0.0002)
+                        loaded += loader.poll()
+                t["drain"] = time.perf_counter() - t0
+
+                t0 = time.perf_counter()
+                keys = []
+                for key, data in loaded:
+                    if isinstance(data, np.ndarray):
+                        vt.insert(key, data)
+                    keys.append(v.pack_request(*key))
+                if keys:
+                    done = np.array(keys, dtype=np.uint64)
+                    loading.loaded(done)
+                t["update"] = time.perf_counter() - t0
+
+                t0 = time.perf_counter()
+                for d in views:
+                    self._display(vt, d)
+                t["display"] = time.perf_counter() - t0
+
+                # Hit rate after this frame's updates: what the display showed.
+                flat = np.concatenate([b.ravel() for b in buffers])
+                req = np.unique(flat[flat != v.NO_REQUEST])
+                levels = v.unpack_requests(req)[1]
+                hits = sum(lookup.resident_level(int(k)) == int(lv) for k, lv in zip(req, levels))
+                self.records.append({
+                    "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in STAGES},
+                    "total_ms": 1e3 * sum(t.values()), "requests": int(req.size),
+                    "hit_rate": hits / req.size if req.size else 1.0, "issued": int(issue.size),
+                    "loaded": len(loaded), "latency_frames": latency,
+                    "moving": frame + 1 < len(self.path) and not np.array_equal(
+                        self.path.position[frame], self.path.position[frame + 1]),
+                    "time_s": time.perf_counter() - start})
+                if bar is not None:
+                    bar.update(1)
+                if self.pace:
+                    delay = start + (frame + 1) * period - time.perf_counter()
+                    if delay > 0:
+                        time.sleep(delay)
+        if bar is not None:
+            bar.close()
+        return self.summary()
+
+    def _display(self, vt, d) -> np.ndarray:
+        """Samples the view through the virtual texture (at the feedback resolution)."""
+        keys, lod, uv = d["keys"], d["lod"], d["uv"]
+        out = np.zeros(keys.shape + (3,), np.float32)
+        hit = keys != v.NO_REQUEST
+        if not hit.any():
+            return out
+        painting = v.unpack_requests(keys[hit])[0]
+        for p in np.unique(painting):
+            sel = np.zeros_like(hit)
+            sel[hit] = painting == p
+            rgb, _ = vt.sample(int(p), uv[..., 0][sel], uv[..., 1][sel],
+                               np.maximum(lod[sel], 0.0))
+            out[sel] = rgb
+        return out
+
+    def summary(self) -> dict:
+        r = self.records
+        if not r:
+            return {}
+        frame_ms = [x["total_ms"] for x in r]
+        times = [x["time_s"] for x in r]
+        fps = (len(r) - 1) / (times[-1] - times[0]) if len(r) > 1 else float("nan")
+        # Display latency: from the first frame after the camera stopped until every visible
+        # request is resident at its level.
+        stop = next((i for i in range(len(r)) if not r[i]["moving"]
+                     and all(not x["moving"] for x in r[i:])), None)
+        display_latency = None
+        if stop is not None:
+            sharp = next((i for i in range(stop, len(r)) if r[i]["hit_rate"] == 1.0), None)
+            display_latency = None if sharp is None else sharp - stop + 1
+        return {
+            "frames": len(r), "fps": fps,
+            "fps_from_frame_time": 1e3 / statistics.mean(frame_ms),
+            "frame_ms_std": statistics.pstdev(frame_ms),
+            **{f"{s}_ms": statistics.mean(x[f"{s}_ms"] for x in r) for s in STAGES},
+            "hit_rate": statistics.mean(x["hit_rate"] for x in r),
+            "latency_frames": statistics.mean(x["latency_frames"] for x in r),
+            "requests_per_frame": statistics.mean(x["requests"] for x in r),
+            "display_latency_frames": display_latency,
+        }
