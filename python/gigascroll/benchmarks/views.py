@@ -21,7 +21,7 @@ from .. import views as v
 from ..cli import UserError
 
 PAINTING_COUNTS = (8, 16, 24, 32, 40)
-PARTS = ("paintings", "tiles", "latency", "losses")
+PARTS = ("paintings", "tiles", "latency", "losses", "loop")
 
 
 def add_arguments(parser) -> None:
@@ -182,6 +182,39 @@ def _hash_losses(args, frames) -> list[dict]:
             for b, s in stats.items()]
 
 
+def _loop(args, quick) -> list[dict]:
+    """The first frame loop (seed 000 Tables 2, 3 set-up, scaled down): a synthetic painting
+    at the scroll's texel size, eyes at 40 cm plus the magnifier, 1 m/s then a stop, paced at
+    90 Hz with the lock-free loader thread; Table 2's methods with direct loading, and
+    mip-by-mip with the hash."""
+    import tempfile
+
+    from .. import pack as pk
+    width, height = (12000, 1600) if quick else (24000, 1600)
+    yy = np.arange(height, dtype=np.int32)[:, None]
+    xx = np.arange(width, dtype=np.int32)[None, :]
+    img = np.empty((height, width, 3), np.uint8)
+    img[..., 0] = (xx * 7 + yy) % 256
+    img[..., 1] = (xx // 3 + yy * 5) % 256
+    img[..., 2] = (xx ^ yy) % 256
+    rows = []
+    with tempfile.TemporaryDirectory() as d:
+        pack = pk.build_pack(img, Path(d) / "loop.pack")
+        del img
+        spec = v.PaintingSpec("loop", width, height, width * 12 / 152089, height * 12 / 152089)
+        ex = v.single_scroll(spec)
+        moving = 0.2 if quick else 1.2
+        path = v.scroll_path(distance=0.40, speed=1.0, duration=moving, start_x=0.3,
+                             exhibition=ex, stop_frames=10 if quick else 60)
+        for method, strategy in (("cpu-async", "direct"), ("flag-array", "direct"),
+                                 ("hash", "direct"), ("hash", "mip-by-mip")):
+            loop = v.FrameLoop(ex, pack, path, method=method, strategy=strategy,
+                               pace=True, threads=args.threads)
+            s = loop.run(progress=True)
+            rows.append({"method": method, "strategy": strategy, **s})
+    return rows
+
+
 def _plot(rows, key, xlabel, path, log_x=False):
     import matplotlib
     matplotlib.use("Agg")
@@ -266,6 +299,18 @@ def run(args) -> int:
             print(f"| 2^{h['table_bits']} | {h['requests_per_frame']:.0f} | "
                   f"{h['lost_per_frame']:.3f} | {h['repeated_losses']} | "
                   f"{h['fixed_salt_lost_per_frame']:.3f} | {h['fixed_salt_repeated_losses']} |")
+    if "loop" in parts:
+        results["loop"] = _loop(args, args.quick)
+        print("\n## Frame loop paced at 90 Hz (eyes + magnifier, 1 m/s then stop)\n")
+        print("| method | loading | fps | fps std (ms) | hit rate | processing latency | "
+              "display latency | feedback | processing | issue | drain | update | display |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in results["loop"]:
+            print(f"| {r['method']} | {r['strategy']} | {r['fps']:.1f} | {r['frame_ms_std']:.2f} | "
+                  f"{100 * r['hit_rate']:.1f}% | {r['latency_frames']:.2f} | "
+                  f"{r['display_latency_frames']} | " +
+                  " | ".join(f"{r[s + '_ms']:.2f}" for s in ("feedback", "processing", "issue",
+                                                              "drain", "update", "display")) + " |")
     name = "views.json" if parts == set(PARTS) else f"views_{'_'.join(sorted(parts))}.json"
     tmp = out / (name + ".tmp")
     tmp.write_text(json.dumps(results, indent=1))
