@@ -37,17 +37,17 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
     dense_ = mode == Mode::Dense || (mode == Mode::Auto && cells <= dense_limit);
     if (dense_) require(cells <= double(1 << 27), "HashGrid: a dense grid would need more than 2^27 cells");
 
-    std::vector<std::uint64_t> key(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        std::int64_t c[3];
-        cell_of(photons[i].p, c);
-        key[i] = dense_ ? std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]) : bucket(c[0], c[1], c[2]);
-    }
     if (dense_) {
         cells_ = std::uint64_t(cells);
     } else {
         buckets_ = 1;
         while (buckets_ < 2 * std::max<std::uint64_t>(n, 1)) buckets_ <<= 1;
+    }
+    std::vector<std::uint64_t> key(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        std::int64_t c[3];
+        cell_of(photons[i].p, c);
+        key[i] = dense_ ? std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]) : bucket(c[0], c[1], c[2]);
     }
     // Counting sort by key; start_ is the exclusive prefix sum of the counts.
     const std::uint64_t m = dense_ ? cells_ : buckets_;

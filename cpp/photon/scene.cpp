@@ -188,8 +188,12 @@ std::uint64_t Scene::position_key(Vec3 p) const {
     const Vec3 ext = vmax(hi_ - lo_, Vec3(1e-30f, 1e-30f, 1e-30f));
     std::uint64_t key = 0x6a09e667f3bcc909ULL;
     for (int a = 0; a < 3; ++a) {
-        const float u = std::clamp((p[a] - lo_[a]) / ext[a], 0.0f, 1.0f);
-        key = hash_combine(key, std::uint64_t(u * float(1 << 20)));
+        // Walls often lie exactly on the bounds (u = 0 or 1): the non-dyadic shift keeps them
+        // off bin boundaries, where rounding at another scale or from another eye would flip
+        // the bin. 2^14 bins: coarse enough that rounding rarely crosses one, fine enough
+        // that neighbouring pixels' hit points fall in different bins.
+        const float u = std::clamp((p[a] - lo_[a]) / ext[a], 0.0f, 1.0f) * 0.6f + 0.2f;
+        key = hash_combine(key, std::uint64_t(u * float(1 << 14)));
     }
     return key;
 }
