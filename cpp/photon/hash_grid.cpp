@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "photon/gather.h"
 
 namespace gigascroll::photon {
 
@@ -57,6 +58,48 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
     std::vector<std::uint64_t> fill(start_.begin(), start_.end() - 1);
     photons_.resize(n);
     for (std::size_t i = 0; i < n; ++i) photons_[fill[key[i]]++] = photons[i];
+    for (auto* v : {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_}) v->resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Photon& p = photons_[i];
+        px_[i] = p.p.x; py_[i] = p.p.y; pz_[i] = p.p.z;
+        nx_[i] = p.n.x; ny_[i] = p.n.y; nz_[i] = p.n.z;
+        pr_[i] = p.power.x; pg_[i] = p.power.y; pb_[i] = p.power.z;
+    }
+}
+
+Vec3 HashGrid::sum_box(Vec3 q, Vec3 n, float r2) const {
+    constexpr int kLanes = 8;  // independent partial sums: a fixed-width inner loop vectorises
+    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {};
+    PhotonRun rs[27];
+    const int nr = runs(q, rs);
+    const float* px = px_.data(); const float* py = py_.data(); const float* pz = pz_.data();
+    const float* nx = nx_.data(); const float* ny = ny_.data(); const float* nz = nz_.data();
+    const float* pr = pr_.data(); const float* pg = pg_.data(); const float* pb = pb_.data();
+    auto weight = [&](std::uint64_t j) {
+        const float dx = px[j] - q.x, dy = py[j] - q.y, dz = pz[j] - q.z;
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        const float agree = nx[j] * n.x + ny[j] * n.y + nz[j] * n.z;
+        return float((d2 <= r2) & (agree > kNormalAgreement));
+    };
+    for (int i = 0; i < nr; ++i) {
+        std::uint64_t j = rs[i].begin;
+        for (; j + kLanes <= rs[i].end; j += kLanes)
+            for (int l = 0; l < kLanes; ++l) {
+                const float w = weight(j + l);
+                sr[l] += w * pr[j + l];
+                sg[l] += w * pg[j + l];
+                sb[l] += w * pb[j + l];
+            }
+        for (int l = 0; j < rs[i].end; ++j, ++l) {
+            const float w = weight(j);
+            sr[l] += w * pr[j];
+            sg[l] += w * pg[j];
+            sb[l] += w * pb[j];
+        }
+    }
+    Vec3 sum{0, 0, 0};
+    for (int l = 0; l < kLanes; ++l) sum += Vec3(sr[l], sg[l], sb[l]);
+    return sum;
 }
 
 bool HashGrid::cell_of(Vec3 q, std::int64_t c[3]) const {

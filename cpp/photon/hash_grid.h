@@ -54,6 +54,11 @@ public:
             }
     }
 
+    // Heap-free box gather: the summed power of the photons within sqrt(r2) <= radius() of q
+    // whose normals agree with n (gather.h), over structure-of-arrays copies so the loop over
+    // each run vectorises.
+    Vec3 sum_box(Vec3 q, Vec3 n, float r2) const;
+
     // The cell holding q (clamped to one cell outside the grid); true when inside the grid.
     bool cell_of(Vec3 q, std::int64_t c[3]) const;
     // A sort key ordering cells as the dense hash does (z, then y, then x).
@@ -72,6 +77,8 @@ private:
     std::uint64_t cells_ = 0, buckets_ = 0;
     std::vector<std::uint64_t> start_;  // prefix sums, one more entry than cells/buckets
     std::vector<Photon> photons_;
+    // photons_ again as structure of arrays (position, normal, power), for sum_box.
+    std::vector<float> px_, py_, pz_, nx_, ny_, nz_, pr_, pg_, pb_;
 };
 
 }  // namespace gigascroll::photon

@@ -30,6 +30,8 @@ public:
 
     // Flux density at x on a surface with normal n (see gather.h).
     Vec3 gather(Vec3 x, Vec3 n, const GatherSettings& s, KnnHeap& heap) const {
+        if (grid_ && !s.knn && s.kernel == Kernel::Box)  // the hot path, vectorised
+            return grid_->sum_box(x, n, s.radius * s.radius) * (1.0f / (float(M_PI) * s.radius * s.radius));
         if (grid_) return s.knn ? gather_knn(*grid_, x, n, s.radius, s.k, s.kernel, heap)
                                 : gather_radius(*grid_, x, n, s.radius, s.kernel);
         return s.knn ? gather_knn(*kd_, x, n, s.radius, s.k, s.kernel, heap)

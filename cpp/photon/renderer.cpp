@@ -146,6 +146,37 @@ void Renderer::render_fused(const Camera& cam, std::vector<float>& img, RenderSt
 }
 
 namespace {
+// A cooperative block's hit points as structure of arrays, with their flux sums.
+struct CoopBlock {
+    float x[kCoopBlock], y[kCoopBlock], z[kCoopBlock], nx[kCoopBlock], ny[kCoopBlock], nz[kCoopBlock];
+    float r[kCoopBlock], g[kCoopBlock], b[kCoopBlock];
+};
+
+// Seed 001 Algorithm 1 on a CPU: each photon of the cell's 27-cell neighbourhood is read once
+// and streamed through all hit points of the block. The inner loop is branch-free over the
+// block's arrays so the compiler vectorises it (the box kernel; the cone needs a sqrt).
+template <bool Cone>
+void gather_block(const std::vector<Photon>& photons, const PhotonRun* runs, int nr, CoopBlock& b,
+                  std::size_t count, float r2) {
+    const float inv_r2 = 1.0f / r2;
+    for (int ri = 0; ri < nr; ++ri)
+        for (std::uint64_t pi = runs[ri].begin; pi < runs[ri].end; ++pi) {
+            const Photon& ph = photons[pi];
+            const float px = ph.p.x, py = ph.p.y, pz = ph.p.z, qx = ph.n.x, qy = ph.n.y, qz = ph.n.z;
+            const float pr = ph.power.x, pg = ph.power.y, pb = ph.power.z;
+            for (std::size_t j = 0; j < count; ++j) {
+                const float dx = px - b.x[j], dy = py - b.y[j], dz = pz - b.z[j];
+                const float d2 = dx * dx + dy * dy + dz * dz;
+                const float agree = qx * b.nx[j] + qy * b.ny[j] + qz * b.nz[j];
+                float w = float((d2 <= r2) & (agree > kNormalAgreement));
+                if constexpr (Cone) w *= 1.0f - std::sqrt(std::min(d2 * inv_r2, 1.0f));
+                b.r[j] += w * pr;
+                b.g[j] += w * pg;
+                b.b[j] += w * pb;
+            }
+        }
+}
+
 struct HitPoint {
     Vec3 p, n;
     Vec3 weight;  // albedo / pi / spp
@@ -244,37 +275,22 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
         const float r = s_.gather.radius, r2 = r * r;
         const Kernel kernel = s_.gather.kernel;
         const float scale = 1.0f / (kernel_norm(kernel) * float(M_PI) * r2);
-        const float inv_r2 = 1.0f / r2;
         const std::vector<Photon>& photons = grid->photons();
         parallel_for(block_start.size() - 1, 16, [&](std::size_t bb, std::size_t be) {
-            // Structure-of-arrays copy of the block, so the inner loop over hit points vectorises.
-            float bx[kCoopBlock], by[kCoopBlock], bz[kCoopBlock], nx[kCoopBlock], ny[kCoopBlock], nz[kCoopBlock];
-            float ar[kCoopBlock], ag[kCoopBlock], ab[kCoopBlock];
+            CoopBlock b;
             for (std::size_t blk = bb; blk < be; ++blk) {
                 const std::size_t first = block_start[blk], count = block_start[blk + 1] - first;
                 for (std::size_t j = 0; j < count; ++j) {
                     const HitPoint& hp = hits[first + j];
-                    bx[j] = hp.p.x; by[j] = hp.p.y; bz[j] = hp.p.z;
-                    nx[j] = hp.n.x; ny[j] = hp.n.y; nz[j] = hp.n.z;
-                    ar[j] = ag[j] = ab[j] = 0.0f;
+                    b.x[j] = hp.p.x; b.y[j] = hp.p.y; b.z[j] = hp.p.z;
+                    b.nx[j] = hp.n.x; b.ny[j] = hp.n.y; b.nz[j] = hp.n.z;
+                    b.r[j] = b.g[j] = b.b[j] = 0.0f;
                 }
                 PhotonRun runs[27];
                 const int nr = grid->runs(hits[first].p, runs);  // the same for the whole cell
-                for (int ri = 0; ri < nr; ++ri)
-                    for (std::uint64_t pi = runs[ri].begin; pi < runs[ri].end; ++pi) {
-                        const Photon& ph = photons[pi];
-                        for (std::size_t j = 0; j < count; ++j) {
-                            const float dx = ph.p.x - bx[j], dy = ph.p.y - by[j], dz = ph.p.z - bz[j];
-                            const float d2 = dx * dx + dy * dy + dz * dz;
-                            const float agree = ph.n.x * nx[j] + ph.n.y * ny[j] + ph.n.z * nz[j];
-                            float wgt = (d2 <= r2 && agree > kNormalAgreement) ? 1.0f : 0.0f;
-                            if (kernel == Kernel::Cone) wgt *= 1.0f - std::sqrt(d2 * inv_r2);
-                            ar[j] += wgt * ph.power.x;
-                            ag[j] += wgt * ph.power.y;
-                            ab[j] += wgt * ph.power.z;
-                        }
-                    }
-                for (std::size_t j = 0; j < count; ++j) result[first + j] = Vec3(ar[j], ag[j], ab[j]) * scale;
+                if (kernel == Kernel::Cone) gather_block<true>(photons, runs, nr, b, count, r2);
+                else gather_block<false>(photons, runs, nr, b, count, r2);
+                for (std::size_t j = 0; j < count; ++j) result[first + j] = Vec3(b.r[j], b.g[j], b.b[j]) * scale;
             }
         }, s_.threads);
     }
