@@ -167,8 +167,8 @@ def test_scale_invariance(cornell64):
 
 
 def _cornell_meshes():
-    """The Cornell box as plain arrays (the C++ builder's geometry, read back through rays is
-    not possible, so rebuild it from Mitsuba's transforms here)."""
+    """The Cornell box as plain arrays, rebuilt from Mitsuba's transforms (the built-in scene
+    lives in C++; test_python_cornell_arrays_equal_builtin checks that the two agree)."""
     e = -4.37114e-08
     rect = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float)
     rect_t = np.array([[0, 1, 2], [2, 3, 0]])
