@@ -59,7 +59,7 @@ sanitize: deps
 	cmake -S . -B build/tsan -G Ninja -DGIGASCROLL_PYTHON=OFF -DGIGASCROLL_BENCH=OFF \
 	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=thread
 	cmake --build build/tsan -j $(JOBS)
-	cd build/tsan && TSAN_OPTIONS=halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+	cd build/tsan && TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/tests/tsan.supp ctest --output-on-failure -j $(JOBS)
 
 clean:
 	rm -rf build

@@ -1,7 +1,289 @@
+// Python bindings of the photon mapper. Arrays come in as C-contiguous float32/int64 numpy
+// arrays without copies (the Python layer in gigascroll/photon.py converts and validates
+// user input first) and images go out as float32 (H, W, 3) arrays owning their buffers.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+
+#include <array>
+#include <cstring>
+#include <string>
+#include <vector>
+
 #include "bindings/bindings.h"
+#include "common/error.h"
+#include "photon/camera.h"
+#include "photon/photon_map.h"
+#include "photon/photon_tracer.h"
+#include "photon/renderer.h"
+#include "photon/scene.h"
+#include "photon/scenes.h"
+#include "photon/stereo.h"
 
 namespace nb = nanobind;
+using namespace nb::literals;
 
 namespace gigascroll::bindings {
-void bind_photon(nb::module_& m) { (void)m; }
+namespace {
+using namespace gigascroll::photon;
+
+using FloatArray = nb::ndarray<const float, nb::c_contig, nb::device::cpu>;
+using IndexArray = nb::ndarray<const std::int64_t, nb::c_contig, nb::device::cpu>;
+using Out = nb::ndarray<nb::numpy, float>;
+
+Vec3 vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
+
+// Moves a vector into a numpy array of the given shape (no copy).
+Out to_numpy(std::vector<float>&& v, std::initializer_list<std::size_t> shape) {
+    auto* heap = new std::vector<float>(std::move(v));
+    nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<float>*>(p); });
+    return Out(heap->data(), shape.size(), shape.begin(), owner);
+}
+
+Out photons_field(const std::vector<Photon>& ph, int field) {
+    std::vector<float> v(ph.size() * 3);
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+        const Vec3 x = field == 0 ? ph[i].p : (field == 1 ? ph[i].power : ph[i].n);
+        v[3 * i] = x.x; v[3 * i + 1] = x.y; v[3 * i + 2] = x.z;
+    }
+    return to_numpy(std::move(v), {ph.size(), 3});
+}
+
+std::vector<Photon> photons_from(const FloatArray& positions) {
+    require(positions.ndim() == 2 && positions.shape(1) == 3, "PhotonMap: positions must have shape (N, 3)");
+    std::vector<Photon> ph(positions.shape(0));
+    const float* p = positions.data();
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+        ph[i].p = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+        require(finite(ph[i].p), "PhotonMap: positions must be finite");
+        ph[i].power = {1, 1, 1};
+        ph[i].n = {0, 0, 1};
+    }
+    return ph;
+}
+
+HashGrid::Mode hash_mode(const std::string& s) {
+    if (s == "auto") return HashGrid::Mode::Auto;
+    if (s == "dense") return HashGrid::Mode::Dense;
+    if (s == "hashed") return HashGrid::Mode::Hashed;
+    throw InvalidArgument("hash_mode must be 'auto', 'dense' or 'hashed', not '" + s + "'");
+}
+
+GridKind grid_kind(const std::string& s) {
+    if (s == "hash") return GridKind::Hash;
+    if (s == "kdtree") return GridKind::KdTree;
+    throw InvalidArgument("grid must be 'hash' or 'kdtree', not '" + s + "'");
+}
+
+RenderSettings make_settings(std::uint64_t photons, float radius, const std::string& grid,
+                             const std::string& gather, int k, const std::string& kernel, int spp,
+                             int light_samples, std::uint64_t seed, const std::string& pipeline,
+                             bool cooperative, bool direct, bool indirect, unsigned threads,
+                             const std::string& mode) {
+    RenderSettings s;
+    s.photons = photons;
+    s.gather.radius = radius;
+    s.grid = grid_kind(grid);
+    require(gather == "radius" || gather == "knn", "gather must be 'radius' or 'knn', not '" + gather + "'");
+    s.gather.knn = gather == "knn";
+    s.gather.k = k;
+    require(kernel == "box" || kernel == "cone", "kernel must be 'box' or 'cone', not '" + kernel + "'");
+    s.gather.kernel = kernel == "box" ? Kernel::Box : Kernel::Cone;
+    s.spp = spp;
+    s.light_samples = light_samples;
+    s.seed = seed;
+    require(pipeline == "fused" || pipeline == "two-pass",
+            "pipeline must be 'fused' or 'two-pass', not '" + pipeline + "'");
+    s.pipeline = pipeline == "fused" ? Pipeline::Fused : Pipeline::TwoPass;
+    s.cooperative = cooperative;
+    s.direct = direct;
+    s.indirect = indirect;
+    s.threads = threads;
+    s.hash_mode = hash_mode(mode);
+    s.validate();
+    return s;
+}
+
+nb::dict stats_dict(const RenderStats& st) {
+    nb::dict d;
+    d["photon_seconds"] = st.photon_seconds;
+    d["build_seconds"] = st.build_seconds;
+    d["trace_seconds"] = st.trace_seconds;
+    d["gather_seconds"] = st.gather_seconds;
+    d["total_seconds"] = st.total_seconds;
+    d["photons_stored"] = st.photons_stored;
+    d["photon_pass_skipped"] = st.photon_pass_skipped;
+    d["gathers"] = st.gathers;
+    d["gathers_skipped"] = st.gathers_skipped;
+    d["shadow_rays"] = st.shadow_rays;
+    d["shadow_rays_skipped"] = st.shadow_rays_skipped;
+    d["reused_pixels"] = st.reused_pixels;
+    return d;
+}
+
+#define RENDER_ARGS                                                                                   \
+    "photons"_a, "radius"_a, "grid"_a = "hash", "gather"_a = "radius", "k"_a = 50, "kernel"_a = "box", \
+        "spp"_a = 1, "light_samples"_a = 1, "seed"_a = 0, "pipeline"_a = "fused", "cooperative"_a = false, \
+        "direct"_a = true, "indirect"_a = true, "threads"_a = 0, "hash_mode"_a = "auto"
+
+}  // namespace
+
+void bind_photon(nb::module_& m) {
+    nb::class_<Scene>(m, "_Scene", "Embree scene of Lambertian triangle meshes (see gigascroll.Scene).")
+        .def(nb::init<>())
+        .def("_add_mesh",
+             [](Scene& s, const FloatArray& v, const IndexArray& t, const FloatArray& albedo,
+                std::array<float, 3> emission) {
+                 require(v.ndim() == 2 && v.shape(1) == 3, "add_mesh: vertices must have shape (N, 3)");
+                 require(t.ndim() == 2 && t.shape(1) == 3, "add_mesh: triangles must have shape (M, 3)");
+                 const bool per_tri = albedo.ndim() == 2;
+                 require((albedo.ndim() == 1 && albedo.shape(0) == 3) ||
+                             (per_tri && albedo.shape(0) == t.shape(0) && albedo.shape(1) == 3),
+                         "add_mesh: albedo must have shape (3,) or (M, 3)");
+                 return s.add_mesh(v.data(), v.shape(0), t.data(), t.shape(0), albedo.data(), per_tri,
+                                   vec(emission));
+             })
+        .def("commit", [](Scene& s) {
+            nb::gil_scoped_release release;
+            s.commit();
+        }, "Builds the BVH and the emitter distribution; no meshes can be added afterwards.")
+        .def_prop_ro("committed", &Scene::committed)
+        .def_prop_ro("triangle_count", &Scene::triangle_count)
+        .def_prop_ro("emitter_count", &Scene::emitter_count)
+        .def_prop_ro("emitted_power", [](const Scene& s) {
+            const Vec3 p = s.emitted_power();
+            return std::array<float, 3>{p.x, p.y, p.z};
+        }, "Total emitted flux: sum of pi * area * radiance over the emitters (RGB).")
+        .def_prop_ro("bounds", [](const Scene& s) {
+            const Vec3 a = s.bounds_min(), b = s.bounds_max();
+            return std::make_tuple(std::array<float, 3>{a.x, a.y, a.z}, std::array<float, 3>{b.x, b.y, b.z});
+        })
+        .def("intersect", [](const Scene& s, std::array<float, 3> o, std::array<float, 3> d) -> nb::object {
+            require(s.committed(), "Scene.intersect: call commit() first");
+            Hit h;
+            if (!s.intersect(vec(o), vec(d), h)) return nb::none();
+            return nb::make_tuple(h.t, std::array<float, 3>{h.p.x, h.p.y, h.p.z}, h.tri);
+        }, "o"_a, "d"_a, "Nearest hit (t, point, triangle) along o + t d, or None.");
+
+    nb::class_<Camera>(m, "Camera", "Pinhole camera: vertical field of view in degrees, pixel (0, 0) top-left.")
+        .def("__init__", [](Camera* c, std::array<float, 3> pos, std::array<float, 3> at, std::array<float, 3> up,
+                            float fov, std::array<int, 2> res) {
+            new (c) Camera(vec(pos), vec(at), vec(up), fov, res[0], res[1]);
+        }, "position"_a, "look_at"_a, "up"_a, "fov"_a, "resolution"_a = std::array<int, 2>{256, 256})
+        .def_prop_ro("position", [](const Camera& c) { auto p = c.position(); return std::array<float, 3>{p.x, p.y, p.z}; })
+        .def_prop_ro("forward", [](const Camera& c) { auto p = c.forward(); return std::array<float, 3>{p.x, p.y, p.z}; })
+        .def_prop_ro("right", [](const Camera& c) { auto p = c.right(); return std::array<float, 3>{p.x, p.y, p.z}; })
+        .def_prop_ro("up", [](const Camera& c) { auto p = c.up(); return std::array<float, 3>{p.x, p.y, p.z}; })
+        .def_prop_ro("fov", &Camera::fov)
+        .def_prop_ro("resolution", [](const Camera& c) { return std::array<int, 2>{c.width(), c.height()}; })
+        .def("project", [](const Camera& c, std::array<float, 3> p) -> nb::object {
+            int x, y;
+            if (!c.project(vec(p), x, y)) return nb::none();
+            return nb::make_tuple(x, y);
+        }, "point"_a, "Pixel (x, y) that sees point (seed 001 eqs. 3-5), or None off the film.")
+        .def("direction", [](const Camera& c, float px, float py) {
+            const Vec3 d = c.direction(px, py);
+            return std::array<float, 3>{d.x, d.y, d.z};
+        }, "px"_a, "py"_a, "Unit direction through film position (px, py) in pixels.");
+
+    nb::class_<StereoCamera>(m, "StereoCamera", "Two parallel eyes ipd apart along the camera's right vector.")
+        .def(nb::init<const Camera&, float>(), "camera"_a, "ipd"_a = 0.064f)
+        .def_ro("left", &StereoCamera::left)
+        .def_ro("right", &StereoCamera::right)
+        .def_ro("ipd", &StereoCamera::ipd);
+
+    m.def("_build_scene", [](const std::string& name, Scene& scene, int width, int height, float albedo,
+                              float emission) {
+        nb::gil_scoped_release release;
+        if (name == "cornell") return build_cornell(scene, width, height);
+        if (name == "office") return build_office(scene, width, height);
+        if (name == "furnace") return build_furnace(scene, albedo, emission, width, height);
+        throw InvalidArgument("unknown scene '" + name + "' (built-in: cornell, office, furnace)");
+    });
+
+    m.def("_trace_photons", [](const Scene& scene, std::uint64_t count, std::uint64_t seed, unsigned threads) {
+        TraceStats st;
+        std::vector<Photon> ph;
+        {
+            nb::gil_scoped_release release;
+            ph = trace_photons(scene, count, seed, threads, &st);
+        }
+        nb::dict d;
+        d["position"] = photons_field(ph, 0);
+        d["power"] = photons_field(ph, 1);
+        d["normal"] = photons_field(ph, 2);
+        d["emitted"] = st.emitted;
+        d["emitted_power"] = std::array<float, 3>{st.emitted_power.x, st.emitted_power.y, st.emitted_power.z};
+        return d;
+    }, "scene"_a, "count"_a, "seed"_a = 0, "threads"_a = 0);
+
+    nb::class_<PhotonMap>(m, "PhotonMap",
+                          "A photon map over positions (N, 3) float32: grid='hash' (seed 001) or 'kdtree' (Jensen).")
+        .def("__init__", [](PhotonMap* pm, const FloatArray& positions, float radius, const std::string& grid,
+                            const std::string& mode) {
+            std::vector<Photon> ph = photons_from(positions);
+            const GridKind kind = grid_kind(grid);
+            const HashGrid::Mode md = hash_mode(mode);
+            nb::gil_scoped_release release;
+            new (pm) PhotonMap(ph, radius, kind, md);
+        }, "positions"_a, "radius"_a, "grid"_a = "hash", "hash_mode"_a = "auto")
+        .def_prop_ro("size", &PhotonMap::size)
+        .def_prop_ro("dense", [](const PhotonMap& pm) { return pm.grid() && pm.grid()->dense(); },
+                     "True for the dense hash grid, False for the hashed fallback or the kd-tree.")
+        .def_prop_ro("cell_count", [](const PhotonMap& pm) { return pm.grid() ? pm.grid()->cell_count() : 0; })
+        .def("query_radius", [](const PhotonMap& pm, std::array<float, 3> q, float r) {
+            const auto idx = pm.query_radius(vec(q), r);
+            std::vector<float> v;
+            for (auto i : idx) { const Vec3 p = pm.photons()[i].p; v.insert(v.end(), {p.x, p.y, p.z}); }
+            return to_numpy(std::move(v), {idx.size(), 3});
+        }, "point"_a, "radius"_a, "Positions of every photon within radius (at most the map's radius).")
+        .def("query_knn", [](const PhotonMap& pm, std::array<float, 3> q, int k, float r) {
+            const auto idx = pm.query_knn(vec(q), k, r);
+            std::vector<float> v;
+            for (auto i : idx) { const Vec3 p = pm.photons()[i].p; v.insert(v.end(), {p.x, p.y, p.z}); }
+            return to_numpy(std::move(v), {idx.size(), 3});
+        }, "point"_a, "k"_a, "radius"_a, "Positions of the k nearest photons within radius, nearest first.");
+
+    m.def("_render", [](const Scene& scene, const Camera& cam, std::uint64_t photons, float radius,
+                        const std::string& grid, const std::string& gather, int k, const std::string& kernel,
+                        int spp, int light_samples, std::uint64_t seed, const std::string& pipeline,
+                        bool cooperative, bool direct, bool indirect, unsigned threads, const std::string& mode) {
+        const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
+                                               pipeline, cooperative, direct, indirect, threads, mode);
+        RenderStats st;
+        std::vector<float> img;
+        {
+            nb::gil_scoped_release release;
+            Renderer r(scene, s);
+            img = r.render(cam, st);
+        }
+        return nb::make_tuple(to_numpy(std::move(img), {std::size_t(cam.height()), std::size_t(cam.width()), 3}),
+                              stats_dict(st));
+    }, "scene"_a, "camera"_a, RENDER_ARGS);
+
+    m.def("_render_stereo", [](const Scene& scene, const StereoCamera& eyes, bool reuse, std::uint64_t photons,
+                               float radius, const std::string& grid, const std::string& gather, int k,
+                               const std::string& kernel, int spp, int light_samples, std::uint64_t seed,
+                               const std::string& pipeline, bool cooperative, bool direct, bool indirect,
+                               unsigned threads, const std::string& mode) {
+        const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
+                                               pipeline, cooperative, direct, indirect, threads, mode);
+        StereoImages out;
+        {
+            nb::gil_scoped_release release;
+            Renderer r(scene, s);
+            out = render_stereo(r, eyes, reuse);
+        }
+        const std::size_t h = std::size_t(eyes.left.height()), w = std::size_t(eyes.left.width());
+        nb::dict d;
+        d["left"] = stats_dict(out.left_stats);
+        d["right"] = stats_dict(out.right_stats);
+        d["total_seconds"] = out.total_seconds;
+        d["reused_pixels"] = out.right_stats.reused_pixels;
+        d["reused_share"] = double(out.right_stats.reused_pixels) / double(h * w);
+        return nb::make_tuple(to_numpy(std::move(out.left), {h, w, 3}), to_numpy(std::move(out.right), {h, w, 3}), d);
+    }, "scene"_a, "eyes"_a, "reuse"_a, RENDER_ARGS);
+}
 }  // namespace gigascroll::bindings

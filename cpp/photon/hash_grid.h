@@ -1,0 +1,84 @@
+// The photon hash grid of seed 001 §3.1. Cells have edge r (the gather radius); the origin is
+// just below the smallest photon and one empty layer pads each side. A photon's cell (x, y, z)
+// has the linear hash z*gx*gy + y*gx + x (eq. 2); photons are counting-sorted by hash and
+// start[h] is the prefix sum, so the photons of cells x-1..x+1 of one row are one contiguous
+// run and a query visits the 3x3x3 neighbourhood as 9 runs.
+//
+// When gx*gy*gz cells would not fit (a tiny radius in a large scene) the grid falls back to a
+// hashed table of about twice the photon count (as pbrt-v4's SPPM does): cells map to buckets
+// by a spatial hash, and a query visits the distinct buckets of its 27 cells.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "photon/photon_tracer.h"
+
+namespace gigascroll::photon {
+
+// A contiguous range of photons [begin, end) in a map's storage order.
+struct PhotonRun {
+    std::uint64_t begin, end;
+};
+
+class HashGrid {
+public:
+    enum class Mode { Auto, Dense, Hashed };
+
+    // Copies the photons in cell order. Auto uses the dense grid when its cell count is at
+    // most max(2^22, 4 * photons), else the hashed table.
+    HashGrid(const std::vector<Photon>& photons, float radius, Mode mode = Mode::Auto);
+
+    bool dense() const { return dense_; }
+    float radius() const { return r_; }
+    std::size_t size() const { return photons_.size(); }
+    const std::vector<Photon>& photons() const { return photons_; }
+    std::uint64_t cell_count() const { return dense_ ? cells_ : buckets_; }
+
+    // The runs holding every photon within radius() of q (and others: callers test the
+    // distance). Writes at most 27 runs; returns how many.
+    int runs(Vec3 q, PhotonRun out[27]) const;
+
+    // Calls f(photon, d2) for each photon with squared distance d2 <= r2. f may shrink r2
+    // (k-nearest search does). r2 must start at most radius()^2.
+    template <typename F>
+    void for_each_in_radius(Vec3 q, float& r2, F&& f) const {
+        PhotonRun rs[27];
+        const int n = runs(q, rs);
+        for (int i = 0; i < n; ++i)
+            for (std::uint64_t j = rs[i].begin; j < rs[i].end; ++j) {
+                const Photon& p = photons_[j];
+                const Vec3 d = p.p - q;
+                const float d2 = dot(d, d);
+                if (d2 <= r2) f(p, d2);
+            }
+    }
+
+    // Heap-free box gather: the summed power of the photons within sqrt(r2) <= radius() of q
+    // whose normals agree with n (gather.h), over structure-of-arrays copies so the loop over
+    // each run vectorises.
+    Vec3 sum_box(Vec3 q, Vec3 n, float r2) const;
+
+    // The cell holding q (clamped to one cell outside the grid); true when inside the grid.
+    bool cell_of(Vec3 q, std::int64_t c[3]) const;
+    // A sort key ordering cells as the dense hash does (z, then y, then x).
+    std::uint64_t cell_order(const std::int64_t c[3]) const {
+        return (std::uint64_t(c[2] + 2) * std::uint64_t(g_[1] + 4) + std::uint64_t(c[1] + 2)) *
+                   std::uint64_t(g_[0] + 4) + std::uint64_t(c[0] + 2);
+    }
+
+private:
+    std::uint64_t bucket(std::int64_t x, std::int64_t y, std::int64_t z) const;
+
+    float r_ = 0, inv_r_ = 0;
+    bool dense_ = true;
+    Vec3 origin_;
+    std::int64_t g_[3] = {0, 0, 0};
+    std::uint64_t cells_ = 0, buckets_ = 0;
+    std::vector<std::uint64_t> start_;  // prefix sums, one more entry than cells/buckets
+    std::vector<Photon> photons_;
+    // photons_ again as structure of arrays (position, normal, power), for sum_box.
+    std::vector<float> px_, py_, pz_, nx_, ny_, nz_, pr_, pg_, pb_;
+};
+
+}  // namespace gigascroll::photon

@@ -1,0 +1,57 @@
+// A photon map: the stored photons behind one of the two search structures, with the
+// gathers of gather.h dispatched on the settings.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "photon/gather.h"
+#include "photon/hash_grid.h"
+#include "photon/kd_tree.h"
+
+namespace gigascroll::photon {
+
+enum class GridKind { Hash, KdTree };
+
+struct GatherSettings {
+    float radius = 0.05f;
+    bool knn = false;  // k-nearest with a heap instead of the heap-free radius gather
+    int k = 50;
+    Kernel kernel = Kernel::Box;
+};
+
+class PhotonMap {
+public:
+    PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind,
+              HashGrid::Mode mode = HashGrid::Mode::Auto);
+
+    std::size_t size() const { return grid_ ? grid_->size() : kd_->size(); }
+    const HashGrid* grid() const { return grid_.get(); }
+    const KdTree* kdtree() const { return kd_.get(); }
+
+    // Flux density at x on a surface with normal n (see gather.h).
+    Vec3 gather(Vec3 x, Vec3 n, const GatherSettings& s, KnnHeap& heap) const {
+        if (grid_ && !s.knn && s.kernel == Kernel::Box)  // the hot path, vectorised
+            return grid_->sum_box(x, n, s.radius * s.radius) * (1.0f / (float(M_PI) * s.radius * s.radius));
+        if (grid_) return s.knn ? gather_knn(*grid_, x, n, s.radius, s.k, s.kernel, heap)
+                                : gather_radius(*grid_, x, n, s.radius, s.kernel);
+        return s.knn ? gather_knn(*kd_, x, n, s.radius, s.k, s.kernel, heap)
+                     : gather_radius(*kd_, x, n, s.radius, s.kernel);
+    }
+
+    // Indices (into photons()) of every photon within r of q, for tests against brute force.
+    std::vector<std::uint64_t> query_radius(Vec3 q, float r) const;
+    // The k nearest photons within r, nearest first.
+    std::vector<std::uint64_t> query_knn(Vec3 q, int k, float r) const;
+    const std::vector<Photon>& photons() const { return grid_ ? grid_->photons() : kd_->photons(); }
+
+private:
+    template <typename F>
+    void each(Vec3 q, float& r2, F&& f) const {
+        if (grid_) grid_->for_each_in_radius(q, r2, f);
+        else kd_->for_each_in_radius(q, r2, f);
+    }
+    std::unique_ptr<HashGrid> grid_;
+    std::unique_ptr<KdTree> kd_;
+};
+
+}  // namespace gigascroll::photon

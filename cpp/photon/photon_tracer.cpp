@@ -1,0 +1,77 @@
+#include "photon/photon_tracer.h"
+
+#include <cmath>
+
+#include "common/error.h"
+#include "common/parallel.h"
+#include "photon/rng.h"
+
+namespace gigascroll::photon {
+
+Vec3 sample_cosine(Vec3 n, float u1, float u2) {
+    const float r = std::sqrt(u1);
+    const float phi = 2.0f * float(M_PI) * u2;
+    const float z = std::sqrt(std::max(0.0f, 1.0f - u1));
+    Vec3 t, b;
+    basis(n, t, b);
+    return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
+}
+
+std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::uint64_t seed,
+                                  unsigned threads, TraceStats* stats, int max_bounces) {
+    require(scene.committed(), "trace_photons: call Scene.commit() first");
+    require(count > 0, "trace_photons: the photon count must be positive");
+    TraceStats st;
+    st.emitted = count;
+    st.emitted_power = scene.emitted_power();
+    std::vector<Photon> out;
+    if (scene.emitter_count() == 0 || !scene.reflects_anything()) {
+        if (stats) *stats = st;
+        return out;  // nothing is ever stored
+    }
+    // Each photon carries W / N per unit of emitter weight; see Scene::sample_emitter.
+    const double scale = double(scene.emitter_weight_total()) * M_PI / double(count);
+    const float eps = scene.epsilon();
+
+    constexpr std::uint64_t kChunk = 4096;
+    const std::uint64_t chunks = (count + kChunk - 1) / kChunk;
+    std::vector<std::vector<Photon>> parts(chunks);
+    parallel_for(chunks, 1, [&](std::size_t cb, std::size_t ce) {
+        for (std::size_t c = cb; c < ce; ++c) {
+            auto& part = parts[c];
+            const std::uint64_t end = std::min<std::uint64_t>(count, (c + 1) * kChunk);
+            for (std::uint64_t i = c * kChunk; i < end; ++i) {
+                Rng rng(hash_combine(seed, i));
+                const float ut = rng.uniform(), ua = rng.uniform(), ub = rng.uniform();
+                const LightSample ls = scene.sample_emitter(ut, ua, ub);
+                const float w = (ls.radiance.x + ls.radiance.y + ls.radiance.z) / 3.0f;
+                Vec3 power = ls.radiance * float(scale / w);
+                Vec3 o = ls.p + ls.n * eps;
+                Vec3 d = sample_cosine(ls.n, rng.uniform(), rng.uniform());
+                for (int bounce = 0; bounce < max_bounces; ++bounce) {
+                    Hit hit;
+                    if (!scene.intersect(o, d, hit)) break;
+                    if (bounce > 0) part.push_back({hit.p, power, hit.n});
+                    const Vec3 albedo = scene.albedo(hit.tri);
+                    const float survive = max_component(albedo);
+                    if (!(rng.uniform() < survive)) break;  // Russian roulette by albedo
+                    power = power * (albedo / survive);
+                    o = hit.p + hit.n * eps;
+                    d = sample_cosine(hit.n, rng.uniform(), rng.uniform());
+                }
+            }
+        }
+    }, threads);
+    std::size_t total = 0;
+    for (const auto& p : parts) total += p.size();
+    out.reserve(total);
+    for (auto& p : parts) {
+        out.insert(out.end(), p.begin(), p.end());
+        std::vector<Photon>().swap(p);
+    }
+    st.stored = out.size();
+    if (stats) *stats = st;
+    return out;
+}
+
+}  // namespace gigascroll::photon

@@ -1,0 +1,97 @@
+// The photon-mapping renderer: direct light by sampling the emitters with shadow rays,
+// indirect light from the photon map at the first diffuse hit (seed 001's pass 2).
+//
+// Pipelines (seed 001 Table 3 on a CPU):
+//  - Fused: each pixel traces its ray, shades and gathers in one loop.
+//  - TwoPass: all primary hits (with their direct light) first, then the gathers over the hit
+//    points ordered by grid cell, so neighbouring gathers read the same photons.
+// Cooperative gather (seed 001 Algorithm 1 on a CPU, TwoPass + hash grid + radius gather): a
+// block of hit points in the same cell streams each photon of the 27 neighbouring cells once
+// through all of them, instead of each hit point reading those photons itself.
+//
+// What a scene does not need is skipped: no photon pass when indirect light is off or no
+// surface reflects; no gather (nor light sampling) for pixels that see nothing or a surface
+// that does not reflect; no shadow ray toward a light whose front is turned away or that lies
+// behind the surface.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "photon/camera.h"
+#include "photon/photon_map.h"
+#include "photon/scene.h"
+
+namespace gigascroll::photon {
+
+enum class Pipeline { Fused, TwoPass };
+
+struct RenderSettings {
+    std::uint64_t photons = 1 << 18;
+    GridKind grid = GridKind::Hash;
+    HashGrid::Mode hash_mode = HashGrid::Mode::Auto;
+    GatherSettings gather;
+    int spp = 1;            // camera samples per pixel (jittered, box filter)
+    int light_samples = 1;  // emitter samples per shading point
+    std::uint64_t seed = 0;
+    Pipeline pipeline = Pipeline::Fused;
+    bool cooperative = false;
+    bool direct = true;
+    bool indirect = true;
+    unsigned threads = 0;  // 0 = all cores
+    void validate() const;
+};
+
+struct RenderStats {
+    double photon_seconds = 0;  // photon tracing
+    double build_seconds = 0;   // hash grid or kd-tree construction
+    double trace_seconds = 0;   // primary rays and direct light (two-pass: pass 1)
+    double gather_seconds = 0;  // density estimation (two-pass: pass 2, including the sort)
+    double total_seconds = 0;   // whole render of this view (photon pass included once)
+    std::uint64_t photons_stored = 0;
+    bool photon_pass_skipped = false;
+    std::uint64_t gathers = 0, gathers_skipped = 0;
+    std::uint64_t shadow_rays = 0, shadow_rays_skipped = 0;
+    std::uint64_t reused_pixels = 0;  // stereo: right-eye pixels written by the left eye
+};
+
+// Per-thread counters, summed into RenderStats once per chunk.
+struct ShadeCounters {
+    std::uint64_t gathers = 0, gathers_skipped = 0, shadow_rays = 0, shadow_rays_skipped = 0;
+};
+
+class Renderer {
+public:
+    // Runs the photon pass (unless skipped) and builds the photon map.
+    Renderer(const Scene& scene, const RenderSettings& settings);
+
+    // Renders one view: linear RGB radiance, row-major (height, width, 3).
+    std::vector<float> render(const Camera& camera, RenderStats& stats) const;
+
+    // Emitted + direct + photon-map radiance leaving hit toward where its normal faces. Depends
+    // on the hit point alone (Lambertian, samples seeded by position), not on the eye.
+    Vec3 surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const;
+    // Emission and direct light only; *needs_gather says whether the photon map applies.
+    Vec3 emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const;
+
+    const RenderStats& photon_stats() const { return photon_stats_; }  // photon pass only
+    const PhotonMap* photon_map() const { return map_.get(); }
+    const Scene& scene() const { return scene_; }
+    const RenderSettings& settings() const { return s_; }
+
+    // Deterministic per-pixel sample stream.
+    std::uint64_t pixel_key(int x, int y, int view) const;
+    static void add(RenderStats& st, const ShadeCounters& c);
+
+private:
+    void render_fused(const Camera& cam, std::vector<float>& img, RenderStats& st) const;
+    void render_two_pass(const Camera& cam, std::vector<float>& img, RenderStats& st) const;
+
+    const Scene& scene_;
+    RenderSettings s_;
+    std::unique_ptr<PhotonMap> map_;
+    RenderStats photon_stats_;
+};
+
+}  // namespace gigascroll::photon
