@@ -144,7 +144,7 @@ void bind_views(nb::module_& m) {
                               to_numpy(std::move(x)), to_numpy(std::move(y)));
     }, "keys"_a, "Split request keys into (painting, level, x, y) uint32 arrays (flattened).");
 
-    nb::class_<Camera>(m, "Camera", "A pinhole view: a headset eye or the magnifier.")
+    nb::class_<Camera>(m, "ViewCamera", "A pinhole view: a headset eye or the magnifier.")
         .def("__init__", [](Camera* c, std::array<double, 3> position, std::array<double, 3> forward,
                             std::array<double, 3> up, double tan_half_x, double tan_half_y,
                             std::int64_t width, std::int64_t height) {

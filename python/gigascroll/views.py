@@ -16,14 +16,14 @@ from pathlib import Path
 import numpy as np
 
 from . import _core
-from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, Camera, DirectLoading,
+from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, ViewCamera, DirectLoading,
                     ExhibitionScene, FlagArrayProcessor, HashProcessor, MipByMipLoading,
                     PaintingTiles, ResidencyLookup, ResidentSet, VisibilityLists, mip_level,
                     pack_request, render_feedback, render_view, texel_footprint,
                     unpack_requests)
 
 __all__ = [
-    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "DirectLoading",
+    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "ViewCamera", "DirectLoading",
     "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingTiles", "ResidencyLookup", "ResidentSet",
     "VisibilityLists", "mip_level", "pack_request", "render_feedback", "render_view",
     "texel_footprint", "unpack_requests", "FrameLoop", "LOADING_STRATEGIES",
@@ -316,7 +316,7 @@ def multi_route(n_paintings: int, speed: float = 1.0, duration: float = 10.0,
 
 
 def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
-                  magnifier: Magnifier | None = MAGNIFIER) -> list[tuple[Camera, int, int]]:
+                  magnifier: Magnifier | None = MAGNIFIER) -> list[tuple[ViewCamera, int, int]]:
     """The views of one frame as (camera, feedback width, feedback height): left eye, right
     eye (parallel, +-ipd/2 along the head's right vector), and the magnifier when the path
     has a target that frame."""
@@ -329,7 +329,7 @@ def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
     views = []
     for side in (-1, 1):
         eye = p + side * headset.ipd / 2 * right
-        views.append((Camera(tuple(eye), tuple(f), tuple(u), headset.tan_half_x,
+        views.append((ViewCamera(tuple(eye), tuple(f), tuple(u), headset.tan_half_x,
                              headset.tan_half_y, headset.width, headset.height), fw, fh))
     if magnifier is not None and path.magnifier_target is not None \
             and np.all(np.isfinite(path.magnifier_target[frame])):
@@ -339,7 +339,7 @@ def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
         up_hint = u if abs(np.dot(u, normal)) < 0.99 else right
         tan_half = magnifier.field / 2 / magnifier.lens_distance
         r = magnifier.resolution
-        views.append((Camera(tuple(cam_pos), tuple(-normal), tuple(up_hint), tan_half, tan_half,
+        views.append((ViewCamera(tuple(cam_pos), tuple(-normal), tuple(up_hint), tan_half, tan_half,
                              r, r), r, r))
     return views
 

@@ -21,3 +21,15 @@ def test_unknown_command_fails_cleanly():
                        capture_output=True, text=True)
     assert r.returncode == 2
     assert "invalid choice" in r.stderr
+
+
+def test_subsystems_export_distinct_names():
+    # gigascroll/__init__ re-exports every subsystem with *: a name exported twice would
+    # silently shadow another subsystem's class.
+    from collections import Counter
+
+    from gigascroll import pack, photon, runtime, views
+    counts = Counter(n for m in (pack, runtime, views, photon) for n in m.__all__)
+    assert [n for n, k in counts.items() if k > 1] == []
+    for name in counts:
+        assert hasattr(gigascroll, name), name

@@ -61,7 +61,7 @@ def test_lod_matches_finite_difference_footprint(scroll, yaw_deg, pitch_deg):
     yaw, pitch = math.radians(yaw_deg), math.radians(pitch_deg)
     fwd = (math.sin(yaw) * math.cos(pitch), math.sin(pitch), math.cos(yaw) * math.cos(pitch))
     h = v.HEADSET
-    cam = v.Camera((6.0 - 0.6 * math.tan(yaw), 1.5, -0.6), fwd, (0, 1, 0), h.tan_half_x,
+    cam = v.ViewCamera((6.0 - 0.6 * math.tan(yaw), 1.5, -0.6), fwd, (0, 1, 0), h.tan_half_x,
                    h.tan_half_y, h.width, h.height)
     keys, lod = v.render_feedback(scroll.scene, cam, 45, 48, with_lod=True)
     iy, ix = np.nonzero(keys != v.NO_REQUEST)
@@ -207,7 +207,7 @@ def test_bad_input_is_rejected(scroll, tmp_path):
     with pytest.raises(ValueError):
         v.CameraPath.load(tmp_path / "bad.json")
     with pytest.raises(ValueError, match="NaN"):
-        v.Camera((0, 0, float("nan")), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8)
+        v.ViewCamera((0, 0, float("nan")), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8)
     resident = scroll.resident_set()
     good = np.array([v.pack_request(0, 0, 1, 1)], dtype=np.uint64)
     for proc in (v.BasicProcessor(), v.FlagArrayProcessor(scroll.tiles), v.HashProcessor()):
@@ -226,7 +226,7 @@ def test_bad_input_is_rejected(scroll, tmp_path):
         v.pack_request(0, 32, 0, 0)
     scene = v.ExhibitionScene()
     with pytest.raises(ValueError, match="commit"):
-        v.render_feedback(scene, v.Camera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
+        v.render_feedback(scene, v.ViewCamera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
     with pytest.raises(ValueError, match="orthonormal"):
         scene.add_painting(0, v.PaintingTiles(100, 100), (0, 0, 0), (1, 0, 0), (1, 0, 0), 1, 1)
 
