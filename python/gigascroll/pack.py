@@ -303,6 +303,14 @@ def _prefetch(it: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
         t.join()
 
 
+def _fsync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 def _prepare_output(out: Path, force: bool) -> None:
     if out.exists() or out.is_symlink():
         if not force:
@@ -378,7 +386,6 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                 bands.close()  # joins the reader thread before the image is closed
             builder.end_painting()
             s.close()
-        info = dict(info)
         builder.finish(table_w, table_h, json.dumps(info))
         del builder
         if bar is not None:
@@ -386,6 +393,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         if out.exists():
             shutil.rmtree(out)
         os.rename(tmp, out)
+        _fsync_dir(out.parent)  # make the rename itself durable
     except BaseException:
         if bar is not None:
             bar.close()
