@@ -174,7 +174,7 @@ def write_image(path, pixels):
     out.close()
 
 
-@pytest.mark.parametrize("kind", ["grey", "grey_alpha", "rgba", "16bit", "float", "tiled"])
+@pytest.mark.parametrize("kind", ["grey", "grey_alpha", "rgba", "16bit", "float", "tiled", "jpeg"])
 def test_file_inputs_are_converted(tmp_path, kind):
     rng = np.random.default_rng(11)
     if kind == "grey":
@@ -199,6 +199,10 @@ def test_file_inputs_are_converted(tmp_path, kind):
         x = np.clip(pix.astype(np.float64), 0, 1)
         srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
         expect = np.rint(srgb * 255).astype(np.uint8)
+    elif kind == "jpeg":
+        pix = rng.integers(0, 256, (61, 90, 3), dtype=np.uint8)
+        path = tmp_path / "photo.jpg"
+        expect = None  # lossy: compared with what OpenImageIO decodes below
     else:
         pix = rng.integers(0, 256, (300, 83, 3), dtype=np.uint8)
         path = tmp_path / "tiled.tif"
@@ -211,6 +215,8 @@ def test_file_inputs_are_converted(tmp_path, kind):
         expect = pix
     if kind != "tiled":
         write_image(path, pix)
+    if expect is None:
+        expect = oiio.ImageBuf(str(path)).get_pixels(oiio.UINT8)
     pack = build_pack(path, tmp_path / "p", tile_size=16, border=2)
     p = pack.paintings[0]
     assert p.name == path.stem and p.source == str(path)
