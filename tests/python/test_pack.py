@@ -567,3 +567,20 @@ def test_bench_pack_smoke(tmp_path):
     # outputs removed, the synthesized input cached
     assert sorted(f.name for f in tmp_path.iterdir()) == [
         "bench_pack.json", "bench_pack.png", "ink-700x260.tif"]
+
+
+def test_random_geometries_match_reference(tmp_path_factory):
+    """Property test: any small image size, tile size and border, any band size."""
+    from hypothesis import given, settings, HealthCheck, strategies as st
+
+    @settings(max_examples=15, deadline=None, suppress_health_check=list(HealthCheck))
+    @given(h=st.integers(1, 70), w=st.integers(1, 70), border=st.integers(0, 3),
+           extra=st.integers(1, 9), band=st.integers(1, 40), seed=st.integers(0, 1000))
+    def check(h, w, border, extra, band, seed):
+        img = noise(h, w, seed=seed)
+        out = tmp_path_factory.mktemp("h") / "p"
+        pack = build_pack(img, out, tile_size=max(2, 2 * border + extra), border=border,
+                          band_rows=band)
+        check_pack_against(pack, 0, img)
+
+    check()
