@@ -15,6 +15,21 @@
 #include "common/parallel.h"
 
 namespace gigascroll {
+namespace {
+
+// write() until done; IoError with the reason (ENOSPC: disk full, EFBIG, ...) otherwise.
+void write_fully(int fd, const void* data, std::size_t size, const std::string& path) {
+    const auto* p = static_cast<const std::uint8_t*>(data);
+    while (size > 0) {
+        const ssize_t n = ::write(fd, p, size);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) throw IoError(path + ": write failed: " + std::strerror(n < 0 ? errno : EIO));
+        p += n;
+        size -= static_cast<std::size_t>(n);
+    }
+}
+
+}  // namespace
 
 struct PackBuilder::Level {
     LevelGeometry geo;
@@ -56,16 +71,7 @@ std::uint32_t PackBuilder::rows_done() const {
 }
 
 void PackBuilder::write_all(const void* data, std::size_t size) {
-    const auto* p = static_cast<const std::uint8_t*>(data);
-    while (size > 0) {
-        const ssize_t n = ::write(fd_, p, size);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0)
-            throw IoError(directory_ + "/" + kTilesName + ": write failed: " +
-                          std::strerror(n < 0 ? errno : EIO));
-        p += n;
-        size -= static_cast<std::size_t>(n);
-    }
+    write_fully(fd_, data, size, directory_ + "/" + kTilesName);
 }
 
 void PackBuilder::begin_painting(const PaintingSpec& spec) {
@@ -375,20 +381,20 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
         const std::string path = directory_ + "/" + kIndexName;
         const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
         if (fd < 0) throw IoError(path + ": cannot create: " + std::strerror(errno));
-        fd_ = fd;  // write_all writes to fd_
+        struct Closer {
+            int fd;
+            ~Closer() { ::close(fd); }
+        } closer{fd};
         FileHeader ih{};
         std::memcpy(ih.magic, kIndexMagic, 8);
         ih.version = kPackVersion;
         ih.entry_size = sizeof(TileEntry);
         ih.count = count;
         ih.data_bytes = count * sizeof(TileEntry);
-        write_all(&ih, sizeof ih);
+        write_fully(fd, &ih, sizeof ih, path);
         for (const auto& p : paintings_)
-            write_all(p.entries.data(), p.entries.size() * sizeof(TileEntry));
-        const bool ok = ::fsync(fd) == 0;
-        ::close(fd);
-        fd_ = -1;
-        if (!ok) throw IoError(path + ": fsync failed: " + std::strerror(errno));
+            write_fully(fd, p.entries.data(), p.entries.size() * sizeof(TileEntry), path);
+        if (::fsync(fd) != 0) throw IoError(path + ": fsync failed: " + std::strerror(errno));
     }
 
     // manifest.json, last.

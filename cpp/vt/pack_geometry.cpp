@@ -3,17 +3,8 @@
 #include <string>
 
 #include "common/error.h"
-#include "vt/pack_format.h"
 
 namespace gigascroll {
-
-Codec parse_codec(const std::string& name) {
-    if (name == "raw") return Codec::Raw;
-    if (name == "zstd") return Codec::Zstd;
-    throw InvalidArgument("unknown codec '" + name + "' (expected raw or zstd)");
-}
-
-const char* codec_name(Codec codec) { return codec == Codec::Zstd ? "zstd" : "raw"; }
 
 std::uint32_t next_pow2(std::uint32_t v) {
     std::uint32_t p = 1;

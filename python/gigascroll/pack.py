@@ -38,10 +38,13 @@ def _srgb_encode(linear: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
 
 
-def describe_conversion(dtype: np.dtype, channels: int) -> str:
-    """How an input of this dtype and channel count becomes 8-bit RGB (for the manifest)."""
+def describe_conversion(dtype: np.dtype, channels: int, stored_type: str | None = None) -> str:
+    """How an input of this dtype and channel count becomes 8-bit RGB (for the manifest).
+    `stored_type` names the file's own pixel type when it differs from `dtype` (the type the
+    reader asked OpenImageIO for, e.g. half -> float32, int16 -> uint16)."""
     steps = []
     dtype = np.dtype(dtype)
+    source = f"{stored_type} read as {dtype.name}; " if stored_type and stored_type != dtype.name else ""
     if dtype == np.uint8:
         pass
     elif dtype == np.uint16:
@@ -56,7 +59,9 @@ def describe_conversion(dtype: np.dtype, channels: int) -> str:
         steps.append("alpha dropped")
     if channels > 4:
         steps.append(f"channels 3..{channels - 1} dropped")
-    return "; ".join(steps) if steps else "none (8-bit RGB)"
+    if not steps:
+        return source + "none (8-bit RGB)" if source else "none (8-bit RGB)"
+    return source + "; ".join(steps)
 
 
 def to_rgb8(pixels: np.ndarray) -> np.ndarray:
@@ -154,7 +159,7 @@ class FileSource(ImageSource):
             band_rows = 128
         self._nch = min(spec.nchannels, 4)
         super().__init__(name or path.stem, str(path), spec.width, spec.height,
-                         describe_conversion(dtype, spec.nchannels), band_rows)
+                         describe_conversion(dtype, spec.nchannels, str(spec.format)), band_rows)
         self._inp = inp
         self._spec = spec
 
@@ -298,6 +303,14 @@ def _prefetch(it: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
         t.join()
 
 
+def _fsync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 def _prepare_output(out: Path, force: bool) -> None:
     if out.exists() or out.is_symlink():
         if not force:
@@ -373,7 +386,6 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                 bands.close()  # joins the reader thread before the image is closed
             builder.end_painting()
             s.close()
-        info = dict(info)
         builder.finish(table_w, table_h, json.dumps(info))
         del builder
         if bar is not None:
@@ -381,6 +393,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         if out.exists():
             shutil.rmtree(out)
         os.rename(tmp, out)
+        _fsync_dir(out.parent)  # make the rename itself durable
     except BaseException:
         if bar is not None:
             bar.close()
