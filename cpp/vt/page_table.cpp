@@ -19,6 +19,19 @@ PageTable::PageTable(const VtLayout& layout) : layout_(layout) {
         for (std::uint32_t l = p.merged_levels(); l < p.level_count(); ++l)
             tail_[i].emplace_back(std::size_t(p.tiles_x[l]) * p.tiles_y[l], PageEntry{});
     }
+    views_.resize(layout_.paintings.size());
+    for (std::size_t i = 0; i < layout_.paintings.size(); ++i) {
+        const VtPainting& p = layout_.paintings[i];
+        for (std::uint32_t l = 0; l < p.level_count(); ++l) {
+            if (l < p.merged_levels()) {
+                const std::size_t stride = layout_.table_w >> l;
+                views_[i].push_back({merged_[l].data() + std::size_t(p.table_y >> l) * stride + (p.table_x >> l),
+                                     stride});
+            } else {
+                views_[i].push_back({tail_[i][l - p.merged_levels()].data(), p.tiles_x[l]});
+            }
+        }
+    }
 }
 
 std::uint32_t PageTable::grid_w(std::uint32_t p, std::uint32_t l) const {

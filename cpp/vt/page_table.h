@@ -37,6 +37,9 @@ struct PageEntry {
 class PageTable {
 public:
     explicit PageTable(const VtLayout& layout);
+    // Not copyable: views_ point into the table's own storage.
+    PageTable(const PageTable&) = delete;
+    PageTable& operator=(const PageTable&) = delete;
 
     // O(1): the finest resident tile covering (p, l, tx, ty) (tx, ty in that level's tile
     // grid, padding included: tx < Mp >> l for merged levels, < tiles_x(l) for tail levels).
@@ -62,17 +65,23 @@ private:
         return const_cast<PageEntry&>(cref(p, l, x, y));
     }
     const PageEntry& cref(std::uint32_t p, std::uint32_t l, std::uint32_t x, std::uint32_t y) const {
-        const VtPainting& pt = layout_.paintings[p];
-        if (l < pt.merged_levels())
-            return merged_[l][std::size_t((pt.table_y >> l) + y) * (layout_.table_w >> l) +
-                              (pt.table_x >> l) + x];
-        return tail_[p][l - pt.merged_levels()][std::size_t(y) * pt.tiles_x[l] + x];
+        const LevelView& v = views_[p][l];
+        return v.base[std::size_t(y) * v.stride + x];
     }
     // Calls f(entry) for every entry of levels <= key.level under key's tile.
     template <typename F>
     void for_each_covered(const TileKey& key, F&& f);
 
+    // Where level l of painting p starts (its region's first entry) and its row stride: the
+    // merged table at offset >> l with stride Mc >> l, or the painting's tail table. Precomputed
+    // so a lookup is one multiply-add, the sampler's hot path.
+    struct LevelView {
+        PageEntry* base;
+        std::size_t stride;
+    };
+
     VtLayout layout_;
+    std::vector<std::vector<LevelView>> views_;            // [painting][level]
     std::vector<std::vector<PageEntry>> merged_;            // [level][row-major Mc>>l x Nc>>l]
     std::vector<std::vector<std::vector<PageEntry>>> tail_;  // [painting][level - merged][...]
 };

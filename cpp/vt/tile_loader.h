@@ -5,7 +5,8 @@
 //   LockFree (the seed's design): one SPSC command queue per loader thread (the main thread
 //   deals commands round-robin), one MPSC result queue back, and per thread an SPSC queue of
 //   free buffers returned by the main thread. Idle threads sleep in std::atomic::wait on a
-//   per-thread wake counter (a futex on Linux), never spinning; the main thread never blocks.
+//   per-thread wake counter (libstdc++ polls a few dozen times, then sleeps on a futex), so
+//   an idle thread costs no CPU; the main thread never blocks.
 //   Locked (the Unreal-style baseline): N workers sharing mutex + condition-variable job,
 //   free-buffer and result queues.
 //
