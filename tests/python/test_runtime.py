@@ -294,3 +294,20 @@ def test_bad_input_raises_clear_errors(pack, vt_full):
     a, _ = vt_full.sample(0, np.array([-3.0, 7.0]), np.array([0.0, 1.0]))
     b, _ = vt_full.sample(0, np.array([0.0, 1.0]), np.array([0.0, 1.0]))
     np.testing.assert_array_equal(a, b)
+
+
+def test_empty_and_single_key_batches_are_accepted(pack):
+    # numpy gives empty and one-row arrays arbitrary strides: they must not be rejected.
+    vt = VirtualTexture(pack, slots=(8, 8))
+    key = all_keys(pack)[0]
+    with TileLoader(pack, "lockfree", 1) as loader:
+        loader.submit([])
+        loader.submit(np.zeros((0, 4), np.int64))
+        assert vt.request([]) == []
+        loader.submit([key])
+        deadline = time.monotonic() + 30
+        got = []
+        while not got and time.monotonic() < deadline:
+            got = loader.poll()
+            time.sleep(0.001)
+    assert [k for k, _ in got] == [tuple(key)]
