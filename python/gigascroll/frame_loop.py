@@ -6,7 +6,11 @@ requests answered at the level asked), the request-processing latency in frames,
 the camera stops the display latency (frames until every visible tile is resident at its
 requested level).
 
-Not yet here (issue 4 §4): the Ma VT and seed 003 LOD-mapping baselines.
+The methods are the four request-processing methods of views.PROCESSING_METHODS and the two
+baselines without a feedback pass (baselines.BASELINES: Ma VT, seed 003 LOD mapping). For
+those the rays still render the views for the display pass, so their time counts as display,
+and the baseline's own determination plus the page-table lookup of its requests counts as
+processing.
 """
 
 from __future__ import annotations
@@ -20,8 +24,11 @@ import numpy as np
 
 from . import views as v
 from ._core import VirtualTextureLookup
+from .baselines import BASELINES, make_baseline
 
-__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES"]
+__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
+
+METHODS = v.PROCESSING_METHODS + BASELINES
 
 LOADING_STRATEGIES = ("direct", "mip-by-mip")
 # The columns of seed 000 Table 5 (physical and page-table update are one call here: the
@@ -59,9 +66,9 @@ class FrameLoop:
                              f"{', '.join(LOADING_STRATEGIES)}")
         if self.per_frame <= 0:
             raise ValueError("per_frame (the direct-loading threshold) must be > 0")
-        if self.method not in v.PROCESSING_METHODS:
+        if self.method not in METHODS:
             raise ValueError(f"unknown request-processing method {self.method!r}; choose from "
-                             f"{', '.join(v.PROCESSING_METHODS)}")
+                             f"{', '.join(METHODS)}")
         paintings = self.pack.paintings
         if len(paintings) < len(self.exhibition.tiles):
             raise ValueError(f"the pack has {len(paintings)} paintings, the exhibition shows "
@@ -79,7 +86,12 @@ class FrameLoop:
         from . import runtime
         vt = runtime.VirtualTexture(self.pack, self.slots)
         lookup = VirtualTextureLookup(vt)
-        proc = v.make_processor(self.method, self.exhibition.tiles, self.threads)
+        baseline = None
+        if self.method in BASELINES:
+            baseline = make_baseline(self.method, self.exhibition)
+            proc = v.BasicProcessor()  # looks the baseline's requests up in the page table
+        else:
+            proc = v.make_processor(self.method, self.exhibition.tiles, self.threads)
         is_async = isinstance(proc, v.AsyncProcessor)
         direct = v.DirectLoading(self.per_frame) if self.strategy == "direct" else None
         mip = v.MipByMipLoading(self.per_frame) if self.strategy == "mip-by-mip" else None
@@ -107,7 +119,13 @@ class FrameLoop:
 
                 t0 = time.perf_counter()
                 new_set = None
-                if is_async:
+                if baseline is not None:
+                    own = baseline.requests(self.path, frame)
+                    new_set = proc.process(own, lookup, frame)
+                    # The rays above only feed the display pass for a baseline.
+                    t["display_rays"] = t.pop("feedback")
+                    t["feedback"] = 0.0
+                elif is_async:
                     proc.submit(buffers, frame)
                     results = proc.poll(lookup)
                     if results:
@@ -150,7 +168,7 @@ class FrameLoop:
                 t0 = time.perf_counter()
                 for d in views:
                     self._display(vt, d)
-                t["display"] = time.perf_counter() - t0
+                t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
                 # Hit rate after this frame's updates: what the display showed.
                 flat = np.concatenate([b.ravel() for b in buffers])
