@@ -44,7 +44,10 @@ class FrameLoop:
     `per_frame` requested tiles a frame) or "mip-by-mip" (van Waveren, same cap).
     pace: sleep to 90 Hz frame boundaries (False: run flat out, for tests).
     wait_loads: block each frame until that frame's loads arrived (deterministic tests;
-    a real loop leaves it False and drains what is ready)."""
+    a real loop leaves it False and drains what is ready).
+    magnifier_requests: False shows the magnifier but leaves its feedback out of request
+    processing (to see what its requests add); `last_images` holds the last frame's display
+    images (left eye, right eye[, magnifier]) as float RGB."""
     exhibition: v.Exhibition
     pack: object
     path: v.CameraPath
@@ -57,8 +60,10 @@ class FrameLoop:
     pace: bool = True
     wait_loads: bool = False
     magnifier: bool = True
+    magnifier_requests: bool = True
     threads: int = 0
     records: list = field(default_factory=list, init=False)
+    last_images: list = field(default_factory=list, init=False)
 
     def __post_init__(self):
         if self.strategy not in LOADING_STRATEGIES:
@@ -115,6 +120,7 @@ class FrameLoop:
                                                           magnifier=v.MAGNIFIER if self.magnifier
                                                           else None)]
                 buffers = [d["keys"] for d in views]
+                processed = buffers if self.magnifier_requests else buffers[:2]
                 t["feedback"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
@@ -126,13 +132,13 @@ class FrameLoop:
                     t["display_rays"] = t.pop("feedback")
                     t["feedback"] = 0.0
                 elif is_async:
-                    proc.submit(buffers, frame)
+                    proc.submit(processed, frame)
                     results = proc.poll(lookup)
                     if results:
                         new_set = results[-1]
                         latency = frame - new_set["frame"]
                 else:
-                    new_set = proc.process(buffers, lookup, frame)
+                    new_set = proc.process(processed, lookup, frame)
                     latency = 0
                 t["processing"] = time.perf_counter() - t0
 
@@ -166,16 +172,23 @@ class FrameLoop:
                 t["update"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
-                for d in views:
-                    self._display(vt, d)
+                images = [self._display(vt, d) for d in views]
                 t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
                 # Hit rate after this frame's updates: what the display showed.
                 flat = np.concatenate([b.ravel() for b in buffers])
                 req = np.unique(flat[flat != v.NO_REQUEST])
                 levels = v.unpack_requests(req)[1]
-                hits = sum(lookup.resident_level(int(k)) == int(lv) for k, lv in zip(req, levels))
+                hit = np.array([lookup.resident_level(int(k)) == int(lv)
+                                for k, lv in zip(req, levels)], bool)
+                hits = int(hit.sum())
+                view_hits = []
+                for b in buffers:
+                    mine = np.isin(req, b)
+                    view_hits.append(float(hit[mine].mean()) if mine.any() else 1.0)
+                self.last_images = images
                 self.records.append({
+                    "view_hit_rates": view_hits,
                     "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in STAGES},
                     "total_ms": 1e3 * sum(t.values()), "requests": int(req.size),
                     "hit_rate": hits / req.size if req.size else 1.0, "issued": int(issue.size),
