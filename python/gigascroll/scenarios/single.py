@@ -26,16 +26,17 @@ def setup(opts: c.Options):
     else:
         ex = v.single_scroll()
         pack = c.open_user_pack(opts) if opts.pack else c.scroll_pack(opts)
-        path = v.scroll_path(distance=0.40, speed=1.0, duration=10.0, start_x=1.0,
-                             exhibition=ex, stop_frames=60)
+        path = v.scroll_path(distance=0.40, speed=1.0, duration=opts.duration or 10.0,
+                             start_x=1.0, exhibition=ex, stop_frames=60)
     return ex, pack, c.user_path(opts, path, ex)
 
 
 def _loop(opts, ex, pack, path, **kw):
     # Quick runs wait for each frame's loads (deterministic invariants); full runs are paced
     # at 90 Hz with the loader draining whatever is ready.
-    return v.FrameLoop(ex, pack, path, per_frame=opts.threshold, pace=opts.pace and not opts.quick,
-                       wait_loads=opts.quick, threads=opts.threads, **kw)
+    return v.FrameLoop(ex, pack, path, per_frame=opts.threshold,
+                       pace=opts.pace and not opts.quick, wait_loads=opts.quick,
+                       threads=opts.threads, **kw)
 
 
 def salt_losses(ex, path, frames: int, threads: int = 0) -> dict:
