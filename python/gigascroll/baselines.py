@@ -33,7 +33,8 @@ __all__ = ["BASELINES", "MaVT", "LodMapping", "make_baseline", "LOD_BANDS_M"]
 BASELINES = ("ma-vt", "lod-mapping")
 # Seed 003's bands (scene units 100, 200, 300, 500), scaled so that LOD1 ends where a
 # head-on view of the scroll's texels stops needing level 0: 2 texels per display pixel.
-_LEVEL0_END_M = 2 * (v.SCROLL.width_m / v.SCROLL.width) / (2 * v.HEADSET.tan_half_x / v.HEADSET.width)
+_LEVEL0_END_M = (2 * (v.SCROLL.width_m / v.SCROLL.width)
+                 / (2 * v.HEADSET.tan_half_x / v.HEADSET.width))
 LOD_BANDS_M = tuple(_LEVEL0_END_M * b / 100 for b in (100, 200, 300, 500))
 
 
