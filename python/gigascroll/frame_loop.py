@@ -102,6 +102,7 @@ class FrameLoop:
         mip = v.MipByMipLoading(self.per_frame) if self.strategy == "mip-by-mip" else None
         loading = direct if direct is not None else mip
         commands = np.zeros(0, np.uint64)
+        truth = v.BasicProcessor()  # the exact request set, for the hit rate
         latency = 0
         period = 1.0 / self.path.fps
         self.records = []
@@ -175,23 +176,17 @@ class FrameLoop:
                 images = [self._display(vt, d) for d in views]
                 t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
-                # Hit rate after this frame's updates: what the display showed.
-                flat = np.concatenate([b.ravel() for b in buffers])
-                req = np.unique(flat[flat != v.NO_REQUEST])
-                levels = v.unpack_requests(req)[1]
-                hit = np.array([lookup.resident_level(int(k)) == int(lv)
-                                for k, lv in zip(req, levels)], bool)
-                hits = int(hit.sum())
-                view_hits = []
-                for b in buffers:
-                    mine = np.isin(req, b)
-                    view_hits.append(float(hit[mine].mean()) if mine.any() else 1.0)
+                # Hit rate after this frame's updates: what the display showed. A request
+                # hits when its response (finest resident tile answering it) is itself.
+                hit_rate = _hit_rate(truth, buffers, lookup, frame)
+                view_hits = ([_hit_rate(truth, [b], lookup, frame)[0] for b in buffers]
+                             if frame == len(self.path) - 1 else None)
                 self.last_images = images
                 self.records.append({
                     "view_hit_rates": view_hits,
                     "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in STAGES},
-                    "total_ms": 1e3 * sum(t.values()), "requests": int(req.size),
-                    "hit_rate": hits / req.size if req.size else 1.0, "issued": int(issue.size),
+                    "total_ms": 1e3 * sum(t.values()), "requests": hit_rate[1],
+                    "hit_rate": hit_rate[0], "issued": int(issue.size),
                     "loaded": len(loaded), "latency_frames": latency,
                     "moving": frame + 1 < len(self.path) and not np.array_equal(
                         self.path.position[frame], self.path.position[frame + 1]),
@@ -247,3 +242,10 @@ class FrameLoop:
             "requests_per_frame": statistics.mean(x["requests"] for x in r),
             "display_latency_frames": display_latency,
         }
+
+
+def _hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
+    """(share of the distinct requests in `buffers` answered at their own level, count)."""
+    s = truth.process(buffers, lookup, frame)
+    n = int(s["requests"].size)
+    return (float(np.mean(s["responses"] == s["requests"])) if n else 1.0), n
