@@ -170,6 +170,11 @@ class FrameLoop:
                 if keys:
                     done = np.array(keys, dtype=np.uint64)
                     loading.loaded(done)
+                if new_set is not None and new_set["responses"].size:
+                    # The tiles the display samples become most recently used, so the LRU
+                    # evicts what the views left, not what they still show.
+                    vt.request(np.stack(v.unpack_requests(new_set["responses"]),
+                                        axis=1).astype(np.int64))
                 t["update"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()

@@ -145,9 +145,10 @@ def _safe(x):
 
 def save_png(path: Path, rgb: np.ndarray) -> None:
     import matplotlib.pyplot as plt
-    img = np.clip(np.asarray(rgb, np.float32), 0, 1)
-    if img.max() > 1.0 + 1e-6:
+    img = np.asarray(rgb, np.float32)
+    if img.size and img.max() > 1.0 + 1e-6:  # 0..255 colours
         img = img / 255.0
+    img = np.clip(img, 0, 1)
     plt.imsave(path, img)
 
 
