@@ -57,8 +57,11 @@ def run(opts: c.Options) -> dict:
                 path, len(path) - 1, pack.tile_size ** 2 * 4) / 2 ** 20
         res["rows"].append(row)
     by = {r["method"]: r for r in res["rows"]}
+    # LOD mapping loads whole levels (16k tiles for the full scroll at 25 cm): it is expected
+    # to stay blurred for the full run's stop; the quick run's small painting must sharpen.
     checks = {"all_sharp_after_stop": all(r["display_latency_frames"] is not None
-                                          for r in res["rows"])}
+                                          for r in res["rows"]
+                                          if opts.quick or r["method"] != "lod-mapping")}
     if "hash" in by:
         # Deterministic quick run: each frame's loads arrive within the frame, so the hash
         # loop is sharp within a few frames of the stop (seed 000: 3-4).
