@@ -47,7 +47,10 @@ class FrameLoop:
     a real loop leaves it False and drains what is ready).
     magnifier_requests: False shows the magnifier but leaves its feedback out of request
     processing (to see what its requests add); `last_images` holds the last frame's display
-    images (left eye, right eye[, magnifier]) as float RGB."""
+    images (left eye, right eye[, magnifier]) as float RGB.
+    magnifier_display_step: the display pass samples every n-th magnifier pixel per axis
+    (its feedback stays at full 512 x 512; the eyes' display is at feedback resolution);
+    the last frame is displayed in full."""
     exhibition: v.Exhibition
     pack: object
     path: v.CameraPath
@@ -61,6 +64,7 @@ class FrameLoop:
     wait_loads: bool = False
     magnifier: bool = True
     magnifier_requests: bool = True
+    magnifier_display_step: int = 2
     threads: int = 0
     records: list = field(default_factory=list, init=False)
     last_images: list = field(default_factory=list, init=False)
@@ -69,6 +73,8 @@ class FrameLoop:
         if self.strategy not in LOADING_STRATEGIES:
             raise ValueError(f"unknown loading strategy {self.strategy!r}; choose from "
                              f"{', '.join(LOADING_STRATEGIES)}")
+        if self.magnifier_display_step < 1:
+            raise ValueError("magnifier_display_step must be >= 1")
         if self.per_frame <= 0:
             raise ValueError("per_frame (the direct-loading threshold) must be > 0")
         if self.method not in METHODS:
@@ -178,7 +184,10 @@ class FrameLoop:
                 t["update"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
-                images = [self._display(vt, d) for d in views]
+                last = frame == len(self.path) - 1
+                images = [self._display(vt, d, 1 if i < 2 or last
+                                        else self.magnifier_display_step)
+                          for i, d in enumerate(views)]
                 t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
                 # Hit rate after this frame's updates: what the display showed. A request
@@ -206,9 +215,12 @@ class FrameLoop:
             bar.close()
         return self.summary()
 
-    def _display(self, vt, d) -> np.ndarray:
-        """Samples the view through the virtual texture (at the feedback resolution)."""
-        keys, lod, uv = d["keys"], d["lod"], d["uv"]
+    def _display(self, vt, d, step: int = 1) -> np.ndarray:
+        """Samples the view through the virtual texture at the feedback resolution, or
+        every `step`-th pixel per axis (at the level the feedback asked for, so the same
+        tiles are read)."""
+        keys, lod, uv = (d["keys"][::step, ::step], d["lod"][::step, ::step],
+                         d["uv"][::step, ::step])
         out = np.zeros(keys.shape + (3,), np.float32)
         hit = keys != v.NO_REQUEST
         if not hit.any():
