@@ -98,3 +98,12 @@ def test_bad_input(tmp_path, capsys, cache, results):
                      "--out", str(tmp_path))
     assert code == 2 and "NaN" in err
     assert not (tmp_path / "latency.md").exists()  # no report that looks complete
+
+
+def test_cli_runs_a_scenario(tmp_path, capsys, cache):
+    code = cli.main(["scenario", "latency", "--quick", "--methods", "hash,ma-vt", "--cache",
+                     str(cache), "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert code == 0 and "report" in out
+    rows = json.loads((tmp_path / "latency.json").read_text())["rows"]
+    assert [r["method"] for r in rows] == ["hash", "ma-vt"]
