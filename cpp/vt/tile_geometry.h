@@ -1,10 +1,11 @@
-// Tile geometry of one painting: mip levels, tiles per level, flat tile indices.
-// Mirrors the pack layout (payload P = tile_size - 2 * border; level l is
-// ceil(W / 2^l) x ceil(H / 2^l) texels cut into ceil(W_l / P) x ceil(H_l / P) tiles;
-// levels stop at the first one that fits in a single tile).
+// Tile geometry of one painting as the views see it: mip levels, tiles per level, flat tile
+// indices. The levels and tile grids are the pack's own (make_geometry in pack_geometry.h is
+// the single source of truth); this class adds the flat per-painting tile index used by the
+// flag array and checks that tile coordinates fit the 16 bits of a request key.
 #pragma once
 #include <cstdint>
-#include <vector>
+
+#include "vt/pack_geometry.h"
 
 namespace gigascroll {
 
@@ -13,33 +14,34 @@ public:
     PaintingTiles(std::uint32_t width, std::uint32_t height, std::uint32_t tile_size = 128,
                   std::uint32_t border = 4);
 
-    std::uint32_t width() const { return width_; }
-    std::uint32_t height() const { return height_; }
-    std::uint32_t tile_size() const { return tile_size_; }
-    std::uint32_t border() const { return border_; }
-    std::uint32_t payload() const { return tile_size_ - 2 * border_; }
-    std::uint32_t levels() const { return static_cast<std::uint32_t>(tiles_x_.size()); }
+    const PaintingGeometry& geometry() const { return g_; }
+    std::uint32_t width() const { return g_.width; }
+    std::uint32_t height() const { return g_.height; }
+    std::uint32_t tile_size() const { return g_.tile_size; }
+    std::uint32_t border() const { return g_.border; }
+    std::uint32_t payload() const { return g_.payload; }
+    std::uint32_t levels() const { return g_.level_count(); }
 
     std::uint32_t level_width(std::uint32_t level) const;
     std::uint32_t level_height(std::uint32_t level) const;
-    std::uint32_t tiles_x(std::uint32_t level) const { return tiles_x_.at(level); }
-    std::uint32_t tiles_y(std::uint32_t level) const { return tiles_y_.at(level); }
+    std::uint32_t tiles_x(std::uint32_t level) const { return g_.levels.at(level).tiles_x; }
+    std::uint32_t tiles_y(std::uint32_t level) const { return g_.levels.at(level).tiles_y; }
     std::uint64_t tile_count(std::uint32_t level) const {
         return std::uint64_t(tiles_x(level)) * tiles_y(level);
     }
     // Tiles of all levels together, and the first flat index of a level (levels 0..l-1 first,
     // row-major inside a level: seed 002's page index).
-    std::uint64_t total_tiles() const { return level_offset_.back(); }
-    std::uint64_t level_offset(std::uint32_t level) const { return level_offset_.at(level); }
+    std::uint64_t total_tiles() const { return g_.tile_count; }
+    std::uint64_t level_offset(std::uint32_t level) const {
+        return level == levels() ? g_.tile_count : g_.levels.at(level).first_entry;
+    }
 
     // Level-0 page table size: the next powers of two of the level-0 tile counts (eqs 3, 4).
-    std::uint32_t page_table_width() const;
-    std::uint32_t page_table_height() const;
+    std::uint32_t page_table_width() const { return g_.table_width; }
+    std::uint32_t page_table_height() const { return g_.table_height; }
 
 private:
-    std::uint32_t width_, height_, tile_size_, border_;
-    std::vector<std::uint32_t> tiles_x_, tiles_y_;
-    std::vector<std::uint64_t> level_offset_;  // levels() + 1 entries
+    PaintingGeometry g_;
 };
 
 }  // namespace gigascroll

@@ -6,7 +6,11 @@ requests answered at the level asked), the request-processing latency in frames,
 the camera stops the display latency (frames until every visible tile is resident at its
 requested level).
 
-Not yet here (issue 4 §4): the Ma VT and seed 003 LOD-mapping baselines.
+The methods are the four request-processing methods of views.PROCESSING_METHODS and the two
+baselines without a feedback pass (baselines.BASELINES: Ma VT, seed 003 LOD mapping). For
+those the rays still render the views for the display pass, so their time counts as display,
+and the baseline's own determination plus the page-table lookup of its requests counts as
+processing.
 """
 
 from __future__ import annotations
@@ -20,8 +24,11 @@ import numpy as np
 
 from . import views as v
 from ._core import VirtualTextureLookup
+from .baselines import BASELINES, make_baseline
 
-__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES"]
+__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
+
+METHODS = v.PROCESSING_METHODS + BASELINES
 
 LOADING_STRATEGIES = ("direct", "mip-by-mip")
 # The columns of seed 000 Table 5 (physical and page-table update are one call here: the
@@ -37,7 +44,13 @@ class FrameLoop:
     `per_frame` requested tiles a frame) or "mip-by-mip" (van Waveren, same cap).
     pace: sleep to 90 Hz frame boundaries (False: run flat out, for tests).
     wait_loads: block each frame until that frame's loads arrived (deterministic tests;
-    a real loop leaves it False and drains what is ready)."""
+    a real loop leaves it False and drains what is ready).
+    magnifier_requests: False shows the magnifier but leaves its feedback out of request
+    processing (to see what its requests add); `last_images` holds the last frame's display
+    images (left eye, right eye[, magnifier]) as float RGB.
+    magnifier_display_step: the display pass samples every n-th magnifier pixel per axis
+    (its feedback stays at full 512 x 512; the eyes' display is at feedback resolution);
+    the last frame is displayed in full."""
     exhibition: v.Exhibition
     pack: object
     path: v.CameraPath
@@ -50,18 +63,23 @@ class FrameLoop:
     pace: bool = True
     wait_loads: bool = False
     magnifier: bool = True
+    magnifier_requests: bool = True
+    magnifier_display_step: int = 2
     threads: int = 0
     records: list = field(default_factory=list, init=False)
+    last_images: list = field(default_factory=list, init=False)
 
     def __post_init__(self):
         if self.strategy not in LOADING_STRATEGIES:
             raise ValueError(f"unknown loading strategy {self.strategy!r}; choose from "
                              f"{', '.join(LOADING_STRATEGIES)}")
+        if self.magnifier_display_step < 1:
+            raise ValueError("magnifier_display_step must be >= 1")
         if self.per_frame <= 0:
             raise ValueError("per_frame (the direct-loading threshold) must be > 0")
-        if self.method not in v.PROCESSING_METHODS:
+        if self.method not in METHODS:
             raise ValueError(f"unknown request-processing method {self.method!r}; choose from "
-                             f"{', '.join(v.PROCESSING_METHODS)}")
+                             f"{', '.join(METHODS)}")
         paintings = self.pack.paintings
         if len(paintings) < len(self.exhibition.tiles):
             raise ValueError(f"the pack has {len(paintings)} paintings, the exhibition shows "
@@ -79,12 +97,18 @@ class FrameLoop:
         from . import runtime
         vt = runtime.VirtualTexture(self.pack, self.slots)
         lookup = VirtualTextureLookup(vt)
-        proc = v.make_processor(self.method, self.exhibition.tiles, self.threads)
+        baseline = None
+        if self.method in BASELINES:
+            baseline = make_baseline(self.method, self.exhibition)
+            proc = v.BasicProcessor()  # looks the baseline's requests up in the page table
+        else:
+            proc = v.make_processor(self.method, self.exhibition.tiles, self.threads)
         is_async = isinstance(proc, v.AsyncProcessor)
         direct = v.DirectLoading(self.per_frame) if self.strategy == "direct" else None
         mip = v.MipByMipLoading(self.per_frame) if self.strategy == "mip-by-mip" else None
         loading = direct if direct is not None else mip
         commands = np.zeros(0, np.uint64)
+        truth = v.BasicProcessor()  # the exact request set, for the hit rate
         latency = 0
         period = 1.0 / self.path.fps
         self.records = []
@@ -103,18 +127,25 @@ class FrameLoop:
                                                           magnifier=v.MAGNIFIER if self.magnifier
                                                           else None)]
                 buffers = [d["keys"] for d in views]
+                processed = buffers if self.magnifier_requests else buffers[:2]
                 t["feedback"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
                 new_set = None
-                if is_async:
-                    proc.submit(buffers, frame)
+                if baseline is not None:
+                    own = baseline.requests(self.path, frame)
+                    new_set = proc.process(own, lookup, frame)
+                    # The rays above only feed the display pass for a baseline.
+                    t["display_rays"] = t.pop("feedback")
+                    t["feedback"] = 0.0
+                elif is_async:
+                    proc.submit(processed, frame)
                     results = proc.poll(lookup)
                     if results:
                         new_set = results[-1]
                         latency = frame - new_set["frame"]
                 else:
-                    new_set = proc.process(buffers, lookup, frame)
+                    new_set = proc.process(processed, lookup, frame)
                     latency = 0
                 t["processing"] = time.perf_counter() - t0
 
@@ -145,22 +176,31 @@ class FrameLoop:
                 if keys:
                     done = np.array(keys, dtype=np.uint64)
                     loading.loaded(done)
+                if new_set is not None and new_set["responses"].size:
+                    # The tiles the display samples become most recently used, so the LRU
+                    # evicts what the views left, not what they still show.
+                    vt.request(np.stack(v.unpack_requests(new_set["responses"]),
+                                        axis=1).astype(np.int64))
                 t["update"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
-                for d in views:
-                    self._display(vt, d)
-                t["display"] = time.perf_counter() - t0
+                last = frame == len(self.path) - 1
+                images = [self._display(vt, d, 1 if i < 2 or last
+                                        else self.magnifier_display_step)
+                          for i, d in enumerate(views)]
+                t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
-                # Hit rate after this frame's updates: what the display showed.
-                flat = np.concatenate([b.ravel() for b in buffers])
-                req = np.unique(flat[flat != v.NO_REQUEST])
-                levels = v.unpack_requests(req)[1]
-                hits = sum(lookup.resident_level(int(k)) == int(lv) for k, lv in zip(req, levels))
+                # Hit rate after this frame's updates: what the display showed. A request
+                # hits when its response (finest resident tile answering it) is itself.
+                hit_rate = _hit_rate(truth, buffers, lookup, frame)
+                view_hits = ([_hit_rate(truth, [b], lookup, frame)[0] for b in buffers]
+                             if frame == len(self.path) - 1 else None)
+                self.last_images = images
                 self.records.append({
+                    "view_hit_rates": view_hits,
                     "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in STAGES},
-                    "total_ms": 1e3 * sum(t.values()), "requests": int(req.size),
-                    "hit_rate": hits / req.size if req.size else 1.0, "issued": int(issue.size),
+                    "total_ms": 1e3 * sum(t.values()), "requests": hit_rate[1],
+                    "hit_rate": hit_rate[0], "issued": int(issue.size),
                     "loaded": len(loaded), "latency_frames": latency,
                     "moving": frame + 1 < len(self.path) and not np.array_equal(
                         self.path.position[frame], self.path.position[frame + 1]),
@@ -175,9 +215,12 @@ class FrameLoop:
             bar.close()
         return self.summary()
 
-    def _display(self, vt, d) -> np.ndarray:
-        """Samples the view through the virtual texture (at the feedback resolution)."""
-        keys, lod, uv = d["keys"], d["lod"], d["uv"]
+    def _display(self, vt, d, step: int = 1) -> np.ndarray:
+        """Samples the view through the virtual texture at the feedback resolution, or
+        every `step`-th pixel per axis (at the level the feedback asked for, so the same
+        tiles are read)."""
+        keys, lod, uv = (d["keys"][::step, ::step], d["lod"][::step, ::step],
+                         d["uv"][::step, ::step])
         out = np.zeros(keys.shape + (3,), np.float32)
         hit = keys != v.NO_REQUEST
         if not hit.any():
@@ -216,3 +259,10 @@ class FrameLoop:
             "requests_per_frame": statistics.mean(x["requests"] for x in r),
             "display_latency_frames": display_latency,
         }
+
+
+def _hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
+    """(share of the distinct requests in `buffers` answered at their own level, count)."""
+    s = truth.process(buffers, lookup, frame)
+    n = int(s["requests"].size)
+    return (float(np.mean(s["responses"] == s["requests"])) if n else 1.0), n

@@ -64,3 +64,15 @@ def test_bad_loop_input(small):
     two = v.multi_exhibition(8)
     with pytest.raises(ValueError, match="missing"):
         v.FrameLoop(two, pack, path)
+    with pytest.raises(ValueError, match="magnifier_display_step"):
+        v.FrameLoop(ex, pack, path, magnifier_display_step=0)
+
+
+def test_baselines_run_in_the_loop_and_sharpen(small):
+    # The baselines request without feedback; the loop must still end fully sharp and
+    # count their ray time as display, not feedback.
+    for method in ("ma-vt", "lod-mapping"):
+        s, rec = _run(small, method=method, strategy="direct",
+                      per_frame=16 if method == "ma-vt" else 1 << 20)
+        assert rec[-1]["hit_rate"] == 1.0, method
+        assert s["feedback_ms"] == 0 and s["display_ms"] > 0

@@ -38,7 +38,7 @@ def add_arguments(parser) -> None:
                         help="run only these parts (repeatable; default: all)")
 
 
-def _time_configs(configs, threads, repeats) -> list[dict]:
+def time_processing(configs, threads, repeats) -> list[dict]:
     """Per configuration (exhibition, feedback frames) and method: milliseconds per frame,
     wall time and CPU time of the whole process (all worker threads; a machine shared with
     other jobs distorts it much less). Methods run interleaved frame by frame and the whole
@@ -73,16 +73,23 @@ def _time_configs(configs, threads, repeats) -> list[dict]:
     return best
 
 
-def _painting_sweep(args, frames) -> list[dict]:
+def painting_sweep(counts, frames: int, repeats: int, threads: int = 0) -> list[dict]:
+    """Request processing alone on the full-size room (the Table 4 paintings at full
+    resolution: 0.57-2.8 million tiles for 8-40 paintings): feedback buffers along each
+    route, every method timed on the same buffers. Also used by `gigascroll scenario multi`."""
     configs = []
-    for n in tqdm(PAINTING_COUNTS, desc="feedback, paintings 8..40", unit="config"):
+    for n in tqdm(counts, desc="feedback, paintings", unit="config"):
         ex = v.multi_exhibition(n)
         path = v.multi_route(n, duration=frames / v.FPS)
-        configs.append((ex, [v.feedback_buffers(ex, path, f, threads=args.threads)
+        configs.append((ex, [v.feedback_buffers(ex, path, f, threads=threads)
                              for f in range(len(path))]))
-    res = _time_configs(configs, args.threads, args.repeats)
+    res = time_processing(configs, threads, repeats)
     return [{"paintings": n, "tiles": sum(t.total_tiles for t in ex.tiles), **r}
-            for n, (ex, _), r in zip(PAINTING_COUNTS, configs, res)]
+            for n, (ex, _), r in zip(counts, configs, res)]
+
+
+def _painting_sweep(args, frames) -> list[dict]:
+    return painting_sweep(PAINTING_COUNTS, frames, args.repeats, args.threads)
 
 
 # Seed 000 Fig. 12's five steps of 4096 tiles, then larger totals where a flag array shows.
@@ -109,7 +116,7 @@ def _tile_sweep(args, frames) -> list[dict]:
         bufs = v.feedback_buffers(ex, path, 0, magnifier=None, threads=args.threads)
         configs.append((ex, [bufs] * frames))  # static camera: the same buffers every frame
         widths.append(spec.width)
-    res = _time_configs(configs, args.threads, args.repeats)
+    res = time_processing(configs, args.threads, args.repeats)
     return [{"tiles": ex.tiles[0].total_tiles, "width": w, **r}
             for (ex, _), w, r in zip(configs, widths, res)]
 
