@@ -11,24 +11,37 @@
 
 namespace gigascroll {
 
+namespace {
+// What texel_footprint needs of a painting and a camera, computed once per pass instead of
+// once per pixel (the per-pixel arithmetic below is unchanged, so the result is too).
+struct FootprintFrame {
+    FootprintFrame(const PaintingPlacement& p, const Camera& camera)
+        : n(p.normal()), ddx(camera.ddx()), ddy(camera.ddy()), u_axis(p.u_axis),
+          v_axis(p.v_axis), su(p.tiles.width() / p.width_m), sv(p.tiles.height() / p.height_m) {}
+    Vec3 n, ddx, ddy, u_axis, v_axis;
+    double su, sv;
+
+    double operator()(Vec3 direction, double t) const {
+        // dP/dx = t dD/dx - (t dD/dx . n) / (D . n) D: the pixel-step of the hit point along
+        // the plane (pinhole camera: the origin does not move between pixels).
+        const double dn = dot(direction, n);
+        auto transfer = [&](Vec3 dd) {
+            const Vec3 dp = t * dd;
+            return dp - (dot(dp, n) / dn) * direction;
+        };
+        const Vec3 dpx = transfer(ddx), dpy = transfer(ddy);
+        auto texels = [&](Vec3 dp) {
+            const double du = dot(dp, u_axis) * su, dv = dot(dp, v_axis) * sv;
+            return std::sqrt(du * du + dv * dv);
+        };
+        return std::max(texels(dpx), texels(dpy));
+    }
+};
+}  // namespace
+
 double texel_footprint(const PaintingPlacement& painting, const Camera& camera, Vec3 direction,
                        double t) {
-    // dP/dx = t dD/dx - (t dD/dx . n) / (D . n) D: the pixel-step of the hit point along the
-    // plane (pinhole camera: the origin does not move between pixels).
-    const Vec3 n = painting.normal();
-    const double dn = dot(direction, n);
-    auto transfer = [&](Vec3 dd) {
-        const Vec3 dp = t * dd;
-        return dp - (dot(dp, n) / dn) * direction;
-    };
-    const Vec3 dpx = transfer(camera.ddx()), dpy = transfer(camera.ddy());
-    const double su = painting.tiles.width() / painting.width_m;
-    const double sv = painting.tiles.height() / painting.height_m;
-    auto texels = [&](Vec3 dp) {
-        const double du = dot(dp, painting.u_axis) * su, dv = dot(dp, painting.v_axis) * sv;
-        return std::sqrt(du * du + dv * dv);
-    };
-    return std::max(texels(dpx), texels(dpy));
+    return FootprintFrame(painting, camera)(direction, t);
 }
 
 std::uint32_t mip_level(double lambda, std::uint32_t levels) {
@@ -56,13 +69,22 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
     const RTCScene handle = scene.handle();
     const auto& paintings = scene.paintings();
 
+    // Per-pass constants: each column's and row's screen factor, each painting's footprint
+    // frame (profiling showed the per-pixel shading, not Embree, dominating the pass).
+    std::vector<double> column_sx(fw), row_sy(fh);
+    for (std::uint32_t i = 0; i < fw; ++i) column_sx[i] = camera.screen_x((i + 0.5) * sx);
+    for (std::uint32_t j = 0; j < fh; ++j) row_sy[j] = camera.screen_y((j + 0.5) * sy);
+    std::vector<FootprintFrame> frames;
+    frames.reserve(paintings.size());
+    for (const auto& p : paintings) frames.emplace_back(p, camera);
+
     parallel_for(fh, 4, [&](std::size_t row_begin, std::size_t row_end) {
         std::vector<RTCRayHit> rays(fw);
         std::vector<Vec3> dirs(fw);
         for (std::size_t row = row_begin; row < row_end; ++row) {
             for (std::uint32_t i = 0; i < fw; ++i) {
                 // The feedback pixel's centre, in display pixel coordinates.
-                const Vec3 d = camera.direction((i + 0.5) * sx, (row + 0.5) * sy);
+                const Vec3 d = camera.direction_at(column_sx[i], row_sy[row]);
                 dirs[i] = d;
                 RTCRayHit& r = rays[i];
                 r.ray.org_x = float(camera.position.x);
@@ -104,11 +126,11 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                 const Vec3 d = dirs[i];
                 // Re-intersect the plane in double: the float t is too coarse for texel
                 // positions on a 12 m scroll.
-                const Vec3 n = p.normal();
+                const FootprintFrame& frame = frames[placement];
+                const Vec3 n = frame.n;
                 const double t = dot(p.origin - camera.position, n) / dot(d, n);
                 const Vec3 hit = camera.position + t * d - p.origin;
-                const double lambda =
-                    std::log2(texel_footprint(p, camera, d, t)) + options.lod_bias;
+                const double lambda = std::log2(frame(d, t)) + options.lod_bias;
                 const std::uint32_t level = mip_level(lambda, p.tiles.levels());
                 const double u = std::clamp(dot(hit, p.u_axis) / p.width_m, 0.0, 1.0);
                 const double v = std::clamp(dot(hit, p.v_axis) / p.height_m, 0.0, 1.0);

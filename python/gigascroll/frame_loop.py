@@ -218,20 +218,36 @@ class FrameLoop:
     def _display(self, vt, d, step: int = 1) -> np.ndarray:
         """Samples the view through the virtual texture at the feedback resolution, or
         every `step`-th pixel per axis (at the level the feedback asked for, so the same
-        tiles are read)."""
-        keys, lod, uv = (d["keys"][::step, ::step], d["lod"][::step, ::step],
-                         d["uv"][::step, ::step])
-        out = np.zeros(keys.shape + (3,), np.float32)
+        tiles are read). A view that sees one painting everywhere (the magnifier) is sampled
+        in place; otherwise the painting pixels are gathered once (masks and copies of the
+        strided views cost twice the sampling itself)."""
+        keys = d["keys"][::step, ::step]
+        uv, lod = d["uv"][::step, ::step], d["lod"][::step, ::step]
         hit = keys != v.NO_REQUEST
-        if not hit.any():
+        out = np.zeros(keys.shape + (3,), np.float32)
+        count = np.count_nonzero(hit)
+        if count == 0:
             return out
-        painting = v.unpack_requests(keys[hit])[0]
-        for p in np.unique(painting):
-            sel = np.zeros_like(hit)
-            sel[hit] = painting == p
-            rgb, _ = vt.sample(int(p), uv[..., 0][sel], uv[..., 1][sel],
-                               np.maximum(lod[sel], 0.0))
-            out[sel] = rgb
+        if count < keys.size:
+            keys, u, w, lod = keys[hit], uv[..., 0][hit], uv[..., 1][hit], lod[hit]
+        else:
+            hit, u, w = None, uv[..., 0], uv[..., 1]
+        lod = np.maximum(lod, 0.0)
+        # The painting is the key's top field: one painting iff the extreme keys share it.
+        lo, hi = v.unpack_requests(np.array([keys.min(), keys.max()], np.uint64))[0]
+        if lo == hi:
+            groups = [(lo, Ellipsis)]
+        else:
+            painting = v.unpack_requests(keys.reshape(-1))[0].reshape(keys.shape)
+            groups = [(p, painting == p) for p in np.unique(painting)]
+        for p, sel in groups:
+            rgb, _ = vt.sample(int(p), u[sel], w[sel], lod[sel])
+            if hit is None and sel is Ellipsis:
+                return rgb
+            if hit is None:
+                out[sel] = rgb
+            else:
+                out.reshape(-1, 3)[np.flatnonzero(hit)[sel]] = rgb
         return out
 
     def summary(self) -> dict:
