@@ -11,6 +11,8 @@
 #include <optional>
 #include <string>
 
+#include <type_traits>
+
 #include "bindings/bindings.h"
 #include "common/error.h"
 #include "vt/exhibition.h"
@@ -91,6 +93,24 @@ nb::dict sets_dict(RequestSets&& s) {
     d["responses"] = to_numpy(std::move(s.responses));
     d["commands"] = to_numpy(std::move(s.commands));
     return d;
+}
+
+// Runs one frame of a processor on the Python feedback buffers without the GIL. The frame
+// number only matters to the hash processor (its salt); the others take it for a common API.
+template <typename Processor>
+nb::dict process_frame(Processor& p, nb::handle buffers, const ResidencyLookup& lookup,
+                       std::uint64_t frame) {
+    auto held = as_buffers(buffers);
+    auto views = views_of(held);
+    RequestSets s;
+    {
+        nb::gil_scoped_release release;
+        if constexpr (std::is_same_v<Processor, HashProcessor>)
+            s = p.process(views, lookup, frame);
+        else
+            s = p.process(views, lookup);
+    }
+    return sets_dict(std::move(s));
 }
 
 std::uint32_t checked_u32(std::int64_t v, std::int64_t hi, const char* what) {
@@ -275,35 +295,13 @@ void bind_views(nb::module_& m) {
 
     nb::class_<BasicProcessor>(m, "BasicProcessor", "Barrett: one thread, a hash set of pixels.")
         .def(nb::init<>())
-        .def("process", [](BasicProcessor& p, nb::handle buffers, const ResidencyLookup& lookup,
-                           std::uint64_t frame) {
-            (void)frame;
-            auto held = as_buffers(buffers);
-            auto views = views_of(held);
-            RequestSets s;
-            {
-                nb::gil_scoped_release release;
-                s = p.process(views, lookup);
-            }
-            return sets_dict(std::move(s));
-        }, "buffers"_a, "lookup"_a, "frame"_a = 0);
+        .def("process", &process_frame<BasicProcessor>, "buffers"_a, "lookup"_a, "frame"_a = 0);
 
     nb::class_<FlagArrayProcessor>(m, "FlagArrayProcessor",
                                    "Hollemeersch: one flag per tile, parallel mark and compaction.")
         .def(nb::init<std::vector<PaintingTiles>, unsigned>(), "paintings"_a, "threads"_a = 0)
         .def_prop_ro("flag_count", &FlagArrayProcessor::flag_count)
-        .def("process", [](FlagArrayProcessor& p, nb::handle buffers, const ResidencyLookup& lookup,
-                           std::uint64_t frame) {
-            (void)frame;
-            auto held = as_buffers(buffers);
-            auto views = views_of(held);
-            RequestSets s;
-            {
-                nb::gil_scoped_release release;
-                s = p.process(views, lookup);
-            }
-            return sets_dict(std::move(s));
-        }, "buffers"_a, "lookup"_a, "frame"_a = 0);
+        .def("process", &process_frame<FlagArrayProcessor>, "buffers"_a, "lookup"_a, "frame"_a = 0);
 
     nb::class_<HashProcessor>(m, "HashProcessor",
                               "Seed 000: fixed-size result table, slot a (B F) mod m, finer level wins.")
@@ -316,17 +314,7 @@ void bind_views(nb::module_& m) {
         .def_prop_ro("table_size", &HashProcessor::table_size)
         .def_static("frame_salt", &HashProcessor::frame_salt, "frame"_a)
         .def("slot", &HashProcessor::slot, "key"_a, "salt"_a)
-        .def("process", [](HashProcessor& p, nb::handle buffers, const ResidencyLookup& lookup,
-                           std::uint64_t frame) {
-            auto held = as_buffers(buffers);
-            auto views = views_of(held);
-            RequestSets s;
-            {
-                nb::gil_scoped_release release;
-                s = p.process(views, lookup, frame);
-            }
-            return sets_dict(std::move(s));
-        }, "buffers"_a, "lookup"_a, "frame"_a);
+        .def("process", &process_frame<HashProcessor>, "buffers"_a, "lookup"_a, "frame"_a);
 
     nb::class_<AsyncProcessor>(m, "AsyncProcessor",
                                "Unreal SVT: a worker thread deduplicates; results arrive frames later.")
