@@ -13,6 +13,9 @@ struct FeedbackOptions {
     std::uint32_t width = 0, height = 0;  // feedback resolution; 0 = 1/8 of the display per axis
     double lod_bias = 0;                  // added to the level of detail before truncation
     unsigned threads = 0;                 // 0 = all cores
+    // lod and uv are written for every display_step-th pixel of every display_step-th row
+    // only (what a display pass at that step reads), as ceil(h / step) x ceil(w / step).
+    std::uint32_t display_step = 1;
 };
 
 // The footprint of a display pixel on a painting, in level-0 texels, from ray differentials
@@ -26,9 +29,10 @@ double texel_footprint(const PaintingPlacement& painting, const Camera& camera, 
 std::uint32_t mip_level(double lambda, std::uint32_t levels);
 
 // Fills keys[height * width] (row-major) with request keys, kNoRequest where no painting is
-// seen; lod (optional, same size) receives lambda (NaN where no painting), uv (optional,
-// 2 per pixel) the painting coordinates in [0, 1] that the display pass samples. Casts
-// Embree ray streams row by row from `threads` threads.
+// seen; lod (optional) receives lambda (NaN where no painting), uv (optional, 2 per pixel)
+// the painting coordinates in [0, 1] that the display pass samples, both on the display
+// grid (FeedbackOptions::display_step; the full resolution by default). Casts Embree
+// packets of 16 rays along each row, rows shared among `threads` threads.
 void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                      const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr,
                      double* uv = nullptr);

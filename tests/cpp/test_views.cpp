@@ -216,6 +216,86 @@ TEST(Feedback, GrazingLevelMatchesAnalyticFootprint) {
     }
 }
 
+TEST(Feedback, LodBiasAndDisplayGrid) {
+    WallScene w;
+    const double d = 0.4;
+    const Camera cam({6, 1.5, -d}, {0.1, 0.05, 1}, {0, 1, 0}, kTanHalf, kTanHalf * 1920 / 1800,
+                     1800, 1920);
+    const std::uint32_t W = 45, H = 48;
+    std::vector<std::uint64_t> keys(W * H), keys_b(W * H), keys_s(W * H);
+    std::vector<float> lod(W * H), lod_b(W * H);
+    std::vector<double> uv(2 * W * H);
+    render_feedback(w.scene, cam, {W, H, 0, 2}, keys.data(), lod.data(), uv.data());
+    // A bias shifts lambda and the level by the same amount (textureQueryLod with bias).
+    render_feedback(w.scene, cam, {W, H, 0.7, 2}, keys_b.data(), lod_b.data());
+    int seen = 0;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        if (keys[i] == kNoRequest) {
+            EXPECT_EQ(keys_b[i], kNoRequest);
+            continue;
+        }
+        ++seen;
+        EXPECT_NEAR(lod_b[i], lod[i] + 0.7f, 1e-5);
+        EXPECT_EQ(request_level(keys_b[i]), mip_level(double(lod[i]) + 0.7, 12));
+    }
+    EXPECT_GT(seen, 100);
+    // On a display grid of step 3, lod and uv are the full buffers' every third pixel of
+    // every third row; the keys do not change.
+    const std::uint32_t S = 3, DW = (W + S - 1) / S, DH = (H + S - 1) / S;
+    std::vector<float> lod_s(DW * DH);
+    std::vector<double> uv_s(2 * DW * DH);
+    FeedbackOptions o{W, H, 0, 2, S};
+    render_feedback(w.scene, cam, o, keys_s.data(), lod_s.data(), uv_s.data());
+    EXPECT_EQ(keys_s, keys);
+    for (std::uint32_t y = 0; y < DH; ++y)
+        for (std::uint32_t x = 0; x < DW; ++x) {
+            const std::size_t full = std::size_t(y * S) * W + x * S, sub = std::size_t(y) * DW + x;
+            if (std::isnan(lod[full])) {
+                EXPECT_TRUE(std::isnan(lod_s[sub]));
+                continue;
+            }
+            EXPECT_EQ(lod_s[sub], lod[full]);
+            EXPECT_EQ(uv_s[2 * sub], uv[2 * full]);
+            EXPECT_EQ(uv_s[2 * sub + 1], uv[2 * full + 1]);
+        }
+    o.display_step = 0;
+    EXPECT_THROW(render_feedback(w.scene, cam, o, keys_s.data()), InvalidArgument);
+}
+
+TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
+    // A small painting seen whole, edges and all, at an angle: every key's tile is the one
+    // holding the pixel's texel at the key's level (the last tile of a row or column reaches
+    // the painting's edge), recomputed here from the uv output.
+    ExhibitionScene scene;
+    const PaintingTiles tiles(1000, 700);
+    scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.7);
+    scene.commit();
+    const Camera cam({0.3, 0.6, -1.2}, {0.15, -0.05, 1}, {0, 1, 0}, 0.6, 0.6, 1600, 1600);
+    const std::uint32_t W = 200, H = 200;
+    std::vector<std::uint64_t> keys(W * H);
+    std::vector<float> lod(W * H);
+    std::vector<double> uv(2 * W * H);
+    render_feedback(scene, cam, {W, H, 0, 2}, keys.data(), lod.data(), uv.data());
+    int seen = 0;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        if (keys[i] == kNoRequest) continue;
+        ++seen;
+        const Request r = unpack_request(keys[i]);
+        const double span = 120.0 * (1 << r.level);
+        const double x = uv[2 * i] * 1000, y = uv[2 * i + 1] * 700;
+        auto tile = [&](double t, std::uint32_t n) {
+            return std::min<std::uint32_t>(std::uint32_t(t / span), n - 1);
+        };
+        const bool near_edge = std::abs(x / span - std::round(x / span)) < 1e-6 ||
+                               std::abs(y / span - std::round(y / span)) < 1e-6;
+        if (near_edge) continue;
+        EXPECT_EQ(r.x, tile(x, tiles.tiles_x(r.level))) << i;
+        EXPECT_EQ(r.y, tile(y, tiles.tiles_y(r.level))) << i;
+    }
+    EXPECT_GT(seen, 5000);
+    EXPECT_LT(seen, int(W * H));  // the painting's surroundings are seen too
+}
+
 TEST(Feedback, OccludersAndMissesGiveNoRequest) {
     ExhibitionScene scene;
     const PaintingTiles tiles(1000, 1000);
