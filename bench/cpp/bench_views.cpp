@@ -7,13 +7,16 @@
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <set>
 #include <vector>
 
+#include "vt/display.h"
 #include "vt/exhibition.h"
 #include "vt/feedback.h"
 #include "vt/request_hash.h"
 #include "vt/request_processing.h"
 #include "vt/residency.h"
+#include "vt/virtual_texture.h"
 
 using namespace gigascroll;
 
@@ -134,6 +137,61 @@ void BM_FeedbackEye(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
 BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// The magnifier's full-resolution feedback as the frame loop asks for it (keys, lambda and
+// uv): 2.5 cm of the scroll on 512 x 512 pixels from 20 cm.
+void BM_FeedbackMagnifier(benchmark::State& state) {
+    const PaintingTiles tiles(152089, 6083);
+    ExhibitionScene scene;
+    scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
+    scene.commit();
+    const double th = 0.025 / 2 / 0.20;
+    const Camera cam({6, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, th, th, 512, 512);
+    std::vector<std::uint64_t> keys(512 * 512);
+    std::vector<float> lod(keys.size());
+    std::vector<double> uv(2 * keys.size());
+    for (auto _ : state)
+        render_feedback(scene, cam, {512, 512, 0, unsigned(state.range(0))}, keys.data(),
+                        state.range(1) ? lod.data() : nullptr, state.range(1) ? uv.data() : nullptr);
+    state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
+}
+BENCHMARK(BM_FeedbackMagnifier)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// The display pass (display_view) of a view whose requested tiles are all resident, as in
+// the frame loop's steady state: the magnifier at display step 2 (arg 0) or an eye at its
+// feedback resolution (arg 1); arg 1 of the pair: threads.
+void BM_Display(benchmark::State& state) {
+    const PaintingTiles tiles(152089, 6083);
+    ExhibitionScene scene;
+    scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
+    scene.commit();
+    const bool eye = state.range(0) == 1;
+    const double th = eye ? 900 * (12.0 / 152089) / 0.072 : 0.025 / 2 / 0.20;
+    const Camera cam = eye ? Camera({6, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, th, th * 1920 / 1800, 1800, 1920)
+                           : Camera({6, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, th, th, 512, 512);
+    FeedbackOptions o{eye ? 225u : 512u, eye ? 240u : 512u, 0, 0, eye ? 1u : 2u};
+    const std::uint32_t w = o.width, h = o.height, dw = display_extent(w, o.display_step),
+                        dh = display_extent(h, o.display_step);
+    std::vector<std::uint64_t> keys(std::size_t(w) * h);
+    std::vector<float> lod(std::size_t(dw) * dh);
+    std::vector<double> uv(2 * lod.size());
+    render_feedback(scene, cam, o, keys.data(), lod.data(), uv.data());
+    VirtualTexture vt(VtLayout::make(128, 4, {{152089, 6083}}), 30, 30,
+                      [](const TileKey&, std::uint8_t* d) { std::fill_n(d, 128 * 128 * 3, 128); });
+    std::vector<std::uint8_t> texels(128 * 128 * 3);
+    for (std::size_t i = 0; i < texels.size(); ++i) texels[i] = std::uint8_t(i * 2654435761u >> 24);
+    for (std::uint64_t k : std::set<std::uint64_t>(keys.begin(), keys.end())) {
+        if (k == kNoRequest) continue;
+        const Request r = unpack_request(k);
+        vt.insert({r.painting, r.level, r.x, r.y}, texels.data());
+    }
+    std::vector<float> out(3 * lod.size());
+    for (auto _ : state)
+        display_view(vt, keys.data(), lod.data(), uv.data(), w, h, o.display_step, out.data(),
+                     unsigned(state.range(1)));
+    state.SetItemsProcessed(state.iterations() * std::int64_t(lod.size()));
+}
+BENCHMARK(BM_Display)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
 
 }  // namespace
 

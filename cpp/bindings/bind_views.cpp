@@ -15,6 +15,7 @@
 
 #include "bindings/bindings.h"
 #include "common/error.h"
+#include "vt/display.h"
 #include "vt/exhibition.h"
 #include "vt/feedback.h"
 #include "vt/load_strategy.h"
@@ -40,6 +41,21 @@ nb::ndarray<nb::numpy, T, nb::ndim<1>> to_numpy(std::vector<T>&& v) {
     nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
     return nb::ndarray<nb::numpy, T, nb::ndim<1>>(heap->data(), {heap->size()}, owner);
 }
+
+// An uninitialised numpy array of the given shape that C++ fills (the frame loop's buffers:
+// zeroing 7 MB a frame that the pass overwrites anyway was measurable).
+template <typename T>
+struct FreshArray {
+    explicit FreshArray(std::initializer_list<std::size_t> shape) {
+        std::size_t n = 1;
+        for (auto s : shape) n *= s;
+        data = new T[n];
+        nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
+        array = nb::ndarray<nb::numpy, T>(data, shape.size(), shape.begin(), owner);
+    }
+    T* data;
+    nb::ndarray<nb::numpy, T> array;
+};
 
 Vec3 vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 std::array<double, 3> arr3(Vec3 v) { return {v.x, v.y, v.z}; }
@@ -239,26 +255,59 @@ void bind_views(nb::module_& m) {
           "width/height 0 = 1/8 of the camera's resolution. with_lod also returns lambda.");
 
     m.def("render_view", [](const ExhibitionScene& scene, const Camera& camera, std::int64_t width,
-                            std::int64_t height, double lod_bias, unsigned threads) {
+                            std::int64_t height, double lod_bias, unsigned threads,
+                            std::int64_t display_step) {
         require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
                 "view resolution out of range");
-        FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads};
+        require(display_step >= 1 && display_step < (1 << 16), "display_step must be >= 1");
+        FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads,
+                          std::uint32_t(display_step)};
         const std::size_t w = feedback_width(camera, o), h = feedback_height(camera, o);
-        std::vector<std::uint64_t> keys(w * h);
-        std::vector<float> lod(w * h);
-        std::vector<double> uv(2 * w * h);
+        const std::size_t dw = display_extent(std::uint32_t(w), o.display_step),
+                          dh = display_extent(std::uint32_t(h), o.display_step);
+        FreshArray<std::uint64_t> keys({h, w});
+        FreshArray<float> lod({dh, dw});
+        FreshArray<double> uv({dh, dw, 2});
         {
             nb::gil_scoped_release release;
-            render_feedback(scene, camera, o, keys.data(), lod.data(), uv.data());
+            render_feedback(scene, camera, o, keys.data, lod.data, uv.data);
         }
         nb::dict d;
-        d["keys"] = nb::cast(to_numpy(std::move(keys))).attr("reshape")(h, w);
-        d["lod"] = nb::cast(to_numpy(std::move(lod))).attr("reshape")(h, w);
-        d["uv"] = nb::cast(to_numpy(std::move(uv))).attr("reshape")(h, w, 2);
+        d["keys"] = keys.array;
+        d["lod"] = lod.array;
+        d["uv"] = uv.array;
+        d["display_step"] = display_step;
         return d;
     }, "scene"_a, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
-          "The feedback pass plus what the display pass samples: dict of keys (h, w), lod (h, w)\n"
-          "and uv (h, w, 2) painting coordinates (NaN where no painting).");
+          "display_step"_a = 1,
+          "The feedback pass plus what the display pass samples: dict of keys (h, w), and on\n"
+          "the display grid (every display_step-th pixel per axis) lod (h', w') and uv\n"
+          "(h', w', 2) painting coordinates (NaN where no painting), h' = ceil(h / step).");
+
+    m.def("display_view", [](const VirtualTexture& vt,
+                             nb::ndarray<const std::uint64_t, nb::ndim<2>, nb::c_contig> keys,
+                             nb::ndarray<const float, nb::ndim<2>, nb::c_contig> lod,
+                             nb::ndarray<const double, nb::ndim<3>, nb::c_contig> uv,
+                             std::uint32_t step, unsigned threads) {
+        require(step >= 1, "display step must be >= 1");
+        const std::size_t h = keys.shape(0), w = keys.shape(1);
+        const std::size_t oh = display_extent(std::uint32_t(h), step),
+                          ow = display_extent(std::uint32_t(w), step);
+        require(lod.shape(0) == oh && lod.shape(1) == ow && uv.shape(0) == oh &&
+                    uv.shape(1) == ow && uv.shape(2) == 2,
+                "display_view: keys (h, w) need lod (h', w') and uv (h', w', 2) on the display "
+                "grid, h' = ceil(h / step) (render_view(..., display_step=step))");
+        FreshArray<float> out({oh, ow, 3});
+        {
+            nb::gil_scoped_release release;
+            display_view(vt, keys.data(), lod.data(), uv.data(), std::uint32_t(w),
+                         std::uint32_t(h), step, out.data, threads);
+        }
+        return out.array;
+    }, "vt"_a, "keys"_a, "lod"_a, "uv"_a, "step"_a = 1, "threads"_a = 0,
+          "The display pass: samples every step-th pixel per axis of a view through the\n"
+          "virtual texture (bilinear at round(lod)), from render_view(..., display_step=step);\n"
+          "(h', w', 3) float32, black where no painting is seen.");
 
     m.def("texel_footprint", [](const ExhibitionScene& scene, std::size_t placement,
                                 const Camera& camera, double px, double py) {

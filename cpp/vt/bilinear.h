@@ -17,11 +17,13 @@ struct Tap {
 
 // Clamp-to-edge on an axis of n texels: clamping the position to [0.5, n - 0.5] gives the
 // same result as clamping texel indices, and keeps i0 + 1 inside [0, n] (weight 0 at n).
+// t = x - 0.5 >= 0 after the clamp, so truncation is the floor (SSE2 has no floor
+// instruction; this is the sampler's innermost arithmetic).
 inline Tap bilinear_tap(double x, std::uint32_t n) {
     x = std::clamp(x, 0.5, double(n) - 0.5);
     const double t = x - 0.5;
-    const double i = std::floor(t);
-    return {static_cast<std::int64_t>(i), static_cast<float>(t - i)};
+    const auto i = static_cast<std::int64_t>(t);
+    return {i, static_cast<float>(t - static_cast<double>(i))};
 }
 
 // Per-level sizes and scales of one painting, so a tap costs a multiply instead of ldexp and

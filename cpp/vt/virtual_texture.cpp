@@ -7,6 +7,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "common/divider.h"
 #include "common/error.h"
 #include "common/parallel.h"
 #include "vt/bilinear.h"
@@ -191,11 +192,18 @@ void VirtualTexture::sample(const SampleRequest& r) const {
                  r.threads);
 }
 
+void VirtualTexture::sample_serial(const SampleRequest& r) const {
+    require(r.painting < layout().paintings.size(), "painting out of range");
+    require(r.u && r.v && r.out, "sample: missing arrays");
+    std::shared_lock lock(mutex_);
+    sample_range(r, 0, r.count);
+}
+
 namespace {
 // Tile column holding the tap's sample point: floor((i0 + 0.5 + f) / P) (i0 >= 0 after the
 // clamp; 32-bit division is the cheaper one).
-inline std::uint32_t tap_tile(const Tap& t, std::uint32_t P) {
-    return static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)) / P;
+inline std::uint32_t tap_tile(const Tap& t, const Divider& P) {
+    return P(static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)));
 }
 }  // namespace
 
@@ -214,12 +222,19 @@ void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std
     const std::size_t row = std::size_t(slots_x_) * T * 3;
     const std::uint8_t* phys = texels_.data();
     const LevelAxes axes(pt.width, pt.height, L);
+    const Divider divide_p(P);
+    std::uint32_t last_l = ~0u, last_cx = 0, last_cy = 0;
+    PageEntry last_e;
 
     // Bilinear sample at level l with page-table fallback; returns the level that answered.
-    auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out) -> std::uint32_t {
+    auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out)
+                        __attribute__((always_inline)) -> std::uint32_t {
         Tap tx = axes.tap_x(x0, l), ty = axes.tap_y(y0, l);
-        const std::uint32_t cx = tap_tile(tx, P), cy = tap_tile(ty, P);
-        const PageEntry e = table_.lookup(r.painting, l, cx, cy);
+        const std::uint32_t cx = tap_tile(tx, divide_p), cy = tap_tile(ty, divide_p);
+        // Neighbouring samples mostly fall in the same tile: reuse the last lookup.
+        if (l != last_l || cx != last_cx || cy != last_cy)
+            last_l = l, last_cx = cx, last_cy = cy, last_e = table_.lookup(r.painting, l, cx, cy);
+        const PageEntry e = last_e;
         const std::uint32_t al = e.level(), s = al - l;
         if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
             tx = axes.tap_x(x0, al);
@@ -241,7 +256,8 @@ void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std
         float* out = r.out + 3 * i;
         std::uint32_t answered;
         if (r.filter == Filter::Bilinear) {
-            answered = bilinear(x0, y0, static_cast<std::uint32_t>(std::lround(lod)), out);
+            // lod >= 0 here, so lround(lod) = floor(lod + 0.5) (a libm call per sample).
+            answered = bilinear(x0, y0, static_cast<std::uint32_t>(lod + 0.5f), out);
         } else {
             const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
             const float f = lod - float(l0);

@@ -72,6 +72,9 @@ public:
     bool page_table_matches_rebuild() const;
 
     void sample(const SampleRequest& r) const;
+    // The same on the calling thread only (r.threads ignored): for callers that already run
+    // one task per core, such as the display pass.
+    void sample_serial(const SampleRequest& r) const;
 
     // The physical texture: (slots_y * T) rows x (slots_x * T) columns x RGB8.
     const std::vector<std::uint8_t>& physical() const { return texels_; }

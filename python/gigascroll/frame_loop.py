@@ -122,10 +122,12 @@ class FrameLoop:
             for frame in range(len(self.path)):
                 t = {}
                 t0 = time.perf_counter()
-                views = [v.render_view(self.exhibition.scene, cam, w, h, threads=self.threads)
-                         for cam, w, h in v.frame_cameras(self.path, frame,
-                                                          magnifier=v.MAGNIFIER if self.magnifier
-                                                          else None)]
+                last = frame == len(self.path) - 1
+                views = [v.render_view(self.exhibition.scene, cam, w, h, threads=self.threads,
+                                       display_step=self._display_step(i, last))
+                         for i, (cam, w, h) in enumerate(v.frame_cameras(
+                             self.path, frame,
+                             magnifier=v.MAGNIFIER if self.magnifier else None))]
                 buffers = [d["keys"] for d in views]
                 processed = buffers if self.magnifier_requests else buffers[:2]
                 t["feedback"] = time.perf_counter() - t0
@@ -184,10 +186,7 @@ class FrameLoop:
                 t["update"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
-                last = frame == len(self.path) - 1
-                images = [self._display(vt, d, 1 if i < 2 or last
-                                        else self.magnifier_display_step)
-                          for i, d in enumerate(views)]
+                images = [self._display(vt, d) for d in views]
                 t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
                 # Hit rate after this frame's updates: what the display showed. A request
@@ -215,40 +214,17 @@ class FrameLoop:
             bar.close()
         return self.summary()
 
-    def _display(self, vt, d, step: int = 1) -> np.ndarray:
-        """Samples the view through the virtual texture at the feedback resolution, or
-        every `step`-th pixel per axis (at the level the feedback asked for, so the same
-        tiles are read). A view that sees one painting everywhere (the magnifier) is sampled
-        in place; otherwise the painting pixels are gathered once (masks and copies of the
-        strided views cost twice the sampling itself)."""
-        keys = d["keys"][::step, ::step]
-        uv, lod = d["uv"][::step, ::step], d["lod"][::step, ::step]
-        hit = keys != v.NO_REQUEST
-        out = np.zeros(keys.shape + (3,), np.float32)
-        count = np.count_nonzero(hit)
-        if count == 0:
-            return out
-        if count < keys.size:
-            keys, u, w, lod = keys[hit], uv[..., 0][hit], uv[..., 1][hit], lod[hit]
-        else:
-            hit, u, w = None, uv[..., 0], uv[..., 1]
-        lod = np.maximum(lod, 0.0)
-        # The painting is the key's top field: one painting iff the extreme keys share it.
-        lo, hi = v.unpack_requests(np.array([keys.min(), keys.max()], np.uint64))[0]
-        if lo == hi:
-            groups = [(lo, Ellipsis)]
-        else:
-            painting = v.unpack_requests(keys.reshape(-1))[0].reshape(keys.shape)
-            groups = [(p, painting == p) for p in np.unique(painting)]
-        for p, sel in groups:
-            rgb, _ = vt.sample(int(p), u[sel], w[sel], lod[sel])
-            if hit is None and sel is Ellipsis:
-                return rgb
-            if hit is None:
-                out[sel] = rgb
-            else:
-                out.reshape(-1, 3)[np.flatnonzero(hit)[sel]] = rgb
-        return out
+    def _display_step(self, view: int, last: bool) -> int:
+        """The eyes are displayed at their feedback resolution, the magnifier at every
+        magnifier_display_step-th pixel except on the last frame."""
+        return 1 if view < 2 or last else self.magnifier_display_step
+
+    def _display(self, vt, d) -> np.ndarray:
+        """Samples the view through the virtual texture on its display grid, at the level
+        the feedback asked for (so the same tiles are read): one GIL-free C++ pass over the
+        view (views.display_view)."""
+        return v.display_view(vt, d["keys"], d["lod"], d["uv"], d["display_step"],
+                              self.threads)
 
     def summary(self) -> dict:
         r = self.records

@@ -17,7 +17,7 @@ import numpy as np
 
 from . import _core
 from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, ViewCamera, DirectLoading,
-                    ExhibitionScene, FlagArrayProcessor, HashProcessor, MipByMipLoading,
+                    ExhibitionScene, FlagArrayProcessor, display_view, HashProcessor, MipByMipLoading,
                     PaintingTiles, ResidencyLookup, ResidentSet, VisibilityLists, mip_level,
                     pack_request, render_feedback, render_view, texel_footprint,
                     unpack_requests)
@@ -25,7 +25,8 @@ from ._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, ViewCamera, Dire
 __all__ = [
     "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "ViewCamera", "DirectLoading",
     "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingTiles", "ResidencyLookup", "ResidentSet",
-    "VisibilityLists", "mip_level", "pack_request", "render_feedback", "render_view",
+    "VisibilityLists", "display_view", "mip_level", "pack_request", "render_feedback",
+    "render_view",
     "texel_footprint", "unpack_requests", "FrameLoop", "LOADING_STRATEGIES",
     "HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier", "PaintingSpec",
     "Exhibition", "CameraPath", "single_scroll", "multi_exhibition", "scroll_path",

@@ -80,7 +80,7 @@ def test_baselines_run_in_the_loop_and_sharpen(small):
 
 @pytest.mark.parametrize("step", [1, 2])
 @pytest.mark.parametrize("case", ["two-paintings", "one-painting-everywhere", "nothing"])
-def test_display_pass_matches_per_pixel_sampling(small, tmp_path, step, case):
+def test_display_pass_matches_per_pixel_sampling(tmp_path, step, case):
     # The display pass gathers and groups pixels for speed; the reference samples each pixel
     # alone through the same virtual texture.
     from gigascroll import runtime
@@ -98,9 +98,9 @@ def test_display_pass_matches_per_pixel_sampling(small, tmp_path, step, case):
     lod = rng.uniform(-1.0, 3.0, (h, w)).astype(np.float32)
     uv[painting < 0] = np.nan
     lod[painting < 0] = np.nan
-    pack_s, ex, path = small
-    loop = v.FrameLoop(ex, pack_s, path, pace=False, magnifier=False)
-    got = loop._display(vt, {"keys": keys, "uv": uv, "lod": lod}, step)
+    # lod and uv on the display grid, as render_view(..., display_step=step) returns them.
+    got = v.display_view(vt, keys, np.ascontiguousarray(lod[::step, ::step]),
+                         np.ascontiguousarray(uv[::step, ::step]), step)
     sub = painting[::step, ::step]
     assert got.shape == sub.shape + (3,)
     for (i, j), p in np.ndenumerate(sub):
@@ -112,3 +112,25 @@ def test_display_pass_matches_per_pixel_sampling(small, tmp_path, step, case):
         np.testing.assert_array_equal(got[i, j], want[0])
     if case == "two-paintings":
         assert len(np.unique(sub)) == 3
+        # Bad input: display-grid arrays of the wrong size, a painting the texture lacks.
+        with pytest.raises(ValueError, match="display grid"):
+            v.display_view(vt, keys, lod, uv, 2)
+        bad = keys.copy()
+        bad[0, 0] = v.pack_request(5, 0, 0, 0)
+        with pytest.raises(ValueError, match="painting"):
+            v.display_view(vt, bad, lod, uv, 1)
+
+
+@pytest.mark.parametrize("step", [2, 3])
+def test_render_view_display_grid_is_the_full_views_subgrid(step):
+    # lod and uv on the display grid are exactly the full-resolution ones at every step-th
+    # pixel; the keys do not depend on the step.
+    ex = v.single_scroll()
+    path = v.scroll_path(duration=0.1)
+    for cam, w, h in v.frame_cameras(path, 3, magnifier=v.MAGNIFIER):
+        full = v.render_view(ex.scene, cam, w, h)
+        sub = v.render_view(ex.scene, cam, w, h, display_step=step)
+        np.testing.assert_array_equal(sub["keys"], full["keys"])
+        np.testing.assert_array_equal(sub["lod"], full["lod"][::step, ::step])
+        np.testing.assert_array_equal(sub["uv"], full["uv"][::step, ::step])
+        assert sub["display_step"] == step
