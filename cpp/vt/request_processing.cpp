@@ -54,9 +54,10 @@ void resolve_requests(RequestSets& sets, const ResidencyLookup& lookup) {
 RequestSets BasicProcessor::process(std::span<const FeedbackBuffer> buffers,
                                     const ResidencyLookup& lookup) {
     std::unordered_set<std::uint64_t> seen;
+    RepeatFilter filter;
     for (const FeedbackBuffer& buffer : buffers)
         for (std::uint64_t key : buffer)
-            if (key != kNoRequest) seen.insert(key);
+            if (filter.fresh(key)) seen.insert(key);
     RequestSets sets;
     sets.requests.assign(seen.begin(), seen.end());
     resolve_requests(sets, lookup);
@@ -119,8 +120,9 @@ void AsyncProcessor::run() {
         busy_ = true;
         lock.unlock();
         std::unordered_set<std::uint64_t> seen;
+        RepeatFilter filter;
         for (std::uint64_t key : job.pixels)
-            if (key != kNoRequest) seen.insert(key);
+            if (filter.fresh(key)) seen.insert(key);
         Result result{job.frame, 0.0, {}};
         result.sets.requests.assign(seen.begin(), seen.end());
         result.seconds =

@@ -9,6 +9,7 @@
 // a GPU does it per pixel, with the same result.
 #pragma once
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "common/parallel.h"
+#include "vt/request.h"
 #include "vt/residency.h"
 
 namespace gigascroll {
@@ -36,22 +38,43 @@ struct RequestSets {
 // Fills responses and commands for `requests` (already distinct).
 void resolve_requests(RequestSets& sets, const ResidencyLookup& lookup);
 
+// Drops keys this thread saw recently before they reach a shared structure: the previous
+// key (neighbouring pixels of a row usually see the same tile) and a 256-entry direct-mapped
+// cache of recent keys (the rows above saw the same tiles). It only ever drops repeats, so
+// every method stays exact; all four methods scan through one, so they differ only in the
+// structure that deduplicates what passes.
+class RepeatFilter {
+public:
+    RepeatFilter() { recent_.fill(kNoRequest); }
+    // False for kNoRequest and for a key seen recently.
+    bool fresh(std::uint64_t key) {
+        if (key == last_) return false;  // also kNoRequest: last_ starts there
+        last_ = key;
+        if (key == kNoRequest) return false;
+        std::uint64_t& slot = recent_[(key * 0x9E3779B97F4A7C15ull) >> 56];
+        if (slot == key) return false;
+        slot = key;
+        return true;
+    }
+
+private:
+    std::array<std::uint64_t, 256> recent_;
+    std::uint64_t last_ = kNoRequest;
+};
+
 // Calls mark(key) for every requesting pixel of every buffer, from `threads` threads (one
-// parallel loop over all buffers together). Runs of equal keys (neighbouring pixels usually
-// see the same tile) are marked once per run.
+// parallel loop over all buffers together), after each thread's RepeatFilter.
 template <typename Mark>
 void for_each_request(std::span<const FeedbackBuffer> buffers, unsigned threads, Mark&& mark) {
     std::vector<std::size_t> start{0};
     for (const auto& b : buffers) start.push_back(start.back() + b.size());
     parallel_for(start.back(), 16384, [&](std::size_t begin, std::size_t end) {
         std::size_t buf = std::upper_bound(start.begin(), start.end(), begin) - start.begin() - 1;
-        std::uint64_t last = kNoRequest;
+        RepeatFilter filter;
         for (std::size_t i = begin; i < end; ++i) {
             while (i >= start[buf + 1]) ++buf;
             const std::uint64_t key = buffers[buf][i - start[buf]];
-            if (key == kNoRequest || key == last) continue;
-            last = key;
-            mark(key);
+            if (filter.fresh(key)) mark(key);
         }
     }, threads);
 }
