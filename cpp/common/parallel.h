@@ -1,8 +1,17 @@
-// A minimal parallel-for over an index range on std::threads: enough for the core's
-// embarrassingly parallel loops without pulling in a task scheduler.
+// A minimal parallel-for over an index range: enough for the core's embarrassingly parallel
+// loops without pulling in a task scheduler.
+//
+// The helpers come from one process-wide pool of (cores - 1) threads created on first use:
+// the frame loop makes about ten parallel calls a frame, and starting a thread per call cost
+// ~30 us plus a late start of the helper. A call that finds the pool busy (another thread's
+// parallel_for, or a parallel_for nested inside a helper) starts its own threads as before,
+// so callers never wait for each other and nesting cannot deadlock.
 #pragma once
+#include <pthread.h>
+
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
@@ -18,9 +27,94 @@ inline unsigned default_threads() {
     return n == 0 ? 1 : n;
 }
 
-// Calls body(begin, end) on chunks of [0, n) from `threads` threads (0 = all cores).
-// Chunks are handed out dynamically so uneven work balances. The first exception
-// thrown by any chunk is rethrown on the calling thread after all threads joined.
+namespace detail {
+
+// The helper threads. run() hands a job to up to `helpers` of them and returns while they
+// work; finish() waits for them. All shared state is guarded by mutex_ (the job itself
+// synchronises through its own atomics), which keeps the pool ThreadSanitizer-clean.
+class HelperPool {
+public:
+    using Job = void (*)(void*);
+
+    static HelperPool& instance() {
+        // Leaked on purpose: helpers are detached and idle at exit, and a static destructor
+        // joining threads at unload time is a classic shutdown hang. After fork() the child
+        // has no helpers, so it starts a fresh pool.
+        static std::once_flag once;
+        std::call_once(once, [] { pthread_atfork(nullptr, nullptr, [] { current() = nullptr; }); });
+        std::lock_guard lock(create_mutex());
+        if (!current()) current() = new HelperPool(default_threads() - 1);
+        return *current();
+    }
+
+    // Starts job(context) on min(helpers, pool size) helpers and returns that number; 0
+    // (nothing started, no finish() due) when the pool is already running a job.
+    unsigned run(unsigned helpers, Job job, void* context) {
+        std::lock_guard lock(mutex_);
+        if (busy_ || size_ == 0 || helpers == 0) return 0;
+        busy_ = true;
+        job_ = job, context_ = context;
+        wanted_ = std::min(helpers, size_);
+        taken_ = finished_ = 0;
+        ++generation_;
+        wake_.notify_all();
+        return wanted_;
+    }
+
+    // Waits until the helpers of the last run() returned from the job.
+    void finish() {
+        std::unique_lock lock(mutex_);
+        done_.wait(lock, [&] { return finished_ == wanted_; });
+        busy_ = false;
+    }
+
+private:
+    explicit HelperPool(unsigned size) : size_(size) {
+        for (unsigned i = 0; i < size; ++i) std::thread([this] { loop(); }).detach();
+    }
+
+    static HelperPool*& current() {
+        static HelperPool* pool = nullptr;
+        return pool;
+    }
+    static std::mutex& create_mutex() {
+        static std::mutex m;
+        return m;
+    }
+
+    void loop() {
+        std::uint64_t seen = 0;
+        std::unique_lock lock(mutex_);
+        for (;;) {
+            wake_.wait(lock, [&] { return generation_ != seen; });
+            seen = generation_;
+            if (taken_ == wanted_) continue;  // enough helpers took this job already
+            ++taken_;
+            const Job job = job_;
+            void* const context = context_;
+            lock.unlock();
+            job(context);
+            lock.lock();
+            if (++finished_ == wanted_) done_.notify_all();
+        }
+    }
+
+    const unsigned size_;
+    std::mutex mutex_;
+    std::condition_variable wake_, done_;
+    bool busy_ = false;
+    Job job_ = nullptr;
+    void* context_ = nullptr;
+    unsigned wanted_ = 0, taken_ = 0, finished_ = 0;
+    std::uint64_t generation_ = 0;
+};
+
+}  // namespace detail
+
+// Calls body(begin, end) on chunks of [0, n) from `threads` threads (0 = all cores), the
+// calling thread included. Chunks are handed out dynamically so uneven work balances. The
+// first exception thrown by any chunk is rethrown on the calling thread after all chunks
+// stopped.
 template <typename Body>
 void parallel_for(std::size_t n, std::size_t chunk, Body&& body, unsigned threads = 0) {
     if (n == 0) return;
@@ -48,11 +142,15 @@ void parallel_for(std::size_t n, std::size_t chunk, Body&& body, unsigned thread
             }
         }
     };
-    std::vector<std::thread> pool;
-    pool.reserve(threads - 1);
-    for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
+    auto& pool = detail::HelperPool::instance();
+    auto run_worker = [](void* w) { (*static_cast<decltype(worker)*>(w))(); };
+    const unsigned pooled = pool.run(threads - 1, run_worker, &worker);
+    std::vector<std::thread> extra;  // what the pool could not provide
+    extra.reserve(threads - 1 - pooled);
+    for (unsigned t = 1 + pooled; t < threads; ++t) extra.emplace_back(worker);
     worker();
-    for (auto& th : pool) th.join();
+    for (auto& th : extra) th.join();
+    if (pooled) pool.finish();
     if (error) std::rethrow_exception(error);
 }
 
