@@ -19,3 +19,15 @@ def test_bench_views_quick_parts(tmp_path, capsys):
 def test_bench_views_bad_arguments(tmp_path, capsys):
     assert cli.main(["bench", "views", "--frames", "0", "--out", str(tmp_path)]) == 2
     assert "must be >= 1" in capsys.readouterr().err
+
+
+def test_bench_views_quick_pace(tmp_path, capsys):
+    # The flat-out loop reports every stage and a wall time that covers the stages.
+    assert cli.main(["bench", "views", "--quick", "--part", "pace", "--out", str(tmp_path)]) == 0
+    p = json.loads((tmp_path / "views_pace.json").read_text())["pace"]
+    stages = sum(p[s + "_ms"] for s in ("feedback", "processing", "issue", "drain", "update",
+                                        "display"))
+    assert abs(stages - p["stage_ms_sum"]) < 1e-6 * max(1.0, stages)
+    assert p["wall_ms"] >= 0.9 * p["stage_ms_sum"]
+    assert 0 < p["hit_rate"] <= 1 and p["frames"] == 19
+    assert "Frame loop flat out" in capsys.readouterr().out

@@ -21,7 +21,7 @@ from .. import views as v
 from ..cli import UserError
 
 PAINTING_COUNTS = (8, 16, 24, 32, 40)
-PARTS = ("paintings", "tiles", "latency", "losses", "loop")
+PARTS = ("paintings", "tiles", "latency", "losses", "loop", "pace")
 
 
 def add_arguments(parser) -> None:
@@ -222,6 +222,32 @@ def _loop(args, quick) -> list[dict]:
     return rows
 
 
+def _pace(args, quick) -> dict:
+    """How fast the frame loop can go: the hash / direct loop not paced (flat out), eyes at
+    1800 x 1920 (feedback 225 x 240) and the 512 x 512 magnifier, 40 cm from a synthetic
+    painting as high as the scroll (6083 texels, 0.5 m: what the eyes see of it is what
+    costs) and 24000 texels wide (the passes do not depend on the width), 1 s at 1 m/s then
+    10 still frames. Wall time per frame includes the
+    loop's own measurement (the exact request set for the hit rate)."""
+    import tempfile
+
+    from .. import pack as pk
+    from ..scenarios.common import pattern_image, spec_of
+    width, height = (6000, 1600) if quick else (24000, 6083)
+    with tempfile.TemporaryDirectory() as d:
+        pack = pk.build_pack([pattern_image(width, height)], Path(d) / "pace.pack")
+        ex = v.single_scroll(spec_of("pace", width, height))
+        path = v.scroll_path(distance=0.40, speed=1.0, duration=0.1 if quick else 1.0,
+                             start_x=0.3, exhibition=ex, stop_frames=10)
+        loop = v.FrameLoop(ex, pack, path, method="hash", strategy="direct", pace=False,
+                           threads=args.threads)
+        s = loop.run(progress=True)
+    r = loop.records
+    wall = (r[-1]["time_s"] - r[0]["time_s"]) / (len(r) - 1)
+    return {**s, "wall_ms": 1e3 * wall, "wall_fps": 1.0 / wall,
+            "stage_ms_sum": statistics.mean(x["total_ms"] for x in r)}
+
+
 def _plot(rows, key, xlabel, path, log_x=False):
     import matplotlib
     matplotlib.use("Agg")
@@ -318,6 +344,16 @@ def run(args) -> int:
                   f"{r['display_latency_frames']} | " +
                   " | ".join(f"{r[s + '_ms']:.2f}" for s in ("feedback", "processing", "issue",
                                                               "drain", "update", "display")) + " |")
+    if "pace" in parts:
+        p = results["pace"] = _pace(args, args.quick)
+        print(f"\n## Frame loop flat out (hash / direct, eyes + 512 x 512 magnifier, "
+              f"{p['frames']} frames)\n")
+        print("| feedback | processing | issue | drain | update | display | stages | wall | fps |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        print(" | ".join([""] + [f"{p[s + '_ms']:.2f}" for s in ("feedback", "processing", "issue",
+                                                                 "drain", "update", "display")] +
+                         [f"{p['stage_ms_sum']:.2f}", f"{p['wall_ms']:.2f}",
+                          f"{p['wall_fps']:.1f}", ""]).strip())
     name = "views.json" if parts == set(PARTS) else f"views_{'_'.join(sorted(parts))}.json"
     tmp = out / (name + ".tmp")
     tmp.write_text(json.dumps(results, indent=1))
