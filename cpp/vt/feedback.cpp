@@ -163,7 +163,19 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
     parallel_for(fh, 4, [&](std::size_t row_begin, std::size_t row_end) {
+        // The fields Embree only reads and that no pixel changes are set once per thread;
+        // per packet only the directions, tfar and the hit's geometry id.
         RTCRayHit16 packet;
+        for (std::uint32_t k = 0; k < 16; ++k) {
+            packet.ray.org_x[k] = org_x, packet.ray.org_y[k] = org_y;
+            packet.ray.org_z[k] = org_z;
+            packet.ray.tnear[k] = 0.f;
+            packet.ray.time[k] = 0.f;
+            packet.ray.mask[k] = ~0u;
+            packet.ray.id[k] = k;
+            packet.ray.flags[k] = 0;
+            packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
         std::vector<int> placement(fw);
         std::vector<double> rho2(fw), x0(fw), y0(fw), lambda(fw);
         for (std::size_t row = row_begin; row < row_end; ++row) {
@@ -176,18 +188,10 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                 for (std::uint32_t k = 0; k < 16; ++k) {
                     valid[k] = k < n ? -1 : 0;
                     const Vec3 d = row_dir + column_sx[i0 + std::min(k, n - 1)] * camera.right;
-                    packet.ray.org_x[k] = org_x, packet.ray.org_y[k] = org_y;
-                    packet.ray.org_z[k] = org_z;
                     packet.ray.dir_x[k] = float(d.x), packet.ray.dir_y[k] = float(d.y);
                     packet.ray.dir_z[k] = float(d.z);
-                    packet.ray.tnear[k] = 0.f;
                     packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
-                    packet.ray.time[k] = 0.f;
-                    packet.ray.mask[k] = ~0u;
-                    packet.ray.id[k] = k;
-                    packet.ray.flags[k] = 0;
                     packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-                    packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
                 }
                 RTCIntersectContext context;
                 rtcInitIntersectContext(&context);
