@@ -4,7 +4,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -56,7 +55,7 @@ namespace {
 // texel_footprint() transfers to the plane, in closed form:
 //   dx0/dpx = su kx t (u . R - (u . d) / (n . d) n . R),
 // likewise for y0 and dpy. One division per pixel, no square root: the level compares
-// rho^2 (see level_of). texel_footprint() stays the reference the tests compare against.
+// rho^2 (see exact_level). texel_footprint() stays the reference the tests compare against.
 struct PlaneFrame {
     PlaneFrame(const PaintingPlacement& p, const Camera& c) {
         const Vec3 n = p.normal(), rel = c.position - p.origin;
@@ -100,10 +99,12 @@ void half_log2_run(const double* x, std::size_t n, double bias, double* out) {
         const double m =
             std::bit_cast<double>((bits & 0x000fffffffffffffull) | 0x3ff0000000000000ull);
         // The exponent as a double without an int64 conversion (SSE2 has none).
-        const double e = std::bit_cast<double>((bits >> 52) | 0x4330000000000000ull) - two52 - 1023;
+        const double e =
+            std::bit_cast<double>((bits >> 52) | 0x4330000000000000ull) - two52 - 1023;
         const double t = (m - 1) / (m + 1), t2 = t * t;
         const double series =
-            1 + t2 * (1.0 / 3 + t2 * (1.0 / 5 + t2 * (1.0 / 7 + t2 * (1.0 / 9 + t2 * (1.0 / 11 + t2 * (1.0 / 13))))));
+            1 + t2 * (1.0 / 3 + t2 * (1.0 / 5 + t2 * (1.0 / 7 + t2 * (1.0 / 9 +
+                t2 * (1.0 / 11 + t2 * (1.0 / 13))))));
         out[k] = 0.5 * (e + c * t * series) + bias;
     }
 }
