@@ -31,3 +31,4 @@ def test_bench_views_quick_pace(tmp_path, capsys):
     assert p["wall_ms"] >= 0.9 * p["stage_ms_sum"]
     assert 0 < p["hit_rate"] <= 1 and p["frames"] == 19
     assert "Frame loop flat out" in capsys.readouterr().out
+    assert (tmp_path / "views_pace.png").stat().st_size > 0

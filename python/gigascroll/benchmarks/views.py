@@ -270,6 +270,28 @@ def _plot(rows, key, xlabel, path, log_x=False):
     plt.close(fig)
 
 
+def _plot_pace(p: dict, path) -> None:
+    """One stacked bar of the loop's mean stage times against the 90 Hz frame budget."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    stages = ("feedback", "processing", "issue", "drain", "update", "display")
+    fig, ax = plt.subplots(figsize=(9, 2.6))
+    left = 0.0
+    for s in stages:
+        w = p[s + "_ms"]
+        ax.barh([0], [w], left=left, label=f"{s} {w:.2f}")
+        left += w
+    ax.barh([0], [p["wall_ms"] - left], left=left, color="0.8",
+            label=f"outside the stages {p['wall_ms'] - left:.2f}")
+    ax.axvline(1000 / v.FPS, color="k", linestyle="--", label="90 Hz budget 11.1")
+    ax.set_yticks([])
+    ax.set_xlabel("ms per frame (mean), flat out: hash / direct, eyes + 512 x 512 magnifier")
+    ax.legend(ncol=4, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.35))
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+
+
 def _table(rows, key, label) -> str:
     """Markdown: CPU ms (wall ms) per method, and the flag-array / hash ratio of CPU time."""
     lines = [f"| {label} | tiles | requests/frame | basic | cpu-async | flag-array | hash | "
@@ -346,6 +368,7 @@ def run(args) -> int:
                                                               "drain", "update", "display")) + " |")
     if "pace" in parts:
         p = results["pace"] = _pace(args, args.quick)
+        _plot_pace(p, out / "views_pace.png")
         print(f"\n## Frame loop flat out (hash / direct, eyes + 512 x 512 magnifier, "
               f"{p['frames']} frames)\n")
         print("| feedback | processing | issue | drain | update | display | stages | wall | fps |")
