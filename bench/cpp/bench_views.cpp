@@ -39,6 +39,28 @@ PaintingTiles painting_with_tiles(std::uint64_t tiles) {
     return PaintingTiles(w, 6083);
 }
 
+// The views of seed 000 §5.3 on the scroll's wall (texel (0, 0) at (0, 1.75, 0), facing -z):
+// an eye (1800 x 1920, the views.py field of view) 40 cm away and the magnifier (2.5 cm of
+// painting on 512 x 512 from 20 cm), centred on x.
+const double kEyeTanHalf = 900 * (12.0 / 152089) / 0.072;
+Camera eye_camera(double x) {
+    return Camera({x, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, kEyeTanHalf, kEyeTanHalf * 1920 / 1800,
+                  1800, 1920);
+}
+Camera magnifier_camera(double x) {
+    return Camera({x, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, 0.0125 / 0.2, 0.0125 / 0.2, 512, 512);
+}
+
+// The scroll alone on its wall, for the feedback and display passes.
+struct ScrollScene {
+    PaintingTiles tiles{152089, 6083};
+    ExhibitionScene scene;
+    ScrollScene() {
+        scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
+        scene.commit();
+    }
+};
+
 // Both eyes and the magnifier looking at painting 0 (the scroll, 12 m x 0.5 m) from 40 cm.
 struct Feedback {
     std::vector<std::vector<std::uint64_t>> buffers;
@@ -49,16 +71,13 @@ struct Feedback {
                            12.0 * tiles.width() / 152089, 0.5);
         scene.add_box({-2, 0, 0.005}, {20, 3, 0.2});
         scene.commit();
-        const double th = 900 * (12.0 / 152089) / 0.072;
         const double x = std::min(6.0, 6.0 * tiles.width() / 152089);
         for (double eye : {-0.0315, 0.0315}) {
-            const Camera cam({x + eye, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, th, th * 1920 / 1800, 1800, 1920);
             buffers.emplace_back(225 * 240);
-            render_feedback(scene, cam, {225, 240, 0, 0}, buffers.back().data());
+            render_feedback(scene, eye_camera(x + eye), {225, 240, 0, 0}, buffers.back().data());
         }
-        const Camera mag({x, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, 0.0125 / 0.2, 0.0125 / 0.2, 512, 512);
         buffers.emplace_back(512 * 512);
-        render_feedback(scene, mag, {512, 512, 0, 0}, buffers.back().data());
+        render_feedback(scene, magnifier_camera(x), {512, 512, 0, 0}, buffers.back().data());
         views.assign(buffers.begin(), buffers.end());
     }
 };
@@ -126,14 +145,10 @@ void BM_HashSlot(benchmark::State& state) {
 BENCHMARK(BM_HashSlot);
 
 void BM_FeedbackEye(benchmark::State& state) {
-    const PaintingTiles tiles(152089, 6083);
-    ExhibitionScene scene;
-    scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
-    scene.commit();
-    const double th = 900 * (12.0 / 152089) / 0.072;
-    const Camera cam({6, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, th, th * 1920 / 1800, 1800, 1920);
+    const ScrollScene s;
+    const Camera cam = eye_camera(6);
     std::vector<std::uint64_t> keys(225 * 240);
-    for (auto _ : state) render_feedback(scene, cam, {225, 240, 0, unsigned(state.range(0))}, keys.data());
+    for (auto _ : state) render_feedback(s.scene, cam, {225, 240, 0, unsigned(state.range(0))}, keys.data());
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
 BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
@@ -141,17 +156,13 @@ BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->Measur
 // The magnifier's full-resolution feedback as the frame loop asks for it (keys, lambda and
 // uv): 2.5 cm of the scroll on 512 x 512 pixels from 20 cm.
 void BM_FeedbackMagnifier(benchmark::State& state) {
-    const PaintingTiles tiles(152089, 6083);
-    ExhibitionScene scene;
-    scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
-    scene.commit();
-    const double th = 0.025 / 2 / 0.20;
-    const Camera cam({6, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, th, th, 512, 512);
+    const ScrollScene s;
+    const Camera cam = magnifier_camera(6);
     std::vector<std::uint64_t> keys(512 * 512);
     std::vector<float> lod(keys.size());
     std::vector<double> uv(2 * keys.size());
     for (auto _ : state)
-        render_feedback(scene, cam, {512, 512, 0, unsigned(state.range(0))}, keys.data(),
+        render_feedback(s.scene, cam, {512, 512, 0, unsigned(state.range(0))}, keys.data(),
                         state.range(1) ? lod.data() : nullptr, state.range(1) ? uv.data() : nullptr);
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
@@ -161,21 +172,16 @@ BENCHMARK(BM_FeedbackMagnifier)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::
 // the frame loop's steady state: the magnifier at display step 2 (arg 0) or an eye at its
 // feedback resolution (arg 1); arg 1 of the pair: threads.
 void BM_Display(benchmark::State& state) {
-    const PaintingTiles tiles(152089, 6083);
-    ExhibitionScene scene;
-    scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
-    scene.commit();
+    const ScrollScene s;
     const bool eye = state.range(0) == 1;
-    const double th = eye ? 900 * (12.0 / 152089) / 0.072 : 0.025 / 2 / 0.20;
-    const Camera cam = eye ? Camera({6, 1.5, -0.4}, {0, 0, 1}, {0, 1, 0}, th, th * 1920 / 1800, 1800, 1920)
-                           : Camera({6, 1.5, -0.2}, {0, 0, 1}, {0, 1, 0}, th, th, 512, 512);
+    const Camera cam = eye ? eye_camera(6) : magnifier_camera(6);
     FeedbackOptions o{eye ? 225u : 512u, eye ? 240u : 512u, 0, 0, eye ? 1u : 2u};
     const std::uint32_t w = o.width, h = o.height, dw = display_extent(w, o.display_step),
                         dh = display_extent(h, o.display_step);
     std::vector<std::uint64_t> keys(std::size_t(w) * h);
     std::vector<float> lod(std::size_t(dw) * dh);
     std::vector<double> uv(2 * lod.size());
-    render_feedback(scene, cam, o, keys.data(), lod.data(), uv.data());
+    render_feedback(s.scene, cam, o, keys.data(), lod.data(), uv.data());
     VirtualTexture vt(VtLayout::make(128, 4, {{152089, 6083}}), 30, 30,
                       [](const TileKey&, std::uint8_t* d) { std::fill_n(d, 128 * 128 * 3, 128); });
     std::vector<std::uint8_t> texels(128 * 128 * 3);

@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "bindings/bindings.h"
+#include "bindings/numpy_arrays.h"
 #include "common/error.h"
 #include "vt/ink_landscape.h"
 #include "vt/pack_builder.h"
@@ -22,7 +23,6 @@ using namespace nb::literals;
 namespace gigascroll::bindings {
 namespace {
 
-using Tile = nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>>;
 using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::device::cpu>;
 using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::device::cpu>;
 
@@ -116,13 +116,12 @@ void bind_pack(nb::module_& m) {
         .def("read_tile", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
                              std::uint32_t tx, std::uint32_t ty) {
             const std::size_t T = p.tile_size();
-            auto* data = new std::uint8_t[T * T * 3];
-            nb::capsule owner(data, [](void* d) noexcept { delete[] static_cast<std::uint8_t*>(d); });
+            FreshArray<std::uint8_t, nb::ndim<3>> tile({T, T, 3});
             {
                 nb::gil_scoped_release release;
-                p.read_tile(pi, l, tx, ty, data);  // on throw, `owner` frees the buffer
+                p.read_tile(pi, l, tx, ty, tile.data);  // on throw, the array frees the buffer
             }
-            return Tile(data, {T, T, 3}, owner); },
+            return tile.array; },
             "painting"_a, "level"_a, "tx"_a, "ty"_a,
             "The tile as a (tile_size, tile_size, 3) uint8 array, checksum verified.")
         .def("read_tile_into", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
@@ -173,14 +172,12 @@ void bind_pack(nb::module_& m) {
                                      std::uint32_t rows, std::uint64_t seed, unsigned threads) {
         require(std::uint64_t(y0) + rows <= height && rows > 0 && width > 0,
                 "rows [y0, y0 + rows) must be a non-empty range inside the painting");
-        const std::size_t n = std::size_t(rows) * width * 3;
-        auto* data = new std::uint8_t[n];
-        nb::capsule owner(data, [](void* d) noexcept { delete[] static_cast<std::uint8_t*>(d); });
+        FreshArray<std::uint8_t, nb::ndim<3>> out({rows, width, 3});
         {
             nb::gil_scoped_release release;
-            render_ink_landscape(width, height, y0, rows, seed, data, threads);
+            render_ink_landscape(width, height, y0, rows, seed, out.data, threads);
         }
-        return Tile(data, {rows, width, 3}, owner); },
+        return out.array; },
         "width"_a, "height"_a, "y0"_a, "rows"_a, "seed"_a = 0, "threads"_a = 0,
         "Rows [y0, y0 + rows) of the built-in ink-landscape painting as (rows, width, 3) uint8.");
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bindings/bindings.h"
+#include "bindings/numpy_arrays.h"
 #include "common/error.h"
 #include "photon/camera.h"
 #include "photon/photon_map.h"
@@ -34,13 +35,6 @@ using IndexArray = nb::ndarray<const std::int64_t, nb::c_contig, nb::device::cpu
 using Out = nb::ndarray<nb::numpy, float>;
 
 Vec3 vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
-
-// Moves a vector into a numpy array of the given shape (no copy).
-Out to_numpy(std::vector<float>&& v, std::initializer_list<std::size_t> shape) {
-    auto* heap = new std::vector<float>(std::move(v));
-    nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<float>*>(p); });
-    return Out(heap->data(), shape.size(), shape.begin(), owner);
-}
 
 Out photons_field(const std::vector<Photon>& ph, int field) {
     std::vector<float> v(ph.size() * 3);

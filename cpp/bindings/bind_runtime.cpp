@@ -12,6 +12,7 @@
 #include <string>
 
 #include "bindings/bindings.h"
+#include "bindings/numpy_arrays.h"
 #include "common/error.h"
 #include "vt/mip_texture.h"
 #include "vt/tile_loader.h"
@@ -54,10 +55,9 @@ std::vector<TileKey> to_keys(const Keys& a) {
 }
 
 Tile new_tile(std::size_t T, const std::uint8_t* src) {
-    auto* data = new std::uint8_t[T * T * 3];
-    std::memcpy(data, src, T * T * 3);
-    nb::capsule owner(data, [](void* d) noexcept { delete[] static_cast<std::uint8_t*>(d); });
-    return Tile(data, {T, T, 3}, owner);
+    FreshArray<std::uint8_t, nb::ndim<3>> tile({T, T, 3});
+    std::memcpy(tile.data, src, T * T * 3);
+    return tile.array;
 }
 
 LoaderMode parse_mode(const std::string& m) {

@@ -14,6 +14,7 @@
 #include <type_traits>
 
 #include "bindings/bindings.h"
+#include "bindings/numpy_arrays.h"
 #include "common/error.h"
 #include "vt/display.h"
 #include "vt/exhibition.h"
@@ -31,31 +32,6 @@ using namespace nb::literals;
 
 namespace gigascroll::bindings {
 namespace {
-
-using U64Array = nb::ndarray<nb::numpy, std::uint64_t, nb::ndim<1>>;
-
-// Hands a vector to numpy without copying; the capsule owns it.
-template <typename T>
-nb::ndarray<nb::numpy, T, nb::ndim<1>> to_numpy(std::vector<T>&& v) {
-    auto* heap = new std::vector<T>(std::move(v));
-    nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-    return nb::ndarray<nb::numpy, T, nb::ndim<1>>(heap->data(), {heap->size()}, owner);
-}
-
-// An uninitialised numpy array of the given shape that C++ fills (the frame loop's buffers:
-// zeroing 7 MB a frame that the pass overwrites anyway was measurable).
-template <typename T>
-struct FreshArray {
-    explicit FreshArray(std::initializer_list<std::size_t> shape) {
-        std::size_t n = 1;
-        for (auto s : shape) n *= s;
-        data = new T[n];
-        nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
-        array = nb::ndarray<nb::numpy, T>(data, shape.size(), shape.begin(), owner);
-    }
-    T* data;
-    nb::ndarray<nb::numpy, T> array;
-};
 
 Vec3 vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 std::array<double, 3> arr3(Vec3 v) { return {v.x, v.y, v.z}; }
@@ -244,11 +220,9 @@ void bind_views(nb::module_& m) {
             nb::gil_scoped_release release;
             render_feedback(scene, camera, o, keys.data(), with_lod ? lod.data() : nullptr);
         }
-        auto k = to_numpy(std::move(keys));
-        nb::object keys2d = nb::cast(k).attr("reshape")(h, w);
+        nb::object keys2d = nb::cast(to_numpy(std::move(keys), {h, w}));
         if (!with_lod) return keys2d;
-        nb::object lod2d = nb::cast(to_numpy(std::move(lod))).attr("reshape")(h, w);
-        return nb::object(nb::make_tuple(keys2d, lod2d));
+        return nb::object(nb::make_tuple(keys2d, to_numpy(std::move(lod), {h, w})));
     }, "scene"_a, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
           "with_lod"_a = false,
           "Feedback pass: (height, width) uint64 request keys (NO_REQUEST where no painting);\n"

@@ -184,17 +184,20 @@ bool VirtualTexture::page_table_matches_rebuild() const {
     return table_.equals_rebuild([&](const TileKey& k) { return resident_slot(k); });
 }
 
-void VirtualTexture::sample(const SampleRequest& r) const {
+void VirtualTexture::check_request(const SampleRequest& r) const {
     require(r.painting < layout().paintings.size(), "painting out of range");
     require(r.u && r.v && r.out, "sample: missing arrays");
+}
+
+void VirtualTexture::sample(const SampleRequest& r) const {
+    check_request(r);
     std::shared_lock lock(mutex_);
     parallel_for(r.count, 4096, [&](std::size_t b, std::size_t e) { sample_range(r, b, e); },
                  r.threads);
 }
 
 void VirtualTexture::sample_serial(const SampleRequest& r) const {
-    require(r.painting < layout().paintings.size(), "painting out of range");
-    require(r.u && r.v && r.out, "sample: missing arrays");
+    check_request(r);
     std::shared_lock lock(mutex_);
     sample_range(r, 0, r.count);
 }

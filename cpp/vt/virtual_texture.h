@@ -81,6 +81,7 @@ public:
 
 private:
     void check_key(const TileKey& key) const;
+    void check_request(const SampleRequest& r) const;
     std::uint32_t resident_slot(const TileKey& key) const;  // PageEntry::kNone if absent
     void store(std::uint32_t slot, const TileKey& key, const std::uint8_t* data);
     void lru_unlink(std::uint32_t s);

@@ -14,7 +14,6 @@ import statistics
 import time
 from pathlib import Path
 
-import numpy as np
 from tqdm import tqdm
 
 from .. import views as v
@@ -197,19 +196,12 @@ def _loop(args, quick) -> list[dict]:
     import tempfile
 
     from .. import pack as pk
+    from ..scenarios.common import pattern_image, spec_of
     width, height = (12000, 1600) if quick else (24000, 1600)
-    yy = np.arange(height, dtype=np.int32)[:, None]
-    xx = np.arange(width, dtype=np.int32)[None, :]
-    img = np.empty((height, width, 3), np.uint8)
-    img[..., 0] = (xx * 7 + yy) % 256
-    img[..., 1] = (xx // 3 + yy * 5) % 256
-    img[..., 2] = (xx ^ yy) % 256
     rows = []
     with tempfile.TemporaryDirectory() as d:
-        pack = pk.build_pack(img, Path(d) / "loop.pack")
-        del img
-        spec = v.PaintingSpec("loop", width, height, width * 12 / 152089, height * 12 / 152089)
-        ex = v.single_scroll(spec)
+        pack = pk.build_pack([pattern_image(width, height)], Path(d) / "loop.pack")
+        ex = v.single_scroll(spec_of("loop", width, height))
         moving = 0.2 if quick else 1.2
         path = v.scroll_path(distance=0.40, speed=1.0, duration=moving, start_x=0.3,
                              exhibition=ex, stop_frames=10 if quick else 60)
