@@ -241,9 +241,10 @@ void bind_runtime(nb::module_& m) {
             "Whether the incrementally updated page table equals a full rebuild (tests).")
         .def_prop_ro("physical", [](const VirtualTexture& vt) {
             const std::size_t T = vt.layout().tile_size;
-            return nb::ndarray<nb::numpy, const std::uint8_t, nb::ndim<3>>(
-                vt.physical().data(), {vt.slots_y() * T, vt.slots_x() * T, 3}, nb::handle()); },
-            nb::rv_policy::reference_internal, "The physical texture (read-only view).")
+            return nb::ndarray<nb::numpy, const std::uint8_t, nb::ndim<4>>(
+                vt.physical(), {std::size_t(vt.slots_y()) * vt.slots_x(), T, T, 3}, nb::handle()); },
+            nb::rv_policy::reference_internal,
+            "The physical texture, tile-major (read-only view): [slot, y, x, rgb].")
         .def("_sample_into", [](const VirtualTexture& vt, std::uint32_t painting, const Coords& u,
                                 const Coords& v, const std::optional<Lods>& lod, float lod_scalar,
                                 const std::string& filter, Values out, Levels levels, unsigned threads) {

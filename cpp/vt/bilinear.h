@@ -6,6 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace gigascroll {
 
@@ -59,5 +63,28 @@ inline void bilerp_rgb8(const std::uint8_t* p00, std::size_t stride, std::size_t
     for (int c = 0; c < 3; ++c)
         out[c] = w00 * p00[c] + w10 * p10[c] + w01 * p01[c] + w11 * p11[c];
 }
+
+#if defined(__SSE2__)
+// bilerp_rgb8 with dx = 3, dy = 1 on four lanes at once: the same products summed in the
+// same order, so the same floats. Each texel load reads 4 bytes (RGB and the next byte,
+// whose lane is ignored), so one byte past p00 + stride + 5 must be readable; it stores 4
+// floats at out, the fourth of them garbage for the caller to overwrite or ignore.
+inline void bilerp_rgb8_wide(const std::uint8_t* p00, std::size_t stride, float fx, float fy,
+                             float* out) {
+    auto texel = [](const std::uint8_t* p) {
+        std::int32_t bytes;
+        std::memcpy(&bytes, p, 4);
+        const __m128i zero = _mm_setzero_si128();
+        const __m128i b = _mm_cvtsi32_si128(bytes);
+        return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_unpacklo_epi8(b, zero), zero));
+    };
+    const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+    __m128 c = _mm_mul_ps(_mm_set1_ps(w00), texel(p00));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_set1_ps(w10), texel(p00 + 3)));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_set1_ps(w01), texel(p00 + stride)));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_set1_ps(w11), texel(p00 + stride + 3)));
+    _mm_storeu_ps(out, c);
+}
+#endif
 
 }  // namespace gigascroll

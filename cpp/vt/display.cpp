@@ -1,7 +1,6 @@
 #include "vt/display.h"
 
 #include <algorithm>
-#include <vector>
 
 #include "common/error.h"
 #include "common/parallel.h"
@@ -17,22 +16,20 @@ void display_view(const VirtualTexture& vt, const std::uint64_t* keys, const flo
     const std::uint32_t ow = display_extent(width, step), oh = display_extent(height, step);
     const std::size_t paintings = vt.layout().paintings.size();
     parallel_for(oh, 8, [&](std::size_t row_begin, std::size_t row_end) {
-        // One row's samples of one painting are gathered contiguous and sampled in one call.
-        std::vector<double> u(ow), v(ow);
-        std::vector<float> l(ow);
         for (std::size_t oy = row_begin; oy < row_end; ++oy) {
-            const std::size_t row = oy * step * std::size_t(width);
-            float* out_row = out + oy * ow * 3;
+            const std::uint64_t* key_row = keys + oy * step * std::size_t(width);
+            const std::size_t first = oy * ow;  // the row's first sample on the display grid
+            float* out_row = out + first * 3;
+            // Runs of samples that see the same painting are sampled in one call, straight
+            // from the interleaved uv.
             for (std::uint32_t j0 = 0; j0 < ow;) {
-                const std::uint64_t k0 = keys[row + std::size_t(j0) * step];
-                const std::uint32_t p = k0 == kNoRequest ? ~0u : request_painting(k0);
-                std::uint32_t j1 = j0;
-                for (; j1 < ow; ++j1) {
-                    const std::uint64_t k = keys[row + std::size_t(j1) * step];
-                    if ((k == kNoRequest ? ~0u : request_painting(k)) != p) break;
-                    const std::size_t i = oy * ow + j1;  // on the display grid
-                    u[j1 - j0] = uv[2 * i], v[j1 - j0] = uv[2 * i + 1], l[j1 - j0] = lod[i];
-                }
+                auto painting_at = [&](std::uint32_t j) {
+                    const std::uint64_t k = key_row[std::size_t(j) * step];
+                    return k == kNoRequest ? ~0u : request_painting(k);
+                };
+                const std::uint32_t p = painting_at(j0);
+                std::uint32_t j1 = j0 + 1;
+                while (j1 < ow && painting_at(j1) == p) ++j1;
                 if (p == ~0u) {
                     std::fill(out_row + 3 * j0, out_row + 3 * j1, 0.0f);
                 } else {
@@ -40,7 +37,8 @@ void display_view(const VirtualTexture& vt, const std::uint64_t* keys, const flo
                                            "texture does not hold");
                     SampleRequest r;
                     r.painting = p;
-                    r.u = u.data(), r.v = v.data(), r.lod = l.data();
+                    r.u = uv + 2 * (first + j0), r.v = r.u + 1, r.uv_stride = 2;
+                    r.lod = lod + first + j0;
                     r.count = j1 - j0;
                     r.filter = Filter::Bilinear;
                     r.out = out_row + 3 * j0;

@@ -50,6 +50,7 @@ MipTexture MipTexture::from_pack(const TilePack& pack, std::uint32_t painting, s
 
 void MipTexture::sample(const SampleRequest& r) const {
     require(r.u && r.v && r.out, "sample: missing arrays");
+    require(r.uv_stride >= 1, "sample: uv_stride must be >= 1");
     const std::uint32_t L = level_count();
     const double W = levels_[0].width, H = levels_[0].height;
     const LevelAxes axes(levels_[0].width, levels_[0].height, L);
@@ -62,8 +63,9 @@ void MipTexture::sample(const SampleRequest& r) const {
     };
     parallel_for(r.count, 4096, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i) {
-            const double u = std::isnan(r.u[i]) ? 0.0 : std::clamp(r.u[i], 0.0, 1.0);
-            const double v = std::isnan(r.v[i]) ? 0.0 : std::clamp(r.v[i], 0.0, 1.0);
+            const double ui = r.u[i * r.uv_stride], vi = r.v[i * r.uv_stride];
+            const double u = std::isnan(ui) ? 0.0 : std::clamp(ui, 0.0, 1.0);
+            const double v = std::isnan(vi) ? 0.0 : std::clamp(vi, 0.0, 1.0);
             const double x0 = u * W, y0 = v * H;
             float lod = r.lod ? r.lod[i] : r.lod_scalar;
             lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));

@@ -1,6 +1,7 @@
 #include "vt/virtual_texture.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <mutex>
@@ -32,12 +33,8 @@ VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
     require(pinned.size() < n, "slots=(" + std::to_string(slots_x) + ", " + std::to_string(slots_y) +
                                    ") cannot hold the " + std::to_string(pinned.size()) +
                                    " pinned coarse tiles plus one streamed tile");
-    texels_.assign(std::size_t(n) * tile_size_ * tile_size_ * 3, 0);
+    texels_ = HugeBuffer(std::size_t(n) * layout.tile_bytes());
     key_of_.assign(n, 0);
-    slot_origin_.resize(n);
-    for (std::uint32_t s = 0; s < n; ++s)
-        slot_origin_[s] = (s / slots_x) * std::size_t(tile_size_) * slots_x * tile_size_ * 3 +
-                          (s % slots_x) * std::size_t(tile_size_) * 3;
     pinned_.assign(n, 0);
     prev_.assign(n, kNil);
     next_.assign(n, kNil);
@@ -70,9 +67,7 @@ std::uint32_t VirtualTexture::resident_slot(const TileKey& key) const {
 }
 
 void VirtualTexture::store(std::uint32_t slot, const TileKey& key, const std::uint8_t* data) {
-    const std::size_t T = tile_size_, row = std::size_t(slots_x_) * T * 3;
-    std::uint8_t* dst = texels_.data() + (slot / slots_x_) * T * row + (slot % slots_x_) * T * 3;
-    for (std::size_t y = 0; y < T; ++y) std::memcpy(dst + y * row, data + y * T * 3, T * 3);
+    std::memcpy(texels_.data() + slot * layout().tile_bytes(), data, layout().tile_bytes());
     key_of_[slot] = key.packed();
     slot_of_[key.packed()] = slot;
     table_.insert(key, slot);
@@ -187,6 +182,7 @@ bool VirtualTexture::page_table_matches_rebuild() const {
 void VirtualTexture::check_request(const SampleRequest& r) const {
     require(r.painting < layout().paintings.size(), "painting out of range");
     require(r.u && r.v && r.out, "sample: missing arrays");
+    require(r.uv_stride >= 1, "sample: uv_stride must be >= 1");
 }
 
 void VirtualTexture::sample(const SampleRequest& r) const {
@@ -208,6 +204,56 @@ namespace {
 inline std::uint32_t tap_tile(const Tap& t, const Divider& P) {
     return P(static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)));
 }
+
+constexpr std::size_t kBatch = 64;
+
+// Per sample of a batch: level-0 position, level asked for, the taps at that level (integer
+// texel and weight per axis) and the tile column / row holding the sample point.
+struct TapBatch {
+    alignas(64) double x0[kBatch], y0[kBatch];
+    alignas(64) std::int32_t ix[kBatch], iy[kBatch];
+    alignas(64) float fx[kBatch], fy[kBatch];
+    alignas(64) std::uint32_t level[kBatch], cx[kBatch], cy[kBatch];
+};
+
+struct PyramidExtent {
+    std::uint32_t width, height;  // level 0, texels
+    float top;                    // the coarsest level
+};
+
+// The sampler's per-sample arithmetic without branches and on restrict pointers, so GCC
+// vectorises it; the same operations as sample_range's taps (bilinear_tap, tap_tile), hence
+// the same results. Min and max are selects; "0 < x ? x : 0" also maps NaN to 0.
+void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
+                   const float* __restrict lod_in, std::size_t n, const PyramidExtent e,
+                   const Divider divide_p, TapBatch& __restrict b) {
+    auto lo0 = [](auto x) { return decltype(x)(0) < x ? x : decltype(x)(0); };
+    auto below = [](auto x, auto hi) { return x < hi ? x : hi; };
+    auto above = [](auto x, auto lo) { return lo < x ? x : lo; };
+    const std::uint32_t width = e.width, height = e.height;
+    const double W = width, H = height;
+    const float top = e.top;
+    for (std::size_t k = 0; k < n; ++k) {
+        const double u = below(lo0(u_in[k]), 1.0), v = below(lo0(v_in[k]), 1.0);
+        const float lod = below(lo0(lod_in[k]), top);
+        // lod >= 0 here, so lround(lod) = floor(lod + 0.5).
+        const auto l = static_cast<std::uint32_t>(lod + 0.5f);
+        const double x0 = u * W, y0 = v * H;
+        // x0 2^-l exactly (2^-l from its exponent bits) and level l's extent, as LevelAxes
+        // computes them.
+        const double scale = std::bit_cast<double>(std::uint64_t(1023 - l) << 52);
+        const std::uint32_t wl = (width + (1u << l) - 1) >> l;
+        const std::uint32_t hl = (height + (1u << l) - 1) >> l;
+        const double tx = below(above(x0 * scale, 0.5), double(wl) - 0.5) - 0.5;
+        const double ty = below(above(y0 * scale, 0.5), double(hl) - 0.5) - 0.5;
+        const auto i = static_cast<std::int32_t>(tx), j = static_cast<std::int32_t>(ty);
+        const float f = static_cast<float>(tx - double(i)), g = static_cast<float>(ty - double(j));
+        b.x0[k] = x0, b.y0[k] = y0, b.level[k] = l;
+        b.ix[k] = i, b.iy[k] = j, b.fx[k] = f, b.fy[k] = g;
+        b.cx[k] = divide_p.by_halves(std::uint32_t(i) + (f >= 0.5f ? 1u : 0u));
+        b.cy[k] = divide_p.by_halves(std::uint32_t(j) + (g >= 0.5f ? 1u : 0u));
+    }
+}
 }  // namespace
 
 // Seed 000 eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
@@ -219,10 +265,14 @@ inline std::uint32_t tap_tile(const Tap& t, const Divider& P) {
 // origin plus that: no normalised float coordinate ever exists, so 1/256 texel holds at u
 // near 1 on the widest painting.
 void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std::size_t end) const {
+    if (r.filter == Filter::Bilinear) {
+        sample_bilinear(r, begin, end);
+        return;
+    }
     const VtPainting& pt = layout().paintings[r.painting];
     const std::uint32_t P = layout().payload(), E = layout().border, T = tile_size_;
     const std::uint32_t L = pt.level_count();
-    const std::size_t row = std::size_t(slots_x_) * T * 3;
+    const std::size_t row = std::size_t(T) * 3, tile_bytes = layout().tile_bytes();
     const std::uint8_t* phys = texels_.data();
     const LevelAxes axes(pt.width, pt.height, L);
     const Divider divide_p(P);
@@ -245,33 +295,97 @@ void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std
         }
         const std::int64_t jx = std::clamp<std::int64_t>(tx.i0 - std::int64_t(cx >> s) * P + E, 0, T - 2);
         const std::int64_t jy = std::clamp<std::int64_t>(ty.i0 - std::int64_t(cy >> s) * P + E, 0, T - 2);
-        const std::uint8_t* p00 = phys + slot_origin_[e.slot()] + jy * row + jx * 3;
+        const std::uint8_t* p00 = phys + e.slot() * tile_bytes + jy * row + jx * 3;
         bilerp_rgb8(p00, row, 3, 1, tx.f, ty.f, out);
         return al;
     };
 
     for (std::size_t i = begin; i < end; ++i) {
-        const double u = std::isnan(r.u[i]) ? 0.0 : std::clamp(r.u[i], 0.0, 1.0);
-        const double v = std::isnan(r.v[i]) ? 0.0 : std::clamp(r.v[i], 0.0, 1.0);
+        const double ui = r.u[i * r.uv_stride], vi = r.v[i * r.uv_stride];
+        const double u = std::isnan(ui) ? 0.0 : std::clamp(ui, 0.0, 1.0);
+        const double v = std::isnan(vi) ? 0.0 : std::clamp(vi, 0.0, 1.0);
         const double x0 = u * pt.width, y0 = v * pt.height;
         float lod = r.lod ? r.lod[i] : r.lod_scalar;
         lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
         float* out = r.out + 3 * i;
-        std::uint32_t answered;
-        if (r.filter == Filter::Bilinear) {
-            // lod >= 0 here, so lround(lod) = floor(lod + 0.5) (a libm call per sample).
-            answered = bilinear(x0, y0, static_cast<std::uint32_t>(lod + 0.5f), out);
-        } else {
-            const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
-            const float f = lod - float(l0);
-            answered = bilinear(x0, y0, l0, out);
-            if (f > 0 && l0 + 1 < L) {
-                float c[3];
-                bilinear(x0, y0, l0 + 1, c);
-                for (int k = 0; k < 3; ++k) out[k] += f * (c[k] - out[k]);
-            }
+        const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
+        const float f = lod - float(l0);
+        std::uint32_t answered = bilinear(x0, y0, l0, out);
+        if (f > 0 && l0 + 1 < L) {
+            float c[3];
+            bilinear(x0, y0, l0 + 1, c);
+            for (int k = 0; k < 3; ++k) out[k] += f * (c[k] - out[k]);
         }
         if (r.level_out) r.level_out[i] = static_cast<std::int8_t>(answered);
+    }
+}
+
+// The same arithmetic as the trilinear path's bilinear taps, in batches and three passes,
+// because the samples' texel reads are scattered over the physical texture and each used to
+// wait for its cache miss: (1) per sample, branch-free so it vectorises, the level and the
+// taps and tile at that level; (2) the page-table lookup (reused while samples stay in one
+// tile), the fallback to a resident ancestor, the texel address, and a prefetch of both
+// rows; (3) the blends, whose reads the prefetches have mostly brought in by then.
+void VirtualTexture::sample_bilinear(const SampleRequest& r, std::size_t begin,
+                                     std::size_t end) const {
+    const VtPainting& pt = layout().paintings[r.painting];
+    const std::uint32_t P = layout().payload(), E = layout().border, T = tile_size_;
+    const std::uint32_t L = pt.level_count(), width = pt.width, height = pt.height;
+    const std::size_t row = std::size_t(T) * 3, tile_bytes = layout().tile_bytes();
+    const std::uint8_t* phys = texels_.data();
+    const LevelAxes axes(width, height, L);
+    const Divider divide_p(P);
+    std::uint32_t last_l = ~0u, last_cx = 0, last_cy = 0;
+    PageEntry last_e;
+
+    TapBatch b;
+    const std::uint8_t* texel[kBatch];
+    float lod_scalar[kBatch];
+    double u_dense[kBatch], v_dense[kBatch];
+    std::fill(lod_scalar, lod_scalar + kBatch, r.lod_scalar);
+    const PyramidExtent pyramid{width, height, float(L - 1)};
+
+    for (std::size_t b0 = begin; b0 < end; b0 += kBatch) {
+        const std::size_t n = std::min(kBatch, end - b0);
+        // (1)
+        const float* l_in = r.lod ? r.lod + b0 : lod_scalar;
+        const double *u_in = r.u + b0, *v_in = r.v + b0;
+        if (r.uv_stride != 1) {  // gathered here so the tap loop stays contiguous
+            const std::size_t st = r.uv_stride;
+            for (std::size_t k = 0; k < n; ++k)
+                u_dense[k] = r.u[(b0 + k) * st], v_dense[k] = r.v[(b0 + k) * st];
+            u_in = u_dense, v_in = v_dense;
+        }
+        bilinear_taps(u_in, v_in, l_in, n, pyramid, divide_p, b);
+        // (2)
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint32_t l = b.level[k], cx = b.cx[k], cy = b.cy[k];
+            if (l != last_l || cx != last_cx || cy != last_cy)
+                last_l = l, last_cx = cx, last_cy = cy, last_e = table_.lookup(r.painting, l, cx, cy);
+            const std::uint32_t al = last_e.level(), s = al - l;
+            std::int64_t i = b.ix[k], j = b.iy[k];
+            if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
+                const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
+                i = tx.i0, j = ty.i0, b.fx[k] = tx.f, b.fy[k] = ty.f;
+            }
+            const std::int64_t jx = std::clamp<std::int64_t>(i - std::int64_t(cx >> s) * P + E, 0, T - 2);
+            const std::int64_t jy = std::clamp<std::int64_t>(j - std::int64_t(cy >> s) * P + E, 0, T - 2);
+            const std::uint8_t* p = phys + last_e.slot() * tile_bytes + jy * row + jx * 3;
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + row);
+            texel[k] = p;
+            if (r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
+        }
+        // (3)
+        // Four-float stores overlap the next sample's first channel, which is written
+        // after; not past this range's end (another thread may own the next sample).
+        float* out = r.out + 3 * b0;
+        std::size_t k = 0;
+#if defined(__SSE2__)
+        for (; k + 1 < n || (k < n && b0 + n < end); ++k)
+            bilerp_rgb8_wide(texel[k], row, b.fx[k], b.fy[k], out + 3 * k);
+#endif
+        for (; k < n; ++k) bilerp_rgb8(texel[k], row, 3, 1, b.fx[k], b.fy[k], out + 3 * k);
     }
 }
 

@@ -13,6 +13,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/huge_buffer.h"
 #include "vt/page_table.h"
 #include "vt/vt_layout.h"
 
@@ -30,8 +31,9 @@ enum class Filter { Bilinear, Trilinear };
 // trilinear), which differs from the one asked for when that tile was not resident.
 struct SampleRequest {
     std::uint32_t painting = 0;
-    const double* u = nullptr;
-    const double* v = nullptr;
+    const double* u = nullptr;          // sample i at u[i * uv_stride]
+    const double* v = nullptr;          // sample i at v[i * uv_stride]
+    std::size_t uv_stride = 1;          // 2 for interleaved (u, v) pairs
     const float* lod = nullptr;
     float lod_scalar = 0.0f;
     std::size_t count = 0;
@@ -76,8 +78,11 @@ public:
     // one task per core, such as the display pass.
     void sample_serial(const SampleRequest& r) const;
 
-    // The physical texture: (slots_y * T) rows x (slots_x * T) columns x RGB8.
-    const std::vector<std::uint8_t>& physical() const { return texels_; }
+    // The physical texture, tile-major: slot s holds its T x T x RGB8 texels contiguously
+    // at s * T * T * 3, so a bilinear footprint's two rows are T * 3 bytes apart and one
+    // tile spans 14 pages rather than T (the sampler's reads are scattered over the cache).
+    const std::uint8_t* physical() const { return texels_.data(); }
+    std::size_t physical_bytes() const { return texels_.size(); }
 
 private:
     void check_key(const TileKey& key) const;
@@ -87,13 +92,13 @@ private:
     void lru_unlink(std::uint32_t s);
     void lru_push_front(std::uint32_t s);
     void sample_range(const SampleRequest& r, std::size_t begin, std::size_t end) const;
+    void sample_bilinear(const SampleRequest& r, std::size_t begin, std::size_t end) const;
 
     PageTable table_;
     std::uint32_t slots_x_, slots_y_, tile_size_;
-    std::vector<std::uint8_t> texels_;
+    HugeBuffer texels_;
     std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;  // packed key -> slot
     std::vector<std::uint64_t> key_of_;                        // slot -> packed key
-    std::vector<std::size_t> slot_origin_;                     // slot -> byte offset of its texel (0, 0)
     std::vector<std::uint8_t> pinned_;
     std::vector<std::uint32_t> free_;
     // LRU list over unpinned resident slots: head = most recently used.

@@ -11,6 +11,7 @@
 
 #include "common/checksum.h"
 #include "common/divider.h"
+#include "common/huge_buffer.h"
 #include "common/parallel.h"
 
 using namespace gigascroll;
@@ -88,14 +89,33 @@ TEST(Divider, MatchesHardwareDivision) {
                             0x7fffffffu, 0xfffffffeu, 0xffffffffu}) {
         const Divider div(d);
         EXPECT_EQ(div.divisor(), d);
-        for (std::uint32_t n : ns) ASSERT_EQ(div(n), n / d) << n << " / " << d;
+        for (std::uint32_t n : ns) {
+            ASSERT_EQ(div(n), n / d) << n << " / " << d;
+            ASSERT_EQ(div.by_halves(n), n / d) << n << " / " << d << " by halves";
+        }
         // Around every multiple of d in a window: where rounding errors would show.
         for (std::uint64_t q = 1; q < 50 && q * d < 0xffffffffull; ++q)
             for (std::int64_t off = -1; off <= 1; ++off) {
                 const std::uint64_t n = q * d + off;
-                if (n <= 0xffffffffull) ASSERT_EQ(div(std::uint32_t(n)), std::uint32_t(n / d));
+                if (n > 0xffffffffull) continue;
+                ASSERT_EQ(div(std::uint32_t(n)), std::uint32_t(n / d));
+                ASSERT_EQ(div.by_halves(std::uint32_t(n)), std::uint32_t(n / d));
             }
     }
+}
+
+TEST(HugeBuffer, ZeroedAlignedAndReadablePastItsEnd) {
+    for (std::size_t n : {std::size_t(1), std::size_t(4096), HugeBuffer::kHugePage,
+                          HugeBuffer::kHugePage + 3}) {
+        HugeBuffer b(n);
+        ASSERT_EQ(b.size(), n);
+        EXPECT_EQ(reinterpret_cast<std::uintptr_t>(b.data()) % HugeBuffer::kHugePage, 0u);
+        // Every byte up to the promised slack reads as zero (ASan would flag an overrun).
+        std::size_t nonzero = 0;
+        for (std::size_t i = 0; i < n + HugeBuffer::kSlack; ++i) nonzero += b.data()[i] != 0;
+        EXPECT_EQ(nonzero, 0u);
+    }
+    EXPECT_EQ(HugeBuffer().data(), nullptr);
 }
 
 TEST(Checksum, KnownXxh3Value) {

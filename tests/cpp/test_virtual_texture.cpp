@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -65,6 +66,43 @@ std::vector<TileKey> all_tiles(const VtLayout& layout) {
     }
     return keys;
 }
+
+
+// A random painting (make_levels) as the pack would cut it, and a cache to fill with its tiles.
+struct CutPainting {
+    CutPainting(std::uint32_t W, std::uint32_t H, std::uint32_t T, std::uint32_t E, std::uint32_t seed)
+        : layout(VtLayout::make(T, E, {{W, H}})),
+          levels(make_levels(W, H, layout.paintings[0].level_count(), seed)) {}
+    std::uint32_t level_count() const { return layout.paintings[0].level_count(); }
+    VirtualTexture::TileSource source() const {
+        return [this](const TileKey& k, std::uint8_t* out) {
+            cut_tile(levels[k.level], layout.tile_size, layout.border, k, out);
+        };
+    }
+    // Inserts the first `count` of `keys`; returns how many inserts evicted a tile.
+    std::size_t insert(VirtualTexture& vt, const std::vector<TileKey>& keys, std::size_t count) const {
+        std::vector<std::uint8_t> tile(layout.tile_bytes());
+        std::size_t evictions = 0;
+        for (std::size_t i = 0; i < count; ++i) {
+            if (vt.is_resident(keys[i])) continue;
+            source()(keys[i], tile.data());
+            evictions += vt.insert(keys[i], tile.data()).has_value();
+        }
+        return evictions;
+    }
+    // Every tile, or a random share of them in random order.
+    std::size_t insert_all(VirtualTexture& vt) const {
+        const auto keys = all_tiles(layout);
+        return insert(vt, keys, keys.size());
+    }
+    std::size_t insert_random(VirtualTexture& vt, double share, std::mt19937& rng) const {
+        auto keys = all_tiles(layout);
+        std::shuffle(keys.begin(), keys.end(), rng);
+        return insert(vt, keys, std::size_t(share * keys.size()));
+    }
+    VtLayout layout;
+    std::vector<MipTexture::Level> levels;
+};
 
 }  // namespace
 
@@ -183,19 +221,12 @@ static float max_difference(const VirtualTexture& vt, const MipTexture& ref, Fil
 }
 
 TEST(VirtualTexture, SamplingEqualsPlainMipTextureWhenResident) {
-    const std::uint32_t W = 1001, H = 299, T = 32, E = 2;
-    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
-    const std::uint32_t L = layout.paintings[0].level_count();
-    const auto levels = make_levels(W, H, L, 3);
-    auto source = [&](const TileKey& k, std::uint8_t* out) { cut_tile(levels[k.level], T, E, k, out); };
-    VirtualTexture vt(layout, 24, 24, source);
-    std::vector<std::uint8_t> tile(layout.tile_bytes());
-    for (const TileKey& k : all_tiles(layout))
-        if (!vt.is_resident(k)) {
-            source(k, tile.data());
-            ASSERT_FALSE(vt.insert(k, tile.data())) << "the cache must hold every tile here";
-        }
-    const MipTexture ref(levels);
+    const std::uint32_t W = 1001, H = 299;
+    const CutPainting painting(W, H, 32, 2, 3);
+    const std::uint32_t L = painting.level_count();
+    VirtualTexture vt(painting.layout, 24, 24, painting.source());
+    ASSERT_EQ(painting.insert_all(vt), 0u) << "the cache must hold every tile here";
+    const MipTexture ref(painting.levels);
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     std::vector<double> u, v;
@@ -216,21 +247,12 @@ TEST(VirtualTexture, SamplingEqualsPlainMipTextureWhenResident) {
 }
 
 TEST(VirtualTexture, MissingTilesFallBackToTheFinestResidentAncestor) {
-    const std::uint32_t W = 777, H = 333, T = 32, E = 3;
-    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
-    const std::uint32_t L = layout.paintings[0].level_count();
-    const auto levels = make_levels(W, H, L, 5);
-    auto source = [&](const TileKey& k, std::uint8_t* out) { cut_tile(levels[k.level], T, E, k, out); };
-    VirtualTexture vt(layout, 12, 12, source);
+    const CutPainting painting(777, 333, 32, 3, 5);
+    const std::uint32_t L = painting.level_count();
+    VirtualTexture vt(painting.layout, 12, 12, painting.source());
     std::mt19937 rng(13);
-    auto keys = all_tiles(layout);
-    std::shuffle(keys.begin(), keys.end(), rng);
-    std::vector<std::uint8_t> tile(layout.tile_bytes());
-    for (std::size_t i = 0; i < keys.size() / 4; ++i) {  // a random quarter, with evictions
-        source(keys[i], tile.data());
-        vt.insert(keys[i], tile.data());
-    }
-    const MipTexture ref(levels);
+    painting.insert_random(vt, 0.25, rng);  // a random quarter
+    const MipTexture ref(painting.levels);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     std::vector<double> u, v;
     std::vector<float> lod;
@@ -253,6 +275,93 @@ TEST(VirtualTexture, MissingTilesFallBackToTheFinestResidentAncestor) {
         fell_back += answered[i] > lod[i];
     }
     EXPECT_GT(fell_back, 0u);
+}
+
+// The bilinear filter runs batched (taps vectorised, texel reads prefetched); the trilinear
+// path still samples one point at a time with the same arithmetic, and at an integer lod it
+// is one bilinear sample. So the two must agree bit for bit, fallbacks to ancestors
+// included, whatever the batch and thread boundaries.
+TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
+    const CutPainting painting(901, 411, 32, 3, 17);
+    const std::uint32_t L = painting.level_count();
+    VirtualTexture vt(painting.layout, 14, 14, painting.source());
+    std::mt19937 rng(19);
+    painting.insert_random(vt, 1.0 / 3, rng);
+    std::uniform_real_distribution<double> unit(-0.05, 1.05);  // some outside [0, 1]
+    const std::size_t n = 3 * 4096 + 37;  // several parallel chunks, a partial batch
+    std::vector<double> u(n), v(n);
+    std::vector<float> lod(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        // Runs of neighbouring points, as a view's pixels are, and some random jumps.
+        const bool jump = i % 50 == 0;
+        u[i] = jump || i == 0 ? unit(rng) : u[i - 1] + 0.0007;
+        v[i] = jump || i == 0 ? unit(rng) : v[i - 1] + 0.0003;
+        lod[i] = std::floor(float(unit(rng) * L));  // integer, -1 and L included (clamped)
+    }
+    auto run = [&](Filter filter, unsigned threads, bool serial, std::vector<float>& out,
+                   std::vector<std::int8_t>& answered) {
+        out.assign(3 * n, -1.0f);
+        answered.assign(n, -1);
+        SampleRequest r;
+        r.u = u.data(), r.v = v.data(), r.lod = lod.data(), r.count = n, r.filter = filter;
+        r.out = out.data(), r.level_out = answered.data(), r.threads = threads;
+        serial ? vt.sample_serial(r) : vt.sample(r);
+    };
+    std::vector<float> ref, got;
+    std::vector<std::int8_t> ref_level, got_level;
+    run(Filter::Trilinear, 1, true, ref, ref_level);
+    std::size_t fell_back = 0;
+    for (std::size_t i = 0; i < n; ++i) fell_back += ref_level[i] > std::clamp(lod[i], 0.0f, float(L - 1));
+    EXPECT_GT(fell_back, n / 10) << "the fallback path must be exercised";
+    for (unsigned threads : {1u, 2u, 3u}) {
+        run(Filter::Bilinear, threads, threads == 1, got, got_level);
+        ASSERT_EQ(got_level, ref_level) << threads << " threads";
+        for (std::size_t i = 0; i < 3 * n; ++i)
+            ASSERT_EQ(got[i], ref[i]) << "value " << i << ", " << threads << " threads";
+    }
+}
+
+// Interleaved (u, v) pairs (the display pass's layout), a scalar lod and NaN inputs: NaN
+// coordinates sample at 0 and a NaN lod at level 0, in both filters' code.
+TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
+    const CutPainting painting(300, 200, 32, 2, 23);
+    VirtualTexture vt(painting.layout, 16, 16, painting.source());
+    ASSERT_EQ(painting.insert_all(vt), 0u);
+    const MipTexture ref(painting.levels);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const std::size_t n = 201;
+    std::vector<double> u(n), v(n), uv(2 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+        u[i] = i % 7 == 0 ? nan : unit(rng);
+        v[i] = i % 11 == 0 ? nan : unit(rng);
+        uv[2 * i] = u[i], uv[2 * i + 1] = v[i];
+    }
+    std::vector<double> u_clean(u), v_clean(v);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (std::isnan(u_clean[i])) u_clean[i] = 0;
+        if (std::isnan(v_clean[i])) v_clean[i] = 0;
+    }
+    for (Filter filter : {Filter::Bilinear, Filter::Trilinear})
+        for (float lod_scalar : {0.0f, 1.4f, 2.0f, std::numeric_limits<float>::quiet_NaN()}) {
+            auto sample = [&](const auto& texture, const double* pu, const double* pv,
+                              std::size_t stride, const float* lod) {
+                std::vector<float> out(3 * n);
+                SampleRequest r;
+                r.u = pu, r.v = pv, r.uv_stride = stride, r.count = n, r.filter = filter;
+                r.lod = lod, r.lod_scalar = lod_scalar, r.out = out.data();
+                texture.sample(r);
+                return out;
+            };
+            const float lod_clean = std::isnan(lod_scalar) ? 0.0f : lod_scalar;
+            const std::vector<float> lods(n, lod_clean);
+            const auto expect = sample(vt, u_clean.data(), v_clean.data(), 1, lods.data());
+            EXPECT_EQ(sample(vt, uv.data(), uv.data() + 1, 2, nullptr), expect);
+            EXPECT_EQ(sample(vt, u.data(), v.data(), 1, nullptr), expect);
+            EXPECT_EQ(sample(ref, uv.data(), uv.data() + 1, 2, nullptr),
+                      sample(ref, u_clean.data(), v_clean.data(), 1, lods.data()));
+        }
 }
 
 TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {

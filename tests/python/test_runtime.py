@@ -180,6 +180,17 @@ def test_cache_stats_lru_and_pinning(pack):
     assert level == 0 and 0 <= slot < 9
 
 
+def test_physical_texture_holds_each_resident_tile_in_its_slot(pack, vt_full):
+    """The physical view is tile-major: slot s is the tile the page table points at."""
+    phys = vt_full.physical
+    assert phys.shape == (24 * 24, T, T, 3) and phys.dtype == np.uint8
+    assert not phys.flags.writeable
+    for k in all_keys(pack)[::7]:
+        level, slot = vt_full.lookup(k)
+        assert level == k[1]
+        np.testing.assert_array_equal(phys[slot], pack.read_tile(*k).reshape(T, T, 3))
+
+
 def test_plain_mip_texture_matches_the_full_vt(pack, vt_full):
     mip = MipTexture(pack)
     rng = np.random.default_rng(5)
