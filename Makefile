@@ -53,11 +53,11 @@ test: ctest pytest
 # C++ tests under sanitizers, each in its own build tree.
 sanitize: deps
 	cmake -S . -B build/asan -G Ninja -DGIGASCROLL_PYTHON=OFF -DGIGASCROLL_BENCH=OFF \
-	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=address,undefined
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=address,undefined -DGIGASCROLL_NATIVE=OFF
 	cmake --build build/asan -j $(JOBS)
 	cd build/asan && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 ctest --output-on-failure -j $(JOBS)
 	cmake -S . -B build/tsan -G Ninja -DGIGASCROLL_PYTHON=OFF -DGIGASCROLL_BENCH=OFF \
-	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=thread
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGIGASCROLL_SANITIZE=thread -DGIGASCROLL_NATIVE=OFF
 	cmake --build build/tsan -j $(JOBS)
 	cd build/tsan && TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/tests/tsan.supp ctest --output-on-failure -j $(JOBS)
 

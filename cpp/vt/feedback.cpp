@@ -55,7 +55,7 @@ namespace {
 // texel_footprint() transfers to the plane, in closed form:
 //   dx0/dpx = su kx t (u . R - (u . d) / (n . d) n . R),
 // likewise for y0 and dpy. One division per pixel, no square root: the level compares
-// rho^2 (see exact_level). texel_footprint() stays the reference the tests compare against.
+// rho^2 (see plane_keys). texel_footprint() stays the reference the tests compare against.
 struct PlaneFrame {
     PlaneFrame(const PaintingPlacement& p, const Camera& c) {
         const Vec3 n = p.normal(), rel = c.position - p.origin;
@@ -69,23 +69,23 @@ struct PlaneFrame {
         width = p.tiles.width(), height = p.tiles.height();
         inv_width = 1.0 / width, inv_height = 1.0 / height;
         payload = Divider(p.tiles.payload()), levels = p.tiles.levels(), painting = p.painting;
-        for (std::uint32_t l = 0; l < levels; ++l)
-            tiles_x[l] = p.tiles.tiles_x(l), tiles_y[l] = p.tiles.tiles_y(l);
+        texels_x = p.tiles.width(), texels_y = p.tiles.height();
+        const std::uint32_t P = p.tiles.payload();
+        for (std::uint32_t l = 0; l < levels; ++l) {
+            last_tile_x[l] = p.tiles.tiles_x(l) - 1, last_tile_y[l] = p.tiles.tiles_y(l) - 1;
+            // plane_keys relies on the pyramid's geometry: ceil(ceil(W / 2^l) / P) tiles.
+            const std::uint32_t wl = (texels_x + (1u << l) - 1) >> l;
+            const std::uint32_t hl = (texels_y + (1u << l) - 1) >> l;
+            require((wl - 1) / P == last_tile_x[l] && (hl - 1) / P == last_tile_y[l],
+                    "feedback: the painting's tile grid is not the pack geometry's");
+        }
     }
     double nF, nR, nU, uF, uR, uU, vF, vR, vU, N, su, sv, uc, vc, kx2, ky2;
     double width, height, inv_width, inv_height;
     Divider payload;
-    std::uint32_t levels, painting;
-    std::array<std::uint32_t, kMaxLevels> tiles_x{}, tiles_y{};
+    std::uint32_t levels, painting, texels_x, texels_y;
+    std::array<std::uint32_t, kMaxLevels> last_tile_x{}, last_tile_y{};
 };
-
-// floor(log2(rho^2) / 2) clamped to the pyramid, exactly: the binary exponent e of rho^2
-// satisfies e <= log2(rho^2) < e + 1, so floor(log2(rho^2) / 2) = floor(e / 2).
-inline std::uint32_t exact_level(double rho2, std::uint32_t levels) {
-    if (!(rho2 > 1)) return 0;  // magnification (and NaN) read level 0
-    const int e = int((std::bit_cast<std::uint64_t>(rho2) >> 52) & 0x7ff) - 1023;
-    return std::min<std::uint32_t>(std::uint32_t(e) >> 1, levels - 1);
-}
 
 // 0.5 log2(x) + bias for n values, branch-free so it vectorises (libm's log2 per pixel was
 // a sixth of the pass): exponent e plus log2 of the mantissa m in [1, 2) by the atanh
@@ -113,26 +113,47 @@ inline bool normal_positive(double x) {
 }
 
 // The plane's closed form for n pixels of a row (screen factors sx[0..n), row factor s_y):
-// rho^2 (the squared footprint in level-0 texels) and the texel position, clamped to the
-// painting. Branch-free so the compiler vectorises it.
-void plane_run(const PlaneFrame& f, const double* sx, double s_y, std::size_t n, double* rho2,
-               double* x0, double* y0) {
+// rho^2 (the squared footprint in level-0 texels), the texel position clamped to the
+// painting, and the request key. The level is exact without a logarithm: the binary
+// exponent e of rho^2 satisfies e <= log2(rho^2) < e + 1, so the truncated level
+// floor(log2(rho^2) / 2) = floor(e / 2), clamped to the pyramid. Branch-free and on
+// restrict pointers so that GCC vectorises all of it, keys included (the key loop that
+// reused the last tile's key while pixels stayed in it was a third of the pass).
+void plane_keys(const PlaneFrame& f, const double* __restrict sx, double s_y, std::size_t n,
+                double* __restrict rho2, double* __restrict x0, double* __restrict y0,
+                std::uint64_t* __restrict keys) {
     // Constants in locals and min/max by value: GCC then if-converts and vectorises.
     auto max = [](double a, double b) { return a < b ? b : a; };
     auto min = [](double a, double b) { return b < a ? b : a; };
+    auto umin = [](std::uint32_t a, std::uint32_t b) { return b < a ? b : a; };
     const double Dr = f.nF + s_y * f.nU, Ar = f.uF + s_y * f.uU, Br = f.vF + s_y * f.vU;
     const double nR = f.nR, uR = f.uR, vR = f.vR, nU = f.nU, uU = f.uU, vU = f.vU, N = f.N;
     const double su = f.su, sv = f.sv, kx2 = f.kx2, ky2 = f.ky2, xc = f.su * f.uc,
                  yc = f.sv * f.vc, sN = f.su * f.N, vN = f.sv * f.N, W = f.width, H = f.height;
+    const std::uint32_t top = f.levels - 1;
+    const std::uint64_t painting = std::uint64_t(f.painting) << 37;
+    const Divider payload = f.payload;
+    const std::uint32_t width = f.texels_x, height = f.texels_y;
     for (std::size_t k = 0; k < n; ++k) {
         const double inv = 1.0 / (Dr + sx[k] * nR);
         const double a = (Ar + sx[k] * uR) * inv, b = (Br + sx[k] * vR) * inv;
         const double t = N * inv;
         const double ex = su * (uR - a * nR), fx = sv * (vR - b * nR);
         const double ey = su * (uU - a * nU), fy = sv * (vU - b * nU);
-        rho2[k] = t * t * max(kx2 * (ex * ex + fx * fx), ky2 * (ey * ey + fy * fy));
-        x0[k] = min(max(xc + sN * a, 0.0), W);
-        y0[k] = min(max(yc + vN * b, 0.0), H);
+        const double r2 = t * t * max(kx2 * (ex * ex + fx * fx), ky2 * (ey * ey + fy * fy));
+        const double x = min(max(xc + sN * a, 0.0), W), y = min(max(yc + vN * b, 0.0), H);
+        rho2[k] = r2, x0[k] = x, y0[k] = y;
+        // rho^2 <= 1 (magnification) and NaN read level 0.
+        const auto e = std::uint32_t(std::bit_cast<std::uint64_t>(r2) >> 52) - 1023u;
+        const std::uint32_t level = r2 > 1.0 ? umin(e >> 1, top) : 0u;
+        // The texel clamped to the level (x = W at the right edge) before the division,
+        // which makes the clamp to the last tile arithmetic: a table lookup per level
+        // would be a gather, the slowest instruction of the loop.
+        const std::uint32_t last_i = ((width + (1u << level) - 1) >> level) - 1;
+        const std::uint32_t last_j = ((height + (1u << level) - 1) >> level) - 1;
+        const std::uint32_t tx = payload.by_halves(umin(std::uint32_t(x) >> level, last_i));
+        const std::uint32_t ty = payload.by_halves(umin(std::uint32_t(y) >> level, last_j));
+        keys[k] = painting | (std::uint64_t(level) << 32) | morton2(tx, ty);
     }
 }
 
@@ -177,11 +198,21 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
             packet.ray.flags[k] = 0;
             packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
-        std::vector<int> placement(fw);
+        // A row's runs of pixels that see the same painting (or none: placement -1).
+        struct Run {
+            std::uint32_t begin, end;
+            int placement;
+        };
+        std::vector<Run> runs;
         std::vector<double> rho2(fw), x0(fw), y0(fw), lambda(fw);
         for (std::size_t row = row_begin; row < row_end; ++row) {
             const double s_y = row_sy[row];
             const Vec3 row_dir = camera.forward + s_y * camera.up;
+            runs.clear();
+            auto extend = [&](std::uint32_t begin, std::uint32_t end, int pl) {
+                if (!runs.empty() && runs.back().placement == pl) runs.back().end = end;
+                else runs.push_back({begin, end, pl});
+            };
             // Visibility: Embree packets of 16 consecutive pixels of the row.
             for (std::uint32_t i0 = 0; i0 < fw; i0 += 16) {
                 const std::uint32_t n = std::min<std::uint32_t>(16, fw - i0);
@@ -198,36 +229,42 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                 rtcInitIntersectContext(&context);
                 context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
                 rtcIntersect16(valid, handle, &context, &packet);
-                for (std::uint32_t k = 0; k < n; ++k) {
-                    const unsigned g = packet.hit.geomID[k];
-                    placement[i0 + k] = g == RTC_INVALID_GEOMETRY_ID ? -1 : scene.placement_of(g);
+                // Mostly the whole packet sees one surface: one run step for all of it.
+                const unsigned g0 = packet.hit.geomID[0];
+                bool uniform = true;
+                for (std::uint32_t k = 1; k < n; ++k) uniform &= packet.hit.geomID[k] == g0;
+                auto placement = [&](unsigned g) {
+                    return g == RTC_INVALID_GEOMETRY_ID ? -1 : scene.placement_of(g);
+                };
+                if (uniform) {
+                    extend(i0, i0 + n, placement(g0));
+                } else {
+                    for (std::uint32_t k = 0; k < n; ++k)
+                        extend(i0 + k, i0 + k + 1, placement(packet.hit.geomID[k]));
                 }
             }
 
-            // Shading, run by run of pixels that see the same painting: the plane's closed
-            // form (PlaneFrame) in a branch-free loop, then levels, tiles and keys.
+            // Shading, run by run: the plane's closed form and the keys (plane_keys), then
+            // lod and uv where the display grid needs them.
             std::uint64_t* out = keys + row * fw;
             // lod and uv only on the display grid: every ds-th pixel of every ds-th row,
             // stored at (row / ds, column / ds).
             const bool display_row = row % ds == 0;
             float* out_lod = lod && display_row ? lod + (row / ds) * dw : nullptr;
             double* out_uv = uv && display_row ? uv + 2 * (row / ds) * dw : nullptr;
-            for (std::uint32_t i0 = 0; i0 < fw;) {
-                const int pl = placement[i0];
-                std::uint32_t i1 = i0 + 1;
-                while (i1 < fw && placement[i1] == pl) ++i1;
+            for (const Run& run : runs) {
+                const std::uint32_t i0 = run.begin, i1 = run.end, n = i1 - i0;
                 // The run's display columns are c = d * ds for d in [d0, d1).
                 const std::uint32_t d0 = (i0 + ds - 1) / ds, d1 = (i1 + ds - 1) / ds;
-                if (pl < 0) {
+                if (run.placement < 0) {
                     std::fill(out + i0, out + i1, kNoRequest);
                     if (out_lod) std::fill(out_lod + d0, out_lod + d1, kNaN);
                     if (out_uv) std::fill(out_uv + 2 * d0, out_uv + 2 * d1, double(kNaN));
-                    i0 = i1;
                     continue;
                 }
-                const PlaneFrame& f = planes[pl];
-                const std::uint32_t n = i1 - i0;
-                plane_run(f, column_sx.data() + i0, s_y, n, rho2.data(), x0.data(), y0.data());
+                const PlaneFrame& f = planes[run.placement];
+                plane_keys(f, column_sx.data() + i0, s_y, n, rho2.data(), x0.data(), y0.data(),
+                           out + i0);
                 if (out_lod || biased) {  // out_lod is null off the display grid
                     half_log2_run(rho2.data(), n, options.lod_bias, lambda.data());
                     for (std::uint32_t k = 0; k < n; ++k)
@@ -237,29 +274,15 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                         for (std::uint32_t d = d0; d < d1; ++d)
                             out_lod[d] = float(lambda[d * ds - i0]);
                 }
-                // Neighbouring pixels mostly ask for the same tile: keep the last key and
-                // the level-0 texel rectangle its tile covers (the last tile of a row or
-                // column reaches the painting's edge), and recompute only outside it.
-                std::uint32_t last_level = ~0u, lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
-                std::uint64_t last_key = kNoRequest;
-                for (std::uint32_t k = 0; k < n; ++k) {
-                    const std::uint32_t level = biased ? mip_level(lambda[k], f.levels)
-                                                       : exact_level(rho2[k], f.levels);
-                    const auto xi = std::uint32_t(x0[k]), yi = std::uint32_t(y0[k]);
-                    if (level != last_level || xi < lo_x || xi >= hi_x || yi < lo_y ||
-                        yi >= hi_y) {
-                        const std::uint32_t tx = std::min(f.payload(xi >> level),
-                                                          f.tiles_x[level] - 1);
-                        const std::uint32_t ty = std::min(f.payload(yi >> level),
-                                                          f.tiles_y[level] - 1);
-                        const std::uint32_t span = f.payload.divisor() << level;
-                        last_level = level;
-                        last_key = pack_request(f.painting, level, tx, ty);
-                        lo_x = tx * span, lo_y = ty * span;
-                        hi_x = tx + 1 == f.tiles_x[level] ? ~0u : lo_x + span;
-                        hi_y = ty + 1 == f.tiles_y[level] ? ~0u : lo_y + span;
+                if (biased) {  // the level from lambda + bias instead (tests; seed 002's bias)
+                    for (std::uint32_t k = 0; k < n; ++k) {
+                        const std::uint32_t level = mip_level(lambda[k], f.levels);
+                        const std::uint32_t tx = std::min(f.payload(std::uint32_t(x0[k]) >> level),
+                                                          f.last_tile_x[level]);
+                        const std::uint32_t ty = std::min(f.payload(std::uint32_t(y0[k]) >> level),
+                                                          f.last_tile_y[level]);
+                        out[i0 + k] = pack_request(f.painting, level, tx, ty);
                     }
-                    out[i0 + k] = last_key;
                 }
                 if (out_uv) {
                     for (std::uint32_t d = d0; d < d1; ++d) {
@@ -267,7 +290,6 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                         out_uv[2 * d + 1] = y0[d * ds - i0] * f.inv_height;
                     }
                 }
-                i0 = i1;
             }
         }
     }, options.threads);
