@@ -56,8 +56,7 @@ RequestSets BasicProcessor::process(std::span<const FeedbackBuffer> buffers,
     std::unordered_set<std::uint64_t> seen;
     RepeatFilter filter;
     for (const FeedbackBuffer& buffer : buffers)
-        for (std::uint64_t key : buffer)
-            if (filter.fresh(key)) seen.insert(key);
+        filter.scan(buffer.data(), buffer.size(), [&](std::uint64_t key) { seen.insert(key); });
     RequestSets sets;
     sets.requests.assign(seen.begin(), seen.end());
     resolve_requests(sets, lookup);
@@ -121,8 +120,8 @@ void AsyncProcessor::run() {
         lock.unlock();
         std::unordered_set<std::uint64_t> seen;
         RepeatFilter filter;
-        for (std::uint64_t key : job.pixels)
-            if (filter.fresh(key)) seen.insert(key);
+        filter.scan(job.pixels.data(), job.pixels.size(),
+                    [&](std::uint64_t key) { seen.insert(key); });
         Result result{job.frame, 0.0, {}};
         result.sets.requests.assign(seen.begin(), seen.end());
         result.seconds =

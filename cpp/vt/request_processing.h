@@ -57,6 +57,24 @@ public:
         return true;
     }
 
+    // Calls mark(key) for every fresh key of keys[0, n). Feedback rows repeat one key for
+    // long stretches (the magnifier's 262k pixels hold a dozen tiles), so blocks of eight
+    // keys all equal to the last one are skipped in one vectorised comparison.
+    template <typename Mark>
+    void scan(const std::uint64_t* keys, std::size_t n, Mark&& mark) {
+        std::size_t i = 0;
+        while (i < n) {
+            for (; i + 8 <= n; i += 8) {
+                std::uint64_t differ = 0;
+                for (std::size_t k = 0; k < 8; ++k) differ |= keys[i + k] ^ last_;
+                if (differ) break;
+            }
+            const std::size_t stop = std::min(n, i + 8);
+            for (; i < stop; ++i)
+                if (fresh(keys[i])) mark(keys[i]);
+        }
+    }
+
 private:
     std::array<std::uint64_t, 256> recent_;
     std::uint64_t last_ = kNoRequest;
@@ -71,10 +89,11 @@ void for_each_request(std::span<const FeedbackBuffer> buffers, unsigned threads,
     parallel_for(start.back(), 16384, [&](std::size_t begin, std::size_t end) {
         std::size_t buf = std::upper_bound(start.begin(), start.end(), begin) - start.begin() - 1;
         RepeatFilter filter;
-        for (std::size_t i = begin; i < end; ++i) {
+        for (std::size_t i = begin; i < end;) {
             while (i >= start[buf + 1]) ++buf;
-            const std::uint64_t key = buffers[buf][i - start[buf]];
-            if (filter.fresh(key)) mark(key);
+            const std::size_t stop = std::min(end, start[buf + 1]);
+            filter.scan(buffers[buf].data() + (i - start[buf]), stop - i, mark);
+            i = stop;
         }
     }, threads);
 }

@@ -313,6 +313,35 @@ TEST(Feedback, OccludersAndMissesGiveNoRequest) {
     EXPECT_THROW(open.add_painting(0, tiles, {0, 0, 0}, {1, 0, 0}, {1, 0, 0}, 1, 1), InvalidArgument);
 }
 
+// The block-skipping scan marks exactly what key-by-key fresh() marks, in the same order:
+// long runs of one key (skipped eight at a time), runs of kNoRequest, short runs, run ends
+// at every offset within a block of eight.
+TEST(RequestProcessing, RepeatFilterScanEqualsKeyByKey) {
+    std::mt19937 rng(31);
+    for (int trial = 0; trial < 50; ++trial) {
+        std::vector<std::uint64_t> keys;
+        while (keys.size() < 5000) {
+            const std::size_t run = 1 + rng() % (rng() % 4 == 0 ? 100 : 9);
+            const std::uint64_t key = rng() % 5 == 0 ? kNoRequest : pack_request(0, rng() % 3, rng() % 40, 0);
+            keys.insert(keys.end(), run, key);
+        }
+        const std::size_t n = keys.size() - rng() % 8;
+        std::vector<std::uint64_t> one_by_one, scanned;
+        RepeatFilter a, b;
+        for (std::size_t i = 0; i < n; ++i)
+            if (a.fresh(keys[i])) one_by_one.push_back(keys[i]);
+        // In two calls, as parallel chunks and buffer boundaries split a scan.
+        const std::size_t cut = rng() % n;
+        b.scan(keys.data(), cut, [&](std::uint64_t k) { scanned.push_back(k); });
+        b.scan(keys.data() + cut, n - cut, [&](std::uint64_t k) { scanned.push_back(k); });
+        ASSERT_EQ(scanned, one_by_one) << "trial " << trial;
+        // And nothing distinct is lost: the filter only drops repeats.
+        std::set<std::uint64_t> all(keys.begin(), keys.begin() + n);
+        all.erase(kNoRequest);
+        EXPECT_EQ(std::set<std::uint64_t>(scanned.begin(), scanned.end()), all);
+    }
+}
+
 TEST(RequestProcessing, FourMethodsAgree) {
     const auto paintings = small_paintings();
     const ResidentSet resident = random_residency(paintings, 5);
