@@ -9,25 +9,24 @@ namespace gigascroll {
 
 class Divider {
 public:
-    explicit Divider(std::uint32_t d = 1) : d_(d), m_(d > 1 ? ~std::uint64_t(0) / d + 1 : 0) {}
+    explicit Divider(std::uint32_t d = 1)
+        : d_(d), m_(d > 1 ? ~std::uint64_t(0) / d + 1 : 0), inv_(1.0 / d) {}
     std::uint32_t operator()(std::uint32_t n) const {
         return d_ > 1 ? static_cast<std::uint32_t>((unsigned __int128)n * m_ >> 64) : n;
     }
-    // The same quotient from two 32 x 32 -> 64-bit products, for loops meant to vectorise
-    // (no vector unit has the 64 x 64 -> 128-bit product): with m = hi 2^32 + lo,
-    // floor(n m / 2^64) = floor((n hi + floor(n lo / 2^32)) / 2^32), and the sum < 2^64.
-    std::uint32_t by_halves(std::uint32_t n) const {
-        // 32-bit halves, so the vectoriser sees widening 32 x 32 multiplies (vpmuludq).
-        const auto hi = static_cast<std::uint32_t>(m_ >> 32), lo = static_cast<std::uint32_t>(m_);
-        const std::uint64_t q =
-            (std::uint64_t(n) * hi + ((std::uint64_t(n) * lo) >> 32)) >> 32;
-        return d_ > 1 ? static_cast<std::uint32_t>(q) : n;
+    // The same quotient in double arithmetic, for loops meant to vectorise (a vector
+    // 64 x 64-bit multiply is slow or missing): q' = (n + 1/2) * fl(1/d) is within
+    // 2^-52 (n + 1/2) / d < 2^-20 / d of (n + 1/2) / d, whose distance to the nearest
+    // integer is at least 1/(2d), so floor(q') = floor(n / d) for every 32-bit n and d.
+    std::uint32_t by_double(std::uint32_t n) const {
+        return static_cast<std::uint32_t>((double(n) + 0.5) * inv_);
     }
     std::uint32_t divisor() const { return d_; }
 
 private:
     std::uint32_t d_;
     std::uint64_t m_;
+    double inv_;
 };
 
 }  // namespace gigascroll

@@ -4,6 +4,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -108,8 +109,8 @@ void half_log2_run(const double* x, std::size_t n, double bias, double* out) {
         out[k] = 0.5 * (e + c * t * series) + bias;
     }
 }
-inline bool normal_positive(double x) {
-    return x >= std::numeric_limits<double>::min() && x <= std::numeric_limits<double>::max();
+inline bool normal_positive(double x) {  // & rather than &&: no branch, so loops vectorise
+    return (x >= std::numeric_limits<double>::min()) & (x <= std::numeric_limits<double>::max());
 }
 
 // The plane's closed form for n pixels of a row (screen factors sx[0..n), row factor s_y):
@@ -151,8 +152,8 @@ void plane_keys(const PlaneFrame& f, const double* __restrict sx, double s_y, st
         // would be a gather, the slowest instruction of the loop.
         const std::uint32_t last_i = ((width + (1u << level) - 1) >> level) - 1;
         const std::uint32_t last_j = ((height + (1u << level) - 1) >> level) - 1;
-        const std::uint32_t tx = payload.by_halves(umin(std::uint32_t(x) >> level, last_i));
-        const std::uint32_t ty = payload.by_halves(umin(std::uint32_t(y) >> level, last_j));
+        const std::uint32_t tx = payload.by_double(umin(std::uint32_t(x) >> level, last_i));
+        const std::uint32_t ty = payload.by_double(umin(std::uint32_t(y) >> level, last_j));
         keys[k] = painting | (std::uint64_t(level) << 32) | morton2(tx, ty);
     }
 }
@@ -176,6 +177,8 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
     // Per-pass constants: each column's and row's screen factor, each painting's plane.
     std::vector<double> column_sx(fw), row_sy(fh);
     for (std::uint32_t i = 0; i < fw; ++i) column_sx[i] = camera.screen_x((i + 0.5) * sx);
+    std::vector<double> column_sx_padded(column_sx);
+    column_sx_padded.resize((fw + 15) / 16 * 16, column_sx.back());
     for (std::uint32_t j = 0; j < fh; ++j) row_sy[j] = camera.screen_y((j + 0.5) * sy);
     std::vector<PlaneFrame> planes;
     planes.reserve(scene.paintings().size());
@@ -205,9 +208,20 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
         };
         std::vector<Run> runs;
         std::vector<double> rho2(fw), x0(fw), y0(fw), lambda(fw);
+        // The row's ray directions as Embree takes them, padded to whole packets with the
+        // last column (a vectorised loop here; per packet only copies).
+        const std::size_t padded = (fw + 15) / 16 * 16;
+        std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
         for (std::size_t row = row_begin; row < row_end; ++row) {
             const double s_y = row_sy[row];
             const Vec3 row_dir = camera.forward + s_y * camera.up;
+            const Vec3 right = camera.right;
+            for (std::size_t i = 0; i < padded; ++i) {
+                const double c = column_sx_padded[i];
+                dir_x[i] = float(row_dir.x + c * right.x);
+                dir_y[i] = float(row_dir.y + c * right.y);
+                dir_z[i] = float(row_dir.z + c * right.z);
+            }
             runs.clear();
             auto extend = [&](std::uint32_t begin, std::uint32_t end, int pl) {
                 if (!runs.empty() && runs.back().placement == pl) runs.back().end = end;
@@ -217,11 +231,11 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
             for (std::uint32_t i0 = 0; i0 < fw; i0 += 16) {
                 const std::uint32_t n = std::min<std::uint32_t>(16, fw - i0);
                 alignas(64) int valid[16];
+                std::memcpy(packet.ray.dir_x, dir_x.data() + i0, sizeof packet.ray.dir_x);
+                std::memcpy(packet.ray.dir_y, dir_y.data() + i0, sizeof packet.ray.dir_y);
+                std::memcpy(packet.ray.dir_z, dir_z.data() + i0, sizeof packet.ray.dir_z);
                 for (std::uint32_t k = 0; k < 16; ++k) {
                     valid[k] = k < n ? -1 : 0;
-                    const Vec3 d = row_dir + column_sx[i0 + std::min(k, n - 1)] * camera.right;
-                    packet.ray.dir_x[k] = float(d.x), packet.ray.dir_y[k] = float(d.y);
-                    packet.ray.dir_z[k] = float(d.z);
                     packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
                     packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
                 }
@@ -267,7 +281,9 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                            out + i0);
                 if (out_lod || biased) {  // out_lod is null off the display grid
                     half_log2_run(rho2.data(), n, options.lod_bias, lambda.data());
-                    for (std::uint32_t k = 0; k < n; ++k)
+                    std::uint32_t outside = 0;  // counted first: this loop vectorises
+                    for (std::uint32_t k = 0; k < n; ++k) outside += !normal_positive(rho2[k]);
+                    for (std::uint32_t k = 0; outside && k < n; ++k)
                         if (!normal_positive(rho2[k]))
                             lambda[k] = 0.5 * std::log2(rho2[k]) + options.lod_bias;
                     if (out_lod)

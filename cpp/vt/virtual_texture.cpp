@@ -250,8 +250,8 @@ void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
         const float f = static_cast<float>(tx - double(i)), g = static_cast<float>(ty - double(j));
         b.x0[k] = x0, b.y0[k] = y0, b.level[k] = l;
         b.ix[k] = i, b.iy[k] = j, b.fx[k] = f, b.fy[k] = g;
-        b.cx[k] = divide_p.by_halves(std::uint32_t(i) + (f >= 0.5f ? 1u : 0u));
-        b.cy[k] = divide_p.by_halves(std::uint32_t(j) + (g >= 0.5f ? 1u : 0u));
+        b.cx[k] = divide_p.by_double(std::uint32_t(i) + (f >= 0.5f ? 1u : 0u));
+        b.cy[k] = divide_p.by_double(std::uint32_t(j) + (g >= 0.5f ? 1u : 0u));
     }
 }
 }  // namespace

@@ -91,15 +91,19 @@ TEST(Divider, MatchesHardwareDivision) {
         EXPECT_EQ(div.divisor(), d);
         for (std::uint32_t n : ns) {
             ASSERT_EQ(div(n), n / d) << n << " / " << d;
-            ASSERT_EQ(div.by_halves(n), n / d) << n << " / " << d << " by halves";
+            ASSERT_EQ(div.by_double(n), n / d) << n << " / " << d << " in double";
         }
-        // Around every multiple of d in a window: where rounding errors would show.
-        for (std::uint64_t q = 1; q < 50 && q * d < 0xffffffffull; ++q)
+        // Around multiples of d, the smallest and the largest ones: where rounding errors
+        // would show (the largest quotients have the largest absolute error in double).
+        std::vector<std::uint64_t> qs;
+        for (std::uint64_t q = 1; q < 50; ++q) qs.push_back(q);
+        for (std::uint64_t q = 0xffffffffull / d; q > 0 && qs.size() < 100; --q) qs.push_back(q);
+        for (std::uint64_t q : qs)
             for (std::int64_t off = -1; off <= 1; ++off) {
                 const std::uint64_t n = q * d + off;
                 if (n > 0xffffffffull) continue;
                 ASSERT_EQ(div(std::uint32_t(n)), std::uint32_t(n / d));
-                ASSERT_EQ(div.by_halves(std::uint32_t(n)), std::uint32_t(n / d));
+                ASSERT_EQ(div.by_double(std::uint32_t(n)), std::uint32_t(n / d));
             }
     }
 }
