@@ -13,7 +13,7 @@
 
 #include "common/checksum.h"
 #include "vt/exhibition.h"
-#include "vt/feedback.h"
+#include "feedback_image.h"
 #include "vt/request.h"
 #include "vt/virtual_texture.h"
 
@@ -36,11 +36,7 @@ TEST(BuildResults, FeedbackPassGivesTheSameFloatsInEveryBuild) {
     scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.7);
     scene.commit();
     const Camera cam({0.4, 0.7, -0.5}, {0.3, -0.1, 1}, {0, 1, 0}, 0.3, 0.3, 1600, 1600);
-    const std::uint32_t W = 200, H = 200;
-    std::vector<std::uint64_t> keys(W * H);
-    std::vector<float> lod(W * H);
-    std::vector<double> uv(2 * W * H);
-    render_feedback(scene, cam, {W, H, 0, 2}, keys.data(), lod.data(), uv.data());
+    const auto [keys, lod, uv] = feedback_image(scene, cam, 200, 200);
     std::set<std::uint32_t> levels;
     for (std::uint64_t k : keys) {
         ASSERT_NE(k, kNoRequest);

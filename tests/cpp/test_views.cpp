@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "feedback_image.h"
 #include "vt/exhibition.h"
 #include "vt/feedback.h"
 #include "vt/request.h"
@@ -272,10 +273,7 @@ TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
     scene.commit();
     const Camera cam({0.3, 0.6, -1.2}, {0.15, -0.05, 1}, {0, 1, 0}, 0.6, 0.6, 1600, 1600);
     const std::uint32_t W = 200, H = 200;
-    std::vector<std::uint64_t> keys(W * H);
-    std::vector<float> lod(W * H);
-    std::vector<double> uv(2 * W * H);
-    render_feedback(scene, cam, {W, H, 0, 2}, keys.data(), lod.data(), uv.data());
+    const auto [keys, lod, uv] = feedback_image(scene, cam, W, H);
     int seen = 0;
     for (std::size_t i = 0; i < keys.size(); ++i) {
         if (keys[i] == kNoRequest) continue;
