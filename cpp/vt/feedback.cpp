@@ -1,7 +1,6 @@
 #include "vt/feedback.h"
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -67,25 +66,35 @@ struct PlaneFrame {
         su = p.tiles.width() / p.width_m, sv = p.tiles.height() / p.height_m;
         uc = dot(rel, p.u_axis), vc = dot(rel, p.v_axis);
         kx2 = std::pow(2 * c.tan_half_x / c.width, 2), ky2 = std::pow(2 * c.tan_half_y / c.height, 2);
-        width = p.tiles.width(), height = p.tiles.height();
-        inv_width = 1.0 / width, inv_height = 1.0 / height;
-        payload = Divider(p.tiles.payload()), levels = p.tiles.levels(), painting = p.painting;
         texels_x = p.tiles.width(), texels_y = p.tiles.height();
-        const std::uint32_t P = p.tiles.payload();
-        for (std::uint32_t l = 0; l < levels; ++l) {
-            last_tile_x[l] = p.tiles.tiles_x(l) - 1, last_tile_y[l] = p.tiles.tiles_y(l) - 1;
-            // plane_keys relies on the pyramid's geometry: ceil(ceil(W / 2^l) / P) tiles.
-            const std::uint32_t wl = (texels_x + (1u << l) - 1) >> l;
-            const std::uint32_t hl = (texels_y + (1u << l) - 1) >> l;
-            require((wl - 1) / P == last_tile_x[l] && (hl - 1) / P == last_tile_y[l],
+        inv_width = 1.0 / texels_x, inv_height = 1.0 / texels_y;
+        payload = Divider(p.tiles.payload()), levels = p.tiles.levels(), painting = p.painting;
+        // tile_key relies on the pyramid's geometry: ceil(ceil(W / 2^l) / P) tiles a row.
+        for (std::uint32_t l = 0; l < levels; ++l)
+            require(payload(last_texel(texels_x, l)) == p.tiles.tiles_x(l) - 1 &&
+                        payload(last_texel(texels_y, l)) == p.tiles.tiles_y(l) - 1,
                     "feedback: the painting's tile grid is not the pack geometry's");
-        }
     }
+    // The last texel of an axis of n level-0 texels at level l (ceil(n / 2^l) of them).
+    static std::uint32_t last_texel(std::uint32_t n, std::uint32_t l) {
+        return ((n + (1u << l) - 1) >> l) - 1;
+    }
+
+    // The request for level-0 texel position (x, y), clamped to the painting, at `level`.
+    // The texel is clamped to the level (x = W at the right edge) before the division, which
+    // makes the clamp to the last tile arithmetic (a per-level table would be a gather, the
+    // slowest instruction of plane_keys' vectorised loop), and the division is by_double.
+    std::uint64_t tile_key(double x, double y, std::uint32_t level) const {
+        auto umin = [](std::uint32_t a, std::uint32_t b) { return b < a ? b : a; };
+        const std::uint32_t tx = payload.by_double(umin(std::uint32_t(x) >> level, last_texel(texels_x, level)));
+        const std::uint32_t ty = payload.by_double(umin(std::uint32_t(y) >> level, last_texel(texels_y, level)));
+        return (std::uint64_t(painting) << 37) | (std::uint64_t(level) << 32) | morton2(tx, ty);
+    }
+
     double nF, nR, nU, uF, uR, uU, vF, vR, vU, N, su, sv, uc, vc, kx2, ky2;
-    double width, height, inv_width, inv_height;
+    double inv_width, inv_height;
     Divider payload;
     std::uint32_t levels, painting, texels_x, texels_y;
-    std::array<std::uint32_t, kMaxLevels> last_tile_x{}, last_tile_y{};
 };
 
 // 0.5 log2(x) + bias for n values, branch-free so it vectorises (libm's log2 per pixel was
@@ -127,14 +136,13 @@ void plane_keys(const PlaneFrame& f, const double* __restrict sx, double s_y, st
     auto max = [](double a, double b) { return a < b ? b : a; };
     auto min = [](double a, double b) { return b < a ? b : a; };
     auto umin = [](std::uint32_t a, std::uint32_t b) { return b < a ? b : a; };
+    const PlaneFrame frame = f;  // a local copy, so no store in the loop can alias it
     const double Dr = f.nF + s_y * f.nU, Ar = f.uF + s_y * f.uU, Br = f.vF + s_y * f.vU;
     const double nR = f.nR, uR = f.uR, vR = f.vR, nU = f.nU, uU = f.uU, vU = f.vU, N = f.N;
     const double su = f.su, sv = f.sv, kx2 = f.kx2, ky2 = f.ky2, xc = f.su * f.uc,
-                 yc = f.sv * f.vc, sN = f.su * f.N, vN = f.sv * f.N, W = f.width, H = f.height;
+                 yc = f.sv * f.vc, sN = f.su * f.N, vN = f.sv * f.N, W = f.texels_x,
+                 H = f.texels_y;
     const std::uint32_t top = f.levels - 1;
-    const std::uint64_t painting = std::uint64_t(f.painting) << 37;
-    const Divider payload = f.payload;
-    const std::uint32_t width = f.texels_x, height = f.texels_y;
     for (std::size_t k = 0; k < n; ++k) {
         const double inv = 1.0 / (Dr + sx[k] * nR);
         const double a = (Ar + sx[k] * uR) * inv, b = (Br + sx[k] * vR) * inv;
@@ -147,14 +155,7 @@ void plane_keys(const PlaneFrame& f, const double* __restrict sx, double s_y, st
         // rho^2 <= 1 (magnification) and NaN read level 0.
         const auto e = std::uint32_t(std::bit_cast<std::uint64_t>(r2) >> 52) - 1023u;
         const std::uint32_t level = r2 > 1.0 ? umin(e >> 1, top) : 0u;
-        // The texel clamped to the level (x = W at the right edge) before the division,
-        // which makes the clamp to the last tile arithmetic: a table lookup per level
-        // would be a gather, the slowest instruction of the loop.
-        const std::uint32_t last_i = ((width + (1u << level) - 1) >> level) - 1;
-        const std::uint32_t last_j = ((height + (1u << level) - 1) >> level) - 1;
-        const std::uint32_t tx = payload.by_double(umin(std::uint32_t(x) >> level, last_i));
-        const std::uint32_t ty = payload.by_double(umin(std::uint32_t(y) >> level, last_j));
-        keys[k] = painting | (std::uint64_t(level) << 32) | morton2(tx, ty);
+        keys[k] = frame.tile_key(x, y, level);
     }
 }
 
@@ -175,10 +176,11 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
     const std::uint32_t ds = options.display_step, dw = (fw + ds - 1) / ds;
 
     // Per-pass constants: each column's and row's screen factor, each painting's plane.
-    std::vector<double> column_sx(fw), row_sy(fh);
+    // Columns padded to whole 16-ray packets with the last column's factor.
+    const std::size_t padded = (fw + 15) / 16 * 16;
+    std::vector<double> column_sx(padded), row_sy(fh);
     for (std::uint32_t i = 0; i < fw; ++i) column_sx[i] = camera.screen_x((i + 0.5) * sx);
-    std::vector<double> column_sx_padded(column_sx);
-    column_sx_padded.resize((fw + 15) / 16 * 16, column_sx.back());
+    std::fill(column_sx.begin() + fw, column_sx.end(), column_sx[fw - 1]);
     for (std::uint32_t j = 0; j < fh; ++j) row_sy[j] = camera.screen_y((j + 0.5) * sy);
     std::vector<PlaneFrame> planes;
     planes.reserve(scene.paintings().size());
@@ -208,16 +210,15 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
         };
         std::vector<Run> runs;
         std::vector<double> rho2(fw), x0(fw), y0(fw), lambda(fw);
-        // The row's ray directions as Embree takes them, padded to whole packets with the
-        // last column (a vectorised loop here; per packet only copies).
-        const std::size_t padded = (fw + 15) / 16 * 16;
+        // The row's ray directions as Embree takes them, for whole packets (a vectorised
+        // loop here; per packet only copies).
         std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
         for (std::size_t row = row_begin; row < row_end; ++row) {
             const double s_y = row_sy[row];
             const Vec3 row_dir = camera.forward + s_y * camera.up;
             const Vec3 right = camera.right;
             for (std::size_t i = 0; i < padded; ++i) {
-                const double c = column_sx_padded[i];
+                const double c = column_sx[i];
                 dir_x[i] = float(row_dir.x + c * right.x);
                 dir_y[i] = float(row_dir.y + c * right.y);
                 dir_z[i] = float(row_dir.z + c * right.z);
@@ -291,14 +292,8 @@ void render_feedback(const ExhibitionScene& scene, const Camera& camera,
                             out_lod[d] = float(lambda[d * ds - i0]);
                 }
                 if (biased) {  // the level from lambda + bias instead (tests; seed 002's bias)
-                    for (std::uint32_t k = 0; k < n; ++k) {
-                        const std::uint32_t level = mip_level(lambda[k], f.levels);
-                        const std::uint32_t tx = std::min(f.payload(std::uint32_t(x0[k]) >> level),
-                                                          f.last_tile_x[level]);
-                        const std::uint32_t ty = std::min(f.payload(std::uint32_t(y0[k]) >> level),
-                                                          f.last_tile_y[level]);
-                        out[i0 + k] = pack_request(f.painting, level, tx, ty);
-                    }
+                    for (std::uint32_t k = 0; k < n; ++k)
+                        out[i0 + k] = f.tile_key(x0[k], y0[k], mip_level(lambda[k], f.levels));
                 }
                 if (out_uv) {
                     for (std::uint32_t d = d0; d < d1; ++d) {

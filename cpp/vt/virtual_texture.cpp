@@ -17,7 +17,7 @@ namespace gigascroll {
 
 VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
                                std::uint32_t slots_y, const TileSource& pinned_source)
-    : table_(layout), slots_x_(slots_x), slots_y_(slots_y), tile_size_(layout.tile_size) {
+    : table_(layout), slots_x_(slots_x), slots_y_(slots_y) {
     require(slots_x >= 1 && slots_y >= 1 && std::uint64_t(slots_x) * slots_y < (1u << 24),
             "slots must be positive and fewer than 2^24 in total");
     const std::uint32_t n = slots_x * slots_y;
@@ -205,6 +205,44 @@ inline std::uint32_t tap_tile(const Tap& t, const Divider& P) {
     return P(static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)));
 }
 
+// What both sampling paths do once a sample's tile is known: its page-table entry (looked up
+// again only when a sample leaves the last tile; neighbours mostly share it) and the
+// physical address of a texel of the tile that answered.
+class TexelFinder {
+public:
+    TexelFinder(const PageTable& table, std::uint32_t painting, const std::uint8_t* physical)
+        : table_(table), painting_(painting), physical_(physical),
+          P_(table.layout().payload()), E_(table.layout().border), T_(table.layout().tile_size),
+          tile_bytes_(table.layout().tile_bytes()) {}
+
+    std::size_t row_bytes() const { return std::size_t(T_) * 3; }
+
+    // Entry of tile (cx, cy) at level l: the level and slot of its finest resident ancestor.
+    PageEntry entry(std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
+        if (l != last_l_ || cx != last_cx_ || cy != last_cy_)
+            last_l_ = l, last_cx_ = cx, last_cy_ = cy, last_ = table_.lookup(painting_, l, cx, cy);
+        return last_;
+    }
+
+    // Texel (i, j) of e's level, where e answers tile (cx, cy) from s levels coarser:
+    // eq (7,8)'s in-tile offset with the border, clamped so the 2 x 2 footprint stays inside.
+    const std::uint8_t* texel(PageEntry e, std::uint32_t s, std::int64_t i, std::int64_t j,
+                              std::uint32_t cx, std::uint32_t cy) const {
+        const std::int64_t jx = std::clamp<std::int64_t>(i - std::int64_t(cx >> s) * P_ + E_, 0, T_ - 2);
+        const std::int64_t jy = std::clamp<std::int64_t>(j - std::int64_t(cy >> s) * P_ + E_, 0, T_ - 2);
+        return physical_ + e.slot() * tile_bytes_ + jy * row_bytes() + jx * 3;
+    }
+
+private:
+    const PageTable& table_;
+    const std::uint32_t painting_;
+    const std::uint8_t* const physical_;
+    const std::int64_t P_, E_, T_;
+    const std::size_t tile_bytes_;
+    std::uint32_t last_l_ = ~0u, last_cx_ = 0, last_cy_ = 0;
+    PageEntry last_;
+};
+
 constexpr std::size_t kBatch = 64;
 
 // Per sample of a batch: level-0 position, level asked for, the taps at that level (integer
@@ -270,33 +308,24 @@ void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std
         return;
     }
     const VtPainting& pt = layout().paintings[r.painting];
-    const std::uint32_t P = layout().payload(), E = layout().border, T = tile_size_;
     const std::uint32_t L = pt.level_count();
-    const std::size_t row = std::size_t(T) * 3, tile_bytes = layout().tile_bytes();
-    const std::uint8_t* phys = texels_.data();
     const LevelAxes axes(pt.width, pt.height, L);
-    const Divider divide_p(P);
-    std::uint32_t last_l = ~0u, last_cx = 0, last_cy = 0;
-    PageEntry last_e;
+    const Divider divide_p(layout().payload());
+    TexelFinder finder(table_, r.painting, texels_.data());
 
     // Bilinear sample at level l with page-table fallback; returns the level that answered.
     auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out)
                         __attribute__((always_inline)) -> std::uint32_t {
         Tap tx = axes.tap_x(x0, l), ty = axes.tap_y(y0, l);
         const std::uint32_t cx = tap_tile(tx, divide_p), cy = tap_tile(ty, divide_p);
-        // Neighbouring samples mostly fall in the same tile: reuse the last lookup.
-        if (l != last_l || cx != last_cx || cy != last_cy)
-            last_l = l, last_cx = cx, last_cy = cy, last_e = table_.lookup(r.painting, l, cx, cy);
-        const PageEntry e = last_e;
+        const PageEntry e = finder.entry(l, cx, cy);
         const std::uint32_t al = e.level(), s = al - l;
         if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
             tx = axes.tap_x(x0, al);
             ty = axes.tap_y(y0, al);
         }
-        const std::int64_t jx = std::clamp<std::int64_t>(tx.i0 - std::int64_t(cx >> s) * P + E, 0, T - 2);
-        const std::int64_t jy = std::clamp<std::int64_t>(ty.i0 - std::int64_t(cy >> s) * P + E, 0, T - 2);
-        const std::uint8_t* p00 = phys + e.slot() * tile_bytes + jy * row + jx * 3;
-        bilerp_rgb8(p00, row, 3, 1, tx.f, ty.f, out);
+        bilerp_rgb8(finder.texel(e, s, tx.i0, ty.i0, cx, cy), finder.row_bytes(), 3, 1, tx.f,
+                    ty.f, out);
         return al;
     };
 
@@ -329,14 +358,11 @@ void VirtualTexture::sample_range(const SampleRequest& r, std::size_t begin, std
 void VirtualTexture::sample_bilinear(const SampleRequest& r, std::size_t begin,
                                      std::size_t end) const {
     const VtPainting& pt = layout().paintings[r.painting];
-    const std::uint32_t P = layout().payload(), E = layout().border, T = tile_size_;
     const std::uint32_t L = pt.level_count(), width = pt.width, height = pt.height;
-    const std::size_t row = std::size_t(T) * 3, tile_bytes = layout().tile_bytes();
-    const std::uint8_t* phys = texels_.data();
     const LevelAxes axes(width, height, L);
-    const Divider divide_p(P);
-    std::uint32_t last_l = ~0u, last_cx = 0, last_cy = 0;
-    PageEntry last_e;
+    const Divider divide_p(layout().payload());
+    TexelFinder finder(table_, r.painting, texels_.data());
+    const std::size_t row = finder.row_bytes();
 
     TapBatch b;
     const std::uint8_t* texel[kBatch];
@@ -360,17 +386,14 @@ void VirtualTexture::sample_bilinear(const SampleRequest& r, std::size_t begin,
         // (2)
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint32_t l = b.level[k], cx = b.cx[k], cy = b.cy[k];
-            if (l != last_l || cx != last_cx || cy != last_cy)
-                last_l = l, last_cx = cx, last_cy = cy, last_e = table_.lookup(r.painting, l, cx, cy);
-            const std::uint32_t al = last_e.level(), s = al - l;
+            const PageEntry e = finder.entry(l, cx, cy);
+            const std::uint32_t al = e.level(), s = al - l;
             std::int64_t i = b.ix[k], j = b.iy[k];
             if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
                 const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
                 i = tx.i0, j = ty.i0, b.fx[k] = tx.f, b.fy[k] = ty.f;
             }
-            const std::int64_t jx = std::clamp<std::int64_t>(i - std::int64_t(cx >> s) * P + E, 0, T - 2);
-            const std::int64_t jy = std::clamp<std::int64_t>(j - std::int64_t(cy >> s) * P + E, 0, T - 2);
-            const std::uint8_t* p = phys + last_e.slot() * tile_bytes + jy * row + jx * 3;
+            const std::uint8_t* p = finder.texel(e, s, i, j, cx, cy);
             __builtin_prefetch(p);
             __builtin_prefetch(p + row);
             texel[k] = p;

@@ -82,7 +82,6 @@ public:
     // at s * T * T * 3, so a bilinear footprint's two rows are T * 3 bytes apart and one
     // tile spans 14 pages rather than T (the sampler's reads are scattered over the cache).
     const std::uint8_t* physical() const { return texels_.data(); }
-    std::size_t physical_bytes() const { return texels_.size(); }
 
 private:
     void check_key(const TileKey& key) const;
@@ -95,7 +94,7 @@ private:
     void sample_bilinear(const SampleRequest& r, std::size_t begin, std::size_t end) const;
 
     PageTable table_;
-    std::uint32_t slots_x_, slots_y_, tile_size_;
+    std::uint32_t slots_x_, slots_y_;
     HugeBuffer texels_;
     std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;  // packed key -> slot
     std::vector<std::uint64_t> key_of_;                        // slot -> packed key

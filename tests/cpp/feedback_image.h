@@ -1,4 +1,5 @@
-// A feedback pass's whole output at full resolution (display step 1), for tests.
+// What the feedback tests look at: one painting, 1 m x 0.7 m, texel (0, 0) at (0, 1, 0),
+// facing -z; and a feedback pass's whole output at full resolution (display step 1).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -6,6 +7,14 @@
 #include "vt/feedback.h"
 
 namespace gigascroll {
+
+struct PaintingOnWall {
+    ExhibitionScene scene;
+    explicit PaintingOnWall(const PaintingTiles& tiles) {
+        scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.7);
+        scene.commit();
+    }
+};
 
 struct FeedbackImage {
     std::vector<std::uint64_t> keys;

@@ -31,12 +31,9 @@ std::uint64_t digest(const std::vector<T>& v) {
 TEST(BuildResults, FeedbackPassGivesTheSameFloatsInEveryBuild) {
     // The view lies inside the painting (seen at an angle, so levels vary), away from its
     // edges: which surface a ray hits does not then depend on the ray tracer's kernel.
-    ExhibitionScene scene;
-    const PaintingTiles tiles(20000, 14000);
-    scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.7);
-    scene.commit();
+    const PaintingOnWall wall(PaintingTiles(20000, 14000));
     const Camera cam({0.4, 0.7, -0.5}, {0.3, -0.1, 1}, {0, 1, 0}, 0.3, 0.3, 1600, 1600);
-    const auto [keys, lod, uv] = feedback_image(scene, cam, 200, 200);
+    const auto [keys, lod, uv] = feedback_image(wall.scene, cam, 200, 200);
     std::set<std::uint32_t> levels;
     for (std::uint64_t k : keys) {
         ASSERT_NE(k, kNoRequest);

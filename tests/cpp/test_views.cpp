@@ -267,13 +267,11 @@ TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
     // A small painting seen whole, edges and all, at an angle: every key's tile is the one
     // holding the pixel's texel at the key's level (the last tile of a row or column reaches
     // the painting's edge), recomputed here from the uv output.
-    ExhibitionScene scene;
     const PaintingTiles tiles(1000, 700);
-    scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.7);
-    scene.commit();
+    const PaintingOnWall wall(tiles);
     const Camera cam({0.3, 0.6, -1.2}, {0.15, -0.05, 1}, {0, 1, 0}, 0.6, 0.6, 1600, 1600);
     const std::uint32_t W = 200, H = 200;
-    const auto [keys, lod, uv] = feedback_image(scene, cam, W, H);
+    const auto [keys, lod, uv] = feedback_image(wall.scene, cam, W, H);
     int seen = 0;
     for (std::size_t i = 0; i < keys.size(); ++i) {
         if (keys[i] == kNoRequest) continue;
