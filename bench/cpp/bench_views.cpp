@@ -6,6 +6,7 @@
 // table's does not.
 #include <benchmark/benchmark.h>
 
+#include <limits>
 #include <memory>
 #include <set>
 #include <vector>
@@ -167,6 +168,46 @@ void BM_FeedbackMagnifier(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
 BENCHMARK(BM_FeedbackMagnifier)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// Embree alone on the magnifier's rays (one thread, 16-ray packets along each row, the same
+// set-up as render_feedback's): the part of BM_FeedbackMagnifier/1/0 that is ray tracing.
+void BM_EmbreeMagnifier(benchmark::State& state) {
+    const ScrollScene s;
+    const Camera cam = magnifier_camera(6);
+    RTCRayHit16 packet;
+    alignas(64) int valid[16];
+    for (int k = 0; k < 16; ++k) {
+        valid[k] = -1;
+        packet.ray.org_x[k] = float(cam.position.x), packet.ray.org_y[k] = float(cam.position.y);
+        packet.ray.org_z[k] = float(cam.position.z);
+        packet.ray.tnear[k] = 0.f, packet.ray.time[k] = 0.f, packet.ray.mask[k] = ~0u;
+        packet.ray.id[k] = k, packet.ray.flags[k] = 0;
+        packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    std::int64_t hits = 0;
+    for (auto _ : state) {
+        for (int row = 0; row < 512; ++row) {
+            const Vec3 row_dir = cam.forward + cam.screen_y(row + 0.5) * cam.up;
+            for (int i0 = 0; i0 < 512; i0 += 16) {
+                for (int k = 0; k < 16; ++k) {
+                    const Vec3 d = row_dir + cam.screen_x(i0 + k + 0.5) * cam.right;
+                    packet.ray.dir_x[k] = float(d.x), packet.ray.dir_y[k] = float(d.y);
+                    packet.ray.dir_z[k] = float(d.z);
+                    packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
+                    packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+                }
+                RTCIntersectContext context;
+                rtcInitIntersectContext(&context);
+                context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+                rtcIntersect16(valid, s.scene.handle(), &context, &packet);
+                hits += packet.hit.geomID[0] != RTC_INVALID_GEOMETRY_ID;
+            }
+        }
+    }
+    benchmark::DoNotOptimize(hits);
+    state.SetItemsProcessed(state.iterations() * 512 * 512);
+}
+BENCHMARK(BM_EmbreeMagnifier)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // The display pass (display_view) of a view whose requested tiles are all resident, as in
 // the frame loop's steady state: the magnifier at display step 2 (arg 0) or an eye at its

@@ -120,6 +120,8 @@ TEST(HugeBuffer, ZeroedAlignedAndReadablePastItsEnd) {
         EXPECT_EQ(nonzero, 0u);
     }
     EXPECT_EQ(HugeBuffer().data(), nullptr);
+    // More than any machine has: std::bad_alloc (MemoryError in Python), not a crash.
+    EXPECT_THROW(HugeBuffer(std::size_t(1) << 62), std::bad_alloc);
 }
 
 TEST(Checksum, KnownXxh3Value) {

@@ -362,6 +362,13 @@ TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
             EXPECT_EQ(sample(ref, uv.data(), uv.data() + 1, 2, nullptr),
                       sample(ref, u_clean.data(), v_clean.data(), 1, lods.data()));
         }
+    // A stride of 0 would read one point over and over: refused by both textures.
+    std::vector<float> out(3 * n);
+    SampleRequest bad;
+    bad.u = u.data(), bad.v = v.data(), bad.uv_stride = 0, bad.count = n, bad.out = out.data();
+    EXPECT_THROW(vt.sample(bad), InvalidArgument);
+    EXPECT_THROW(vt.sample_serial(bad), InvalidArgument);
+    EXPECT_THROW(ref.sample(bad), InvalidArgument);
 }
 
 TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
