@@ -11,13 +11,13 @@
 #include <set>
 #include <vector>
 
-#include "vt/display.h"
-#include "vt/exhibition.h"
-#include "vt/feedback.h"
-#include "vt/request_hash.h"
-#include "vt/request_processing.h"
-#include "vt/residency.h"
-#include "vt/virtual_texture.h"
+#include "sampling/display.h"
+#include "views/exhibition.h"
+#include "views/feedback.h"
+#include "views/request_hash.h"
+#include "views/request_processing.h"
+#include "views/residency.h"
+#include "cache/virtual_texture.h"
 
 using namespace gigascroll;
 
@@ -116,7 +116,7 @@ void add_methods(benchmark::State& state, const std::vector<PaintingTiles>& pain
         break;
     }
     default: {
-        HashProcessor p(16, HashModulus::Pow2, 2);
+        HashProcessor p(16, 2);
         run_method(state, paintings, [&](auto& v, auto& r, auto f) { return p.process(v, r, f).requests.size(); });
         break;
     }
@@ -187,10 +187,10 @@ void BM_EmbreeMagnifier(benchmark::State& state) {
     std::int64_t hits = 0;
     for (auto _ : state) {
         for (int row = 0; row < 512; ++row) {
-            const Vec3 row_dir = cam.forward + cam.screen_y(row + 0.5) * cam.up;
+            const Vec3d row_dir = cam.forward + cam.screen_y(row + 0.5) * cam.up;
             for (int i0 = 0; i0 < 512; i0 += 16) {
                 for (int k = 0; k < 16; ++k) {
-                    const Vec3 d = row_dir + cam.screen_x(i0 + k + 0.5) * cam.right;
+                    const Vec3d d = row_dir + cam.screen_x(i0 + k + 0.5) * cam.right;
                     packet.ray.dir_x[k] = float(d.x), packet.ray.dir_y[k] = float(d.y);
                     packet.ray.dir_z[k] = float(d.z);
                     packet.ray.tfar[k] = std::numeric_limits<float>::infinity();

@@ -1,4 +1,4 @@
-// Tile packs: the reader (TilePack), the streaming builder (PackBuilder) and pack geometry.
+// pack/: the reader (TilePack), the streaming builder (PackBuilder), pack geometry and tile keys.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/filesystem.h>
 #include <nanobind/stl/pair.h>
@@ -9,13 +9,15 @@
 #include <filesystem>
 
 #include "bindings/bindings.h"
-#include "bindings/numpy_arrays.h"
+#include "bindings/arrays.h"
 #include "common/error.h"
-#include "vt/ink_landscape.h"
-#include "vt/pack_builder.h"
-#include "vt/pack_geometry.h"
-#include "vt/page_layout.h"
-#include "vt/tile_pack.h"
+#include "pack/ink_landscape.h"
+#include "pack/builder.h"
+#include "pack/geometry.h"
+#include "pack/page_layout.h"
+#include "pack/painting_tiles.h"
+#include "pack/tile_key.h"
+#include "pack/reader.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -67,6 +69,49 @@ void check_tile_out(const TilePack& pack, const TileOut& out) {
 }  // namespace
 
 void bind_pack(nb::module_& m) {
+    m.attr("NO_REQUEST") = kNoRequest;
+
+    nb::class_<PaintingTiles>(m, "PaintingTiles",
+                              "Tile pyramid geometry of one painting (levels, tiles per level).")
+        .def(nb::init<std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t>(), "width"_a,
+             "height"_a, "tile_size"_a = 128, "border"_a = 4)
+        .def_prop_ro("width", &PaintingTiles::width)
+        .def_prop_ro("height", &PaintingTiles::height)
+        .def_prop_ro("tile_size", &PaintingTiles::tile_size)
+        .def_prop_ro("border", &PaintingTiles::border)
+        .def_prop_ro("payload", &PaintingTiles::payload)
+        .def_prop_ro("levels", &PaintingTiles::levels)
+        .def_prop_ro("total_tiles", &PaintingTiles::total_tiles)
+        .def_prop_ro("page_table_width", &PaintingTiles::page_table_width)
+        .def_prop_ro("page_table_height", &PaintingTiles::page_table_height)
+        .def("level_width", &PaintingTiles::level_width)
+        .def("level_height", &PaintingTiles::level_height)
+        .def("tiles_x", &PaintingTiles::tiles_x)
+        .def("tiles_y", &PaintingTiles::tiles_y)
+        .def("tile_count", &PaintingTiles::tile_count)
+        .def("__repr__", [](const PaintingTiles& p) {
+            return "PaintingTiles(" + std::to_string(p.width()) + ", " + std::to_string(p.height()) +
+                   ", tile_size=" + std::to_string(p.tile_size()) +
+                   ", border=" + std::to_string(p.border()) + ")";
+        });
+
+    m.def("pack_request", [](std::int64_t p, std::int64_t l, std::int64_t x, std::int64_t y) {
+        return pack_request(checked_u32(p, kMaxPaintings - 1, "painting"),
+                            checked_u32(l, kMaxLevels - 1, "level"),
+                            checked_u32(x, 65535, "tile x"), checked_u32(y, 65535, "tile y"));
+    }, "painting"_a, "level"_a, "x"_a, "y"_a,
+          "64-bit request key: painting << 37 | level << 32 | morton(x, y).");
+    m.def("unpack_requests", [](nb::handle keys) {
+        HeldBuffer b = as_buffer(keys, "keys");
+        std::vector<std::uint32_t> p(b.view.size()), l(p.size()), x(p.size()), y(p.size());
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            const Request r = unpack_request(b.view[i]);
+            p[i] = r.painting, l[i] = r.level, x[i] = r.x, y[i] = r.y;
+        }
+        return nb::make_tuple(to_numpy(std::move(p)), to_numpy(std::move(l)),
+                              to_numpy(std::move(x)), to_numpy(std::move(y)));
+    }, "keys"_a, "Split request keys into (painting, level, x, y) uint32 arrays (flattened).");
+
     nb::class_<PaintingInfo>(m, "PackPainting", "One painting of a tile pack (read-only).")
         .def_ro("name", &PaintingInfo::name)
         .def_ro("source", &PaintingInfo::source)

@@ -366,7 +366,7 @@ def make_processor(method: str, tiles: list[PaintingTiles], threads: int = 0,
     if method == "flag-array":
         return FlagArrayProcessor(tiles, threads)
     if method == "hash":
-        return HashProcessor(table_bits, "pow2", threads)
+        return HashProcessor(table_bits, threads)
     raise ValueError(f"unknown request-processing method {method!r}; "
                      f"choose from {', '.join(PROCESSING_METHODS)}")
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "vt/feedback.h"
+#include "views/feedback.h"
 
 namespace gigascroll {
 

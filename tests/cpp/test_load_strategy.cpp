@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "common/error.h"
-#include "vt/load_strategy.h"
-#include "vt/residency.h"
+#include "loading/load_strategy.h"
+#include "views/residency.h"
 
 using namespace gigascroll;
 

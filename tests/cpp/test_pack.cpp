@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "common/error.h"
-#include "vt/ink_landscape.h"
-#include "vt/pack_builder.h"
-#include "vt/page_layout.h"
-#include "vt/tile_pack.h"
+#include "pack/ink_landscape.h"
+#include "pack/builder.h"
+#include "pack/page_layout.h"
+#include "pack/reader.h"
 
 using namespace gigascroll;
 namespace fs = std::filesystem;

@@ -13,9 +13,9 @@
 #include <unistd.h>
 
 #include "common/error.h"
-#include "vt/pack_builder.h"
-#include "vt/tile_loader.h"
-#include "vt/tile_pack.h"
+#include "pack/builder.h"
+#include "loading/tile_loader.h"
+#include "pack/reader.h"
 
 using namespace gigascroll;
 namespace fs = std::filesystem;

@@ -7,11 +7,13 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "common/error.h"
-#include "vt/mip_texture.h"
-#include "vt/virtual_texture.h"
+#include "sampling/mip_texture.h"
+#include "cache/virtual_texture.h"
+#include "sampling/sampler.h"
 
 using namespace gigascroll;
 
@@ -207,7 +209,7 @@ static float max_difference(const VirtualTexture& vt, const MipTexture& ref, Fil
     r.out = a.data();
     r.level_out = answered.data();
     r.threads = 2;
-    vt.sample(r);
+    sample(vt, r);
     std::vector<float> lod_ref(lod);
     if (use_answered_level)
         for (std::size_t i = 0; i < n; ++i) lod_ref[i] = answered[i];
@@ -268,7 +270,7 @@ TEST(VirtualTexture, MissingTilesFallBackToTheFinestResidentAncestor) {
     SampleRequest r;
     r.u = u.data(); r.v = v.data(); r.lod = lod.data(); r.count = u.size();
     r.out = a.data(); r.level_out = answered.data();
-    vt.sample(r);
+    sample(vt, r);
     std::size_t fell_back = 0;
     for (std::size_t i = 0; i < u.size(); ++i) {
         EXPECT_GE(answered[i], lod[i]);
@@ -305,7 +307,7 @@ TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
         SampleRequest r;
         r.u = u.data(), r.v = v.data(), r.lod = lod.data(), r.count = n, r.filter = filter;
         r.out = out.data(), r.level_out = answered.data(), r.threads = threads;
-        serial ? vt.sample_serial(r) : vt.sample(r);
+        serial ? sample_serial(vt, r) : sample(vt, r);
     };
     std::vector<float> ref, got;
     std::vector<std::int8_t> ref_level, got_level;
@@ -351,7 +353,10 @@ TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
                 SampleRequest r;
                 r.u = pu, r.v = pv, r.uv_stride = stride, r.count = n, r.filter = filter;
                 r.lod = lod, r.lod_scalar = lod_scalar, r.out = out.data();
-                texture.sample(r);
+                if constexpr (std::is_same_v<std::decay_t<decltype(texture)>, VirtualTexture>)
+                    gigascroll::sample(texture, r);
+                else
+                    texture.sample(r);
                 return out;
             };
             const float lod_clean = std::isnan(lod_scalar) ? 0.0f : lod_scalar;
@@ -366,8 +371,8 @@ TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
     std::vector<float> out(3 * n);
     SampleRequest bad;
     bad.u = u.data(), bad.v = v.data(), bad.uv_stride = 0, bad.count = n, bad.out = out.data();
-    EXPECT_THROW(vt.sample(bad), InvalidArgument);
-    EXPECT_THROW(vt.sample_serial(bad), InvalidArgument);
+    EXPECT_THROW(sample(vt, bad), InvalidArgument);
+    EXPECT_THROW(sample_serial(vt, bad), InvalidArgument);
     EXPECT_THROW(ref.sample(bad), InvalidArgument);
 }
 
@@ -403,7 +408,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     std::vector<std::int8_t> answered(u.size());
     SampleRequest r;
     r.u = u.data(); r.v = v.data(); r.count = u.size(); r.out = out.data(); r.level_out = answered.data();
-    vt.sample(r);
+    sample(vt, r);
     double worst = 0, worst32 = 0;
     for (std::size_t i = 0; i < u.size(); ++i) {
         ASSERT_EQ(answered[i], 0);
@@ -415,7 +420,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     std::vector<double> u32(u.size());
     for (std::size_t i = 0; i < u.size(); ++i) u32[i] = double(float(u[i]));
     r.u = u32.data(); r.out = out32.data();
-    vt.sample(r);
+    sample(vt, r);
     for (std::size_t i = 0; i < u.size(); ++i) worst32 = std::max(worst32, std::abs(out32[3 * i] - expect[i]));
     EXPECT_GT(worst32, 1.0);
 }
