@@ -33,12 +33,21 @@ Camera Camera::look_at(Vec3d position, Vec3d target, Vec3d up, double fov_y_deg,
             "camera: fov must be in (0, 180) degrees");
     require(width > 0 && height > 0 && width <= 65536 && height <= 65536,
             "camera: resolution must be positive (at most 65536 per side)");
-    require(length(target - position) > 0, "camera: look_at equals position");
-    require(length(cross(normalize(target - position), up)) > 1e-6 * length(up),
-            "camera: up is parallel to the viewing direction");
-    const double t = std::tan(0.5 * fov_y_deg * M_PI / 180.0);
-    return Camera(position, target - position, up, t * double(width) / double(height), t, width,
-                  height);
+    // The frame and the tangent in single precision, as the photon renderer's cameras have
+    // always been set up: a scene's default camera renders the same image as before the views
+    // and the renderer shared this type (ray_direction() is single precision anyway).
+    const Vec3f p(position), t(target), u(up);
+    require(length(t - p) > 0.0f, "camera: look_at equals position");
+    const Vec3f f = normalize(t - p);
+    const Vec3f r = cross(f, u);
+    require(length(r) > 1e-6f * length(u), "camera: up is parallel to the viewing direction");
+    const Vec3f right = normalize(r), true_up = cross(right, f);
+    const float tan_half = std::tan(0.5f * float(fov_y_deg) * float(M_PI) / 180.0f);
+    const float aspect = float(width) / float(height);
+    Camera c(position, Vec3d(f), Vec3d(true_up), double(tan_half * aspect), double(tan_half),
+             width, height);
+    c.forward = Vec3d(f), c.right = Vec3d(right), c.up = Vec3d(true_up);
+    return c;
 }
 
 Vec3f Camera::ray_direction(float px, float py) const {
