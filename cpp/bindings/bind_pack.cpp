@@ -249,8 +249,6 @@ void bind_pack(nb::module_& m) {
         info["fill_ratio"] = chosen.fill_ratio;
         info["shelf_fill_ratio"] = shelf.fill_ratio;
         info["brkga_fill_ratio"] = brkga.fill_ratio;
-        info["shelf_box_fill_ratio"] = shelf.box_fill_ratio;
-        info["brkga_box_fill_ratio"] = brkga.box_fill_ratio;
         info["shelf_size"] = std::make_pair(shelf.width, shelf.height);
         info["brkga_size"] = std::make_pair(brkga.width, brkga.height);
         info["seed"] = seed;

@@ -62,7 +62,8 @@ public:
                                                         per_thread_));
         for (unsigned t = 0; t < threads; ++t) {
             Worker& w = *workers_[t];
-            for (std::size_t i = 0; i < per_thread_; ++i) w.free.try_push(std::int32_t(t * per_thread_ + i));
+            for (std::size_t i = 0; i < per_thread_; ++i)
+                GS_CHECK(w.free.try_push(std::int32_t(t * per_thread_ + i)));  // sized for them
             w.thread = std::thread([this, &w] { run(w); });
         }
     }
@@ -101,7 +102,7 @@ public:
 
     void release(std::int32_t b) override {
         Worker& w = *workers_[std::size_t(b) / per_thread_];
-        w.free.try_push(b);  // never full: it holds at most the thread's own buffers
+        GS_CHECK(w.free.try_push(b));  // never full: it holds at most the thread's own buffers
         wake(w);
     }
 
@@ -181,7 +182,7 @@ public:
     LockedLoader(const TilePack& pack, unsigned threads, const LoaderOptions& o)
         : Impl(pack, o.pool_tiles), jobs_(o.queue_capacity), free_(o.pool_tiles),
           results_(o.pool_tiles + o.queue_capacity), leftovers_(threads) {
-        for (std::size_t i = 0; i < o.pool_tiles; ++i) free_.try_push(std::int32_t(i));
+        for (std::size_t i = 0; i < o.pool_tiles; ++i) GS_CHECK(free_.try_push(std::int32_t(i)));
         for (unsigned t = 0; t < threads; ++t) threads_.emplace_back([this, t] { run(t); });
     }
 
@@ -196,7 +197,7 @@ public:
     std::size_t pop(std::vector<LoadedTile>& out, std::size_t max) override {
         return results_.try_pop_batch(std::back_inserter(out), max);
     }
-    void release(std::int32_t b) override { free_.try_push(b); }
+    void release(std::int32_t b) override { GS_CHECK(free_.try_push(b)); }  // holds the whole pool
 
     std::size_t stop(std::vector<LoadedTile>& leftovers) override {
         if (stopped_) return 0;
@@ -221,7 +222,7 @@ private:
                 break;
             }
             LoadedTile r = load(key, b);
-            if (r.buffer < 0) free_.try_push(b);
+            if (r.buffer < 0) GS_CHECK(free_.try_push(b));
             if (!results_.wait_push(std::move(r))) {  // closed: keep the finished tile
                 leftovers_[t] = std::move(r);
                 break;

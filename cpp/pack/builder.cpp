@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "common/bits.h"
 #include "common/checksum.h"
 #include "common/error.h"
 #include "common/parallel.h"
@@ -336,7 +337,7 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
     require(!finished_, "pack already finished");
     require(!open_painting_, "finish: a painting is still open");
     require(!paintings_.empty(), "finish: the pack has no painting");
-    require(table_width == next_pow2(table_width) && table_height == next_pow2(table_height),
+    require(is_pow2(table_width) && is_pow2(table_height),
             "merged page table must be a power of two in each dimension");
     for (std::size_t i = 0; i < paintings_.size(); ++i) {
         const auto& a = paintings_[i];

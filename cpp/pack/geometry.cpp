@@ -2,15 +2,10 @@
 
 #include <string>
 
+#include "common/bits.h"
 #include "common/error.h"
 
 namespace gigascroll {
-
-std::uint32_t next_pow2(std::uint32_t v) {
-    std::uint32_t p = 1;
-    while (p < v) p <<= 1;
-    return p;
-}
 
 void check_tile_parameters(std::uint32_t tile_size, std::uint32_t border) {
     require(tile_size >= 2 && tile_size <= 4096,

@@ -34,7 +34,4 @@ void check_tile_parameters(std::uint32_t tile_size, std::uint32_t border);
 PaintingGeometry make_geometry(std::uint32_t width, std::uint32_t height,
                                std::uint32_t tile_size, std::uint32_t border);
 
-// Smallest power of two >= v (v >= 1).
-std::uint32_t next_pow2(std::uint32_t v);
-
 }  // namespace gigascroll

@@ -4,6 +4,7 @@
 #include <bit>
 #include <string>
 
+#include "common/bits.h"
 #include "common/error.h"
 #include "pack/reader.h"
 
@@ -33,8 +34,8 @@ VtLayout VtLayout::make(std::uint32_t tile_size, std::uint32_t border,
             p.tiles_y.push_back((lh + P - 1) / P);
             if (lw <= P && lh <= P) break;
         }
-        p.table_w = std::bit_ceil(p.tiles_x[0]);
-        p.table_h = std::bit_ceil(p.tiles_y[0]);
+        p.table_w = next_pow2(p.tiles_x[0]);
+        p.table_h = next_pow2(p.tiles_y[0]);
         x = (x + p.table_w - 1) / p.table_w * p.table_w;  // aligned to its own size
         p.table_x = x;
         p.table_y = 0;
@@ -42,8 +43,8 @@ VtLayout VtLayout::make(std::uint32_t tile_size, std::uint32_t border,
         h = std::max(h, p.table_h);
         layout.paintings.push_back(std::move(p));
     }
-    layout.table_w = std::bit_ceil(std::max(x, 1u));
-    layout.table_h = std::bit_ceil(h);
+    layout.table_w = next_pow2(std::max(x, 1u));
+    layout.table_h = next_pow2(h);
     return layout;
 }
 
@@ -79,7 +80,7 @@ void VtLayout::validate() const {
         const std::string who = "layout: painting " + std::to_string(i);
         require(p.level_count() > 0 && p.tiles_y.size() == p.tiles_x.size(), who + " has no levels");
         require(p.level_count() <= 32, who + " has more than 32 levels");
-        require(std::has_single_bit(p.table_w) && std::has_single_bit(p.table_h),
+        require(is_pow2(p.table_w) && is_pow2(p.table_h),
                 who + ": page table size is not a power of two");
         require(p.table_w >= p.tiles_x[0] && p.table_h >= p.tiles_y[0], who + ": page table too small");
         require(p.table_x % p.table_w == 0 && p.table_y % p.table_h == 0, who + ": offset not aligned");

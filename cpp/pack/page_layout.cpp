@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 
+#include "common/bits.h"
 #include "common/error.h"
 #include "common/parallel.h"
 #include "pack/geometry.h"
@@ -23,17 +24,10 @@ bool overlaps(const Rect& a, const Rect& b) {
 
 std::uint64_t round_up(std::uint64_t v, std::uint64_t m) { return (v + m - 1) / m * m; }
 
-std::uint64_t pow2_at_least(std::uint64_t v) {
-    std::uint64_t p = 1;
-    while (p < v) p <<= 1;
-    return p;
-}
-
 void check_tables(const std::vector<TableSize>& tables) {
     require(!tables.empty(), "no page tables to lay out");
     for (const auto& t : tables)
-        require(t.width >= 1 && t.height >= 1 && t.width == next_pow2(t.width) &&
-                    t.height == next_pow2(t.height),
+        require(t.width >= 1 && t.height >= 1 && is_pow2(t.width) && is_pow2(t.height),
                 "page-table sizes must be powers of two");
 }
 
@@ -51,7 +45,6 @@ PageLayout finish_layout(const std::vector<TableSize>& tables, const std::vector
     out.width = next_pow2(static_cast<std::uint32_t>(mx));
     out.height = next_pow2(static_cast<std::uint32_t>(my));
     out.fill_ratio = double(area) / (double(out.width) * out.height);
-    out.box_fill_ratio = double(area) / (double(mx) * double(my));
     return out;
 }
 
@@ -76,7 +69,7 @@ Cost cost_of(const std::vector<Rect>& placed) {
         mx = std::max(mx, r.x + r.w);
         my = std::max(my, r.y + r.h);
     }
-    return {double(pow2_at_least(mx)) * double(pow2_at_least(my)), double(mx) * double(my)};
+    return {double(next_pow2(mx)) * double(next_pow2(my)), double(mx) * double(my)};
 }
 
 // Places tables in `order`, each with rule[i] (false: bottom-left, true: left-bottom), at the
@@ -124,7 +117,7 @@ std::vector<Rect> place(const std::vector<TableSize>& tables, const std::vector<
 void check_layout(const std::vector<TableSize>& tables, const PageLayout& layout) {
     check_tables(tables);
     require(layout.offsets.size() == tables.size(), "layout has the wrong number of offsets");
-    require(layout.width == next_pow2(layout.width) && layout.height == next_pow2(layout.height),
+    require(is_pow2(layout.width) && is_pow2(layout.height),
             "merged page table must be a power of two in each dimension");
     std::vector<Rect> r;
     for (std::size_t i = 0; i < tables.size(); ++i) {
@@ -197,7 +190,7 @@ PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions
         wmax = std::max<std::uint64_t>(wmax, t.width);
         hmax = std::max<std::uint64_t>(hmax, t.height);
     }
-    const double bound = double(std::max(pow2_at_least(area), wmax * hmax));
+    const double bound = double(std::max(next_pow2(area), wmax * hmax));
 
     auto decode = [&](const std::vector<double>& keys) {
         std::vector<std::uint32_t> order(n);

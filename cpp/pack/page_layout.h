@@ -23,7 +23,6 @@ struct PageLayout {
     std::uint32_t width = 0, height = 0;  // merged table, powers of two
     std::vector<std::pair<std::uint32_t, std::uint32_t>> offsets;
     double fill_ratio = 0;                // sum of table areas / merged area
-    double box_fill_ratio = 0;            // sum of table areas / bounding box of the tables
 };
 
 struct BrkgaOptions {

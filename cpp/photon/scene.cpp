@@ -15,16 +15,13 @@ float emitter_weight(Vec3f le) { return (le.x + le.y + le.z) / 3.0f; }
 }  // namespace
 
 Scene::Scene() {
-    device_ = rtcNewDevice(nullptr);
-    if (!device_) throw std::runtime_error("Embree: cannot create a device");
-    scene_ = rtcNewScene(device_);
+    scene_ = rtcNewScene(device_.handle());
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 }
 
 Scene::~Scene() {
     if (scene_) rtcReleaseScene(scene_);
-    if (device_) rtcReleaseDevice(device_);
 }
 
 std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::int64_t* triangles,
@@ -59,7 +56,7 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     }
     if (kept.empty()) return 0;
 
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCGeometry geom = rtcNewGeometry(device_.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
     // rtcSetNewGeometryBuffer pads the buffer as Embree requires (16 bytes after the last vertex).
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
                                                            RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
@@ -86,6 +83,7 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
+    device_.check("the mesh");
     if (geom_offset_.size() <= id) geom_offset_.resize(id + 1);
     geom_offset_[id] = first;
     return kept.size();
@@ -95,6 +93,7 @@ void Scene::commit() {
     require(!committed_, "Scene.commit: already committed");
     require(!normal_.empty(), "Scene.commit: the scene is empty (add at least one non-degenerate mesh)");
     rtcCommitScene(scene_);
+    device_.check("the scene build");
     eps_ = std::max(diagonal(), 1e-30f) * 1e-5f;
     // Emitter distribution: geometry is re-read from Embree's buffers.
     double total = 0;

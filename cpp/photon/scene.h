@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/embree_device.h"
 #include "common/vec3.h"
 
 namespace gigascroll {
@@ -70,7 +71,7 @@ public:
 
 private:
     void require_committed() const;
-    RTCDevice device_ = nullptr;
+    EmbreeDevice device_;
     RTCScene scene_ = nullptr;
     bool committed_ = false;
     std::vector<std::uint32_t> geom_offset_;  // first global triangle of each geometry

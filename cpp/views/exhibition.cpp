@@ -8,20 +8,10 @@
 
 namespace gigascroll {
 
-namespace {
-void embree_error(void*, RTCError code, const char* message) {
-    (void)code;
-    (void)message;  // surfaced through rtcGetDeviceError checks below
-}
-}  // namespace
-
-ExhibitionScene::ExhibitionScene() {
-    // One build thread: the room has a few hundred quads, and building on the calling thread
-    // keeps the BVH free of races visible to ThreadSanitizer.
-    device_ = rtcNewDevice("threads=1");
-    if (!device_) throw std::runtime_error("Embree device creation failed");
-    rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
-    scene_ = rtcNewScene(device_);
+// One build thread: the room has a few hundred quads, and building on the calling thread
+// keeps the BVH free of races visible to ThreadSanitizer.
+ExhibitionScene::ExhibitionScene() : device_("threads=1") {
+    scene_ = rtcNewScene(device_.handle());
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     // Watertight intersection: without it rays through a quad's diagonal slip between its
     // two triangles (a hole through boxes, and through the painting's centre line).
@@ -30,7 +20,6 @@ ExhibitionScene::ExhibitionScene() {
 
 ExhibitionScene::~ExhibitionScene() {
     if (scene_) rtcReleaseScene(scene_);
-    if (device_) rtcReleaseDevice(device_);
 }
 
 void ExhibitionScene::require_open() const {
@@ -38,7 +27,7 @@ void ExhibitionScene::require_open() const {
 }
 
 unsigned ExhibitionScene::add_quads(const std::vector<Vec3d>& vertices, std::size_t quads) {
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
+    RTCGeometry geom = rtcNewGeometry(device_.handle(), RTC_GEOMETRY_TYPE_QUAD);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size()));
     for (std::size_t i = 0; i < vertices.size(); ++i) {
@@ -52,8 +41,7 @@ unsigned ExhibitionScene::add_quads(const std::vector<Vec3d>& vertices, std::siz
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
-    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE)
-        throw std::runtime_error("Embree rejected the scene geometry");
+    device_.check("the scene geometry");
     if (geom_placement_.size() <= id) geom_placement_.resize(id + 1, -1);
     return id;
 }
@@ -109,8 +97,7 @@ void ExhibitionScene::add_table(double x, double z, double length, double depth,
 void ExhibitionScene::commit() {
     require_open();
     rtcCommitScene(scene_);
-    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE)
-        throw std::runtime_error("Embree scene build failed");
+    device_.check("the scene build");
     committed_ = true;
 }
 

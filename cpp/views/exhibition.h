@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pack/painting_tiles.h"
+#include "common/embree_device.h"
 #include "common/vec3.h"
 
 namespace gigascroll {
@@ -54,7 +55,7 @@ private:
     unsigned add_quads(const std::vector<Vec3d>& vertices, std::size_t quads);
     void require_open() const;
 
-    RTCDevice device_ = nullptr;
+    EmbreeDevice device_;
     RTCScene scene_ = nullptr;
     std::vector<PaintingPlacement> paintings_;
     std::vector<int> geom_placement_;

@@ -218,8 +218,8 @@ TEST(PageLayout, PackersAreAlignedDisjointAtEveryLevelAndDeterministic) {
         EXPECT_GE(a.fill_ratio, shelf_layout(tables).fill_ratio);
     }
     EXPECT_THROW(shelf_layout({{3, 4}}), InvalidArgument);
-    EXPECT_THROW(check_layout({{4, 4}, {4, 4}}, PageLayout{8, 8, {{0, 0}, {0, 0}}, 0, 0}), InvalidArgument);
-    EXPECT_THROW(check_layout({{4, 4}}, PageLayout{8, 8, {{2, 0}}, 0, 0}), InvalidArgument);
+    EXPECT_THROW(check_layout({{4, 4}, {4, 4}}, PageLayout{8, 8, {{0, 0}, {0, 0}}, 0}), InvalidArgument);
+    EXPECT_THROW(check_layout({{4, 4}}, PageLayout{8, 8, {{2, 0}}, 0}), InvalidArgument);
 }
 
 TEST(InkLandscape, BandsAreIndependent) {
