@@ -61,7 +61,7 @@ void bind_cache(nb::module_& m) {
         "Physical tile cache (LRU, coarse tiles pinned) with its mip-mapped page table and "
         "software VT sampling.")
         .def("__init__", [](VirtualTexture* self, const TilePack& pack, std::pair<std::uint32_t, std::uint32_t> slots) {
-            const VtLayout layout = VtLayout::from_pack(pack);
+            const PackGeometry layout = pack.geometry();
             nb::gil_scoped_release release;
             new (self) VirtualTexture(layout, slots.first, slots.second,
                                       [&](const TileKey& k, std::uint8_t* out) {

@@ -15,7 +15,7 @@
 #include "pack/builder.h"
 #include "pack/geometry.h"
 #include "pack/page_layout.h"
-#include "pack/painting_tiles.h"
+#include "pack/geometry.h"
 #include "pack/tile_key.h"
 #include "pack/reader.h"
 
@@ -30,20 +30,21 @@ using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::device::cpu>;
 
 nb::dict geometry_dict(const PaintingGeometry& g) {
     nb::dict d;
-    d["width"] = g.width;
-    d["height"] = g.height;
-    d["tile_size"] = g.tile_size;
-    d["border"] = g.border;
-    d["payload"] = g.payload;
-    d["table_size"] = std::make_pair(g.table_width, g.table_height);
+    d["width"] = g.width();
+    d["height"] = g.height();
+    d["tile_size"] = g.tile_size();
+    d["border"] = g.border();
+    d["payload"] = g.payload();
+    d["table_size"] = std::make_pair(g.page_table_width(), g.page_table_height());
     d["uv_scale"] = std::make_pair(g.uv_scale_u(), g.uv_scale_v());
-    d["tile_count"] = g.tile_count;
+    d["tile_count"] = g.total_tiles();
     nb::list levels;
-    for (const auto& lv : g.levels) {
+    for (std::uint32_t l = 0; l < g.levels(); ++l) {
+        const LevelGeometry& lv = g.level(l);
         nb::dict dl;
         dl["size"] = std::make_pair(lv.width, lv.height);
         dl["tiles"] = std::make_pair(lv.tiles_x, lv.tiles_y);
-        dl["first_entry"] = lv.first_entry;
+        dl["first_entry"] = lv.first_tile;
         levels.append(dl);
     }
     d["levels"] = levels;
@@ -53,8 +54,10 @@ nb::dict geometry_dict(const PaintingGeometry& g) {
 std::vector<std::pair<std::uint32_t, std::uint32_t>> level_pairs(const PaintingGeometry& g,
                                                                   bool tiles) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
-    for (const auto& lv : g.levels)
+    for (std::uint32_t l = 0; l < g.levels(); ++l) {
+        const LevelGeometry& lv = g.level(l);
         out.emplace_back(tiles ? lv.tiles_x : lv.width, tiles ? lv.tiles_y : lv.height);
+    }
     return out;
 }
 
@@ -71,29 +74,30 @@ void check_tile_out(const TilePack& pack, const TileOut& out) {
 void bind_pack(nb::module_& m) {
     m.attr("NO_REQUEST") = kNoRequest;
 
-    nb::class_<PaintingTiles>(m, "PaintingTiles",
+    nb::class_<PaintingGeometry>(m, "PaintingGeometry",
                               "Tile pyramid geometry of one painting (levels, tiles per level).")
         .def(nb::init<std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t>(), "width"_a,
              "height"_a, "tile_size"_a = 128, "border"_a = 4)
-        .def_prop_ro("width", &PaintingTiles::width)
-        .def_prop_ro("height", &PaintingTiles::height)
-        .def_prop_ro("tile_size", &PaintingTiles::tile_size)
-        .def_prop_ro("border", &PaintingTiles::border)
-        .def_prop_ro("payload", &PaintingTiles::payload)
-        .def_prop_ro("levels", &PaintingTiles::levels)
-        .def_prop_ro("total_tiles", &PaintingTiles::total_tiles)
-        .def_prop_ro("page_table_width", &PaintingTiles::page_table_width)
-        .def_prop_ro("page_table_height", &PaintingTiles::page_table_height)
-        .def("level_width", &PaintingTiles::level_width)
-        .def("level_height", &PaintingTiles::level_height)
-        .def("tiles_x", &PaintingTiles::tiles_x)
-        .def("tiles_y", &PaintingTiles::tiles_y)
-        .def("tile_count", &PaintingTiles::tile_count)
-        .def("__repr__", [](const PaintingTiles& p) {
-            return "PaintingTiles(" + std::to_string(p.width()) + ", " + std::to_string(p.height()) +
+        .def_prop_ro("width", &PaintingGeometry::width)
+        .def_prop_ro("height", &PaintingGeometry::height)
+        .def_prop_ro("tile_size", &PaintingGeometry::tile_size)
+        .def_prop_ro("border", &PaintingGeometry::border)
+        .def_prop_ro("payload", &PaintingGeometry::payload)
+        .def_prop_ro("levels", &PaintingGeometry::levels)
+        .def_prop_ro("total_tiles", &PaintingGeometry::total_tiles)
+        .def_prop_ro("page_table_width", &PaintingGeometry::page_table_width)
+        .def_prop_ro("page_table_height", &PaintingGeometry::page_table_height)
+        .def("level_width", &PaintingGeometry::level_width)
+        .def("level_height", &PaintingGeometry::level_height)
+        .def("tiles_x", &PaintingGeometry::tiles_x)
+        .def("tiles_y", &PaintingGeometry::tiles_y)
+        .def("tile_count", &PaintingGeometry::tile_count)
+        .def("__repr__", [](const PaintingGeometry& p) {
+            return "PaintingGeometry(" + std::to_string(p.width()) + ", " + std::to_string(p.height()) +
                    ", tile_size=" + std::to_string(p.tile_size()) +
                    ", border=" + std::to_string(p.border()) + ")";
         });
+    m.attr("PaintingTiles") = m.attr("PaintingGeometry");  // the views' old name
 
     m.def("pack_request", [](std::int64_t p, std::int64_t l, std::int64_t x, std::int64_t y) {
         return pack_request(checked_u32(p, kMaxPaintings - 1, "painting"),
@@ -116,26 +120,28 @@ void bind_pack(nb::module_& m) {
         .def_ro("name", &PaintingInfo::name)
         .def_ro("source", &PaintingInfo::source)
         .def_ro("conversion", &PaintingInfo::conversion)
-        .def_prop_ro("width", &PaintingInfo::width)
-        .def_prop_ro("height", &PaintingInfo::height)
-        .def_prop_ro("levels", &PaintingInfo::level_count, "number of mip levels")
+        .def_prop_ro("width", [](const PaintingInfo& p) { return p.geometry.width(); })
+        .def_prop_ro("height", [](const PaintingInfo& p) { return p.geometry.height(); })
+        .def_prop_ro("levels", [](const PaintingInfo& p) { return p.geometry.levels(); },
+                     "number of mip levels")
         .def_prop_ro("level_sizes", [](const PaintingInfo& p) { return level_pairs(p.geometry, false); },
                      "(width, height) in texels of each level")
         .def_prop_ro("level_tiles", [](const PaintingInfo& p) { return level_pairs(p.geometry, true); },
                      "(tiles_x, tiles_y) real tiles of each level")
         .def_prop_ro("table_size", [](const PaintingInfo& p) {
-            return std::make_pair(p.geometry.table_width, p.geometry.table_height); },
+            return std::make_pair(p.geometry.page_table_width(), p.geometry.page_table_height()); },
             "(Mp, Np): the painting's power-of-two level-0 page table")
         .def_prop_ro("table_offset", [](const PaintingInfo& p) {
-            return std::make_pair(p.table_x, p.table_y); },
+            return std::make_pair(p.geometry.table_x(), p.geometry.table_y()); },
             "(x, y) offset of its page table in the merged table")
         .def_prop_ro("uv_scale", [](const PaintingInfo& p) {
             return std::make_pair(p.geometry.uv_scale_u(), p.geometry.uv_scale_v()); },
             "(W / (Mp P), H / (Np P)): seed 000 eqs (3, 4)")
-        .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.tile_count; })
+        .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.total_tiles(); })
         .def("__repr__", [](const PaintingInfo& p) {
-            return "PackPainting('" + p.name + "', " + std::to_string(p.width()) + " x " +
-                   std::to_string(p.height()) + ", " + std::to_string(p.level_count()) + " levels)";
+            const PaintingGeometry& g = p.geometry;
+            return "PackPainting('" + p.name + "', " + std::to_string(g.width()) + " x " +
+                   std::to_string(g.height()) + ", " + std::to_string(g.levels()) + " levels)";
         });
 
     nb::class_<TilePack>(m, "TilePack",
@@ -259,7 +265,7 @@ void bind_pack(nb::module_& m) {
 
     m.def("painting_geometry", [](std::uint32_t w, std::uint32_t h, std::uint32_t tile_size,
                                   std::uint32_t border) {
-        return geometry_dict(make_geometry(w, h, tile_size, border)); },
+        return geometry_dict(PaintingGeometry(w, h, tile_size, border)); },
         "width"_a, "height"_a, "tile_size"_a = 128, "border"_a = 4,
         "Mip levels, tile grids, page-table size and UV scale of a painting.");
 }

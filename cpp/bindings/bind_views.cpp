@@ -112,7 +112,7 @@ void bind_views(nb::module_& m) {
     nb::class_<ExhibitionScene>(m, "ExhibitionScene",
                                 "The exhibition room as an Embree scene: paintings, boxes, tables.")
         .def(nb::init<>())
-        .def("add_painting", [](ExhibitionScene& s, std::int64_t painting, const PaintingTiles& tiles,
+        .def("add_painting", [](ExhibitionScene& s, std::int64_t painting, const PaintingGeometry& tiles,
                                 std::array<double, 3> origin, std::array<double, 3> u_axis,
                                 std::array<double, 3> v_axis, double width_m, double height_m) {
             return s.add_painting(checked_u32(painting, kMaxPaintings - 1, "painting id"), tiles,
@@ -220,7 +220,7 @@ void bind_views(nb::module_& m) {
 
     nb::class_<ResidentSet, ResidencyLookup>(
         m, "ResidentSet", "Reference residency: a set of tiles plus every painting's coarsest tile.")
-        .def(nb::init<std::vector<PaintingTiles>>(), "paintings"_a)
+        .def(nb::init<std::vector<PaintingGeometry>>(), "paintings"_a)
         .def("insert", [](ResidentSet& s, nb::handle keys) {
             if (nb::isinstance<nb::int_>(keys)) return s.insert(nb::cast<std::uint64_t>(keys));
             HeldBuffer b = as_buffer(keys, "keys");
@@ -236,7 +236,7 @@ void bind_views(nb::module_& m) {
 
     nb::class_<FlagArrayProcessor>(m, "FlagArrayProcessor",
                                    "Hollemeersch: one flag per tile, parallel mark and compaction.")
-        .def(nb::init<std::vector<PaintingTiles>, unsigned>(), "paintings"_a, "threads"_a = 0)
+        .def(nb::init<std::vector<PaintingGeometry>, unsigned>(), "paintings"_a, "threads"_a = 0)
         .def_prop_ro("flag_count", &FlagArrayProcessor::flag_count)
         .def("process", &process_frame<FlagArrayProcessor>, "buffers"_a, "lookup"_a, "frame"_a = 0);
 
@@ -279,7 +279,7 @@ void bind_views(nb::module_& m) {
 
     nb::class_<VisibilityLists>(m, "VisibilityLists",
                                 "Seed 002: alive and remove lists against the previous frame.")
-        .def(nb::init<std::vector<PaintingTiles>, unsigned>(), "paintings"_a, "threads"_a = 0)
+        .def(nb::init<std::vector<PaintingGeometry>, unsigned>(), "paintings"_a, "threads"_a = 0)
         .def("process", [](VisibilityLists& v, nb::handle buffers) {
             auto held = as_buffers(buffers);
             auto views = views_of(held);

@@ -6,42 +6,42 @@
 
 namespace gigascroll {
 
-PageTable::PageTable(const VtLayout& layout) : layout_(layout) {
+PageTable::PageTable(const PackGeometry& layout) : layout_(layout) {
     layout_.validate();
     std::uint32_t merged_levels = 0;
     for (const auto& p : layout_.paintings) merged_levels = std::max(merged_levels, p.merged_levels());
     merged_.resize(merged_levels);
     for (std::uint32_t l = 0; l < merged_levels; ++l)
-        merged_[l].assign(std::size_t(layout_.table_w >> l) * (layout_.table_h >> l), PageEntry{});
+        merged_[l].assign(std::size_t(layout_.table_width >> l) * (layout_.table_height >> l), PageEntry{});
     tail_.resize(layout_.paintings.size());
     for (std::size_t i = 0; i < layout_.paintings.size(); ++i) {
-        const VtPainting& p = layout_.paintings[i];
-        for (std::uint32_t l = p.merged_levels(); l < p.level_count(); ++l)
-            tail_[i].emplace_back(std::size_t(p.tiles_x[l]) * p.tiles_y[l], PageEntry{});
+        const PaintingGeometry& p = layout_.paintings[i];
+        for (std::uint32_t l = p.merged_levels(); l < p.levels(); ++l)
+            tail_[i].emplace_back(std::size_t(p.tiles_x(l)) * p.tiles_y(l), PageEntry{});
     }
     views_.resize(layout_.paintings.size());
     for (std::size_t i = 0; i < layout_.paintings.size(); ++i) {
-        const VtPainting& p = layout_.paintings[i];
-        for (std::uint32_t l = 0; l < p.level_count(); ++l) {
+        const PaintingGeometry& p = layout_.paintings[i];
+        for (std::uint32_t l = 0; l < p.levels(); ++l) {
             if (l < p.merged_levels()) {
-                const std::size_t stride = layout_.table_w >> l;
-                views_[i].push_back({merged_[l].data() + std::size_t(p.table_y >> l) * stride + (p.table_x >> l),
+                const std::size_t stride = layout_.table_width >> l;
+                views_[i].push_back({merged_[l].data() + std::size_t(p.table_y() >> l) * stride + (p.table_x() >> l),
                                      stride});
             } else {
-                views_[i].push_back({tail_[i][l - p.merged_levels()].data(), p.tiles_x[l]});
+                views_[i].push_back({tail_[i][l - p.merged_levels()].data(), p.tiles_x(l)});
             }
         }
     }
 }
 
 std::uint32_t PageTable::grid_w(std::uint32_t p, std::uint32_t l) const {
-    const VtPainting& pt = layout_.paintings[p];
-    return l < pt.merged_levels() ? pt.table_w >> l : pt.tiles_x[l];
+    const PaintingGeometry& pt = layout_.paintings[p];
+    return l < pt.merged_levels() ? pt.page_table_width() >> l : pt.tiles_x(l);
 }
 
 std::uint32_t PageTable::grid_h(std::uint32_t p, std::uint32_t l) const {
-    const VtPainting& pt = layout_.paintings[p];
-    return l < pt.merged_levels() ? pt.table_h >> l : pt.tiles_y[l];
+    const PaintingGeometry& pt = layout_.paintings[p];
+    return l < pt.merged_levels() ? pt.page_table_height() >> l : pt.tiles_y(l);
 }
 
 std::size_t PageTable::entry_count() const {
@@ -66,9 +66,9 @@ void PageTable::for_each_covered(const TileKey& key, F&& f) {
 
 void PageTable::insert(const TileKey& key, std::uint32_t slot) {
     require(key.painting < layout_.paintings.size() &&
-                key.level < layout_.paintings[key.painting].level_count() &&
-                key.tx < layout_.paintings[key.painting].tiles_x[key.level] &&
-                key.ty < layout_.paintings[key.painting].tiles_y[key.level],
+                key.level < layout_.paintings[key.painting].levels() &&
+                key.tx < layout_.paintings[key.painting].tiles_x(key.level) &&
+                key.ty < layout_.paintings[key.painting].tiles_y(key.level),
             "page table: tile key out of range");
     const PageEntry e = PageEntry::make(key.level, slot);
     // Entries pointing at a finer tile keep it; coarser or missing ones now point here.
@@ -78,9 +78,9 @@ void PageTable::insert(const TileKey& key, std::uint32_t slot) {
 }
 
 void PageTable::evict(const TileKey& key) {
-    const VtPainting& pt = layout_.paintings[key.painting];
+    const PaintingGeometry& pt = layout_.paintings[key.painting];
     // The parent's entry is the finest resident tile strictly coarser than this one.
-    const PageEntry parent = key.level + 1 < pt.level_count()
+    const PageEntry parent = key.level + 1 < pt.levels()
                                  ? lookup(key.painting, key.level + 1, key.tx >> 1, key.ty >> 1)
                                  : PageEntry{};
     for_each_covered(key, [&](PageEntry& x) {
@@ -90,15 +90,15 @@ void PageTable::evict(const TileKey& key) {
 
 void PageTable::rebuild(const std::function<std::uint32_t(const TileKey&)>& resident) {
     for (std::uint32_t p = 0; p < layout_.paintings.size(); ++p) {
-        const VtPainting& pt = layout_.paintings[p];
-        for (std::uint32_t l = 0; l < pt.level_count(); ++l) {
+        const PaintingGeometry& pt = layout_.paintings[p];
+        for (std::uint32_t l = 0; l < pt.levels(); ++l) {
             for (std::uint32_t y = 0; y < grid_h(p, l); ++y)
                 for (std::uint32_t x = 0; x < grid_w(p, l); ++x) {
                     // Walk up the ancestors until a resident real tile answers.
                     PageEntry e;
-                    for (std::uint32_t a = l; a < pt.level_count(); ++a) {
+                    for (std::uint32_t a = l; a < pt.levels(); ++a) {
                         const std::uint32_t ax = x >> (a - l), ay = y >> (a - l);
-                        if (ax >= pt.tiles_x[a] || ay >= pt.tiles_y[a]) continue;
+                        if (ax >= pt.tiles_x(a) || ay >= pt.tiles_y(a)) continue;
                         const std::uint32_t slot = resident(TileKey{p, a, ax, ay});
                         if (slot != PageEntry::kNone) {
                             e = PageEntry::make(a, slot);

@@ -20,7 +20,8 @@
 #include <functional>
 #include <vector>
 
-#include "pack/layout.h"
+#include "pack/geometry.h"
+#include "pack/tile_key.h"
 
 namespace gigascroll {
 
@@ -36,7 +37,7 @@ struct PageEntry {
 
 class PageTable {
 public:
-    explicit PageTable(const VtLayout& layout);
+    explicit PageTable(const PackGeometry& layout);
     // Not copyable: views_ point into the table's own storage.
     PageTable(const PageTable&) = delete;
     PageTable& operator=(const PageTable&) = delete;
@@ -57,7 +58,7 @@ public:
     // Same computation into a copy, for comparing against the incremental state.
     bool equals_rebuild(const std::function<std::uint32_t(const TileKey&)>& resident) const;
 
-    const VtLayout& layout() const { return layout_; }
+    const PackGeometry& layout() const { return layout_; }
     std::size_t entry_count() const;
 
 private:
@@ -80,7 +81,7 @@ private:
         std::size_t stride;
     };
 
-    VtLayout layout_;
+    PackGeometry layout_;
     std::vector<std::vector<LevelView>> views_;            // [painting][level]
     std::vector<std::vector<PageEntry>> merged_;            // [level][row-major Mc>>l x Nc>>l]
     std::vector<std::vector<std::vector<PageEntry>>> tail_;  // [painting][level - merged][...]

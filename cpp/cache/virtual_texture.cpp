@@ -10,7 +10,7 @@
 
 namespace gigascroll {
 
-VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
+VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x,
                                std::uint32_t slots_y, const TileSource& pinned_source)
     : table_(layout), slots_x_(slots_x), slots_y_(slots_y) {
     require(slots_x >= 1 && slots_y >= 1 && std::uint64_t(slots_x) * slots_y < (1u << 24),
@@ -19,11 +19,11 @@ VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
     // Pinned: every tile of the tail levels (which include the coarsest, single-tile level).
     std::vector<TileKey> pinned;
     for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
-        const VtPainting& pt = layout.paintings[p];
-        const std::uint32_t first = std::min(pt.merged_levels(), pt.level_count() - 1);
-        for (std::uint32_t l = first; l < pt.level_count(); ++l)
-            for (std::uint32_t y = 0; y < pt.tiles_y[l]; ++y)
-                for (std::uint32_t x = 0; x < pt.tiles_x[l]; ++x) pinned.push_back({p, l, x, y});
+        const PaintingGeometry& pt = layout.paintings[p];
+        const std::uint32_t first = std::min(pt.merged_levels(), pt.levels() - 1);
+        for (std::uint32_t l = first; l < pt.levels(); ++l)
+            for (std::uint32_t y = 0; y < pt.tiles_y(l); ++y)
+                for (std::uint32_t x = 0; x < pt.tiles_x(l); ++x) pinned.push_back({p, l, x, y});
     }
     require(pinned.size() < n, "slots=(" + std::to_string(slots_x) + ", " + std::to_string(slots_y) +
                                    ") cannot hold the " + std::to_string(pinned.size()) +
@@ -49,9 +49,9 @@ VirtualTexture::VirtualTexture(const VtLayout& layout, std::uint32_t slots_x,
 void VirtualTexture::check_key(const TileKey& k) const {
     const auto& ps = layout().paintings;
     require(k.painting < ps.size(), "painting " + std::to_string(k.painting) + " out of range");
-    const VtPainting& p = ps[k.painting];
-    require(k.level < p.level_count(), "level " + std::to_string(k.level) + " out of range");
-    require(k.tx < p.tiles_x[k.level] && k.ty < p.tiles_y[k.level],
+    const PaintingGeometry& p = ps[k.painting];
+    require(k.level < p.levels(), "level " + std::to_string(k.level) + " out of range");
+    require(k.tx < p.tiles_x(k.level) && k.ty < p.tiles_y(k.level),
             "tile (" + std::to_string(k.tx) + ", " + std::to_string(k.ty) + ") out of range at level " +
                 std::to_string(k.level));
 }
@@ -161,7 +161,7 @@ CacheStats VirtualTexture::stats() const {
 
 PageEntry VirtualTexture::lookup(const TileKey& key) const {
     const auto& ps = layout().paintings;
-    require(key.painting < ps.size() && key.level < ps[key.painting].level_count() &&
+    require(key.painting < ps.size() && key.level < ps[key.painting].levels() &&
                 key.tx < table_.grid_w(key.painting, key.level) &&
                 key.ty < table_.grid_h(key.painting, key.level),
             "page-table key out of range");

@@ -15,7 +15,7 @@
 
 #include "common/huge_buffer.h"
 #include "cache/page_table.h"
-#include "pack/layout.h"
+#include "pack/geometry.h"
 
 namespace gigascroll {
 
@@ -30,10 +30,10 @@ public:
     using TileSource = std::function<void(const TileKey&, std::uint8_t*)>;
 
     // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot.
-    VirtualTexture(const VtLayout& layout, std::uint32_t slots_x, std::uint32_t slots_y,
+    VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x, std::uint32_t slots_y,
                    const TileSource& pinned_source);
 
-    const VtLayout& layout() const { return table_.layout(); }
+    const PackGeometry& layout() const { return table_.layout(); }
     std::uint32_t slots_x() const { return slots_x_; }
     std::uint32_t slots_y() const { return slots_y_; }
 

@@ -272,9 +272,9 @@ void TileLoader::submit(const TileKey* keys, std::size_t n) {
     const auto& ps = pack_.paintings();
     for (std::size_t i = 0; i < n; ++i) {
         const TileKey& k = keys[i];
-        require(k.painting < ps.size() && k.level < ps[k.painting].level_count() &&
-                    k.tx < ps[k.painting].geometry.levels[k.level].tiles_x &&
-                    k.ty < ps[k.painting].geometry.levels[k.level].tiles_y,
+        require(k.painting < ps.size() && k.level < ps[k.painting].geometry.levels() &&
+                    k.tx < ps[k.painting].geometry.tiles_x(k.level) &&
+                    k.ty < ps[k.painting].geometry.tiles_y(k.level),
                 "tile (" + std::to_string(k.painting) + ", " + std::to_string(k.level) + ", " +
                     std::to_string(k.tx) + ", " + std::to_string(k.ty) + ") is not in the pack");
     }

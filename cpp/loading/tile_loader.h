@@ -22,7 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "pack/layout.h"
+#include "pack/geometry.h"
+#include "pack/tile_key.h"
 
 namespace gigascroll {
 

@@ -8,12 +8,12 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <nlohmann/json.hpp>
 
 #include "common/bits.h"
 #include "common/checksum.h"
 #include "common/error.h"
 #include "common/parallel.h"
+#include "pack/manifest.h"
 
 namespace gigascroll {
 namespace {
@@ -80,15 +80,15 @@ void PackBuilder::begin_painting(const PaintingSpec& spec) {
     require(!open_painting_, "begin_painting: previous painting not ended");
     Painting p;
     p.spec = spec;
-    p.geometry = make_geometry(spec.width, spec.height, options_.tile_size, options_.border);
+    p.geometry = PaintingGeometry(spec.width, spec.height, options_.tile_size, options_.border);
     p.first_entry = paintings_.empty()
                         ? 0
-                        : paintings_.back().first_entry + paintings_.back().geometry.tile_count;
+                        : paintings_.back().first_entry + paintings_.back().geometry.total_tiles();
     levels_.clear();
-    levels_.resize(p.geometry.levels.size());
+    levels_.resize(p.geometry.levels());
     for (std::size_t l = 0; l < levels_.size(); ++l) {
         Level& lv = levels_[l];
-        lv.geo = p.geometry.levels[l];
+        lv.geo = p.geometry.level(std::uint32_t(l));
         lv.shift = static_cast<std::uint32_t>(l);
         if (l > 0) lv.acc.assign(std::size_t(lv.geo.width) * 3, 0);
         lv.entries.assign(std::size_t(lv.geo.tiles_x) * lv.geo.tiles_y, TileEntry{});
@@ -100,15 +100,15 @@ void PackBuilder::begin_painting(const PaintingSpec& spec) {
 void PackBuilder::add_rows(const std::uint8_t* rgb, std::uint32_t rows, std::uint32_t width) {
     require(open_painting_, "add_rows: no painting begun");
     const PaintingGeometry& g = paintings_.back().geometry;
-    require(width == g.width, "add_rows: rows are " + std::to_string(width) +
-                                  " pixels wide, the painting is " + std::to_string(g.width));
-    require(std::uint64_t(levels_[0].rows_done) + rows <= g.height,
+    require(width == g.width(), "add_rows: rows are " + std::to_string(width) +
+                                  " pixels wide, the painting is " + std::to_string(g.width()));
+    require(std::uint64_t(levels_[0].rows_done) + rows <= g.height(),
             "add_rows: " + std::to_string(rows) + " rows at row " +
                 std::to_string(levels_[0].rows_done) + " overflow the image height " +
-                std::to_string(g.height));
+                std::to_string(g.height()));
     // Sub-bands of at most one payload height: the level-0 window then never holds more
     // than about two tile rows, whatever band size the caller uses.
-    const std::uint32_t step = g.payload;
+    const std::uint32_t step = g.payload();
     for (std::uint32_t done = 0; done < rows; done += step) {
         const std::uint32_t n = std::min(step, rows - done);
         add_sub_band(rgb + std::size_t(done) * width * 3, n);
@@ -135,11 +135,11 @@ void PackBuilder::add_sub_band(const std::uint8_t* rgb, std::uint32_t rows) {
     // Column strips aligned to 2^(levels-1) stay independent through the whole chain.
     const std::uint32_t align = 1u << (levels_.size() - 1);
     const std::uint32_t strip = std::max<std::uint32_t>(align, ((4096 + align - 1) / align) * align);
-    const std::size_t strips = (g.width + strip - 1) / strip;
+    const std::size_t strips = (g.width() + strip - 1) / strip;
     parallel_for(strips, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t s = b; s < e; ++s) {
             const std::uint32_t x0 = static_cast<std::uint32_t>(s * strip);
-            const std::uint32_t x1 = std::min<std::uint32_t>(g.width, x0 + strip);
+            const std::uint32_t x1 = std::min<std::uint32_t>(g.width(), x0 + strip);
             reduce_strip(x0, x1, rgb, y0, rows);
         }
     }, options_.threads);
@@ -187,14 +187,14 @@ void PackBuilder::finish_row(std::size_t l, std::uint32_t y, std::uint32_t x0, s
     const std::uint32_t s = lv.shift;
     const std::uint64_t full = 1ull << (2 * s);
     const std::uint64_t cy =
-        std::min<std::uint64_t>(g.height, (std::uint64_t(y) + 1) << s) - (std::uint64_t(y) << s);
+        std::min<std::uint64_t>(g.height(), (std::uint64_t(y) + 1) << s) - (std::uint64_t(y) << s);
     std::uint64_t* acc = lv.acc.data();
     std::uint8_t* dst = lv.window.data() + std::size_t(y - lv.win_base) * lv.geo.width * 3;
     const bool last_level = l + 1 == levels_.size();
     std::uint64_t* next = last_level ? nullptr : levels_[l + 1].acc.data();
     for (std::uint32_t x = x0; x < x1; ++x) {
         const std::uint64_t cx =
-            std::min<std::uint64_t>(g.width, (std::uint64_t(x) + 1) << s) - (std::uint64_t(x) << s);
+            std::min<std::uint64_t>(g.width(), (std::uint64_t(x) + 1) << s) - (std::uint64_t(x) << s);
         const std::uint64_t count = cx * cy;
         std::uint64_t* a = acc + 3 * std::size_t(x);
         if (count == full) {
@@ -320,9 +320,9 @@ void PackBuilder::emit_tile_row(Level& lv, std::uint32_t ty) {
 void PackBuilder::end_painting() {
     require(open_painting_, "end_painting: no painting begun");
     Painting& p = paintings_.back();
-    require(levels_[0].rows_done == p.geometry.height,
+    require(levels_[0].rows_done == p.geometry.height(),
             "end_painting: only " + std::to_string(levels_[0].rows_done) + " of " +
-                std::to_string(p.geometry.height) + " rows were added");
+                std::to_string(p.geometry.height()) + " rows were added");
     for (Level& lv : levels_) {
         if (lv.next_tile_row != lv.geo.tiles_y || lv.rows_done != lv.geo.height)
             throw std::logic_error("pack builder: level incomplete at end of painting");
@@ -342,27 +342,26 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
     for (std::size_t i = 0; i < paintings_.size(); ++i) {
         const auto& a = paintings_[i];
         const auto& ga = a.geometry;
-        require(a.spec.table_x % ga.table_width == 0 && a.spec.table_y % ga.table_height == 0,
+        require(a.spec.table_x % ga.page_table_width() == 0 && a.spec.table_y % ga.page_table_height() == 0,
                 "page table of painting '" + a.spec.name + "' is not aligned to its size");
-        require(std::uint64_t(a.spec.table_x) + ga.table_width <= table_width &&
-                    std::uint64_t(a.spec.table_y) + ga.table_height <= table_height,
+        require(std::uint64_t(a.spec.table_x) + ga.page_table_width() <= table_width &&
+                    std::uint64_t(a.spec.table_y) + ga.page_table_height() <= table_height,
                 "page table of painting '" + a.spec.name + "' lies outside the merged table");
         for (std::size_t j = 0; j < i; ++j) {
             const auto& b = paintings_[j];
-            const bool apart = a.spec.table_x + ga.table_width <= b.spec.table_x ||
-                               b.spec.table_x + b.geometry.table_width <= a.spec.table_x ||
-                               a.spec.table_y + ga.table_height <= b.spec.table_y ||
-                               b.spec.table_y + b.geometry.table_height <= a.spec.table_y;
+            const bool apart = a.spec.table_x + ga.page_table_width() <= b.spec.table_x ||
+                               b.spec.table_x + b.geometry.page_table_width() <= a.spec.table_x ||
+                               a.spec.table_y + ga.page_table_height() <= b.spec.table_y ||
+                               b.spec.table_y + b.geometry.page_table_height() <= a.spec.table_y;
             require(apart, "page tables of '" + a.spec.name + "' and '" + b.spec.name + "' overlap");
         }
     }
-    nlohmann::json extra;
-    try {
-        extra = nlohmann::json::parse(page_table_json);
-    } catch (const nlohmann::json::exception& e) {
-        throw InvalidArgument(std::string("page_table_json: ") + e.what());
+    // Fails now (on a malformed page_table_json) rather than after the files are written.
+    {
+        Manifest probe;
+        probe.page_table_extra = page_table_json;
+        (void)manifest_text(probe);
     }
-    require(extra.is_object(), "page_table_json must be a JSON object");
 
     // tiles.bin header with the totals, then flush to disk.
     FileHeader th{};
@@ -399,54 +398,21 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
     }
 
     // manifest.json, last.
-    nlohmann::json m;
-    m["format"] = kManifestFormat;
-    m["version"] = kPackVersion;
-    m["tile_size"] = options_.tile_size;
-    m["border"] = options_.border;
-    m["payload"] = options_.tile_size - 2 * options_.border;
-    m["codec"] = codec_name(options_.codec);
-    m["tile_count"] = count;
-    m["tiles_bytes"] = sizeof(FileHeader) + data_bytes_;
-    nlohmann::json pt = extra;
-    pt["width"] = table_width;
-    pt["height"] = table_height;
-    m["page_table"] = pt;
-    m["paintings"] = nlohmann::json::array();
+    Manifest m;
+    m.tile_size = options_.tile_size;
+    m.border = options_.border;
+    m.codec = options_.codec;
+    m.tile_count = count;
+    m.tiles_bytes = sizeof(FileHeader) + data_bytes_;
+    m.table_width = table_width;
+    m.table_height = table_height;
+    m.page_table_extra = page_table_json;
     for (const auto& p : paintings_) {
-        const auto& g = p.geometry;
-        nlohmann::json jp;
-        jp["name"] = p.spec.name;
-        jp["source"] = p.spec.source;
-        jp["conversion"] = p.spec.conversion;
-        jp["width"] = g.width;
-        jp["height"] = g.height;
-        jp["uv_scale"] = {g.uv_scale_u(), g.uv_scale_v()};
-        jp["page_table"] = {{"width", g.table_width}, {"height", g.table_height},
-                            {"x", p.spec.table_x}, {"y", p.spec.table_y}};
-        jp["first_entry"] = p.first_entry;
-        jp["tile_count"] = g.tile_count;
-        jp["levels"] = nlohmann::json::array();
-        for (std::size_t l = 0; l < g.levels.size(); ++l) {
-            const auto& lv = g.levels[l];
-            jp["levels"].push_back({{"level", l}, {"width", lv.width}, {"height", lv.height},
-                                    {"tiles_x", lv.tiles_x}, {"tiles_y", lv.tiles_y},
-                                    {"first_entry", lv.first_entry}});
-        }
-        m["paintings"].push_back(std::move(jp));
+        PaintingInfo info{p.spec.name, p.spec.source, p.spec.conversion, p.geometry};
+        info.geometry.place(p.spec.table_x, p.spec.table_y, p.first_entry);
+        m.paintings.push_back(std::move(info));
     }
-    const std::string path = directory_ + "/" + kManifestName;
-    {
-        std::ofstream out(path, std::ios::trunc);
-        out << m.dump(2) << '\n';
-        out.flush();
-        if (!out) throw IoError(path + ": write failed");
-    }
-    const int mfd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (mfd >= 0) {
-        ::fsync(mfd);
-        ::close(mfd);
-    }
+    write_manifest(directory_ + "/" + kManifestName, m);
     finished_ = true;
 }
 

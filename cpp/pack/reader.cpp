@@ -10,7 +10,6 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "common/checksum.h"
@@ -18,8 +17,6 @@
 
 namespace gigascroll {
 namespace {
-
-using nlohmann::json;
 
 std::string key_text(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
     std::ostringstream s;
@@ -49,16 +46,6 @@ void check_header(const FileHeader& h, const char (&magic)[8], const std::string
                       " (this build reads version " + std::to_string(kPackVersion) + ")");
 }
 
-json load_manifest(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw IoError(path + ": missing manifest (not a finished tile pack)");
-    try {
-        return json::parse(in);
-    } catch (const json::exception& e) {
-        throw IoError(path + ": corrupt manifest: " + e.what());
-    }
-}
-
 // Thread-local zstd context: no state is shared between loader threads.
 ZSTD_DCtx* thread_dctx() {
     struct Holder {
@@ -72,60 +59,14 @@ ZSTD_DCtx* thread_dctx() {
 }  // namespace
 
 TilePack::TilePack(const std::string& directory) : directory_(directory) {
-    const std::string manifest_path = directory + "/" + kManifestName;
-    const json m = load_manifest(manifest_path);
-    try {
-        if (m.at("format").get<std::string>() != kManifestFormat)
-            throw IoError(manifest_path + ": not a gigascroll pack manifest");
-        const auto version = m.at("version").get<std::uint32_t>();
-        if (version != kPackVersion)
-            throw IoError(manifest_path + ": unsupported pack version " + std::to_string(version));
-        tile_size_ = m.at("tile_size").get<std::uint32_t>();
-        border_ = m.at("border").get<std::uint32_t>();
-        try {
-            check_tile_parameters(tile_size_, border_);
-            codec_ = parse_codec(m.at("codec").get<std::string>());
-        } catch (const InvalidArgument& e) {
-            throw IoError(manifest_path + ": " + e.what());
-        }
-        table_width_ = m.at("page_table").at("width").get<std::uint32_t>();
-        table_height_ = m.at("page_table").at("height").get<std::uint32_t>();
-        std::uint64_t entries = 0;
-        for (const auto& jp : m.at("paintings")) {
-            PaintingInfo info;
-            info.name = jp.at("name").get<std::string>();
-            info.source = jp.value("source", std::string());
-            info.conversion = jp.value("conversion", std::string());
-            info.geometry = make_geometry(jp.at("width").get<std::uint32_t>(),
-                                          jp.at("height").get<std::uint32_t>(), tile_size_, border_);
-            const auto& pt = jp.at("page_table");
-            info.table_x = pt.at("x").get<std::uint32_t>();
-            info.table_y = pt.at("y").get<std::uint32_t>();
-            info.first_entry = entries;
-            const auto& g = info.geometry;
-            if (pt.at("width").get<std::uint32_t>() != g.table_width ||
-                pt.at("height").get<std::uint32_t>() != g.table_height ||
-                jp.at("levels").size() != g.levels.size() ||
-                jp.at("first_entry").get<std::uint64_t>() != entries)
-                throw IoError(manifest_path + ": geometry of painting '" + info.name +
-                              "' does not match its size");
-            if (info.table_x % g.table_width || info.table_y % g.table_height ||
-                std::uint64_t(info.table_x) + g.table_width > table_width_ ||
-                std::uint64_t(info.table_y) + g.table_height > table_height_)
-                throw IoError(manifest_path + ": page-table offset of painting '" + info.name +
-                              "' is unaligned or outside the merged table");
-            entries += g.tile_count;
-            paintings_.push_back(std::move(info));
-        }
-        if (m.at("tile_count").get<std::uint64_t>() != entries)
-            throw IoError(manifest_path + ": tile_count does not match the paintings");
-        entry_count_ = entries;
-        manifest_json_ = m.dump();
-    } catch (const json::exception& e) {
-        throw IoError(manifest_path + ": malformed manifest: " + e.what());
-    } catch (const InvalidArgument& e) {
-        throw IoError(manifest_path + ": " + e.what());
-    }
+    const Manifest m = read_manifest(directory + "/" + kManifestName, &manifest_json_);
+    tile_size_ = m.tile_size;
+    border_ = m.border;
+    codec_ = m.codec;
+    table_width_ = m.table_width;
+    table_height_ = m.table_height;
+    paintings_ = m.paintings;
+    entry_count_ = m.tile_count;
 
     // Index: map it whole; entries are read-only afterwards.
     const std::string index_path = directory + "/" + kIndexName;
@@ -183,6 +124,16 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
 
 TilePack::~TilePack() { release(); }
 
+PackGeometry TilePack::geometry() const {
+    PackGeometry g;
+    g.tile_size = tile_size_;
+    g.border = border_;
+    g.table_width = table_width_;
+    g.table_height = table_height_;
+    for (const PaintingInfo& p : paintings_) g.paintings.push_back(p.geometry);
+    return g;
+}
+
 void TilePack::release() {
     if (index_map_) ::munmap(index_map_, index_map_size_);
     index_map_ = nullptr;
@@ -195,9 +146,8 @@ const TileEntry& TilePack::entry(std::uint32_t p, std::uint32_t l, std::uint32_t
     if (!has_tile(p, l, tx, ty))
         throw InvalidArgument("tile " + key_text(p, l, tx, ty) +
                               " is not stored (padding outside the painting)");
-    const PaintingInfo& info = paintings_[p];
-    const LevelGeometry& lv = info.geometry.levels[l];
-    return entries_[info.first_entry + lv.first_entry + std::uint64_t(ty) * lv.tiles_x + tx];
+    const PaintingGeometry& g = paintings_[p].geometry;
+    return entries_[g.first_entry() + g.tile_index(l, tx, ty)];
 }
 
 bool TilePack::has_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
@@ -206,17 +156,16 @@ bool TilePack::has_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
         throw InvalidArgument("painting " + std::to_string(p) + " out of range (pack has " +
                               std::to_string(paintings_.size()) + ")");
     const PaintingGeometry& g = paintings_[p].geometry;
-    if (l >= g.levels.size())
+    if (l >= g.levels())
         throw InvalidArgument("level " + std::to_string(l) + " out of range (painting " +
-                              std::to_string(p) + " has " + std::to_string(g.levels.size()) + ")");
-    const std::uint32_t gw = std::max(1u, g.table_width >> l), gh = std::max(1u, g.table_height >> l);
+                              std::to_string(p) + " has " + std::to_string(g.levels()) + ")");
+    const std::uint32_t gw = std::max(1u, g.page_table_width() >> l),
+                        gh = std::max(1u, g.page_table_height() >> l);
     if (tx >= gw || ty >= gh)
         throw InvalidArgument("tile " + key_text(p, l, tx, ty) + " outside the level's " +
                               std::to_string(gw) + " x " + std::to_string(gh) + " page-table grid");
-    const LevelGeometry& lv = g.levels[l];
-    if (tx >= lv.tiles_x || ty >= lv.tiles_y) return false;
-    const TileEntry& e =
-        entries_[paintings_[p].first_entry + lv.first_entry + std::uint64_t(ty) * lv.tiles_x + tx];
+    if (tx >= g.tiles_x(l) || ty >= g.tiles_y(l)) return false;
+    const TileEntry& e = entries_[g.first_entry() + g.tile_index(l, tx, ty)];
     return (e.flags & kTileStored) != 0;
 }
 

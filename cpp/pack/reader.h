@@ -10,21 +10,9 @@
 
 #include "pack/format.h"
 #include "pack/geometry.h"
+#include "pack/manifest.h"
 
 namespace gigascroll {
-
-struct PaintingInfo {
-    std::string name;
-    std::string source;      // input file (or "array") the painting came from
-    std::string conversion;  // how the input was turned into 8-bit RGB
-    PaintingGeometry geometry;
-    std::uint32_t table_x = 0, table_y = 0;  // page-table offset in the merged table
-    std::uint64_t first_entry = 0;           // first index entry of this painting
-
-    std::uint32_t width() const { return geometry.width; }
-    std::uint32_t height() const { return geometry.height; }
-    std::uint32_t level_count() const { return geometry.level_count(); }
-};
 
 struct TileLocation {
     std::uint64_t offset;
@@ -49,6 +37,8 @@ public:
     Codec codec() const { return codec_; }
     std::uint32_t table_width() const { return table_width_; }   // merged Mc
     std::uint32_t table_height() const { return table_height_; } // merged Nc
+    // The paintings' placed geometry and the merged table: what the runtime needs.
+    PackGeometry geometry() const;
     std::uint64_t tile_count() const { return entry_count_; }
     std::size_t tile_bytes() const { return std::size_t(tile_size_) * tile_size_ * 3; }
     // The manifest as this reader parsed it, serialised again (JSON text).

@@ -25,12 +25,12 @@ MipTexture::MipTexture(std::vector<Level> levels) : levels_(std::move(levels)) {
 MipTexture MipTexture::from_pack(const TilePack& pack, std::uint32_t painting, std::uint32_t count) {
     require(painting < pack.paintings().size(), "painting out of range");
     const PaintingGeometry& g = pack.paintings()[painting].geometry;
-    if (count == 0 || count > g.level_count()) count = g.level_count();
+    if (count == 0 || count > g.levels()) count = g.levels();
     const std::size_t T = pack.tile_size(), E = pack.border(), P = pack.payload();
     std::vector<std::uint8_t> tile(pack.tile_bytes());
     std::vector<Level> levels(count);
     for (std::uint32_t l = 0; l < count; ++l) {
-        const LevelGeometry& lg = g.levels[l];
+        const LevelGeometry& lg = g.level(l);
         Level& lv = levels[l];
         lv.width = lg.width;
         lv.height = lg.height;

@@ -151,9 +151,9 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
         sample_bilinear(vt, r, begin, end);
         return;
     }
-    const VtPainting& pt = vt.layout().paintings[r.painting];
-    const std::uint32_t L = pt.level_count();
-    const LevelAxes axes(pt.width, pt.height, L);
+    const PaintingGeometry& pt = vt.layout().paintings[r.painting];
+    const std::uint32_t L = pt.levels();
+    const LevelAxes axes(pt.width(), pt.height(), L);
     const Divider divide_p(vt.layout().payload());
     TexelFinder finder(vt.page_table(), r.painting, vt.physical());
 
@@ -177,7 +177,7 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
         const double ui = r.u[i * r.uv_stride], vi = r.v[i * r.uv_stride];
         const double u = std::isnan(ui) ? 0.0 : std::clamp(ui, 0.0, 1.0);
         const double v = std::isnan(vi) ? 0.0 : std::clamp(vi, 0.0, 1.0);
-        const double x0 = u * pt.width, y0 = v * pt.height;
+        const double x0 = u * pt.width(), y0 = v * pt.height();
         float lod = r.lod ? r.lod[i] : r.lod_scalar;
         lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
         float* out = r.out + 3 * i;
@@ -200,8 +200,8 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
 // tile), the fallback to a resident ancestor, the texel address, and a prefetch of both
 // rows; (3) the blends, whose reads the prefetches have mostly brought in by then.
 void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
-    const VtPainting& pt = vt.layout().paintings[r.painting];
-    const std::uint32_t L = pt.level_count(), width = pt.width, height = pt.height;
+    const PaintingGeometry& pt = vt.layout().paintings[r.painting];
+    const std::uint32_t L = pt.levels(), width = pt.width(), height = pt.height();
     const LevelAxes axes(width, height, L);
     const Divider divide_p(vt.layout().payload());
     TexelFinder finder(vt.page_table(), r.painting, vt.physical());

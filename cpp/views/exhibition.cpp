@@ -46,11 +46,12 @@ unsigned ExhibitionScene::add_quads(const std::vector<Vec3d>& vertices, std::siz
     return id;
 }
 
-std::size_t ExhibitionScene::add_painting(std::uint32_t painting, const PaintingTiles& tiles,
+std::size_t ExhibitionScene::add_painting(std::uint32_t painting, const PaintingGeometry& tiles,
                                           Vec3d origin, Vec3d u_axis, Vec3d v_axis, double width_m,
                                           double height_m) {
     require_open();
     require(painting < kMaxPaintings, "painting id out of range");
+    require(tiles.fits_request_key(), "painting too large: more than 65536 tiles per axis");
     require(is_finite(origin) && is_finite(u_axis) && is_finite(v_axis),
             "painting placement has a non-finite coordinate");
     require(std::isfinite(width_m) && std::isfinite(height_m) && width_m > 0 && height_m > 0,

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "pack/painting_tiles.h"
+#include "pack/geometry.h"
 #include "common/embree_device.h"
 #include "common/vec3.h"
 
@@ -17,7 +17,7 @@ namespace gigascroll {
 // for width_m metres, image y (downwards in the image) along `v_axis` for height_m metres.
 struct PaintingPlacement {
     std::uint32_t painting;  // the painting id p used in request keys
-    PaintingTiles tiles;
+    PaintingGeometry tiles;
     Vec3d origin, u_axis, v_axis;
     double width_m, height_m;
     Vec3d normal() const { return cross(u_axis, v_axis); }
@@ -31,7 +31,7 @@ public:
     ExhibitionScene& operator=(const ExhibitionScene&) = delete;
 
     // Returns the placement index. u_axis and v_axis must be orthonormal.
-    std::size_t add_painting(std::uint32_t painting, const PaintingTiles& tiles, Vec3d origin,
+    std::size_t add_painting(std::uint32_t painting, const PaintingGeometry& tiles, Vec3d origin,
                              Vec3d u_axis, Vec3d v_axis, double width_m, double height_m);
     // An axis-aligned occluder (walls, plinths, the seed's "simple cuboids").
     void add_box(Vec3d lo, Vec3d hi);

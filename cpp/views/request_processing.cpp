@@ -63,7 +63,7 @@ RequestSets BasicProcessor::process(std::span<const FeedbackBuffer> buffers,
     return sets;
 }
 
-FlagArrayProcessor::FlagArrayProcessor(std::vector<PaintingTiles> paintings, unsigned threads)
+FlagArrayProcessor::FlagArrayProcessor(std::vector<PaintingGeometry> paintings, unsigned threads)
     : index_(std::move(paintings)), threads_(threads), flags_(index_.size()) {}
 
 RequestSets FlagArrayProcessor::process(std::span<const FeedbackBuffer> buffers,
@@ -156,7 +156,7 @@ std::size_t AsyncProcessor::pending() const {
     return jobs_.size() + (busy_ ? 1 : 0);
 }
 
-VisibilityLists::VisibilityLists(std::vector<PaintingTiles> paintings, unsigned threads)
+VisibilityLists::VisibilityLists(std::vector<PaintingGeometry> paintings, unsigned threads)
     : index_(std::move(paintings)), threads_(threads), current_(index_.size()),
       previous_(index_.size(), 0) {}
 

@@ -105,7 +105,7 @@ public:
 
 class FlagArrayProcessor {
 public:
-    explicit FlagArrayProcessor(std::vector<PaintingTiles> paintings, unsigned threads = 0);
+    explicit FlagArrayProcessor(std::vector<PaintingGeometry> paintings, unsigned threads = 0);
     FlagArrayProcessor(const FlagArrayProcessor&) = delete;
     FlagArrayProcessor& operator=(const FlagArrayProcessor&) = delete;
     RequestSets process(std::span<const FeedbackBuffer> buffers, const ResidencyLookup& lookup);
@@ -164,7 +164,7 @@ private:
 // over a flag array of every tile (alive = visible now; remove = visible last frame only).
 class VisibilityLists {
 public:
-    explicit VisibilityLists(std::vector<PaintingTiles> paintings, unsigned threads = 0);
+    explicit VisibilityLists(std::vector<PaintingGeometry> paintings, unsigned threads = 0);
     VisibilityLists(const VisibilityLists&) = delete;
     VisibilityLists& operator=(const VisibilityLists&) = delete;
     struct Lists {

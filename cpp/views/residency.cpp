@@ -7,15 +7,17 @@
 
 namespace gigascroll {
 
-PaintingSet::PaintingSet(std::vector<PaintingTiles> paintings) : paintings_(std::move(paintings)) {
+PaintingSet::PaintingSet(std::vector<PaintingGeometry> paintings) : paintings_(std::move(paintings)) {
     require(!paintings_.empty(), "need at least one painting");
     require(paintings_.size() < kMaxPaintings, "too many paintings");
+    for (const PaintingGeometry& p : paintings_)
+        require(p.fits_request_key(), "painting too large: more than 65536 tiles per axis");
 }
 
 bool PaintingSet::valid(std::uint64_t key) const {
     const Request r = unpack_request(key);
     if (r.painting >= paintings_.size()) return false;
-    const PaintingTiles& p = paintings_[r.painting];
+    const PaintingGeometry& p = paintings_[r.painting];
     return r.level < p.levels() && r.x < p.tiles_x(r.level) && r.y < p.tiles_y(r.level);
 }
 
@@ -29,7 +31,7 @@ void PaintingSet::validate(std::uint64_t key) const {
     throw InvalidArgument(s.str());
 }
 
-ResidentSet::ResidentSet(std::vector<PaintingTiles> paintings)
+ResidentSet::ResidentSet(std::vector<PaintingGeometry> paintings)
     : PaintingSet(std::move(paintings)) {}
 
 void ResidentSet::insert(std::uint64_t key) {
@@ -53,7 +55,7 @@ std::uint32_t ResidentSet::resident_level(std::uint64_t request) const {
     return top;
 }
 
-TileIndex::TileIndex(std::vector<PaintingTiles> paintings) : PaintingSet(std::move(paintings)) {
+TileIndex::TileIndex(std::vector<PaintingGeometry> paintings) : PaintingSet(std::move(paintings)) {
     base_.push_back(0);
     for (const auto& p : this->paintings()) base_.push_back(base_.back() + p.total_tiles());
 }
@@ -61,7 +63,7 @@ TileIndex::TileIndex(std::vector<PaintingTiles> paintings) : PaintingSet(std::mo
 std::uint64_t TileIndex::index(std::uint64_t key) const {
     validate(key);
     const Request r = unpack_request(key);
-    const PaintingTiles& p = paintings()[r.painting];
+    const PaintingGeometry& p = paintings()[r.painting];
     return base_[r.painting] + p.level_offset(r.level) + std::uint64_t(r.y) * p.tiles_x(r.level) +
            r.x;
 }
@@ -70,7 +72,7 @@ std::uint64_t TileIndex::key(std::uint64_t index) const {
     require(index < size(), "tile index out of range");
     const auto pi = static_cast<std::uint32_t>(
         std::upper_bound(base_.begin(), base_.end(), index) - base_.begin() - 1);
-    const PaintingTiles& p = paintings()[pi];
+    const PaintingGeometry& p = paintings()[pi];
     std::uint64_t rest = index - base_[pi];
     std::uint32_t level = 0;
     while (p.level_offset(level + 1) <= rest) ++level;

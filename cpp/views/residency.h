@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "pack/tile_key.h"
-#include "pack/painting_tiles.h"
+#include "pack/geometry.h"
 
 namespace gigascroll {
 
@@ -27,20 +27,20 @@ inline std::uint64_t response_of(const ResidencyLookup& lookup, std::uint64_t re
 // Paintings indexed by id p; validates request keys against their tile grids.
 class PaintingSet {
 public:
-    explicit PaintingSet(std::vector<PaintingTiles> paintings);
-    const std::vector<PaintingTiles>& paintings() const { return paintings_; }
+    explicit PaintingSet(std::vector<PaintingGeometry> paintings);
+    const std::vector<PaintingGeometry>& paintings() const { return paintings_; }
     // Throws InvalidArgument unless `key` names an existing tile.
     void validate(std::uint64_t key) const;
     bool valid(std::uint64_t key) const;
 
 private:
-    std::vector<PaintingTiles> paintings_;
+    std::vector<PaintingGeometry> paintings_;
 };
 
 // A set of resident tiles; the coarsest tile of every painting is always resident (seed 000).
 class ResidentSet : public ResidencyLookup, public PaintingSet {
 public:
-    explicit ResidentSet(std::vector<PaintingTiles> paintings);
+    explicit ResidentSet(std::vector<PaintingGeometry> paintings);
     void insert(std::uint64_t key);
     void erase(std::uint64_t key);
     bool contains(std::uint64_t key) const;
@@ -55,7 +55,7 @@ private:
 // index = first index of painting p + tiles of levels 0..l-1 + y * tiles_x(l) + x.
 class TileIndex : public PaintingSet {
 public:
-    explicit TileIndex(std::vector<PaintingTiles> paintings);
+    explicit TileIndex(std::vector<PaintingGeometry> paintings);
     std::uint64_t size() const { return base_.back(); }
     // Throws InvalidArgument for a key outside every painting.
     std::uint64_t index(std::uint64_t key) const;

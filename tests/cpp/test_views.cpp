@@ -41,7 +41,7 @@ std::vector<FeedbackBuffer> spans(const std::vector<std::vector<std::uint64_t>>&
 }
 
 // Random feedback: runs of equal keys (as neighbouring pixels give) and empty pixels.
-std::vector<std::vector<std::uint64_t>> random_buffers(const std::vector<PaintingTiles>& paintings,
+std::vector<std::vector<std::uint64_t>> random_buffers(const std::vector<PaintingGeometry>& paintings,
                                                        std::size_t count, std::size_t pixels,
                                                        std::size_t distinct_keys, unsigned seed) {
     std::mt19937_64 rng(seed);
@@ -62,11 +62,11 @@ std::vector<std::vector<std::uint64_t>> random_buffers(const std::vector<Paintin
     return out;
 }
 
-std::vector<PaintingTiles> small_paintings() {
-    return {PaintingTiles(5000, 700), PaintingTiles(1200, 3000), PaintingTiles(800, 800, 64, 2)};
+std::vector<PaintingGeometry> small_paintings() {
+    return {PaintingGeometry(5000, 700), PaintingGeometry(1200, 3000), PaintingGeometry(800, 800, 64, 2)};
 }
 
-ResidentSet random_residency(const std::vector<PaintingTiles>& paintings, unsigned seed) {
+ResidentSet random_residency(const std::vector<PaintingGeometry>& paintings, unsigned seed) {
     ResidentSet r(paintings);
     std::mt19937_64 rng(seed);
     for (std::uint32_t p = 0; p < paintings.size(); ++p)
@@ -79,8 +79,8 @@ ResidentSet random_residency(const std::vector<PaintingTiles>& paintings, unsign
 
 }  // namespace
 
-TEST(PaintingTiles, ScrollPyramidMatchesDirectCount) {
-    const PaintingTiles t(152089, 6083);  // the seed's scroll, 128-texel tiles, 4-texel border
+TEST(PaintingGeometry, ScrollPyramidMatchesDirectCount) {
+    const PaintingGeometry t(152089, 6083);  // the seed's scroll, 128-texel tiles, 4-texel border
     EXPECT_EQ(t.payload(), 120u);
     // Direct count: halve (rounding up) until one 120-texel tile holds the level.
     std::uint64_t w = 152089, h = 6083, total = 0;
@@ -99,8 +99,8 @@ TEST(PaintingTiles, ScrollPyramidMatchesDirectCount) {
     EXPECT_EQ(t.total_tiles(), total);
     EXPECT_EQ(t.page_table_width(), 2048u);  // 1268 tiles -> 2048
     EXPECT_EQ(t.page_table_height(), 64u);   // 51 tiles -> 64
-    EXPECT_THROW(PaintingTiles(0, 10), InvalidArgument);
-    EXPECT_THROW(PaintingTiles(10, 10, 8, 4), InvalidArgument);
+    EXPECT_THROW(PaintingGeometry(0, 10), InvalidArgument);
+    EXPECT_THROW(PaintingGeometry(10, 10, 8, 4), InvalidArgument);
 }
 
 TEST(RequestKey, RoundTripBeyondSeedFieldWidths) {
@@ -134,7 +134,7 @@ TEST(TileIndex, IsABijectionOverEveryTile) {
 }
 
 TEST(ResidentSet, FinestResidentAncestor) {
-    ResidentSet r({PaintingTiles(1000, 1000)});  // levels: 9x9, 5x5, 3x3, 2x2, 1x1
+    ResidentSet r({PaintingGeometry(1000, 1000)});  // levels: 9x9, 5x5, 3x3, 2x2, 1x1
     ASSERT_EQ(r.paintings()[0].levels(), 5u);
     const std::uint64_t q = pack_request(0, 0, 7, 8);
     EXPECT_EQ(r.resident_level(q), 4u);  // only the coarsest tile
@@ -150,7 +150,7 @@ namespace {
 // A wall painting facing -z with texel (0,0) at (0, 1, 0), like the scroll.
 struct WallScene {
     ExhibitionScene scene;
-    PaintingTiles tiles{152089, 6083};
+    PaintingGeometry tiles{152089, 6083};
     WallScene() {
         scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
         scene.add_box({-1, 0, 0.01}, {13, 3, 0.2});
@@ -267,7 +267,7 @@ TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
     // A small painting seen whole, edges and all, at an angle: every key's tile is the one
     // holding the pixel's texel at the key's level (the last tile of a row or column reaches
     // the painting's edge), recomputed here from the uv output.
-    const PaintingTiles tiles(1000, 700);
+    const PaintingGeometry tiles(1000, 700);
     const PaintingOnWall wall(tiles);
     const Camera cam({0.3, 0.6, -1.2}, {0.15, -0.05, 1}, {0, 1, 0}, 0.6, 0.6, 1600, 1600);
     const std::uint32_t W = 200, H = 200;
@@ -294,7 +294,7 @@ TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
 
 TEST(Feedback, OccludersAndMissesGiveNoRequest) {
     ExhibitionScene scene;
-    const PaintingTiles tiles(1000, 1000);
+    const PaintingGeometry tiles(1000, 1000);
     scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1, 1);
     scene.add_box({-0.1, -0.1, -0.5}, {1.1, 1.1, -0.4});  // a box hiding the painting
     scene.commit();

@@ -58,13 +58,13 @@ void cut_tile(const MipTexture::Level& lv, std::uint32_t T, std::uint32_t E, con
         }
 }
 
-std::vector<TileKey> all_tiles(const VtLayout& layout) {
+std::vector<TileKey> all_tiles(const PackGeometry& layout) {
     std::vector<TileKey> keys;
     for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
         const auto& pt = layout.paintings[p];
-        for (std::uint32_t l = 0; l < pt.level_count(); ++l)
-            for (std::uint32_t y = 0; y < pt.tiles_y[l]; ++y)
-                for (std::uint32_t x = 0; x < pt.tiles_x[l]; ++x) keys.push_back({p, l, x, y});
+        for (std::uint32_t l = 0; l < pt.levels(); ++l)
+            for (std::uint32_t y = 0; y < pt.tiles_y(l); ++y)
+                for (std::uint32_t x = 0; x < pt.tiles_x(l); ++x) keys.push_back({p, l, x, y});
     }
     return keys;
 }
@@ -73,9 +73,9 @@ std::vector<TileKey> all_tiles(const VtLayout& layout) {
 // A random painting (make_levels) as the pack would cut it, and a cache to fill with its tiles.
 struct CutPainting {
     CutPainting(std::uint32_t W, std::uint32_t H, std::uint32_t T, std::uint32_t E, std::uint32_t seed)
-        : layout(VtLayout::make(T, E, {{W, H}})),
-          levels(make_levels(W, H, layout.paintings[0].level_count(), seed)) {}
-    std::uint32_t level_count() const { return layout.paintings[0].level_count(); }
+        : layout(PackGeometry::make(T, E, {{W, H}})),
+          levels(make_levels(W, H, layout.paintings[0].levels(), seed)) {}
+    std::uint32_t level_count() const { return layout.paintings[0].levels(); }
     VirtualTexture::TileSource source() const {
         return [this](const TileKey& k, std::uint8_t* out) {
             cut_tile(levels[k.level], layout.tile_size, layout.border, k, out);
@@ -102,29 +102,29 @@ struct CutPainting {
         std::shuffle(keys.begin(), keys.end(), rng);
         return insert(vt, keys, std::size_t(share * keys.size()));
     }
-    VtLayout layout;
+    PackGeometry layout;
     std::vector<MipTexture::Level> levels;
 };
 
 }  // namespace
 
-TEST(VtLayout, TailLevelsOfTheScroll) {
+TEST(PackGeometry, TailLevelsOfTheScroll) {
     // The seed's scroll: Mp = 2048, Np = 64, levels 0..11; levels 7..11 are the tail (21 tiles).
-    const VtLayout layout = VtLayout::make(128, 4, {{152089, 6083}});
-    const VtPainting& p = layout.paintings[0];
-    EXPECT_EQ(p.table_w, 2048u);
-    EXPECT_EQ(p.table_h, 64u);
-    EXPECT_EQ(p.level_count(), 12u);
+    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
+    const PaintingGeometry& p = layout.paintings[0];
+    EXPECT_EQ(p.page_table_width(), 2048u);
+    EXPECT_EQ(p.page_table_height(), 64u);
+    EXPECT_EQ(p.levels(), 12u);
     EXPECT_EQ(p.merged_levels(), 7u);
     std::uint32_t tail = 0;
-    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x[l] * p.tiles_y[l];
+    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x(l) * p.tiles_y(l);
     EXPECT_EQ(tail, 21u);
-    EXPECT_EQ(p.tiles_x[11] * p.tiles_y[11], 1u);
+    EXPECT_EQ(p.tiles_x(11) * p.tiles_y(11), 1u);
 }
 
 TEST(PageTable, IncrementalUpdatesMatchFullRebuild) {
     // Three paintings of awkward sizes; a small cache so LRU evictions happen constantly.
-    const VtLayout layout = VtLayout::make(16, 2, {{500, 90}, {37, 301}, {12, 12}});
+    const PackGeometry layout = PackGeometry::make(16, 2, {{500, 90}, {37, 301}, {12, 12}});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
     VirtualTexture vt(layout, 6, 6, [](const TileKey&, std::uint8_t*) {});
     const auto keys = all_tiles(layout);
@@ -143,11 +143,11 @@ TEST(PageTable, IncrementalUpdatesMatchFullRebuild) {
 }
 
 TEST(PageTable, LookupIsTheFinestResidentAncestor) {
-    const VtLayout layout = VtLayout::make(16, 2, {{300, 200}});
+    const PackGeometry layout = PackGeometry::make(16, 2, {{300, 200}});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
     VirtualTexture vt(layout, 8, 8, [](const TileKey&, std::uint8_t*) {});
     const auto& pt = layout.paintings[0];
-    const std::uint32_t L = pt.level_count();
+    const std::uint32_t L = pt.levels();
     // Nothing streamed yet: every entry falls back to the finest pinned level (the first
     // tail level, or the coarsest level when there is no tail).
     const std::uint32_t first_pinned = std::min(pt.merged_levels(), L - 1);
@@ -162,7 +162,7 @@ TEST(PageTable, LookupIsTheFinestResidentAncestor) {
 }
 
 TEST(VirtualTexture, LruEvictsLeastRecentlyUsedAndKeepsPinned) {
-    const VtLayout layout = VtLayout::make(16, 2, {{200, 30}});
+    const PackGeometry layout = PackGeometry::make(16, 2, {{200, 30}});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
     VirtualTexture vt(layout, 4, 3, [](const TileKey&, std::uint8_t*) {});
     const std::uint64_t pinned = vt.stats().pinned;
@@ -180,11 +180,11 @@ TEST(VirtualTexture, LruEvictsLeastRecentlyUsedAndKeepsPinned) {
     EXPECT_EQ(s.evictions, 1u);
     EXPECT_EQ(s.resident, 12u);
     const auto& pt = layout.paintings[0];
-    EXPECT_TRUE(vt.is_pinned({0, pt.level_count() - 1, 0, 0}));
+    EXPECT_TRUE(vt.is_pinned({0, pt.levels() - 1, 0, 0}));
 }
 
 TEST(VirtualTexture, RejectsTooFewSlotsAndBadKeys) {
-    const VtLayout layout = VtLayout::make(128, 4, {{152089, 6083}});
+    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
     EXPECT_THROW(VirtualTexture(layout, 4, 4, [](const TileKey&, std::uint8_t*) {}), InvalidArgument);
     VirtualTexture vt(layout, 5, 5, [](const TileKey&, std::uint8_t*) {});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
@@ -380,7 +380,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     // 196301 x 5197 (seed 000 Table 4). Level 0 alternates 0 / 255 between columns, so a
     // bilinear sample between two texels reads the fraction directly: value = 255 f or 255 (1-f).
     const std::uint32_t W = 196301, H = 5197, T = 128, E = 4, P = T - 2 * E;
-    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
+    const PackGeometry layout = PackGeometry::make(T, E, {{W, H}});
     auto texel = [&](std::int64_t x) -> std::uint8_t { return (std::clamp<std::int64_t>(x, 0, W - 1) % 2) ? 255 : 0; };
     auto source = [&](const TileKey& k, std::uint8_t* out) {
         for (std::uint32_t j = 0; j < T; ++j)
@@ -390,7 +390,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     };
     VirtualTexture vt(layout, 8, 8, source);
     std::vector<std::uint8_t> tile(layout.tile_bytes());
-    const std::uint32_t last = layout.paintings[0].tiles_x[0] - 1;
+    const std::uint32_t last = layout.paintings[0].tiles_x(0) - 1;
     for (std::uint32_t tx : {last - 1, last}) {
         source({0, 0, tx, 20}, tile.data());
         vt.insert({0, 0, tx, 20}, tile.data());
