@@ -44,3 +44,17 @@ TEST(PackGeometry, Table4PaintingHasPowerOfTwoPageTable) {
     EXPECT_THROW(PaintingGeometry(10, 10, 8, 4), InvalidArgument);
     EXPECT_THROW(PaintingGeometry(0, 10, 128, 4), InvalidArgument);
 }
+
+TEST(PackGeometry, TailLevelsOfTheScroll) {
+    // The seed's scroll: Mp = 2048, Np = 64, levels 0..11; levels 7..11 are the tail (21 tiles).
+    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
+    const PaintingGeometry& p = layout.paintings[0];
+    EXPECT_EQ(p.page_table_width(), 2048u);
+    EXPECT_EQ(p.page_table_height(), 64u);
+    EXPECT_EQ(p.levels(), 12u);
+    EXPECT_EQ(p.merged_levels(), 7u);
+    std::uint32_t tail = 0;
+    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x(l) * p.tiles_y(l);
+    EXPECT_EQ(tail, 21u);
+    EXPECT_EQ(p.tiles_x(11) * p.tiles_y(11), 1u);
+}
