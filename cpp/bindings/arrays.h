@@ -48,26 +48,25 @@ nanobind::ndarray<nanobind::numpy, T> to_numpy(std::vector<T>&& v,
     return nanobind::ndarray<nanobind::numpy, T>(heap->data(), shape.size(), shape.begin(), owner);
 }
 
-// A C-contiguous uint64 array of any shape, viewed as a flat feedback buffer.
+// A uint64 array of any shape, viewed as a flat feedback buffer (nanobind makes a C-contiguous
+// copy of a strided one). Other dtypes are refused rather than converted: a key is not a
+// number to round.
+using KeyArray = nanobind::ndarray<const std::uint64_t, nanobind::c_contig, nanobind::device::cpu>;
 struct HeldBuffer {
-    nanobind::ndarray<> array;
+    KeyArray array;
     FeedbackBuffer view;
 };
 
 inline HeldBuffer as_buffer(nanobind::handle h, const char* what) {
-    nanobind::ndarray<> a;
-    if (!nanobind::try_cast(h, a))
+    nanobind::ndarray<> probe;
+    if (!nanobind::try_cast(h, probe))
         throw gigascroll::InvalidArgument(std::string(what) + " must be a numpy array of uint64 request keys");
-    require(a.dtype() == nanobind::dtype<std::uint64_t>(),
+    require(probe.dtype() == nanobind::dtype<std::uint64_t>(),
             std::string(what) + " must have dtype uint64 (request keys)");
-    require(a.device_type() == nanobind::device::cpu::value, std::string(what) + " must be on the CPU");
-    std::int64_t expect = 1;
-    for (std::size_t i = a.ndim(); a.size() > 0 && i-- > 0;) {
-        require(a.shape(i) == 1 || a.stride(i) == expect,
-                std::string(what) + " must be C-contiguous");
-        expect *= std::int64_t(a.shape(i));
-    }
-    return {a, FeedbackBuffer(static_cast<const std::uint64_t*>(a.data()), a.size())};
+    KeyArray a;
+    if (!nanobind::try_cast(h, a))
+        throw gigascroll::InvalidArgument(std::string(what) + " must be a CPU array");
+    return {a, FeedbackBuffer(a.data(), a.size())};
 }
 
 // Accepts one array or a sequence of arrays (left eye, right eye, magnifier ...).
@@ -105,6 +104,22 @@ using RequestKeys = nanobind::ndarray<const std::uint64_t, nanobind::ndim<1>, na
 inline std::vector<TileKey> to_tile_keys(const RequestKeys& a) {
     std::vector<TileKey> keys(a.shape(0));
     for (std::size_t i = 0; i < keys.size(); ++i) keys[i] = tile_key_of(a.data()[i]);
+    return keys;
+}
+
+// (n, 4) integer keys (painting, level, tx, ty), each in [0, 2^20).
+using Keys = nanobind::ndarray<const std::int64_t, nanobind::ndim<2>, nanobind::c_contig,
+                               nanobind::device::cpu>;
+inline std::vector<TileKey> to_keys(const Keys& a) {
+    require(a.shape(1) == 4, "keys must have shape (n, 4): painting, level, tx, ty");
+    std::vector<TileKey> keys(a.shape(0));
+    const std::int64_t* d = a.data();
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        for (int c = 0; c < 4; ++c)
+            require(d[4 * i + c] >= 0 && d[4 * i + c] < (1 << 20), "key values must be in [0, 2^20)");
+        keys[i] = {std::uint32_t(d[4 * i]), std::uint32_t(d[4 * i + 1]), std::uint32_t(d[4 * i + 2]),
+                   std::uint32_t(d[4 * i + 3])};
+    }
     return keys;
 }
 

@@ -25,23 +25,7 @@ using namespace nb::literals;
 
 namespace gigascroll::bindings {
 namespace {
-using Keys = nb::ndarray<const std::int64_t, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using TileIn = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
-std::vector<TileKey> to_keys(const Keys& a) {
-    require(a.shape(1) == 4, "keys must have shape (n, 4): painting, level, tx, ty");
-    std::vector<TileKey> keys(a.shape(0));
-    if (keys.empty()) return keys;  // numpy gives empty arrays arbitrary strides
-    require(a.stride(1) == 1 && (keys.size() == 1 || a.stride(0) == 4), "keys must be C-contiguous");
-    const std::int64_t* d = a.data();
-    for (std::size_t i = 0; i < keys.size(); ++i) {
-        for (int c = 0; c < 4; ++c)
-            require(d[4 * i + c] >= 0 && d[4 * i + c] < (1 << 20), "key values must be in [0, 2^20)");
-        keys[i] = {std::uint32_t(d[4 * i]), std::uint32_t(d[4 * i + 1]), std::uint32_t(d[4 * i + 2]),
-                   std::uint32_t(d[4 * i + 3])};
-    }
-    return keys;
-}
-
 nb::dict stats_dict(const CacheStats& s) {
     nb::dict d;
     d["resident"] = s.resident;
@@ -72,9 +56,8 @@ void bind_cache(nb::module_& m) {
         .def_prop_ro("tile_size", [](const VirtualTexture& vt) { return vt.layout().tile_size; })
         .def("insert", [](VirtualTexture& vt, const KeyTuple& key, const TileIn& data) {
             const std::size_t T = vt.layout().tile_size;
-            require(data.shape(0) == T && data.shape(1) == T && data.shape(2) == 3 &&
-                        data.stride(2) == 1 && data.stride(1) == 3 && data.stride(0) == std::int64_t(3 * T),
-                    "tile data must be a C-contiguous (" + std::to_string(T) + ", " + std::to_string(T) +
+            require(data.shape(0) == T && data.shape(1) == T && data.shape(2) == 3,
+                    "tile data must be a (" + std::to_string(T) + ", " + std::to_string(T) +
                         ", 3) uint8 array");
             const auto ev = vt.insert(to_key(key), data.data());
             return ev ? std::optional<KeyTuple>(to_tuple(*ev)) : std::nullopt; },

@@ -23,23 +23,7 @@ using namespace nb::literals;
 
 namespace gigascroll::bindings {
 namespace {
-using Keys = nb::ndarray<const std::int64_t, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using Tile = nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>>;
-std::vector<TileKey> to_keys(const Keys& a) {
-    require(a.shape(1) == 4, "keys must have shape (n, 4): painting, level, tx, ty");
-    std::vector<TileKey> keys(a.shape(0));
-    if (keys.empty()) return keys;  // numpy gives empty arrays arbitrary strides
-    require(a.stride(1) == 1 && (keys.size() == 1 || a.stride(0) == 4), "keys must be C-contiguous");
-    const std::int64_t* d = a.data();
-    for (std::size_t i = 0; i < keys.size(); ++i) {
-        for (int c = 0; c < 4; ++c)
-            require(d[4 * i + c] >= 0 && d[4 * i + c] < (1 << 20), "key values must be in [0, 2^20)");
-        keys[i] = {std::uint32_t(d[4 * i]), std::uint32_t(d[4 * i + 1]), std::uint32_t(d[4 * i + 2]),
-                   std::uint32_t(d[4 * i + 3])};
-    }
-    return keys;
-}
-
 Tile new_tile(std::size_t T, const std::uint8_t* src) {
     FreshArray<std::uint8_t, nb::ndim<3>> tile({T, T, 3});
     std::memcpy(tile.data, src, T * T * 3);

@@ -25,8 +25,8 @@ using namespace nb::literals;
 namespace gigascroll::bindings {
 namespace {
 
-using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::device::cpu>;
-using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::device::cpu>;
+using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 
 nb::dict geometry_dict(const PaintingGeometry& g) {
     nb::dict d;
@@ -65,8 +65,6 @@ void check_tile_out(const TilePack& pack, const TileOut& out) {
     const std::size_t T = pack.tile_size();
     require(out.shape(0) == T && out.shape(1) == T && out.shape(2) == 3,
             "out must have shape (" + std::to_string(T) + ", " + std::to_string(T) + ", 3)");
-    require(out.stride(2) == 1 && out.stride(1) == 3 && out.stride(0) == std::int64_t(3 * T),
-            "out must be C-contiguous");
 }
 
 }  // namespace
@@ -207,13 +205,10 @@ void bind_pack(nb::module_& m) {
             "table_x"_a = 0, "table_y"_a = 0)
         .def("add_rows", [](PackBuilder& b, Rows rows) {
             require(rows.shape(2) == 3, "rows must have shape (n, width, 3)");
-            require(rows.stride(2) == 1 && rows.stride(1) == 3 &&
-                        rows.stride(0) == std::int64_t(rows.shape(1) * 3),
-                    "rows must be C-contiguous");
             nb::gil_scoped_release release;
             b.add_rows(rows.data(), static_cast<std::uint32_t>(rows.shape(0)),
                        static_cast<std::uint32_t>(rows.shape(1))); },
-            "rows"_a.noconvert(), "uint8 array (n, width, 3), the next rows of the current painting")
+            "rows"_a, "uint8 array (n, width, 3), the next rows of the current painting")
         .def("end_painting", &PackBuilder::end_painting)
         .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
              "page_table_json"_a = "{}")

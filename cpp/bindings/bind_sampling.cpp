@@ -28,23 +28,21 @@ using Coords = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::
 using Lods = nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Values = nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
 using Levels = nb::ndarray<std::int8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
-// Fills a SampleRequest from the arrays, checking sizes and contiguity.
+// Fills a SampleRequest from the arrays (nanobind checked dtype and contiguity), checking sizes.
 SampleRequest sample_request(std::uint32_t painting, const Coords& u, const Coords& v,
                              const std::optional<Lods>& lod, float lod_scalar,
                              const std::string& filter, Values& out, Levels& levels,
                              unsigned threads) {
     const std::size_t n = u.shape(0);
     require(v.shape(0) == n, "u and v must have the same length");
-    require(u.stride(0) == 1 && v.stride(0) == 1, "u and v must be contiguous");
-    require(out.shape(0) == n && out.shape(1) == 3 && out.stride(1) == 1 && out.stride(0) == 3,
-            "out must be a contiguous (n, 3) float32 array");
-    require(levels.shape(0) == n && levels.stride(0) == 1, "levels must be a contiguous (n,) int8 array");
+    require(out.shape(0) == n && out.shape(1) == 3, "out must be an (n, 3) float32 array");
+    require(levels.shape(0) == n, "levels must be an (n,) int8 array");
     SampleRequest r;
     r.painting = painting;
     r.u = u.data();
     r.v = v.data();
     if (lod) {
-        require(lod->shape(0) == n && lod->stride(0) == 1, "lod must be a contiguous array of length n");
+        require(lod->shape(0) == n, "lod must be an array of length n");
         r.lod = lod->data();
     }
     r.lod_scalar = lod_scalar;
@@ -66,7 +64,7 @@ void bind_sampling(nb::module_& m) {
             nb::gil_scoped_release release;
             sample(vt, r); },
             "vt"_a, "painting"_a, "u"_a, "v"_a, "lod"_a.none(), "lod_scalar"_a, "filter"_a,
-            "out"_a, "levels"_a, "threads"_a);
+            "out"_a.noconvert(), "levels"_a.noconvert(), "threads"_a);
 
     nb::class_<MipTexture>(m, "MipTexture",
         "A plain in-memory mip-mapped texture sampled by the same filter code (the baseline).")
@@ -89,7 +87,7 @@ void bind_sampling(nb::module_& m) {
             const SampleRequest r = sample_request(0, u, v, lod, lod_scalar, filter, out, levels, threads);
             nb::gil_scoped_release release;
             t.sample(r); },
-            "texture"_a, "u"_a, "v"_a, "lod"_a.none(), "lod_scalar"_a, "filter"_a, "out"_a, "levels"_a, "threads"_a);
+            "texture"_a, "u"_a, "v"_a, "lod"_a.none(), "lod_scalar"_a, "filter"_a, "out"_a.noconvert(), "levels"_a.noconvert(), "threads"_a);
 
     m.def("display_view", [](const VirtualTexture& vt,
                              nb::ndarray<const std::uint64_t, nb::ndim<2>, nb::c_contig> keys,

@@ -32,14 +32,8 @@ void write_fully(int fd, const void* data, std::size_t size, const std::string& 
 
 }  // namespace
 
-struct PackBuilder::Level {
-    LevelGeometry geo;
-    std::uint32_t shift = 0;             // l: a texel covers 2^l x 2^l level-0 pixels
-    std::vector<std::uint8_t> window;    // texel rows [win_base, win_base + win_rows)
-    std::uint32_t win_base = 0, win_rows = 0;
-    std::uint32_t rows_done = 0;         // rows of this level completed so far
+struct PackBuilder::TileRows {
     std::uint32_t next_tile_row = 0;
-    std::vector<std::uint64_t> acc;      // level-0 sums of the row in progress (levels >= 1)
     std::vector<TileEntry> entries;      // tiles_x * tiles_y
 };
 
@@ -68,7 +62,7 @@ PackBuilder::~PackBuilder() {
 }
 
 std::uint32_t PackBuilder::rows_done() const {
-    return levels_.empty() ? 0 : levels_[0].rows_done;
+    return mip_ ? mip_->level(0).rows_done : 0;
 }
 
 void PackBuilder::write_all(const void* data, std::size_t size) {
@@ -84,15 +78,10 @@ void PackBuilder::begin_painting(const PaintingSpec& spec) {
     p.first_entry = paintings_.empty()
                         ? 0
                         : paintings_.back().first_entry + paintings_.back().geometry.total_tiles();
-    levels_.clear();
-    levels_.resize(p.geometry.levels());
-    for (std::size_t l = 0; l < levels_.size(); ++l) {
-        Level& lv = levels_[l];
-        lv.geo = p.geometry.level(std::uint32_t(l));
-        lv.shift = static_cast<std::uint32_t>(l);
-        if (l > 0) lv.acc.assign(std::size_t(lv.geo.width) * 3, 0);
-        lv.entries.assign(std::size_t(lv.geo.tiles_x) * lv.geo.tiles_y, TileEntry{});
-    }
+    mip_ = std::make_unique<MipReducer>(p.geometry, options_.threads);
+    rows_.assign(p.geometry.levels(), TileRows{});
+    for (std::uint32_t l = 0; l < p.geometry.levels(); ++l)
+        rows_[l].entries.assign(p.geometry.tile_count(l), TileEntry{});
     paintings_.push_back(std::move(p));
     open_painting_ = true;
 }
@@ -102,148 +91,46 @@ void PackBuilder::add_rows(const std::uint8_t* rgb, std::uint32_t rows, std::uin
     const PaintingGeometry& g = paintings_.back().geometry;
     require(width == g.width(), "add_rows: rows are " + std::to_string(width) +
                                   " pixels wide, the painting is " + std::to_string(g.width()));
-    require(std::uint64_t(levels_[0].rows_done) + rows <= g.height(),
+    require(std::uint64_t(rows_done()) + rows <= g.height(),
             "add_rows: " + std::to_string(rows) + " rows at row " +
-                std::to_string(levels_[0].rows_done) + " overflow the image height " +
+                std::to_string(rows_done()) + " overflow the image height " +
                 std::to_string(g.height()));
     // Sub-bands of at most one payload height: the level-0 window then never holds more
     // than about two tile rows, whatever band size the caller uses.
     const std::uint32_t step = g.payload();
     for (std::uint32_t done = 0; done < rows; done += step) {
         const std::uint32_t n = std::min(step, rows - done);
-        add_sub_band(rgb + std::size_t(done) * width * 3, n);
+        mip_->add_rows(rgb + std::size_t(done) * width * 3, n);
+        emit_ready_tiles();
     }
-}
-
-void PackBuilder::add_sub_band(const std::uint8_t* rgb, std::uint32_t rows) {
-    const PaintingGeometry& g = paintings_.back().geometry;
-    const std::uint32_t y0 = levels_[0].rows_done;
-
-    // Rows each level completes in this band; grow the windows before the parallel part.
-    std::vector<std::uint32_t> done(levels_.size());
-    done[0] = y0 + rows;
-    for (std::size_t l = 1; l < levels_.size(); ++l) {
-        const Level& up = levels_[l - 1];
-        done[l] = done[l - 1] == up.geo.height ? levels_[l].geo.height : done[l - 1] / 2;
-    }
-    for (std::size_t l = 0; l < levels_.size(); ++l) {
-        Level& lv = levels_[l];
-        const std::uint32_t added = done[l] - lv.rows_done;
-        lv.window.resize(std::size_t(lv.win_rows + added) * lv.geo.width * 3);
-    }
-
-    // Column strips aligned to 2^(levels-1) stay independent through the whole chain.
-    const std::uint32_t align = 1u << (levels_.size() - 1);
-    const std::uint32_t strip = std::max<std::uint32_t>(align, ((4096 + align - 1) / align) * align);
-    const std::size_t strips = (g.width() + strip - 1) / strip;
-    parallel_for(strips, 1, [&](std::size_t b, std::size_t e) {
-        for (std::size_t s = b; s < e; ++s) {
-            const std::uint32_t x0 = static_cast<std::uint32_t>(s * strip);
-            const std::uint32_t x1 = std::min<std::uint32_t>(g.width(), x0 + strip);
-            reduce_strip(x0, x1, rgb, y0, rows);
-        }
-    }, options_.threads);
-
-    for (std::size_t l = 0; l < levels_.size(); ++l) {
-        Level& lv = levels_[l];
-        lv.win_rows += done[l] - lv.rows_done;
-        lv.rows_done = done[l];
-    }
-    emit_ready_tiles();
-}
-
-// Level 0 rows [y_begin, y_begin + rows), columns [x0, x1): copy into the window and cascade
-// the sums down the chain. Only this strip's columns of any buffer are touched.
-void PackBuilder::reduce_strip(std::uint32_t x0, std::uint32_t x1, const std::uint8_t* rgb,
-                               std::uint32_t y_begin, std::uint32_t rows) {
-    Level& l0 = levels_[0];
-    const std::uint32_t W = l0.geo.width;
-    for (std::uint32_t i = 0; i < rows; ++i) {
-        const std::uint32_t y = y_begin + i;
-        const std::uint8_t* src = rgb + (std::size_t(i) * W + x0) * 3;
-        std::uint8_t* dst = l0.window.data() + (std::size_t(y - l0.win_base) * W + x0) * 3;
-        std::memcpy(dst, src, std::size_t(x1 - x0) * 3);
-        if (levels_.size() == 1) continue;
-        std::uint64_t* acc = levels_[1].acc.data();
-        const std::uint32_t X0 = x0 >> 1, X1 = (x1 + 1) >> 1;
-        for (std::uint32_t X = X0; X < X1; ++X) {
-            const std::uint32_t xa = 2 * X, xb = std::min(2 * X + 1, W - 1);
-            const std::uint8_t* a = src + std::size_t(xa - x0) * 3;
-            for (int c = 0; c < 3; ++c) acc[3 * X + c] += a[c];
-            if (xb != xa) {
-                const std::uint8_t* bp = src + std::size_t(xb - x0) * 3;
-                for (int c = 0; c < 3; ++c) acc[3 * X + c] += bp[c];
-            }
-        }
-        if ((y & 1) || y == l0.geo.height - 1) finish_row(1, y >> 1, X0, X1);
-    }
-}
-
-// Row y of level l is complete in columns [x0, x1) of that level: turn its sums into texels,
-// pass them on to level l+1 and recurse when that row completes too.
-void PackBuilder::finish_row(std::size_t l, std::uint32_t y, std::uint32_t x0, std::uint32_t x1) {
-    Level& lv = levels_[l];
-    const PaintingGeometry& g = paintings_.back().geometry;
-    const std::uint32_t s = lv.shift;
-    const std::uint64_t full = 1ull << (2 * s);
-    const std::uint64_t cy =
-        std::min<std::uint64_t>(g.height(), (std::uint64_t(y) + 1) << s) - (std::uint64_t(y) << s);
-    std::uint64_t* acc = lv.acc.data();
-    std::uint8_t* dst = lv.window.data() + std::size_t(y - lv.win_base) * lv.geo.width * 3;
-    const bool last_level = l + 1 == levels_.size();
-    std::uint64_t* next = last_level ? nullptr : levels_[l + 1].acc.data();
-    for (std::uint32_t x = x0; x < x1; ++x) {
-        const std::uint64_t cx =
-            std::min<std::uint64_t>(g.width(), (std::uint64_t(x) + 1) << s) - (std::uint64_t(x) << s);
-        const std::uint64_t count = cx * cy;
-        std::uint64_t* a = acc + 3 * std::size_t(x);
-        if (count == full) {
-            for (int c = 0; c < 3; ++c) dst[3 * x + c] = std::uint8_t((a[c] + full / 2) >> (2 * s));
-        } else {
-            for (int c = 0; c < 3; ++c) dst[3 * x + c] = std::uint8_t((a[c] + count / 2) / count);
-        }
-        if (next) {
-            std::uint64_t* n = next + 3 * std::size_t(x >> 1);
-            for (int c = 0; c < 3; ++c) n[c] += a[c];
-        }
-        a[0] = a[1] = a[2] = 0;
-    }
-    if (!last_level && ((y & 1) || y == lv.geo.height - 1))
-        finish_row(l + 1, y >> 1, x0 >> 1, (x1 + 1) >> 1);
 }
 
 void PackBuilder::emit_ready_tiles() {
     const std::uint32_t P = options_.tile_size - 2 * options_.border;
     const std::uint32_t b = options_.border;
-    for (Level& lv : levels_) {
-        while (lv.next_tile_row < lv.geo.tiles_y) {
-            const std::uint32_t ty = lv.next_tile_row;
+    for (std::size_t l = 0; l < rows_.size(); ++l) {
+        const MipReducer::Level& lv = mip_->level(l);
+        TileRows& tr = rows_[l];
+        while (tr.next_tile_row < lv.geo.tiles_y) {
+            const std::uint32_t ty = tr.next_tile_row;
             const std::uint32_t last =
                 std::min<std::uint64_t>(lv.geo.height - 1, std::uint64_t(ty) * P + P + b - 1);
             if (last >= lv.rows_done) break;
-            emit_tile_row(lv, ty);
-            ++lv.next_tile_row;
+            emit_tile_row(lv, tr, ty);
+            ++tr.next_tile_row;
         }
         // Drop the rows no later tile row needs.
         const std::uint32_t keep_from =
-            lv.next_tile_row < lv.geo.tiles_y
+            tr.next_tile_row < lv.geo.tiles_y
                 ? std::min(lv.rows_done,
                            static_cast<std::uint32_t>(std::max<std::int64_t>(
-                               0, std::int64_t(lv.next_tile_row) * P - b)))
+                               0, std::int64_t(tr.next_tile_row) * P - b)))
                 : lv.rows_done;
-        if (keep_from > lv.win_base) {
-            const std::size_t row_bytes = std::size_t(lv.geo.width) * 3;
-            const std::uint32_t drop = keep_from - lv.win_base;
-            std::memmove(lv.window.data(), lv.window.data() + drop * row_bytes,
-                         (lv.win_rows - drop) * row_bytes);
-            lv.win_rows -= drop;
-            lv.win_base = keep_from;
-            lv.window.resize(lv.win_rows * row_bytes);
-        }
+        mip_->drop_rows(l, keep_from);
     }
 }
 
-void PackBuilder::emit_tile_row(Level& lv, std::uint32_t ty) {
+void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::uint32_t ty) {
     const std::uint32_t T = options_.tile_size, b = options_.border, P = T - 2 * b;
     const std::uint32_t W = lv.geo.width, H = lv.geo.height;
     const std::size_t tile_bytes = std::size_t(T) * T * 3;
@@ -271,7 +158,7 @@ void PackBuilder::emit_tile_row(Level& lv, std::uint32_t ty) {
     // and compressed in parallel, then appended to tiles.bin in tx order.
     constexpr std::uint32_t kGroup = 64;
     const std::uint32_t n = lv.geo.tiles_x;
-    TileEntry* entries = lv.entries.data() + std::size_t(ty) * n;
+    TileEntry* entries = tr.entries.data() + std::size_t(ty) * n;
     std::vector<std::vector<std::uint8_t>> packed(raw ? 0 : kGroup);
     std::uint64_t sums[kGroup];
     for (std::uint32_t g0 = 0; g0 < n; g0 += kGroup) {
@@ -320,15 +207,16 @@ void PackBuilder::emit_tile_row(Level& lv, std::uint32_t ty) {
 void PackBuilder::end_painting() {
     require(open_painting_, "end_painting: no painting begun");
     Painting& p = paintings_.back();
-    require(levels_[0].rows_done == p.geometry.height(),
-            "end_painting: only " + std::to_string(levels_[0].rows_done) + " of " +
+    require(rows_done() == p.geometry.height(),
+            "end_painting: only " + std::to_string(rows_done()) + " of " +
                 std::to_string(p.geometry.height()) + " rows were added");
-    for (Level& lv : levels_) {
-        if (lv.next_tile_row != lv.geo.tiles_y || lv.rows_done != lv.geo.height)
-            throw std::logic_error("pack builder: level incomplete at end of painting");
-        p.entries.insert(p.entries.end(), lv.entries.begin(), lv.entries.end());
+    for (std::size_t l = 0; l < rows_.size(); ++l) {
+        const MipReducer::Level& lv = mip_->level(l);
+        GS_CHECK(rows_[l].next_tile_row == lv.geo.tiles_y && lv.rows_done == lv.geo.height);
+        p.entries.insert(p.entries.end(), rows_[l].entries.begin(), rows_[l].entries.end());
     }
-    levels_.clear();
+    mip_.reset();
+    rows_.clear();
     open_painting_ = false;
 }
 

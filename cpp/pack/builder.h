@@ -1,25 +1,21 @@
-// Write side of a tile pack (format in pack_format.h). The image is fed band by band, top to
-// bottom; the builder keeps, per mip level, only the rows that the next tile row still needs,
-// so memory grows with the image width, not its area.
-//
-// A mip texel is the rounded average of the real level-0 pixels under it: each level keeps the
-// exact 64-bit sums of its texels' level-0 pixels and their counts, never averages of averages,
-// so padding cannot bleed in and odd sizes are exact.
-//
-// Work per band, on `threads` threads:
-//   1. reduce: column strips aligned to 2^(levels-1) level-0 pixels are independent through the
-//      whole mip chain, so each thread cascades its strip through every level;
+// Write side of a tile pack (format in format.h). The image is fed band by band, top to
+// bottom. Work per band, on `threads` threads:
+//   1. reduce: the MipReducer (mip_reducer.h) cascades the band through every level;
 //   2. emit: every tile row whose texels are all present is cut (with clamped borders),
-//      checksummed and compressed in parallel, then appended to tiles.bin in order.
+//      checksummed and compressed in parallel, then appended to tiles.bin in order, and the
+//      rows no later tile row needs are dropped, so memory grows with the image width, not
+//      its area.
 // The builder writes tiles.bin, index.bin and, in finish(), manifest.json last. The caller
 // builds into a temporary directory and renames it, so an interrupted build never looks done.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "pack/format.h"
 #include "pack/geometry.h"
+#include "pack/mip_reducer.h"
 
 namespace gigascroll {
 
@@ -64,15 +60,11 @@ public:
     std::uint64_t bytes_written() const { return data_bytes_; }
 
 private:
-    struct Level;
+    struct TileRows;  // per level: the next tile row to cut, the entries cut so far
     struct Painting;
 
-    void add_sub_band(const std::uint8_t* rgb, std::uint32_t rows);
-    void reduce_strip(std::uint32_t x0, std::uint32_t x1, const std::uint8_t* rgb,
-                      std::uint32_t y_begin, std::uint32_t rows);
-    void finish_row(std::size_t l, std::uint32_t y, std::uint32_t x0, std::uint32_t x1);
     void emit_ready_tiles();
-    void emit_tile_row(Level& lv, std::uint32_t ty);
+    void emit_tile_row(const MipReducer::Level& lv, TileRows& rows, std::uint32_t ty);
     void write_all(const void* data, std::size_t size);
 
     std::string directory_;
@@ -81,7 +73,8 @@ private:
     std::uint64_t data_bytes_ = 0;
     std::uint64_t tiles_written_ = 0;
     std::vector<Painting> paintings_;
-    std::vector<Level> levels_;   // mip chain state of the painting being built
+    std::unique_ptr<MipReducer> mip_;  // mip chain of the painting being built
+    std::vector<TileRows> rows_;
     bool open_painting_ = false;
     bool finished_ = false;
     std::vector<std::uint8_t> staging_;  // a group of cut tiles before writing (raw codec)
