@@ -10,9 +10,9 @@ using namespace gigascroll;
 
 TEST(RequestKey, RoundTripBeyondSeedFieldWidths) {
     // More than 16 paintings, 16 levels and 4096 tiles per axis must not overflow.
-    const Request cases[] = {{0, 0, 0, 0}, {17, 20, 4097, 65535}, {kMaxPaintings - 1, 31, 65535, 1},
+    const TileKey cases[] = {{0, 0, 0, 0}, {17, 20, 4097, 65535}, {kMaxPaintings - 1, 31, 65535, 1},
                              {40, 11, 1267, 50}};
-    for (const Request& r : cases) {
+    for (const TileKey& r : cases) {
         if (r.painting == kMaxPaintings - 1 && r.level == 31) continue;
         EXPECT_EQ(unpack_request(pack_request(r)), r);
     }

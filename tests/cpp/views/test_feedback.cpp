@@ -84,8 +84,8 @@ TEST(Feedback, GrazingLevelMatchesAnalyticFootprint) {
         EXPECT_NEAR(texel_footprint(w.scene.paintings()[0], cam, cam.direction(900, 900), t), rho,
                     1e-9 * rho);
         // The tile holds the texel the centre ray hits: x = 6 m.
-        const Request r = unpack_request(keys[centre]);
-        EXPECT_EQ(r.x, std::uint32_t(6.0 / kTexel / (120.0 * (1 << r.level))));
+        const TileKey r = unpack_request(keys[centre]);
+        EXPECT_EQ(r.tx, std::uint32_t(6.0 / kTexel / (120.0 * (1 << r.level))));
     }
 }
 
@@ -148,7 +148,7 @@ TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
     for (std::size_t i = 0; i < keys.size(); ++i) {
         if (keys[i] == kNoRequest) continue;
         ++seen;
-        const Request r = unpack_request(keys[i]);
+        const TileKey r = unpack_request(keys[i]);
         const double span = 120.0 * (1 << r.level);
         const double x = uv[2 * i] * 1000, y = uv[2 * i + 1] * 700;
         auto tile = [&](double t, std::uint32_t n) {
@@ -157,8 +157,8 @@ TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
         const bool near_edge = std::abs(x / span - std::round(x / span)) < 1e-6 ||
                                std::abs(y / span - std::round(y / span)) < 1e-6;
         if (near_edge) continue;
-        EXPECT_EQ(r.x, tile(x, tiles.tiles_x(r.level))) << i;
-        EXPECT_EQ(r.y, tile(y, tiles.tiles_y(r.level))) << i;
+        EXPECT_EQ(r.tx, tile(x, tiles.tiles_x(r.level))) << i;
+        EXPECT_EQ(r.ty, tile(y, tiles.tiles_y(r.level))) << i;
     }
     EXPECT_GT(seen, 5000);
     EXPECT_LT(seen, int(W * H));  // the painting's surroundings are seen too
