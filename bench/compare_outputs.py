@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Proves that two gigascroll checkouts produce the same outputs.
+"""Proves that two gigascroll checkouts produce the same outputs, and compares their speed.
 
     python bench/compare_outputs.py --old REV_OR_DIR [--new REV_OR_DIR] [--work DIR]
+                                    [--speed] [--pairs N] [--full]
 
 --old / --new name a git revision of this repository (a worktree of it is made under
 --work/checkouts and built with `make build`, or reused if already built) or a directory that
@@ -17,7 +18,12 @@ at the same depth, so relative paths recorded in the outputs are the same. Compa
   demo      a small `demo`: its TIFF, pack and the PNGs it writes;
   render    `render` of the built-in scenes at fixed seeds: pixels of the EXRs.
 It prints a Markdown table, writes --work/compare.json and exits 0 when everything is
-identical, 1 otherwise, 2 when a checkout is missing or does not build.
+identical, 1 otherwise (or when a --speed benchmark run fails), 2 when a checkout is missing
+or does not build.
+
+--speed then times `bench views --part pace`, `bench loader` and `bench photon`, old and new
+alternately (--pairs pairs), with settings that keep each run to a minute or two (--full: the
+benchmarks' own defaults), and reports each headline figure's median new/old ratio.
 
 Needs numpy and OpenImageIO: run it with a checkout's .venv/bin/python.
 """
@@ -30,6 +36,7 @@ import json
 import os
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import time
@@ -81,6 +88,23 @@ RENDERS = [  # (output, arguments after `render`)
       "--kernel", "cone"]),
 ]
 RENDER_COMMON = ["--width", "64", "--height", "64", "--seed", "7", "--spp", "2"]
+
+# Benchmark settings. Short: about 15 s (pace has one fixed length), 100 s (loader: a
+# 12000 x 6083 painting, as high as the scroll so a frame requests the seed's ~220 tiles,
+# 20000 tiles a run) and 70 s (photon: the Cornell box tables at full size; skipped are the
+# error study, whose time is mostly Mitsuba's, and the C++ nanoflann Google Benchmark).
+BENCH_SHORT = {
+    "pace": ["bench", "views", "--part", "pace"],
+    "loader": ["bench", "loader", "--width", "12000", "--height", "6083", "--tiles", "20000",
+               "--repeat", "3"],
+    "photon": ["bench", "photon", "--scenes", "cornell", "--skip", "error,nanoflann"],
+}
+BENCH_FULL = {"pace": ["bench", "views", "--part", "pace"], "loader": ["bench", "loader"],
+              "photon": ["bench", "photon"]}
+# Marks a figure that times no project code (a plain file read): it shows how much the
+# machine's speed drifted between runs and is left out of the geometric mean.
+CONTROL = "(control: sequential read)"
+
 
 class SetupError(Exception):
     """A checkout that is missing or does not build: reported in one line, exit 2."""
@@ -506,12 +530,132 @@ PRODUCERS = [("pack", produce_pack), ("scenario", produce_scenarios), ("demo", p
              ("render", produce_renders)]
 
 
+# ----------------------------------------------------------------------------- speed
+
+def pace_figures(out: Path) -> dict:
+    p = json.loads((out / "views_pace.json").read_text())["pace"]
+    return {k: v for k, v in p.items() if k.endswith("_ms") or k == "stage_ms_sum"}
+
+
+def loader_figures(out: Path) -> dict:
+    d = json.loads((out / "loader.json").read_text())
+    figs = {}
+    for codec, c in d.get("loading", {}).items():
+        for row in c["rows"]:
+            figs[f"{codec} {row['config']} s"] = row["seconds"]
+        figs[f"{codec} direct s"] = c["direct_seconds"]
+        figs[f"{codec} physical s {CONTROL}"] = c["physical_seconds"]
+    for row in d.get("sampling", {}).get("rows", []):
+        name = f"sampling {row['pattern']} {row['filter']} {row['threads']}t"
+        figs[f"{name} VT ns"] = 1e9 / row["vt_samples_per_s"]
+        figs[f"{name} plain ns"] = 1e9 / row["plain_samples_per_s"]
+    return figs
+
+
+def photon_figures(out: Path) -> dict:
+    d = json.loads((out / "results.json").read_text())
+    figs = {}
+    for scene, s in d.items():
+        if not (isinstance(s, dict) and "table1" in s):
+            continue
+        for table in ("table1", "table2", "table3", "table4", "table5"):
+            for row in s.get(table, []):
+                for k, v in row.items():
+                    # Table 2's heap_ms is Table 1's hash_ms, the same measurement.
+                    if k.endswith("_ms") and not (table == "table2" and k == "heap_ms"):
+                        figs[f"{scene} {table} {row['side']}^2 r{row['r']:g} {k[:-3]}"] = v
+    return figs
+
+
+FIGURES = {"pace": pace_figures, "loader": loader_figures, "photon": photon_figures}
+
+
+def run_speed(r: Runner, old: Checkout, new: Checkout, pairs: int, full: bool,
+              share_cache: bool) -> tuple[dict, bool]:
+    """Alternates old / new `pairs` times per benchmark; per headline figure the median of
+    each side and the new/old ratio of each pair. Returns (results, all runs succeeded).
+    The first loader run also renders and packs the painting into its cache: that shows in
+    its wall time, not in its figures."""
+    settings = BENCH_FULL if full else BENCH_SHORT
+    # bench loader keeps its rendered painting and packs in --cache; shared only when the
+    # pack check found both checkouts writing identical packs.
+    caches = {co.label: r.work / ("speed-cache" if share_cache else f"{co.label}/speed-cache")
+              for co in (old, new)}
+    for d in set(caches.values()):
+        if d.exists():
+            shutil.rmtree(d)
+    progress(f"speed: {pairs} pair(s); loader cache {'shared' if share_cache else 'per checkout'}")
+    for name, args in settings.items():
+        progress(f"speed: {name}: gigascroll {' '.join(args)}")
+    results, ok = {}, True
+    for name, args in settings.items():
+        figs = {"old": [None] * pairs, "new": [None] * pairs}  # per pair; None: failed
+        walls = {"old": [], "new": []}
+        loads = {"old": [], "new": []}  # other jobs on the machine skew single pairs
+        for i in range(pairs):
+            for co in (old, new):
+                cwd = r.fresh(co, "speed", name, f"run{i}")
+                extra = ["--out", "out"]
+                if name == "loader":
+                    extra += ["--cache", os.path.relpath(caches[co.label], cwd)]
+                loads[co.label].append(round(os.getloadavg()[0], 1))
+                run = r.run(co, "speed", f"{name} run {i + 1}", [*args, *extra], cwd)
+                walls[co.label].append(run.seconds)
+                if run.rc != 0:
+                    ok = False
+                    continue
+                try:
+                    figs[co.label][i] = FIGURES[name](cwd / "out")
+                except (OSError, KeyError, ValueError) as e:
+                    progress(f"speed: {name} ({co.label}): cannot read its results: {e}")
+                    ok = False
+        rows = {}
+        keys = dict.fromkeys(k for f in figs["old"] + figs["new"] if f for k in f)
+        for k in keys:
+            o = [f[k] for f in figs["old"] if f and k in f]
+            n = [f[k] for f in figs["new"] if f and k in f]
+            ratios = [b[k] / a[k] for a, b in zip(figs["old"], figs["new"])
+                      if a and b and k in a and k in b and a[k]]
+            rows[k] = {"old": o, "new": n, "ratios": ratios,
+                       "old_median": statistics.median(o) if o else None,
+                       "new_median": statistics.median(n) if n else None,
+                       "median_ratio": statistics.median(ratios) if ratios else None}
+        medians = [x["median_ratio"] for k, x in rows.items()
+                   if x["median_ratio"] and CONTROL not in k]
+        geo = float(np.exp(np.mean(np.log(medians)))) if medians else None
+        results[name] = {"command": ["gigascroll", *args], "wall_seconds": walls,
+                         "load_average_before": loads, "figures": rows,
+                         "geometric_mean_ratio": geo}
+    return results, ok
+
+
 # ----------------------------------------------------------------------------- report
 
 def markdown(items: list[Item]) -> str:
     lines = ["| producer | item | result |", "|---|---|---|"]
     for it in items:
         lines.append(f"| {it.producer} | {it.item} | {it.result} |")
+    return "\n".join(lines)
+
+
+def speed_markdown(speed: dict) -> str:
+    lines = []
+    for name, s in speed.items():
+        geo = s["geometric_mean_ratio"]
+        lines += ["", f"### {' '.join(s['command'])}", "",
+                  f"geometric mean of the median new/old ratios (controls left out): "
+                  f"{'-' if geo is None else f'{geo:.3f}'}; wall seconds per run: old "
+                  f"{[round(x) for x in s['wall_seconds']['old']]}, new "
+                  f"{[round(x) for x in s['wall_seconds']['new']]}; 1-minute load average "
+                  f"before each run: old {s['load_average_before']['old']}, new "
+                  f"{s['load_average_before']['new']} ({os.cpu_count()} cores)", "",
+                  "| figure | old (median) | new (median) | new/old (median) | per pair |",
+                  "|---|---|---|---|---|"]
+        for k, x in s["figures"].items():
+            fmt = lambda v: "-" if v is None else f"{v:.4g}"  # noqa: E731
+            lines.append(f"| {k} | {fmt(x['old_median'])} | {fmt(x['new_median'])} | "
+                         f"{fmt(x['median_ratio'])} | "
+                         f"{', '.join(f'{q:.3f}' for q in x['ratios'])} |")
     return "\n".join(lines)
 
 
@@ -548,7 +692,13 @@ def main(argv=None) -> int:
                     help="git revision or built checkout directory (default: this checkout)")
     ap.add_argument("--work", default=str(ROOT / "build" / "compare"),
                     help="worktrees, outputs and compare.json (default: build/compare here)")
+    ap.add_argument("--speed", action="store_true", help="also compare benchmark timings")
+    ap.add_argument("--pairs", type=int, default=3, help="old/new run pairs per benchmark (3)")
+    ap.add_argument("--full", action="store_true",
+                    help="benchmarks at their own default settings (long)")
     args = ap.parse_args(argv)
+    if args.pairs < 1:
+        ap.error("--pairs must be >= 1")
     work = Path(args.work).resolve()
     work.mkdir(parents=True, exist_ok=True)
     try:
@@ -590,10 +740,16 @@ def main(argv=None) -> int:
         others = len(versions) - len(shown)
         print("\nPackages differing between the two venvs (old / new): "
               + ", ".join(shown + ([f"{others} others (see compare.json)"] if others else [])))
+    speed_ok = True
+    if args.speed:
+        share = all(it.identical for it in items if it.producer == "pack")
+        summary["speed"], speed_ok = run_speed(r, old, new, args.pairs, args.full, share)
+        summary["steps"] = r.steps
+        print(speed_markdown(summary["speed"]))
     (work / "compare.json").write_text(json.dumps(summary, indent=1))
     print(f"\nwrote {work / 'compare.json'}")
     print("all outputs identical" if identical else "OUTPUTS DIFFER")
-    return 0 if identical else 1
+    return 0 if identical and speed_ok else 1
 
 
 if __name__ == "__main__":
