@@ -47,7 +47,9 @@ try:
     import numpy as np
     import OpenImageIO as oiio
 except ImportError as e:
-    sys.exit(f"compare_outputs: error: {e.name} is missing; run with a checkout's .venv/bin/python")
+    print(f"compare_outputs: error: {e.name} is missing; run with a checkout's .venv/bin/python",
+          file=sys.stderr)
+    sys.exit(2)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -89,10 +91,11 @@ RENDERS = [  # (output, arguments after `render`)
 ]
 RENDER_COMMON = ["--width", "64", "--height", "64", "--seed", "7", "--spp", "2"]
 
-# Benchmark settings. Short: about 15 s (pace has one fixed length), 100 s (loader: a
-# 12000 x 6083 painting, as high as the scroll so a frame requests the seed's ~220 tiles,
-# 20000 tiles a run) and 70 s (photon: the Cornell box tables at full size; skipped are the
-# error study, whose time is mostly Mitsuba's, and the C++ nanoflann Google Benchmark).
+# Benchmark settings. Short: about 15 s (pace: its one length; --frames does not reach it),
+# 100 s (loader: a 12000 x 6083 painting, as high as the scroll so a frame requests the
+# seed's ~220 tiles, 20000 tiles a run) and 70 s (photon: the Cornell box tables at full
+# size; skipped are the error study, whose time is mostly Mitsuba's, and the C++ nanoflann
+# Google Benchmark).
 BENCH_SHORT = {
     "pace": ["bench", "views", "--part", "pace"],
     "loader": ["bench", "loader", "--width", "12000", "--height", "6083", "--tiles", "20000",
