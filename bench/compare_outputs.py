@@ -641,6 +641,10 @@ def markdown(items: list[Item]) -> str:
     return "\n".join(lines)
 
 
+def num(v) -> str:
+    return "-" if v is None else f"{v:.4g}"
+
+
 def speed_markdown(speed: dict) -> str:
     lines = []
     for name, s in speed.items():
@@ -651,13 +655,17 @@ def speed_markdown(speed: dict) -> str:
                   f"{[round(x) for x in s['wall_seconds']['old']]}, new "
                   f"{[round(x) for x in s['wall_seconds']['new']]}; 1-minute load average "
                   f"before each run: old {s['load_average_before']['old']}, new "
-                  f"{s['load_average_before']['new']} ({os.cpu_count()} cores)", "",
-                  "| figure | old (median) | new (median) | new/old (median) | per pair |",
+                  f"{s['load_average_before']['new']} ({os.cpu_count()} cores)", ""]
+        load = max(s["load_average_before"]["old"] + s["load_average_before"]["new"], default=0)
+        if load > (os.cpu_count() or 1):
+            lines += [f"WARNING: load average up to {load} on {os.cpu_count()} cores: other jobs "
+                      f"shared the CPU, so these ratios say more about them than about the code; "
+                      f"rerun with more --pairs on a quieter machine.", ""]
+        lines += ["| figure | old (median) | new (median) | new/old (median) | per pair |",
                   "|---|---|---|---|---|"]
         for k, x in s["figures"].items():
-            fmt = lambda v: "-" if v is None else f"{v:.4g}"  # noqa: E731
-            lines.append(f"| {k} | {fmt(x['old_median'])} | {fmt(x['new_median'])} | "
-                         f"{fmt(x['median_ratio'])} | "
+            lines.append(f"| {k} | {num(x['old_median'])} | {num(x['new_median'])} | "
+                         f"{num(x['median_ratio'])} | "
                          f"{', '.join(f'{q:.3f}' for q in x['ratios'])} |")
     return "\n".join(lines)
 
