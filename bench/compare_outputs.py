@@ -290,7 +290,13 @@ def compare_dirs(producer: str, item: str, old: Path, new: Path) -> Item:
     differ = [f for f, (a, b) in shas.items() if a != b or a is None]
     details = {f: {"old": a, "new": b} for f, (a, b) in shas.items()}
     if differ:
-        return Item(producer, item, False, "DIFFERS: " + ", ".join(differ), details)
+        text = []
+        for f in differ:  # a JSON file (the manifest) says where it differs
+            paths = (json_diff(*(json.loads((d / f).read_text()) for d in (old, new)))
+                     if f.endswith(".json") and None not in shas[f] else [])
+            details[f]["differing_paths"] = paths
+            text.append(f"{f} at {', '.join(paths)}" if paths else f)
+        return Item(producer, item, False, "DIFFERS: " + "; ".join(text), details)
     return Item(producer, item, True, f"identical bytes ({', '.join(shas)})", details)
 
 
