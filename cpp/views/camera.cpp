@@ -44,15 +44,18 @@ Camera Camera::look_at(Vec3d position, Vec3d target, Vec3d up, double fov_y_deg,
     const Vec3f right = normalize(r), true_up = cross(right, f);
     const float tan_half = std::tan(0.5f * float(fov_y_deg) * float(M_PI) / 180.0f);
     const float aspect = float(width) / float(height);
-    Camera c(position, Vec3d(f), Vec3d(true_up), double(tan_half * aspect), double(tan_half),
-             width, height);
+    // tan_half_x exactly tan_half * aspect (a product of two floats is exact in double), so
+    // ray_direction() recovers both factors and multiplies them in the old order.
+    Camera c(position, Vec3d(f), Vec3d(true_up), double(tan_half) * double(aspect),
+             double(tan_half), width, height);
     c.forward = Vec3d(f), c.right = Vec3d(right), c.up = Vec3d(true_up);
     return c;
 }
 
 Vec3f Camera::ray_direction(float px, float py) const {
-    const float sx = (2.0f * px / float(width) - 1.0f) * float(tan_half_x);
-    const float sy = (1.0f - 2.0f * py / float(height)) * float(tan_half_y);
+    const float t = float(tan_half_y), aspect = float(tan_half_x / tan_half_y);
+    const float sx = (2.0f * px / float(width) - 1.0f) * t * aspect;
+    const float sy = (1.0f - 2.0f * py / float(height)) * t;
     return normalize(Vec3f(forward) + Vec3f(right) * sx + Vec3f(up) * sy);
 }
 
@@ -60,8 +63,9 @@ bool Camera::project(Vec3f p, int& px, int& py) const {
     const Vec3f d = p - ray_origin();
     const Vec3f dir{dot(d, Vec3f(right)), dot(d, Vec3f(up)), dot(d, Vec3f(forward))};  // M_rotate
     if (!(dir.z > 0.0f)) return false;
-    const float cx = dir.x / (dir.z * float(tan_half_x));  // M_proj, then divide by w
-    const float cy = dir.y / (dir.z * float(tan_half_y));
+    const float t = float(tan_half_y), aspect = float(tan_half_x / tan_half_y);
+    const float cx = dir.x / (dir.z * t * aspect);  // M_proj, then divide by w
+    const float cy = dir.y / (dir.z * t);
     const float fx = std::floor((cx + 1.0f) * 0.5f * float(width));
     const float fy = std::floor((1.0f - cy) * 0.5f * float(height));  // rows grow downward
     if (!(fx >= 0.0f && fx < float(width) && fy >= 0.0f && fy < float(height))) return false;
