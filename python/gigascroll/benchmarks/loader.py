@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import UserError
+
 SEED_TABLE1 = {"locked:1": 11.45, "locked:2": 10.5, "locked:3": 10.51, "locked:4": 10.87,
                "lockfree:1": 4.81}
 DEFAULT_CONFIGS = "locked:1,locked:2,locked:3,locked:4,lockfree:1,lockfree:2"
@@ -273,7 +275,6 @@ def _plot(result: dict, path: Path) -> None:
 
 
 def run(args) -> int:
-    from ..cli import UserError
     if args.quick:
         args.width, args.height, args.tiles, args.repeat = 12000, 1000, 3000, 1
         args.samples, args.sample_size = 200_000, "4096x1024"

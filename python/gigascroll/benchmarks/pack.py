@@ -17,6 +17,8 @@ import sys
 import time
 from pathlib import Path
 
+from ..errors import UserError
+
 OURS = """
 import sys, time, gigascroll
 t = time.perf_counter()
@@ -70,7 +72,6 @@ def _measure(code: str, args: list[str]) -> dict:
 
 
 def run(args) -> int:
-    from ..cli import UserError
     from ..pack import synth_painting
     if args.width <= 0 or args.height <= 0 or args.repeat <= 0:
         raise UserError("--width, --height and --repeat must be positive")

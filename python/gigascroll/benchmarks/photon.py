@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import UserError
+
 # Seed 001's settings and numbers (RTX 2080 Ti, ms), to print next to ours.
 SEED_TABLE1 = {  # (photons side, radius): (kd-tree, hash grid)
     (512, 0.02): (7.28, 3.89), (512, 0.05): (118.35, 90.74), (512, 0.1): (426.39, 501.79),
@@ -45,8 +47,6 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..cli import UserError
-
     scenes = [s for s in args.scenes.split(",") if s]
     for s in scenes:
         if s not in SCALE:

@@ -11,6 +11,8 @@ import re
 import subprocess
 from pathlib import Path
 
+from ..errors import UserError
+
 PEERS = {  # kind -> (ours, peers)
     "spsc": ("OurSpsc", ["BoostSpsc", "RWQueue", "OurMpsc", "BoostQueue", "CQueue", "Locked"]),
     "mpsc": ("OurMpsc", ["BoostQueue", "CQueue", "Locked"]),
@@ -25,7 +27,6 @@ def add_arguments(p) -> None:
 
 
 def _find_binary(explicit: str | None) -> Path:
-    from ..cli import UserError
     if explicit:
         path = Path(explicit)
     else:
@@ -99,7 +100,6 @@ def _plot(rows: list[dict], path: Path) -> None:
 
 
 def run(args) -> int:
-    from ..cli import UserError
     binary = _find_binary(args.binary)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .. import views as v
-from ..cli import UserError
+from ..errors import UserError
 
 PAINTING_COUNTS = (8, 16, 24, 32, 40)
 PARTS = ("paintings", "tiles", "latency", "losses", "loop", "pace")
