@@ -107,6 +107,8 @@ void bind_pack(nb::module_& m) {
             return std::make_pair(p.table_width(), p.table_height()); },
             "(Mc, Nc): size of the merged page table")
         .def_prop_ro("tile_count", &TilePack::tile_count)
+        .def("manifest_json", &TilePack::manifest_json,
+             "The manifest as the core's reader parsed it (JSON text).")
         .def("has_tile", &TilePack::has_tile, "painting"_a, "level"_a, "tx"_a, "ty"_a)
         .def("locate", [](const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
                           std::uint32_t ty) {

@@ -18,6 +18,8 @@
 #include "vt/tile_loader.h"
 #include "vt/tile_pack.h"
 #include "vt/virtual_texture.h"
+#include "vt/drain.h"
+#include "vt/vt_lookup.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -51,6 +53,16 @@ std::vector<TileKey> to_keys(const Keys& a) {
         keys[i] = {std::uint32_t(d[4 * i]), std::uint32_t(d[4 * i + 1]), std::uint32_t(d[4 * i + 2]),
                    std::uint32_t(d[4 * i + 3])};
     }
+    return keys;
+}
+
+using RequestKeys = nb::ndarray<const std::uint64_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+// Request keys (views' pack_request layout) as tile keys; the loader and the cache check
+// the ranges.
+std::vector<TileKey> to_tile_keys(const RequestKeys& a) {
+    std::vector<TileKey> keys(a.shape(0));
+    for (std::size_t i = 0; i < keys.size(); ++i) keys[i] = tile_key_of(a.data()[i]);
     return keys;
 }
 
@@ -128,6 +140,9 @@ void bind_runtime(nb::module_& m) {
             "pool_tiles"_a = 64, nb::keep_alive<1, 2>())
         .def("_submit", [](TileLoader& l, const Keys& keys) {
             const auto k = to_keys(keys);
+            l.submit(k.data(), k.size()); }, "keys"_a)
+        .def("_submit_requests", [](TileLoader& l, const RequestKeys& keys) {
+            const auto k = to_tile_keys(keys);
             l.submit(k.data(), k.size()); }, "keys"_a)
         .def("_poll", [](TileLoader& l, std::size_t max) {
             std::vector<LoadedTile> results;
@@ -219,6 +234,23 @@ void bind_runtime(nb::module_& m) {
             "loader"_a, "max_tiles"_a = std::size_t(-1),
             "Polls the loader and inserts its finished tiles without copies through Python; "
             "returns (inserted, [(key, error), ...]).")
+        .def("drain", [](VirtualTexture& vt, TileLoader& loader, std::size_t max) {
+            DrainResult r;
+            {
+                nb::gil_scoped_release release;
+                r = drain(loader, vt, max);
+            }
+            std::vector<std::pair<KeyTuple, std::string>> failed;
+            for (auto& [k, e] : r.failed) failed.emplace_back(to_tuple(k), std::move(e));
+            return std::make_pair(to_numpy(std::move(r.arrived)), failed); },
+            "loader"_a, "max_tiles"_a = std::size_t(-1),
+            "The frame's drain: polls the loader and inserts its finished tiles in C++; returns "
+            "(arrived, failed): the request keys (uint64) of every tile that came back, and "
+            "[(key, error), ...] of the loads that failed.")
+        .def("_request_keys", [](VirtualTexture& vt, const RequestKeys& keys) {
+            std::vector<std::uint64_t> out;
+            for (const auto& k : vt.request(to_tile_keys(keys))) out.push_back(request_of(k));
+            return to_numpy(std::move(out)); }, "keys"_a)
         .def("request", [](VirtualTexture& vt, const Keys& keys) {
             const auto missing = vt.request(to_keys(keys));
             std::vector<KeyTuple> out;

@@ -207,6 +207,7 @@ void bind_views(nb::module_& m) {
             return d;
         }, "index"_a);
 
+    // Deprecated duplicate of render_view (removed once Python no longer uses it).
     m.def("render_feedback", [](const ExhibitionScene& scene, const Camera& camera,
                                 std::int64_t width, std::int64_t height, double lod_bias,
                                 unsigned threads, bool with_lod) {
@@ -230,7 +231,7 @@ void bind_views(nb::module_& m) {
 
     m.def("render_view", [](const ExhibitionScene& scene, const Camera& camera, std::int64_t width,
                             std::int64_t height, double lod_bias, unsigned threads,
-                            std::int64_t display_step) {
+                            std::int64_t display_step, bool display) {
         require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
                 "view resolution out of range");
         require(display_step >= 1 && display_step < (1 << 16), "display_step must be >= 1");
@@ -240,23 +241,33 @@ void bind_views(nb::module_& m) {
         const std::size_t dw = display_extent(std::uint32_t(w), o.display_step),
                           dh = display_extent(std::uint32_t(h), o.display_step);
         FreshArray<std::uint64_t> keys({h, w});
+        nb::dict d;
+        d["keys"] = keys.array;
+        d["display_step"] = display_step;
+        if (!display) {
+            {
+                nb::gil_scoped_release release;
+                render_feedback(scene, camera, o, keys.data);
+            }
+            d["lod"] = nb::none();
+            d["uv"] = nb::none();
+            return d;
+        }
         FreshArray<float> lod({dh, dw});
         FreshArray<double> uv({dh, dw, 2});
         {
             nb::gil_scoped_release release;
             render_feedback(scene, camera, o, keys.data, lod.data, uv.data);
         }
-        nb::dict d;
-        d["keys"] = keys.array;
         d["lod"] = lod.array;
         d["uv"] = uv.array;
-        d["display_step"] = display_step;
         return d;
     }, "scene"_a, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
-          "display_step"_a = 1,
+          "display_step"_a = 1, "display"_a = true,
           "The feedback pass plus what the display pass samples: dict of keys (h, w), and on\n"
           "the display grid (every display_step-th pixel per axis) lod (h', w') and uv\n"
-          "(h', w', 2) painting coordinates (NaN where no painting), h' = ceil(h / step).");
+          "(h', w', 2) painting coordinates (NaN where no painting), h' = ceil(h / step).\n"
+          "display=False computes the keys only (lod and uv are None).");
 
     m.def("display_view", [](const VirtualTexture& vt,
                              nb::ndarray<const std::uint64_t, nb::ndim<2>, nb::c_contig> keys,
@@ -286,10 +297,7 @@ void bind_views(nb::module_& m) {
     m.def("texel_footprint", [](const ExhibitionScene& scene, std::size_t placement,
                                 const Camera& camera, double px, double py) {
         require(placement < scene.paintings().size(), "placement index out of range");
-        const auto& p = scene.paintings()[placement];
-        const Vec3 d = camera.direction(px, py);
-        const double t = dot(p.origin - camera.position, p.normal()) / dot(d, p.normal());
-        return texel_footprint(p, camera, d, t);
+        return texel_footprint_at_pixel(scene.paintings()[placement], camera, px, py);
     }, "scene"_a, "placement"_a, "camera"_a, "px"_a, "py"_a,
           "Footprint in level-0 texels of display pixel (px, py) on a painting's plane.");
     m.def("mip_level", &mip_level, "lod"_a, "levels"_a);

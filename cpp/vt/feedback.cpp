@@ -32,6 +32,13 @@ double texel_footprint(const PaintingPlacement& p, const Camera& camera, Vec3 di
     return std::max(texels(transfer(camera.ddx())), texels(transfer(camera.ddy())));
 }
 
+double texel_footprint_at_pixel(const PaintingPlacement& p, const Camera& camera, double px,
+                                double py) {
+    const Vec3 d = camera.direction(px, py);
+    const double t = dot(p.origin - camera.position, p.normal()) / dot(d, p.normal());
+    return texel_footprint(p, camera, d, t);
+}
+
 std::uint32_t mip_level(double lambda, std::uint32_t levels) {
     if (!(lambda > 0)) return 0;  // magnification (and NaN) read level 0
     const double top = static_cast<double>(levels - 1);

@@ -23,6 +23,9 @@ struct FeedbackOptions {
 // as in the OpenGL specification of the level of detail. lambda = log2(rho).
 double texel_footprint(const PaintingPlacement& painting, const Camera& camera, Vec3 direction,
                        double t);
+// The same for display pixel (px, py): the ray through it meets the painting's plane at t.
+double texel_footprint_at_pixel(const PaintingPlacement& painting, const Camera& camera,
+                                double px, double py);
 
 // The level textureQueryLod(...).y truncated to an integer, as seed 002's shader does:
 // clamp(floor(lambda + bias), 0, levels - 1).

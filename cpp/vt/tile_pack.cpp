@@ -120,6 +120,7 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
         if (m.at("tile_count").get<std::uint64_t>() != entries)
             throw IoError(manifest_path + ": tile_count does not match the paintings");
         entry_count_ = entries;
+        manifest_json_ = m.dump();
     } catch (const json::exception& e) {
         throw IoError(manifest_path + ": malformed manifest: " + e.what());
     } catch (const InvalidArgument& e) {

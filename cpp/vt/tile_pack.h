@@ -51,6 +51,8 @@ public:
     std::uint32_t table_height() const { return table_height_; } // merged Nc
     std::uint64_t tile_count() const { return entry_count_; }
     std::size_t tile_bytes() const { return std::size_t(tile_size_) * tile_size_ * 3; }
+    // The manifest as this reader parsed it, serialised again (JSON text).
+    const std::string& manifest_json() const { return manifest_json_; }
 
     // InvalidArgument when p or l is out of range or (tx, ty) lies outside the level's
     // power-of-two page-table grid; false for padding tiles inside that grid.
@@ -68,6 +70,7 @@ private:
                            std::uint32_t ty) const;
 
     std::string directory_;
+    std::string manifest_json_;
     std::vector<PaintingInfo> paintings_;
     std::uint32_t tile_size_ = 0, border_ = 0;
     Codec codec_ = Codec::Raw;
