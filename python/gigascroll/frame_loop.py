@@ -15,16 +15,16 @@ processing.
 
 from __future__ import annotations
 
-import math
 import statistics
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import runtime
 from . import views as v
 from ._core import VirtualTextureLookup
-from .baselines import BASELINES, make_baseline
+from .views.baselines import BASELINES, make_baseline
 
 __all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
 
@@ -94,7 +94,6 @@ class FrameLoop:
                                  f"(tile {t.tile_size}, border {t.border})")
 
     def run(self, progress: bool = False) -> dict:
-        from . import runtime
         vt = runtime.VirtualTexture(self.pack, self.slots)
         lookup = VirtualTextureLookup(vt)
         baseline = None

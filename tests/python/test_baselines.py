@@ -4,7 +4,7 @@ brute-force reference of what the view needs), seed 003's LOD bands and memory."
 import numpy as np
 import pytest
 
-from gigascroll import baselines as b
+from gigascroll.views import baselines as b
 from gigascroll import views as v
 
 W, H = 12000, 1600

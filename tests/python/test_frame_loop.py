@@ -26,7 +26,7 @@ def small(tmp_path_factory):
 
 def _run(small, **kw):
     pack, ex, path = small
-    loop = v.FrameLoop(ex, pack, path, pace=False, wait_loads=True, magnifier=False, **kw)
+    loop = frame_loop.FrameLoop(ex, pack, path, pace=False, wait_loads=True, magnifier=False, **kw)
     return loop.run(), loop.records
 
 
@@ -56,16 +56,16 @@ def test_synchronous_methods_agree_in_the_loop(small):
 def test_bad_loop_input(small):
     pack, ex, path = small
     with pytest.raises(ValueError, match="strategy"):
-        v.FrameLoop(ex, pack, path, strategy="eager")
+        frame_loop.FrameLoop(ex, pack, path, strategy="eager")
     with pytest.raises(ValueError, match="threshold"):
-        v.FrameLoop(ex, pack, path, per_frame=0)
+        frame_loop.FrameLoop(ex, pack, path, per_frame=0)
     with pytest.raises(ValueError, match="method"):
-        v.FrameLoop(ex, pack, path, method="gpu")
+        frame_loop.FrameLoop(ex, pack, path, method="gpu")
     two = v.multi_exhibition(8)
     with pytest.raises(ValueError, match="missing"):
-        v.FrameLoop(two, pack, path)
+        frame_loop.FrameLoop(two, pack, path)
     with pytest.raises(ValueError, match="magnifier_display_step"):
-        v.FrameLoop(ex, pack, path, magnifier_display_step=0)
+        frame_loop.FrameLoop(ex, pack, path, magnifier_display_step=0)
 
 
 def test_baselines_run_in_the_loop_and_sharpen(small):

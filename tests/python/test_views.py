@@ -63,7 +63,8 @@ def test_lod_matches_finite_difference_footprint(scroll, yaw_deg, pitch_deg):
     h = v.HEADSET
     cam = v.ViewCamera((6.0 - 0.6 * math.tan(yaw), 1.5, -0.6), fwd, (0, 1, 0), h.tan_half_x,
                    h.tan_half_y, h.width, h.height)
-    keys, lod = v.render_feedback(scroll.scene, cam, 45, 48, with_lod=True)
+    view = v.render_view(scroll.scene, cam, 45, 48)
+    keys, lod = view["keys"], view["lod"]
     iy, ix = np.nonzero(keys != v.NO_REQUEST)
     assert ix.size > 100
     px, py = (ix + 0.5) * h.width / 45, (iy + 0.5) * h.height / 48
@@ -226,7 +227,7 @@ def test_bad_input_is_rejected(scroll, tmp_path):
         v.pack_request(0, 32, 0, 0)
     scene = v.ExhibitionScene()
     with pytest.raises(ValueError, match="commit"):
-        v.render_feedback(scene, v.ViewCamera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
+        v.render_view(scene, v.ViewCamera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
     with pytest.raises(ValueError, match="orthonormal"):
         scene.add_painting(0, v.PaintingTiles(100, 100), (0, 0, 0), (1, 0, 0), (1, 0, 0), 1, 1)
 

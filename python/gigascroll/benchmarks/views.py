@@ -17,6 +17,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .. import views as v
+from .._core import hardware_threads
+from ..frame_loop import FrameLoop
 from ..errors import UserError
 
 PAINTING_COUNTS = (8, 16, 24, 32, 40)
@@ -211,7 +213,7 @@ def _loop(args, quick) -> list[dict]:
                              exhibition=ex, stop_frames=10 if quick else 60)
         for method, strategy in (("cpu-async", "direct"), ("flag-array", "direct"),
                                  ("hash", "direct"), ("hash", "mip-by-mip")):
-            loop = v.FrameLoop(ex, pack, path, method=method, strategy=strategy,
+            loop = FrameLoop(ex, pack, path, method=method, strategy=strategy,
                                pace=True, threads=args.threads)
             s = loop.run(progress=True)
             rows.append({"method": method, "strategy": strategy, **s})
@@ -235,7 +237,7 @@ def _pace(args, quick) -> dict:
         ex = v.single_scroll(spec_of("pace", width, height))
         path = v.scroll_path(distance=0.40, speed=1.0, duration=0.1 if quick else 1.0,
                              start_x=0.3, exhibition=ex, stop_frames=10)
-        loop = v.FrameLoop(ex, pack, path, method="hash", strategy="direct", pace=False,
+        loop = FrameLoop(ex, pack, path, method="hash", strategy="direct", pace=False,
                            threads=args.threads)
         s = loop.run(progress=True)
     r = loop.records
@@ -317,7 +319,7 @@ def run(args) -> int:
     if args.quick:
         args.repeats = 1
     results = {"frames": frames, "repeats": args.repeats,
-               "machine_threads": v._core.hardware_threads()}
+               "machine_threads": hardware_threads()}
     parts = set(args.part or PARTS)
     if "paintings" in parts:
         results["paintings"] = _painting_sweep(args, frames)

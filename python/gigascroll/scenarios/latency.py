@@ -6,6 +6,7 @@ mapping, all with the same loader."""
 from __future__ import annotations
 
 from .. import views as v
+from ..frame_loop import FrameLoop
 from . import common as c
 from .single import QUICK_SIZE
 from .sweep import lod_slots
@@ -26,7 +27,7 @@ def moving_then_stop(ex, start_x: float, duration: float, warm: int, stop: int) 
 def run(opts: c.Options) -> dict:
     from tqdm import tqdm
 
-    from ..baselines import LodMapping
+    from ..views.baselines import LodMapping
     methods = c.check_methods(opts, METHODS, METHODS[:4])
     if opts.quick:
         spec = c.spec_of("pattern", *QUICK_SIZE)
@@ -46,7 +47,7 @@ def run(opts: c.Options) -> dict:
     res.update({"quick": opts.quick, "frames": len(path), "rows": []})
     for m in tqdm(methods, desc="latency: methods", unit="method"):
         lod = m == "lod-mapping"
-        loop = v.FrameLoop(ex, pack, path, method=m, strategy="direct",
+        loop = FrameLoop(ex, pack, path, method=m, strategy="direct",
                            per_frame=1 << 20 if lod else opts.threshold,
                            slots=lod_slots(ex, path, len(path) - 1) if lod else (30, 30),
                            pace=opts.pace and not opts.quick, wait_loads=opts.quick,

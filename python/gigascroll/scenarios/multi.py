@@ -11,7 +11,7 @@ full-size tile totals is measured separately by `gigascroll bench views`."""
 from __future__ import annotations
 
 from .. import views as v
-from ..frame_loop import STAGES
+from ..frame_loop import STAGES, FrameLoop
 from . import common as c
 from .single import methods_agree
 
@@ -51,7 +51,7 @@ def run(opts: c.Options) -> dict:
         if n == counts[0]:
             checks["methods_agree"] = methods_agree(ex, path, threads=opts.threads)
         for m in methods:
-            loop = v.FrameLoop(ex, pack, path, method=m, strategy="direct",
+            loop = FrameLoop(ex, pack, path, method=m, strategy="direct",
                                per_frame=opts.threshold, slots=(45, 45),
                                pace=opts.pace and not opts.quick, wait_loads=opts.quick,
                                threads=opts.threads)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import views as v
+from ..frame_loop import FrameLoop
 from . import common as c
 
 METHODS = ("cpu-async", "flag-array", "hash", "basic")
@@ -34,7 +35,7 @@ def setup(opts: c.Options):
 def _loop(opts, ex, pack, path, **kw):
     # Quick runs wait for each frame's loads (deterministic invariants); full runs are paced
     # at 90 Hz with the loader draining whatever is ready.
-    return v.FrameLoop(ex, pack, path, per_frame=opts.threshold,
+    return FrameLoop(ex, pack, path, per_frame=opts.threshold,
                        pace=opts.pace and not opts.quick, wait_loads=opts.quick,
                        threads=opts.threads, **kw)
 

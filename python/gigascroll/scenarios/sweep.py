@@ -8,7 +8,8 @@ from __future__ import annotations
 import math
 
 from .. import views as v
-from ..baselines import LodMapping
+from ..frame_loop import FrameLoop
+from ..views.baselines import LodMapping
 from . import common as c
 
 METHODS = ("basic", "ma-vt", "lod-mapping", "hash")
@@ -53,7 +54,7 @@ def run(opts: c.Options) -> dict:
                                                start_x=x, magnifier=False, exhibition=ex), ex)
         for m in methods:
             lod = m == "lod-mapping"
-            loop = v.FrameLoop(ex, pack, path, method=m, strategy="direct",
+            loop = FrameLoop(ex, pack, path, method=m, strategy="direct",
                                per_frame=1 << 20 if lod else opts.threshold,
                                slots=lod_slots(ex, path) if lod else (30, 30),
                                pace=opts.pace and not opts.quick, wait_loads=opts.quick,
