@@ -246,11 +246,13 @@ def test_loader_reports_a_corrupt_tile_and_keeps_going(pack, tmp_path):
         assert isinstance(res[(0, 0, 0, 0)], np.ndarray)
         vt = VirtualTexture(copy, (4, 4))
         loader.submit([(0, 1, 0, 0), (0, 0, 2, 1)])
-        inserted, failed = 0, []
+        arrived, failed = [], []
         deadline = time.monotonic() + 60
-        while inserted + len(failed) < 2 and time.monotonic() < deadline:
-            n, f = vt.insert_loaded(loader)
-            inserted, failed = inserted + n, failed + f
+        while len(arrived) < 2 and time.monotonic() < deadline:
+            a, f = vt.drain(loader)
+            arrived, failed = arrived + a.tolist(), failed + f
+        inserted = len(arrived) - len(failed)
+        assert sorted(arrived) == sorted(gigascroll.pack_request(*k) for k in [(0, 1, 0, 0), (0, 0, 2, 1)])
         assert inserted == 1 and vt.is_resident((0, 1, 0, 0))
         assert failed[0][0] == (0, 0, 2, 1) and "checksum" in failed[0][1]
 
@@ -322,3 +324,27 @@ def test_empty_and_single_key_batches_are_accepted(pack):
             got = loader.poll()
             time.sleep(0.001)
     assert [k for k, _ in got] == [tuple(key)]
+
+
+def test_request_keys_in_and_out(pack):
+    # A 1-D uint64 array of request keys (views' pack_request layout) is the same set of
+    # tiles as the (n, 4) form: the same misses, loads and drained arrivals.
+    keys = all_keys(pack)[:12]
+    requests = np.array([gigascroll.pack_request(*k) for k in keys], np.uint64)
+    a, b = VirtualTexture(pack, (8, 8)), VirtualTexture(pack, (8, 8))
+    missing = a.request(requests)
+    assert missing.dtype == np.uint64 and missing.ndim == 1
+    assert [gigascroll.pack_request(*k) for k in b.request(keys)] == missing.tolist()
+    assert a.stats() == b.stats()
+    with TileLoader(pack, "lockfree", 1) as loader:
+        loader.submit(missing)
+        arrived, failed = np.zeros(0, np.uint64), []
+        deadline = time.monotonic() + 30
+        while arrived.size < missing.size and time.monotonic() < deadline:
+            got, f = a.drain(loader)
+            arrived, failed = np.concatenate([arrived, got]), failed + f
+    assert failed == [] and sorted(arrived.tolist()) == sorted(missing.tolist())
+    assert a.request(requests).size == 0  # all resident now
+    with TileLoader(pack) as loader:
+        with pytest.raises(ValueError):
+            loader.submit(np.array([gigascroll.pack_request(0, 0, 99, 0)], np.uint64))

@@ -90,7 +90,7 @@ def stream_view(pack, png: Path, frames_max: int = 200, per_frame: int = 16) -> 
             new = [k for k in missing if k not in in_flight][:max(0, per_frame - len(pending))]
             loader.submit(new)
             pending += new
-            vt.insert_loaded(loader)
+            vt.drain(loader)
             rgb, answered = vt.sample(0, u, v, lod=level)
             sharp = int(answered.max()) == level  # every pixel answered at the level asked for
             if frame in (0, 2) or sharp:

@@ -9,16 +9,13 @@ from pathlib import Path
 import numpy as np
 
 from .._core import TilePack
-from .build import MANIFEST
 
 __all__ = ["pack_manifest", "read_level", "verify_pack", "pack_summary"]
 
 
 def pack_manifest(path) -> dict:
-    """The manifest of a pack as a dict (after checking that the pack opens)."""
-    TilePack(path)
-    with open(Path(path) / MANIFEST) as f:
-        return json.load(f)
+    """The manifest of a pack as a dict, as the core's reader parsed it when opening the pack."""
+    return json.loads(TilePack(path).manifest_json())
 
 
 def read_level(pack: TilePack, painting: int, level: int) -> np.ndarray:
