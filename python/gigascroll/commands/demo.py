@@ -123,15 +123,14 @@ def render_room(png: Path) -> None:
 def write_preview(pack, png: Path, painting: int = 0) -> None:
     """A matplotlib figure: the painting at a coarse level, the same region at three levels,
     and single tiles with their borders outlined."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
+    from ..experiments import pyplot, save_figure
     from ..pack import read_level
 
+    plt = pyplot()
     p = pack.paintings[painting]
-    T, b, P = pack.tile_size, pack.border, pack.payload
+    b, P = pack.border, pack.payload
     # Coarse overview: the finest level at most 2400 texels wide.
     overview_level = next(l for l, (w, _) in enumerate(p.level_sizes) if w <= 2400)
     overview = read_level(pack, painting, overview_level)
@@ -173,5 +172,4 @@ def write_preview(pack, png: Path, painting: int = 0) -> None:
         ax.imshow(tile, interpolation="nearest")
         ax.set_title(f"level {level}, right-edge tile ({nx - 1}, {ty})")
         ax.axis("off")
-    fig.savefig(png, dpi=90)
-    plt.close(fig)
+    save_figure(fig, png, dpi=90)
