@@ -1,5 +1,6 @@
-"""Streaming runtime against independent references: numpy bilinear/trilinear sampling of the
-source image and of whole mip levels, brute-force fallback levels, direct pack reads."""
+"""Streaming runtime (gigascroll.runtime) against independent references: numpy
+bilinear/trilinear sampling of the source image and of whole mip levels, brute-force
+fallback levels, direct pack reads."""
 
 import os
 import shutil
@@ -117,8 +118,7 @@ def finest_resident_ancestor(vt, pack, level, u, v):
     raise AssertionError("no resident ancestor: the coarsest tile must be pinned")
 
 
-def test_missing_tiles_answer_with_the_finest_resident_ancestor(pack, levels):
-    rng = np.random.default_rng(3)
+def test_missing_tiles_answer_with_the_finest_resident_ancestor(pack, levels, rng):
     vt = VirtualTexture(pack, (4, 4))  # 16 slots: most tiles cannot be resident
     keys = all_keys(pack)
     for i in rng.permutation(len(keys))[:40]:
@@ -191,9 +191,8 @@ def test_physical_texture_holds_each_resident_tile_in_its_slot(pack, vt_full):
         np.testing.assert_array_equal(phys[slot], pack.read_tile(*k).reshape(T, T, 3))
 
 
-def test_plain_mip_texture_matches_the_full_vt(pack, vt_full):
+def test_plain_mip_texture_matches_the_full_vt(pack, vt_full, rng):
     mip = MipTexture(pack)
-    rng = np.random.default_rng(5)
     u, v = rng.random((40, 50)), rng.random((40, 50))
     lod = rng.random((40, 50)) * (mip.levels - 1)
     for f in ("bilinear", "trilinear"):
