@@ -14,7 +14,7 @@
 #include "photon/photon_tracer.h"
 #include "photon/scenes.h"
 
-using namespace gigascroll::photon;
+using namespace gigascroll;
 
 namespace {
 
@@ -22,7 +22,7 @@ const float kRadii[] = {0.02f, 0.05f, 0.1f, 0.2f};
 
 struct Workload {
     std::vector<Photon> photons;
-    std::vector<Vec3> queries;
+    std::vector<Vec3f> queries;
 };
 
 const Workload& workload(int side) {
@@ -34,10 +34,10 @@ const Workload& workload(int side) {
         const Camera cam = build_cornell(scene, 128, 128);
         scene.commit();
         w->photons = trace_photons(scene, std::uint64_t(side) * side, 1);
-        for (int y = 0; y < cam.height(); ++y)
-            for (int x = 0; x < cam.width(); ++x) {
+        for (int y = 0; y < int(cam.height); ++y)
+            for (int x = 0; x < int(cam.width); ++x) {
                 Hit h;
-                if (scene.intersect(cam.position(), cam.direction(x + 0.5f, y + 0.5f), h)) w->queries.push_back(h.p);
+                if (scene.intersect(cam.ray_origin(), cam.ray_direction(x + 0.5f, y + 0.5f), h)) w->queries.push_back(h.p);
             }
     }
     return *w;
@@ -57,7 +57,7 @@ using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adapto
 struct SumResult {
     float r2;
     const std::vector<Photon>* p;
-    Vec3 sum{0, 0, 0};
+    Vec3f sum{0, 0, 0};
     std::size_t n = 0;
     void init() {}
     void clear() {}
@@ -85,8 +85,8 @@ void radius_search(benchmark::State& st) {
     std::size_t found = 0;
     for (auto _ : st) {
         found = 0;
-        Vec3 total{0, 0, 0};
-        for (const Vec3& q : w.queries) {
+        Vec3f total{0, 0, 0};
+        for (const Vec3f& q : w.queries) {
             float r2 = r * r;
             index.for_each_in_radius(q, r2, [&](const Photon& p, float) { total += p.power; ++found; });
         }
@@ -112,8 +112,8 @@ void BM_Nanoflann(benchmark::State& st) {
     std::size_t found = 0;
     for (auto _ : st) {
         found = 0;
-        Vec3 total{0, 0, 0};
-        for (const Vec3& q : w.queries) {
+        Vec3f total{0, 0, 0};
+        for (const Vec3f& q : w.queries) {
             SumResult res{r * r, &w.photons};
             const float qp[3] = {q.x, q.y, q.z};
             tree.radiusSearchCustomCallback(qp, res, nanoflann::SearchParams(32, 0.0f, false));

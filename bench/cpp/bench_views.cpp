@@ -11,13 +11,13 @@
 #include <set>
 #include <vector>
 
-#include "vt/display.h"
-#include "vt/exhibition.h"
-#include "vt/feedback.h"
-#include "vt/request_hash.h"
-#include "vt/request_processing.h"
-#include "vt/residency.h"
-#include "vt/virtual_texture.h"
+#include "sampling/display.h"
+#include "views/exhibition.h"
+#include "views/feedback.h"
+#include "views/request_hash.h"
+#include "views/request_processing.h"
+#include "views/residency.h"
+#include "cache/virtual_texture.h"
 
 using namespace gigascroll;
 
@@ -27,17 +27,17 @@ const std::pair<std::uint32_t, std::uint32_t> kTable4[] = {
     {152089, 6083}, {196301, 5197}, {159010, 4339}, {102680, 5229},
     {109321, 7183}, {117968, 4722}, {91403, 11161}, {119177, 3858}};
 
-std::vector<PaintingTiles> exhibition(int paintings) {
-    std::vector<PaintingTiles> out;
+std::vector<PaintingGeometry> exhibition(int paintings) {
+    std::vector<PaintingGeometry> out;
     for (int i = 0; i < paintings; ++i) out.emplace_back(kTable4[i % 8].first, kTable4[i % 8].second);
     return out;
 }
 
 // A painting 6083 texels high whose pyramid has about `tiles` tiles in all.
-PaintingTiles painting_with_tiles(std::uint64_t tiles) {
+PaintingGeometry painting_with_tiles(std::uint64_t tiles) {
     std::uint32_t w = 1000;
-    while (PaintingTiles(w, 6083).total_tiles() < tiles) w += 120;
-    return PaintingTiles(w, 6083);
+    while (PaintingGeometry(w, 6083).total_tiles() < tiles) w += 120;
+    return PaintingGeometry(w, 6083);
 }
 
 // The views of seed 000 §5.3 on the scroll's wall (texel (0, 0) at (0, 1.75, 0), facing -z):
@@ -54,7 +54,7 @@ Camera magnifier_camera(double x) {
 
 // The scroll alone on its wall, for the feedback and display passes.
 struct ScrollScene {
-    PaintingTiles tiles{152089, 6083};
+    PaintingGeometry tiles{152089, 6083};
     ExhibitionScene scene;
     ScrollScene() {
         scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0}, 12.0, 0.5);
@@ -66,7 +66,7 @@ struct ScrollScene {
 struct Feedback {
     std::vector<std::vector<std::uint64_t>> buffers;
     std::vector<FeedbackBuffer> views;
-    explicit Feedback(const PaintingTiles& tiles) {
+    explicit Feedback(const PaintingGeometry& tiles) {
         ExhibitionScene scene;
         scene.add_painting(0, tiles, {0, 1.75, 0}, {1, 0, 0}, {0, -1, 0},
                            12.0 * tiles.width() / 152089, 0.5);
@@ -84,7 +84,7 @@ struct Feedback {
 };
 
 template <typename Run>
-void run_method(benchmark::State& state, const std::vector<PaintingTiles>& paintings, Run&& run) {
+void run_method(benchmark::State& state, const std::vector<PaintingGeometry>& paintings, Run&& run) {
     const Feedback fb(paintings[0]);
     const ResidentSet resident(paintings);
     std::uint64_t frame = 0, requests = 0;
@@ -95,7 +95,7 @@ void run_method(benchmark::State& state, const std::vector<PaintingTiles>& paint
     state.counters["requests"] = double(requests);
 }
 
-void add_methods(benchmark::State& state, const std::vector<PaintingTiles>& paintings, int method) {
+void add_methods(benchmark::State& state, const std::vector<PaintingGeometry>& paintings, int method) {
     switch (method) {
     case 0: {
         BasicProcessor p;
@@ -116,7 +116,7 @@ void add_methods(benchmark::State& state, const std::vector<PaintingTiles>& pain
         break;
     }
     default: {
-        HashProcessor p(16, HashModulus::Pow2, 2);
+        HashProcessor p(16, 2);
         run_method(state, paintings, [&](auto& v, auto& r, auto f) { return p.process(v, r, f).requests.size(); });
         break;
     }
@@ -187,10 +187,10 @@ void BM_EmbreeMagnifier(benchmark::State& state) {
     std::int64_t hits = 0;
     for (auto _ : state) {
         for (int row = 0; row < 512; ++row) {
-            const Vec3 row_dir = cam.forward + cam.screen_y(row + 0.5) * cam.up;
+            const Vec3d row_dir = cam.forward + cam.screen_y(row + 0.5) * cam.up;
             for (int i0 = 0; i0 < 512; i0 += 16) {
                 for (int k = 0; k < 16; ++k) {
-                    const Vec3 d = row_dir + cam.screen_x(i0 + k + 0.5) * cam.right;
+                    const Vec3d d = row_dir + cam.screen_x(i0 + k + 0.5) * cam.right;
                     packet.ray.dir_x[k] = float(d.x), packet.ray.dir_y[k] = float(d.y);
                     packet.ray.dir_z[k] = float(d.z);
                     packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
@@ -223,7 +223,7 @@ void BM_Display(benchmark::State& state) {
     std::vector<float> lod(std::size_t(dw) * dh);
     std::vector<double> uv(2 * lod.size());
     render_feedback(s.scene, cam, o, keys.data(), lod.data(), uv.data());
-    VirtualTexture vt(VtLayout::make(128, 4, {{152089, 6083}}), 30, 30,
+    VirtualTexture vt(PackGeometry::make(128, 4, {{152089, 6083}}), 30, 30,
                       [](const TileKey&, std::uint8_t* d) { std::fill_n(d, 128 * 128 * 3, 128); });
     std::vector<std::uint8_t> texels(128 * 128 * 3);
     for (std::size_t i = 0; i < texels.size(); ++i) texels[i] = std::uint8_t(i * 2654435761u >> 24);

@@ -1,4 +1,4 @@
-// Tile packs: the reader (TilePack), the streaming builder (PackBuilder) and pack geometry.
+// pack/: the reader (TilePack), the streaming builder (PackBuilder), pack geometry and tile keys.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/filesystem.h>
 #include <nanobind/stl/pair.h>
@@ -9,13 +9,15 @@
 #include <filesystem>
 
 #include "bindings/bindings.h"
-#include "bindings/numpy_arrays.h"
+#include "bindings/arrays.h"
 #include "common/error.h"
-#include "vt/ink_landscape.h"
-#include "vt/pack_builder.h"
-#include "vt/pack_geometry.h"
-#include "vt/page_layout.h"
-#include "vt/tile_pack.h"
+#include "pack/ink_landscape.h"
+#include "pack/builder.h"
+#include "pack/geometry.h"
+#include "pack/page_layout.h"
+#include "pack/geometry.h"
+#include "pack/tile_key.h"
+#include "pack/reader.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -23,25 +25,26 @@ using namespace nb::literals;
 namespace gigascroll::bindings {
 namespace {
 
-using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::device::cpu>;
-using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::device::cpu>;
+using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 
 nb::dict geometry_dict(const PaintingGeometry& g) {
     nb::dict d;
-    d["width"] = g.width;
-    d["height"] = g.height;
-    d["tile_size"] = g.tile_size;
-    d["border"] = g.border;
-    d["payload"] = g.payload;
-    d["table_size"] = std::make_pair(g.table_width, g.table_height);
+    d["width"] = g.width();
+    d["height"] = g.height();
+    d["tile_size"] = g.tile_size();
+    d["border"] = g.border();
+    d["payload"] = g.payload();
+    d["table_size"] = std::make_pair(g.page_table_width(), g.page_table_height());
     d["uv_scale"] = std::make_pair(g.uv_scale_u(), g.uv_scale_v());
-    d["tile_count"] = g.tile_count;
+    d["tile_count"] = g.total_tiles();
     nb::list levels;
-    for (const auto& lv : g.levels) {
+    for (std::uint32_t l = 0; l < g.levels(); ++l) {
+        const LevelGeometry& lv = g.level(l);
         nb::dict dl;
         dl["size"] = std::make_pair(lv.width, lv.height);
         dl["tiles"] = std::make_pair(lv.tiles_x, lv.tiles_y);
-        dl["first_entry"] = lv.first_entry;
+        dl["first_entry"] = lv.first_tile;
         levels.append(dl);
     }
     d["levels"] = levels;
@@ -51,8 +54,10 @@ nb::dict geometry_dict(const PaintingGeometry& g) {
 std::vector<std::pair<std::uint32_t, std::uint32_t>> level_pairs(const PaintingGeometry& g,
                                                                   bool tiles) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
-    for (const auto& lv : g.levels)
+    for (std::uint32_t l = 0; l < g.levels(); ++l) {
+        const LevelGeometry& lv = g.level(l);
         out.emplace_back(tiles ? lv.tiles_x : lv.width, tiles ? lv.tiles_y : lv.height);
+    }
     return out;
 }
 
@@ -60,37 +65,81 @@ void check_tile_out(const TilePack& pack, const TileOut& out) {
     const std::size_t T = pack.tile_size();
     require(out.shape(0) == T && out.shape(1) == T && out.shape(2) == 3,
             "out must have shape (" + std::to_string(T) + ", " + std::to_string(T) + ", 3)");
-    require(out.stride(2) == 1 && out.stride(1) == 3 && out.stride(0) == std::int64_t(3 * T),
-            "out must be C-contiguous");
 }
 
 }  // namespace
 
 void bind_pack(nb::module_& m) {
+    m.attr("NO_REQUEST") = kNoRequest;
+
+    nb::class_<PaintingGeometry>(m, "PaintingGeometry",
+                              "Tile pyramid geometry of one painting (levels, tiles per level).")
+        .def(nb::init<std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t>(), "width"_a,
+             "height"_a, "tile_size"_a = 128, "border"_a = 4)
+        .def_prop_ro("width", &PaintingGeometry::width)
+        .def_prop_ro("height", &PaintingGeometry::height)
+        .def_prop_ro("tile_size", &PaintingGeometry::tile_size)
+        .def_prop_ro("border", &PaintingGeometry::border)
+        .def_prop_ro("payload", &PaintingGeometry::payload)
+        .def_prop_ro("levels", &PaintingGeometry::levels)
+        .def_prop_ro("total_tiles", &PaintingGeometry::total_tiles)
+        .def_prop_ro("page_table_width", &PaintingGeometry::page_table_width)
+        .def_prop_ro("page_table_height", &PaintingGeometry::page_table_height)
+        .def("level_width", &PaintingGeometry::level_width)
+        .def("level_height", &PaintingGeometry::level_height)
+        .def("tiles_x", &PaintingGeometry::tiles_x)
+        .def("tiles_y", &PaintingGeometry::tiles_y)
+        .def("tile_count", &PaintingGeometry::tile_count)
+        .def("__repr__", [](const PaintingGeometry& p) {
+            return "PaintingGeometry(" + std::to_string(p.width()) + ", " + std::to_string(p.height()) +
+                   ", tile_size=" + std::to_string(p.tile_size()) +
+                   ", border=" + std::to_string(p.border()) + ")";
+        });
+    m.attr("PaintingTiles") = m.attr("PaintingGeometry");  // the views' old name
+
+    m.def("pack_request", [](std::int64_t p, std::int64_t l, std::int64_t x, std::int64_t y) {
+        return pack_request(checked_u32(p, kMaxPaintings - 1, "painting"),
+                            checked_u32(l, kMaxLevels - 1, "level"),
+                            checked_u32(x, 65535, "tile x"), checked_u32(y, 65535, "tile y"));
+    }, "painting"_a, "level"_a, "x"_a, "y"_a,
+          "64-bit request key: painting << 37 | level << 32 | morton(x, y).");
+    m.def("unpack_requests", [](nb::handle keys) {
+        HeldBuffer b = as_buffer(keys, "keys");
+        std::vector<std::uint32_t> p(b.view.size()), l(p.size()), x(p.size()), y(p.size());
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            const Request r = unpack_request(b.view[i]);
+            p[i] = r.painting, l[i] = r.level, x[i] = r.x, y[i] = r.y;
+        }
+        return nb::make_tuple(to_numpy(std::move(p)), to_numpy(std::move(l)),
+                              to_numpy(std::move(x)), to_numpy(std::move(y)));
+    }, "keys"_a, "Split request keys into (painting, level, x, y) uint32 arrays (flattened).");
+
     nb::class_<PaintingInfo>(m, "PackPainting", "One painting of a tile pack (read-only).")
         .def_ro("name", &PaintingInfo::name)
         .def_ro("source", &PaintingInfo::source)
         .def_ro("conversion", &PaintingInfo::conversion)
-        .def_prop_ro("width", &PaintingInfo::width)
-        .def_prop_ro("height", &PaintingInfo::height)
-        .def_prop_ro("levels", &PaintingInfo::level_count, "number of mip levels")
+        .def_prop_ro("width", [](const PaintingInfo& p) { return p.geometry.width(); })
+        .def_prop_ro("height", [](const PaintingInfo& p) { return p.geometry.height(); })
+        .def_prop_ro("levels", [](const PaintingInfo& p) { return p.geometry.levels(); },
+                     "number of mip levels")
         .def_prop_ro("level_sizes", [](const PaintingInfo& p) { return level_pairs(p.geometry, false); },
                      "(width, height) in texels of each level")
         .def_prop_ro("level_tiles", [](const PaintingInfo& p) { return level_pairs(p.geometry, true); },
                      "(tiles_x, tiles_y) real tiles of each level")
         .def_prop_ro("table_size", [](const PaintingInfo& p) {
-            return std::make_pair(p.geometry.table_width, p.geometry.table_height); },
+            return std::make_pair(p.geometry.page_table_width(), p.geometry.page_table_height()); },
             "(Mp, Np): the painting's power-of-two level-0 page table")
         .def_prop_ro("table_offset", [](const PaintingInfo& p) {
-            return std::make_pair(p.table_x, p.table_y); },
+            return std::make_pair(p.geometry.table_x(), p.geometry.table_y()); },
             "(x, y) offset of its page table in the merged table")
         .def_prop_ro("uv_scale", [](const PaintingInfo& p) {
             return std::make_pair(p.geometry.uv_scale_u(), p.geometry.uv_scale_v()); },
             "(W / (Mp P), H / (Np P)): seed 000 eqs (3, 4)")
-        .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.tile_count; })
+        .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.total_tiles(); })
         .def("__repr__", [](const PaintingInfo& p) {
-            return "PackPainting('" + p.name + "', " + std::to_string(p.width()) + " x " +
-                   std::to_string(p.height()) + ", " + std::to_string(p.level_count()) + " levels)";
+            const PaintingGeometry& g = p.geometry;
+            return "PackPainting('" + p.name + "', " + std::to_string(g.width()) + " x " +
+                   std::to_string(g.height()) + ", " + std::to_string(g.levels()) + " levels)";
         });
 
     nb::class_<TilePack>(m, "TilePack",
@@ -156,13 +205,10 @@ void bind_pack(nb::module_& m) {
             "table_x"_a = 0, "table_y"_a = 0)
         .def("add_rows", [](PackBuilder& b, Rows rows) {
             require(rows.shape(2) == 3, "rows must have shape (n, width, 3)");
-            require(rows.stride(2) == 1 && rows.stride(1) == 3 &&
-                        rows.stride(0) == std::int64_t(rows.shape(1) * 3),
-                    "rows must be C-contiguous");
             nb::gil_scoped_release release;
             b.add_rows(rows.data(), static_cast<std::uint32_t>(rows.shape(0)),
                        static_cast<std::uint32_t>(rows.shape(1))); },
-            "rows"_a.noconvert(), "uint8 array (n, width, 3), the next rows of the current painting")
+            "rows"_a, "uint8 array (n, width, 3), the next rows of the current painting")
         .def("end_painting", &PackBuilder::end_painting)
         .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
              "page_table_json"_a = "{}")
@@ -204,8 +250,6 @@ void bind_pack(nb::module_& m) {
         info["fill_ratio"] = chosen.fill_ratio;
         info["shelf_fill_ratio"] = shelf.fill_ratio;
         info["brkga_fill_ratio"] = brkga.fill_ratio;
-        info["shelf_box_fill_ratio"] = shelf.box_fill_ratio;
-        info["brkga_box_fill_ratio"] = brkga.box_fill_ratio;
         info["shelf_size"] = std::make_pair(shelf.width, shelf.height);
         info["brkga_size"] = std::make_pair(brkga.width, brkga.height);
         info["seed"] = seed;
@@ -216,7 +260,7 @@ void bind_pack(nb::module_& m) {
 
     m.def("painting_geometry", [](std::uint32_t w, std::uint32_t h, std::uint32_t tile_size,
                                   std::uint32_t border) {
-        return geometry_dict(make_geometry(w, h, tile_size, border)); },
+        return geometry_dict(PaintingGeometry(w, h, tile_size, border)); },
         "width"_a, "height"_a, "tile_size"_a = 128, "border"_a = 4,
         "Mip levels, tile grids, page-table size and UV scale of a painting.");
 }

@@ -13,9 +13,8 @@
 #include <vector>
 
 #include "bindings/bindings.h"
-#include "bindings/numpy_arrays.h"
+#include "bindings/arrays.h"
 #include "common/error.h"
-#include "photon/camera.h"
 #include "photon/photon_map.h"
 #include "photon/photon_tracer.h"
 #include "photon/renderer.h"
@@ -28,18 +27,18 @@ using namespace nb::literals;
 
 namespace gigascroll::bindings {
 namespace {
-using namespace gigascroll::photon;
+using namespace gigascroll;
 
 using FloatArray = nb::ndarray<const float, nb::c_contig, nb::device::cpu>;
 using IndexArray = nb::ndarray<const std::int64_t, nb::c_contig, nb::device::cpu>;
 using Out = nb::ndarray<nb::numpy, float>;
 
-Vec3 vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
+Vec3f vec(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
 
 Out photons_field(const std::vector<Photon>& ph, int field) {
     std::vector<float> v(ph.size() * 3);
     for (std::size_t i = 0; i < ph.size(); ++i) {
-        const Vec3 x = field == 0 ? ph[i].p : (field == 1 ? ph[i].power : ph[i].n);
+        const Vec3f x = field == 0 ? ph[i].p : (field == 1 ? ph[i].power : ph[i].n);
         v[3 * i] = x.x; v[3 * i + 1] = x.y; v[3 * i + 2] = x.z;
     }
     return to_numpy(std::move(v), {ph.size(), 3});
@@ -51,24 +50,11 @@ std::vector<Photon> photons_from(const FloatArray& positions) {
     const float* p = positions.data();
     for (std::size_t i = 0; i < ph.size(); ++i) {
         ph[i].p = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
-        require(finite(ph[i].p), "PhotonMap: positions must be finite");
+        require(is_finite(ph[i].p), "PhotonMap: positions must be finite");
         ph[i].power = {1, 1, 1};
         ph[i].n = {0, 0, 1};
     }
     return ph;
-}
-
-HashGrid::Mode hash_mode(const std::string& s) {
-    if (s == "auto") return HashGrid::Mode::Auto;
-    if (s == "dense") return HashGrid::Mode::Dense;
-    if (s == "hashed") return HashGrid::Mode::Hashed;
-    throw InvalidArgument("hash_mode must be 'auto', 'dense' or 'hashed', not '" + s + "'");
-}
-
-GridKind grid_kind(const std::string& s) {
-    if (s == "hash") return GridKind::Hash;
-    if (s == "kdtree") return GridKind::KdTree;
-    throw InvalidArgument("grid must be 'hash' or 'kdtree', not '" + s + "'");
 }
 
 RenderSettings make_settings(std::uint64_t photons, float radius, const std::string& grid,
@@ -79,23 +65,19 @@ RenderSettings make_settings(std::uint64_t photons, float radius, const std::str
     RenderSettings s;
     s.photons = photons;
     s.gather.radius = radius;
-    s.grid = grid_kind(grid);
-    require(gather == "radius" || gather == "knn", "gather must be 'radius' or 'knn', not '" + gather + "'");
-    s.gather.knn = gather == "knn";
+    s.grid = parse_grid_kind(grid);
+    s.gather.knn = parse_gather_is_knn(gather);
     s.gather.k = k;
-    require(kernel == "box" || kernel == "cone", "kernel must be 'box' or 'cone', not '" + kernel + "'");
-    s.gather.kernel = kernel == "box" ? Kernel::Box : Kernel::Cone;
+    s.gather.kernel = parse_kernel(kernel);
     s.spp = spp;
     s.light_samples = light_samples;
     s.seed = seed;
-    require(pipeline == "fused" || pipeline == "two-pass",
-            "pipeline must be 'fused' or 'two-pass', not '" + pipeline + "'");
-    s.pipeline = pipeline == "fused" ? Pipeline::Fused : Pipeline::TwoPass;
+    s.pipeline = parse_pipeline(pipeline);
     s.cooperative = cooperative;
     s.direct = direct;
     s.indirect = indirect;
     s.threads = threads;
-    s.hash_mode = hash_mode(mode);
+    s.hash_mode = parse_hash_mode(mode);
     s.validate();
     return s;
 }
@@ -147,11 +129,11 @@ void bind_photon(nb::module_& m) {
         .def_prop_ro("triangle_count", &Scene::triangle_count)
         .def_prop_ro("emitter_count", &Scene::emitter_count)
         .def_prop_ro("emitted_power", [](const Scene& s) {
-            const Vec3 p = s.emitted_power();
+            const Vec3f p = s.emitted_power();
             return std::array<float, 3>{p.x, p.y, p.z};
         }, "Total emitted flux: sum of pi * area * radiance over the emitters (RGB).")
         .def_prop_ro("bounds", [](const Scene& s) {
-            const Vec3 a = s.bounds_min(), b = s.bounds_max();
+            const Vec3f a = s.bounds_min(), b = s.bounds_max();
             return std::make_tuple(std::array<float, 3>{a.x, a.y, a.z}, std::array<float, 3>{b.x, b.y, b.z});
         })
         .def("intersect", [](const Scene& s, std::array<float, 3> o, std::array<float, 3> d) -> nb::object {
@@ -160,33 +142,6 @@ void bind_photon(nb::module_& m) {
             if (!s.intersect(vec(o), vec(d), h)) return nb::none();
             return nb::make_tuple(h.t, std::array<float, 3>{h.p.x, h.p.y, h.p.z}, h.tri);
         }, "o"_a, "d"_a, "Nearest hit (t, point, triangle) along o + t d, or None.");
-
-    nb::class_<Camera>(m, "Camera", "Pinhole camera: vertical field of view in degrees, pixel (0, 0) top-left.")
-        .def("__init__", [](Camera* c, std::array<float, 3> pos, std::array<float, 3> at, std::array<float, 3> up,
-                            float fov, std::array<int, 2> res) {
-            new (c) Camera(vec(pos), vec(at), vec(up), fov, res[0], res[1]);
-        }, "position"_a, "look_at"_a, "up"_a, "fov"_a, "resolution"_a = std::array<int, 2>{256, 256})
-        .def_prop_ro("position", [](const Camera& c) { auto p = c.position(); return std::array<float, 3>{p.x, p.y, p.z}; })
-        .def_prop_ro("forward", [](const Camera& c) { auto p = c.forward(); return std::array<float, 3>{p.x, p.y, p.z}; })
-        .def_prop_ro("right", [](const Camera& c) { auto p = c.right(); return std::array<float, 3>{p.x, p.y, p.z}; })
-        .def_prop_ro("up", [](const Camera& c) { auto p = c.up(); return std::array<float, 3>{p.x, p.y, p.z}; })
-        .def_prop_ro("fov", &Camera::fov)
-        .def_prop_ro("resolution", [](const Camera& c) { return std::array<int, 2>{c.width(), c.height()}; })
-        .def("project", [](const Camera& c, std::array<float, 3> p) -> nb::object {
-            int x, y;
-            if (!c.project(vec(p), x, y)) return nb::none();
-            return nb::make_tuple(x, y);
-        }, "point"_a, "Pixel (x, y) that sees point (seed 001 eqs. 3-5), or None off the film.")
-        .def("direction", [](const Camera& c, float px, float py) {
-            const Vec3 d = c.direction(px, py);
-            return std::array<float, 3>{d.x, d.y, d.z};
-        }, "px"_a, "py"_a, "Unit direction through film position (px, py) in pixels.");
-
-    nb::class_<StereoCamera>(m, "StereoCamera", "Two parallel eyes ipd apart along the camera's right vector.")
-        .def(nb::init<const Camera&, float>(), "camera"_a, "ipd"_a = 0.064f)
-        .def_ro("left", &StereoCamera::left)
-        .def_ro("right", &StereoCamera::right)
-        .def_ro("ipd", &StereoCamera::ipd);
 
     m.def("_build_scene", [](const std::string& name, Scene& scene, int width, int height, float albedo,
                               float emission) {
@@ -218,8 +173,8 @@ void bind_photon(nb::module_& m) {
         .def("__init__", [](PhotonMap* pm, const FloatArray& positions, float radius, const std::string& grid,
                             const std::string& mode) {
             std::vector<Photon> ph = photons_from(positions);
-            const GridKind kind = grid_kind(grid);
-            const HashGrid::Mode md = hash_mode(mode);
+            const GridKind kind = parse_grid_kind(grid);
+            const HashGrid::Mode md = parse_hash_mode(mode);
             nb::gil_scoped_release release;
             new (pm) PhotonMap(ph, radius, kind, md);
         }, "positions"_a, "radius"_a, "grid"_a = "hash", "hash_mode"_a = "auto")
@@ -230,13 +185,13 @@ void bind_photon(nb::module_& m) {
         .def("query_radius", [](const PhotonMap& pm, std::array<float, 3> q, float r) {
             const auto idx = pm.query_radius(vec(q), r);
             std::vector<float> v;
-            for (auto i : idx) { const Vec3 p = pm.photons()[i].p; v.insert(v.end(), {p.x, p.y, p.z}); }
+            for (auto i : idx) { const Vec3f p = pm.photons()[i].p; v.insert(v.end(), {p.x, p.y, p.z}); }
             return to_numpy(std::move(v), {idx.size(), 3});
         }, "point"_a, "radius"_a, "Positions of every photon within radius (at most the map's radius).")
         .def("query_knn", [](const PhotonMap& pm, std::array<float, 3> q, int k, float r) {
             const auto idx = pm.query_knn(vec(q), k, r);
             std::vector<float> v;
-            for (auto i : idx) { const Vec3 p = pm.photons()[i].p; v.insert(v.end(), {p.x, p.y, p.z}); }
+            for (auto i : idx) { const Vec3f p = pm.photons()[i].p; v.insert(v.end(), {p.x, p.y, p.z}); }
             return to_numpy(std::move(v), {idx.size(), 3});
         }, "point"_a, "k"_a, "radius"_a, "Positions of the k nearest photons within radius, nearest first.");
 
@@ -253,7 +208,7 @@ void bind_photon(nb::module_& m) {
             Renderer r(scene, s);
             img = r.render(cam, st);
         }
-        return nb::make_tuple(to_numpy(std::move(img), {std::size_t(cam.height()), std::size_t(cam.width()), 3}),
+        return nb::make_tuple(to_numpy(std::move(img), {std::size_t(cam.height), std::size_t(cam.width), 3}),
                               stats_dict(st));
     }, "scene"_a, "camera"_a, RENDER_ARGS);
 
@@ -270,7 +225,7 @@ void bind_photon(nb::module_& m) {
             Renderer r(scene, s);
             out = render_stereo(r, eyes, reuse);
         }
-        const std::size_t h = std::size_t(eyes.left.height()), w = std::size_t(eyes.left.width());
+        const std::size_t h = std::size_t(eyes.left.height), w = std::size_t(eyes.left.width);
         nb::dict d;
         d["left"] = stats_dict(out.left_stats);
         d["right"] = stats_dict(out.right_stats);

@@ -1,31 +1,27 @@
-// Python bindings of the views subsystem: exhibition scene, cameras, feedback pass and the
-// request-processing methods. Feedback buffers cross as uint64 numpy arrays, without copies.
+// views/: cameras, the exhibition scene, the feedback pass and request processing.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
-#include <array>
-#include <cmath>
-#include <optional>
+#include <cstring>
 #include <string>
+
+#include "bindings/arrays.h"
+#include "bindings/bindings.h"
+#include "common/error.h"
 
 #include <type_traits>
 
-#include "bindings/bindings.h"
-#include "bindings/numpy_arrays.h"
-#include "common/error.h"
-#include "vt/display.h"
-#include "vt/exhibition.h"
-#include "vt/feedback.h"
-#include "vt/load_strategy.h"
-#include "vt/request.h"
-#include "vt/request_hash.h"
-#include "vt/request_processing.h"
-#include "vt/residency.h"
-#include "vt/virtual_texture.h"
-#include "vt/vt_lookup.h"
+#include "views/camera.h"
+#include "views/exhibition.h"
+#include "views/feedback.h"
+#include "views/request_hash.h"
+#include "views/request_processing.h"
+#include "views/residency.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -33,51 +29,8 @@ using namespace nb::literals;
 namespace gigascroll::bindings {
 namespace {
 
-Vec3 vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
-std::array<double, 3> arr3(Vec3 v) { return {v.x, v.y, v.z}; }
-
-// A C-contiguous uint64 array of any shape, viewed as a flat feedback buffer.
-struct HeldBuffer {
-    nb::ndarray<> array;
-    FeedbackBuffer view;
-};
-
-HeldBuffer as_buffer(nb::handle h, const char* what) {
-    nb::ndarray<> a;
-    if (!nb::try_cast(h, a))
-        throw InvalidArgument(std::string(what) + " must be a numpy array of uint64 request keys");
-    require(a.dtype() == nb::dtype<std::uint64_t>(),
-            std::string(what) + " must have dtype uint64 (request keys)");
-    require(a.device_type() == nb::device::cpu::value, std::string(what) + " must be on the CPU");
-    std::int64_t expect = 1;
-    for (std::size_t i = a.ndim(); a.size() > 0 && i-- > 0;) {
-        require(a.shape(i) == 1 || a.stride(i) == expect,
-                std::string(what) + " must be C-contiguous");
-        expect *= std::int64_t(a.shape(i));
-    }
-    return {a, FeedbackBuffer(static_cast<const std::uint64_t*>(a.data()), a.size())};
-}
-
-// Accepts one array or a sequence of arrays (left eye, right eye, magnifier ...).
-std::vector<HeldBuffer> as_buffers(nb::handle h) {
-    std::vector<HeldBuffer> out;
-    nb::ndarray<> probe;
-    if (nb::try_cast(h, probe)) {
-        out.push_back(as_buffer(h, "feedback buffer"));
-        return out;
-    }
-    if (!nb::isinstance<nb::sequence>(h))
-        throw InvalidArgument("feedback buffers must be a uint64 array or a list of them");
-    for (nb::handle item : nb::borrow<nb::sequence>(h))
-        out.push_back(as_buffer(item, "feedback buffer"));
-    return out;
-}
-
-std::vector<FeedbackBuffer> views_of(const std::vector<HeldBuffer>& held) {
-    std::vector<FeedbackBuffer> v;
-    for (const auto& b : held) v.push_back(b.view);
-    return v;
-}
+Vec3d vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+std::array<double, 3> arr3(Vec3d v) { return {v.x, v.y, v.z}; }
 
 nb::dict sets_dict(RequestSets&& s) {
     nb::dict d;
@@ -105,58 +58,13 @@ nb::dict process_frame(Processor& p, nb::handle buffers, const ResidencyLookup& 
     return sets_dict(std::move(s));
 }
 
-std::uint32_t checked_u32(std::int64_t v, std::int64_t hi, const char* what) {
-    require(v >= 0 && v <= hi, std::string(what) + " out of range");
-    return static_cast<std::uint32_t>(v);
-}
-
 }  // namespace
 
 void bind_views(nb::module_& m) {
-    m.attr("NO_REQUEST") = kNoRequest;
-
-    nb::class_<PaintingTiles>(m, "PaintingTiles",
-                              "Tile pyramid geometry of one painting (levels, tiles per level).")
-        .def(nb::init<std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t>(), "width"_a,
-             "height"_a, "tile_size"_a = 128, "border"_a = 4)
-        .def_prop_ro("width", &PaintingTiles::width)
-        .def_prop_ro("height", &PaintingTiles::height)
-        .def_prop_ro("tile_size", &PaintingTiles::tile_size)
-        .def_prop_ro("border", &PaintingTiles::border)
-        .def_prop_ro("payload", &PaintingTiles::payload)
-        .def_prop_ro("levels", &PaintingTiles::levels)
-        .def_prop_ro("total_tiles", &PaintingTiles::total_tiles)
-        .def_prop_ro("page_table_width", &PaintingTiles::page_table_width)
-        .def_prop_ro("page_table_height", &PaintingTiles::page_table_height)
-        .def("level_width", &PaintingTiles::level_width)
-        .def("level_height", &PaintingTiles::level_height)
-        .def("tiles_x", &PaintingTiles::tiles_x)
-        .def("tiles_y", &PaintingTiles::tiles_y)
-        .def("tile_count", &PaintingTiles::tile_count)
-        .def("__repr__", [](const PaintingTiles& p) {
-            return "PaintingTiles(" + std::to_string(p.width()) + ", " + std::to_string(p.height()) +
-                   ", tile_size=" + std::to_string(p.tile_size()) +
-                   ", border=" + std::to_string(p.border()) + ")";
-        });
-
-    m.def("pack_request", [](std::int64_t p, std::int64_t l, std::int64_t x, std::int64_t y) {
-        return pack_request(checked_u32(p, kMaxPaintings - 1, "painting"),
-                            checked_u32(l, kMaxLevels - 1, "level"),
-                            checked_u32(x, 65535, "tile x"), checked_u32(y, 65535, "tile y"));
-    }, "painting"_a, "level"_a, "x"_a, "y"_a,
-          "64-bit request key: painting << 37 | level << 32 | morton(x, y).");
-    m.def("unpack_requests", [](nb::handle keys) {
-        HeldBuffer b = as_buffer(keys, "keys");
-        std::vector<std::uint32_t> p(b.view.size()), l(p.size()), x(p.size()), y(p.size());
-        for (std::size_t i = 0; i < p.size(); ++i) {
-            const Request r = unpack_request(b.view[i]);
-            p[i] = r.painting, l[i] = r.level, x[i] = r.x, y[i] = r.y;
-        }
-        return nb::make_tuple(to_numpy(std::move(p)), to_numpy(std::move(l)),
-                              to_numpy(std::move(x)), to_numpy(std::move(y)));
-    }, "keys"_a, "Split request keys into (painting, level, x, y) uint32 arrays (flattened).");
-
-    nb::class_<Camera>(m, "ViewCamera", "A pinhole view: a headset eye or the magnifier.")
+    nb::class_<Camera>(m, "Camera",
+        "The pinhole camera of every view: Camera(position, look_at, up, fov=45, resolution=(w, h))\n"
+        "with a vertical field of view in degrees, or Camera(position, forward, up, tan_half_x,\n"
+        "tan_half_y, width, height). Pixel (0, 0) is the top-left corner.")
         .def("__init__", [](Camera* c, std::array<double, 3> position, std::array<double, 3> forward,
                             std::array<double, 3> up, double tan_half_x, double tan_half_y,
                             std::int64_t width, std::int64_t height) {
@@ -165,6 +73,14 @@ void bind_views(nb::module_& m) {
             new (c) Camera(vec3(position), vec3(forward), vec3(up), tan_half_x, tan_half_y,
                            std::uint32_t(width), std::uint32_t(height));
         }, "position"_a, "forward"_a, "up"_a, "tan_half_x"_a, "tan_half_y"_a, "width"_a, "height"_a)
+        .def("__init__", [](Camera* c, std::array<double, 3> position, std::array<double, 3> look_at,
+                            std::array<double, 3> up, double fov, std::array<std::int64_t, 2> res) {
+            require(res[0] > 0 && res[1] > 0 && res[0] <= 65536 && res[1] <= 65536,
+                    "Camera: resolution must be positive (at most 65536 per side)");
+            new (c) Camera(Camera::look_at(vec3(position), vec3(look_at), vec3(up), fov,
+                                           std::uint32_t(res[0]), std::uint32_t(res[1])));
+        }, "position"_a, "look_at"_a, "up"_a, "fov"_a = 45.0,
+           "resolution"_a = std::array<std::int64_t, 2>{256, 256})
         .def_prop_ro("position", [](const Camera& c) { return arr3(c.position); })
         .def_prop_ro("forward", [](const Camera& c) { return arr3(c.forward); })
         .def_prop_ro("up", [](const Camera& c) { return arr3(c.up); })
@@ -172,12 +88,31 @@ void bind_views(nb::module_& m) {
         .def_ro("tan_half_x", &Camera::tan_half_x)
         .def_ro("tan_half_y", &Camera::tan_half_y)
         .def_ro("width", &Camera::width)
-        .def_ro("height", &Camera::height);
+        .def_ro("height", &Camera::height)
+        .def_prop_ro("fov", &Camera::fov_y_degrees, "vertical field of view in degrees")
+        .def_prop_ro("resolution", [](const Camera& c) {
+            return std::array<std::uint32_t, 2>{c.width, c.height}; })
+        .def("project", [](const Camera& c, std::array<float, 3> p) -> nb::object {
+            int x, y;
+            if (!c.project(Vec3f(p[0], p[1], p[2]), x, y)) return nb::none();
+            return nb::make_tuple(x, y);
+        }, "point"_a, "Pixel (x, y) that sees point (seed 001 eqs. 3-5), or None off the film.")
+        .def("direction", [](const Camera& c, double px, double py) {
+            return arr3(normalize(c.direction(px, py)));
+        }, "px"_a, "py"_a, "Unit direction through film position (px, py) in pixels.");
+    m.attr("ViewCamera") = m.attr("Camera");
+
+    nb::class_<StereoCamera>(m, "StereoCamera",
+                             "Two parallel eyes ipd apart along the camera's right vector.")
+        .def(nb::init<const Camera&, double>(), "camera"_a, "ipd"_a = 0.064)
+        .def_ro("left", &StereoCamera::left)
+        .def_ro("right", &StereoCamera::right)
+        .def_ro("ipd", &StereoCamera::ipd);
 
     nb::class_<ExhibitionScene>(m, "ExhibitionScene",
                                 "The exhibition room as an Embree scene: paintings, boxes, tables.")
         .def(nb::init<>())
-        .def("add_painting", [](ExhibitionScene& s, std::int64_t painting, const PaintingTiles& tiles,
+        .def("add_painting", [](ExhibitionScene& s, std::int64_t painting, const PaintingGeometry& tiles,
                                 std::array<double, 3> origin, std::array<double, 3> u_axis,
                                 std::array<double, 3> v_axis, double width_m, double height_m) {
             return s.add_painting(checked_u32(painting, kMaxPaintings - 1, "painting id"), tiles,
@@ -269,31 +204,6 @@ void bind_views(nb::module_& m) {
           "(h', w', 2) painting coordinates (NaN where no painting), h' = ceil(h / step).\n"
           "display=False computes the keys only (lod and uv are None).");
 
-    m.def("display_view", [](const VirtualTexture& vt,
-                             nb::ndarray<const std::uint64_t, nb::ndim<2>, nb::c_contig> keys,
-                             nb::ndarray<const float, nb::ndim<2>, nb::c_contig> lod,
-                             nb::ndarray<const double, nb::ndim<3>, nb::c_contig> uv,
-                             std::uint32_t step, unsigned threads) {
-        require(step >= 1, "display step must be >= 1");
-        const std::size_t h = keys.shape(0), w = keys.shape(1);
-        const std::size_t oh = display_extent(std::uint32_t(h), step),
-                          ow = display_extent(std::uint32_t(w), step);
-        require(lod.shape(0) == oh && lod.shape(1) == ow && uv.shape(0) == oh &&
-                    uv.shape(1) == ow && uv.shape(2) == 2,
-                "display_view: keys (h, w) need lod (h', w') and uv (h', w', 2) on the display "
-                "grid, h' = ceil(h / step) (render_view(..., display_step=step))");
-        FreshArray<float> out({oh, ow, 3});
-        {
-            nb::gil_scoped_release release;
-            display_view(vt, keys.data(), lod.data(), uv.data(), std::uint32_t(w),
-                         std::uint32_t(h), step, out.data, threads);
-        }
-        return out.array;
-    }, "vt"_a, "keys"_a, "lod"_a, "uv"_a, "step"_a = 1, "threads"_a = 0,
-          "The display pass: samples every step-th pixel per axis of a view through the\n"
-          "virtual texture (bilinear at round(lod)), from render_view(..., display_step=step);\n"
-          "(h', w', 3) float32, black where no painting is seen.");
-
     m.def("texel_footprint", [](const ExhibitionScene& scene, std::size_t placement,
                                 const Camera& camera, double px, double py) {
         require(placement < scene.paintings().size(), "placement index out of range");
@@ -308,13 +218,9 @@ void bind_views(nb::module_& m) {
         .def("response", [](const ResidencyLookup& r, std::uint64_t key) { return response_of(r, key); },
              "request"_a);
 
-    nb::class_<VirtualTextureLookup, ResidencyLookup>(
-        m, "VirtualTextureLookup", "Request processing's view of a VirtualTexture's page table.")
-        .def(nb::init<const VirtualTexture&>(), "vt"_a, nb::keep_alive<1, 2>());
-
     nb::class_<ResidentSet, ResidencyLookup>(
         m, "ResidentSet", "Reference residency: a set of tiles plus every painting's coarsest tile.")
-        .def(nb::init<std::vector<PaintingTiles>>(), "paintings"_a)
+        .def(nb::init<std::vector<PaintingGeometry>>(), "paintings"_a)
         .def("insert", [](ResidentSet& s, nb::handle keys) {
             if (nb::isinstance<nb::int_>(keys)) return s.insert(nb::cast<std::uint64_t>(keys));
             HeldBuffer b = as_buffer(keys, "keys");
@@ -330,18 +236,13 @@ void bind_views(nb::module_& m) {
 
     nb::class_<FlagArrayProcessor>(m, "FlagArrayProcessor",
                                    "Hollemeersch: one flag per tile, parallel mark and compaction.")
-        .def(nb::init<std::vector<PaintingTiles>, unsigned>(), "paintings"_a, "threads"_a = 0)
+        .def(nb::init<std::vector<PaintingGeometry>, unsigned>(), "paintings"_a, "threads"_a = 0)
         .def_prop_ro("flag_count", &FlagArrayProcessor::flag_count)
         .def("process", &process_frame<FlagArrayProcessor>, "buffers"_a, "lookup"_a, "frame"_a = 0);
 
     nb::class_<HashProcessor>(m, "HashProcessor",
                               "Seed 000: fixed-size result table, slot a (B F) mod m, finer level wins.")
-        .def("__init__", [](HashProcessor* h, unsigned table_bits, const std::string& modulus,
-                            unsigned threads) {
-            require(modulus == "pow2" || modulus == "prime", "modulus must be 'pow2' or 'prime'");
-            new (h) HashProcessor(table_bits, modulus == "pow2" ? HashModulus::Pow2 : HashModulus::Prime,
-                                  threads);
-        }, "table_bits"_a = 16, "modulus"_a = "pow2", "threads"_a = 0)
+        .def(nb::init<unsigned, unsigned>(), "table_bits"_a = 16, "threads"_a = 0)
         .def_prop_ro("table_size", &HashProcessor::table_size)
         .def_static("frame_salt", &HashProcessor::frame_salt, "frame"_a)
         .def("slot", &HashProcessor::slot, "key"_a, "salt"_a)
@@ -376,39 +277,9 @@ void bind_views(nb::module_& m) {
              "wait=True blocks until every submitted frame is done.")
         .def_prop_ro("pending", &AsyncProcessor::pending);
 
-    nb::class_<DirectLoading>(m, "DirectLoading",
-                              "Seed 000: load missing requested tiles, at most per_frame a frame.")
-        .def(nb::init<std::size_t>(), "per_frame"_a = 16)
-        .def("set_commands", [](DirectLoading& d, nb::handle keys) {
-            HeldBuffer b = as_buffer(keys, "commands");
-            d.set_commands(b.view);
-        }, "commands"_a)
-        .def("issue", [](DirectLoading& d, const ResidencyLookup& lookup) {
-            return to_numpy(d.issue(lookup));
-        }, "lookup"_a)
-        .def("loaded", [](DirectLoading& d, nb::handle keys) {
-            HeldBuffer b = as_buffer(keys, "keys");
-            d.loaded(b.view);
-        }, "keys"_a)
-        .def_prop_ro("backlog", &DirectLoading::backlog)
-        .def_prop_ro("in_flight", &DirectLoading::in_flight);
-
-    nb::class_<MipByMipLoading>(m, "MipByMipLoading",
-                                "van Waveren: the coarsest missing ancestor of each miss first.")
-        .def(nb::init<std::size_t>(), "per_frame"_a = 16)
-        .def("issue", [](MipByMipLoading& d, nb::handle commands, const ResidencyLookup& lookup) {
-            HeldBuffer b = as_buffer(commands, "commands");
-            return to_numpy(d.issue(b.view, lookup));
-        }, "commands"_a, "lookup"_a)
-        .def("loaded", [](MipByMipLoading& d, nb::handle keys) {
-            HeldBuffer b = as_buffer(keys, "keys");
-            d.loaded(b.view);
-        }, "keys"_a)
-        .def_prop_ro("in_flight", &MipByMipLoading::in_flight);
-
     nb::class_<VisibilityLists>(m, "VisibilityLists",
                                 "Seed 002: alive and remove lists against the previous frame.")
-        .def(nb::init<std::vector<PaintingTiles>, unsigned>(), "paintings"_a, "threads"_a = 0)
+        .def(nb::init<std::vector<PaintingGeometry>, unsigned>(), "paintings"_a, "threads"_a = 0)
         .def("process", [](VisibilityLists& v, nb::handle buffers) {
             auto held = as_buffers(buffers);
             auto views = views_of(held);

@@ -1,11 +1,14 @@
-// One registration function per subsystem; module.cpp calls them in order.
+// One registration function per folder of the core, called in the order data flows; the
+// bindings only forward (argument conversion, the GIL, numpy arrays), the logic is the core's.
 #pragma once
 #include <nanobind/nanobind.h>
 
 namespace gigascroll::bindings {
-void bind_common(nanobind::module_& m);
-void bind_pack(nanobind::module_& m);     // vt: tile pack, pack builder, layout
-void bind_runtime(nanobind::module_& m);  // concurrency + vt: loader, cache, page table, sampler
-void bind_views(nanobind::module_& m);    // vt: exhibition scene, views, feedback, request processing
-void bind_photon(nanobind::module_& m);   // photon: scene, cameras, photon maps, renderer
+void bind_common(nanobind::module_& m);    // errors, threads
+void bind_pack(nanobind::module_& m);      // tile pack reader and builder, geometry, tile keys
+void bind_views(nanobind::module_& m);     // cameras, exhibition scene, feedback, request processing
+void bind_loading(nanobind::module_& m);   // tile loader, loading strategies
+void bind_cache(nanobind::module_& m);     // physical cache and page table, lookup, drain
+void bind_sampling(nanobind::module_& m);  // VT sampling, mip texture, display pass
+void bind_photon(nanobind::module_& m);    // photon scene, photon maps, renderer
 }  // namespace gigascroll::bindings

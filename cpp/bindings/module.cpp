@@ -5,7 +5,9 @@ NB_MODULE(_core, m) {
     using namespace gigascroll::bindings;
     bind_common(m);
     bind_pack(m);
-    bind_runtime(m);
     bind_views(m);
+    bind_loading(m);
+    bind_cache(m);
+    bind_sampling(m);
     bind_photon(m);
 }

@@ -18,7 +18,7 @@ public:
     std::size_t capacity() const { return capacity_; }
 
     template <typename U>
-    bool try_push(U&& value) {
+    [[nodiscard]] bool try_push(U&& value) {
         {
             std::lock_guard lock(mutex_);
             if (items_.size() >= capacity_) return false;
@@ -29,7 +29,7 @@ public:
     }
 
     template <typename It>
-    std::size_t try_push_batch(It first, std::size_t n) {
+    [[nodiscard]] std::size_t try_push_batch(It first, std::size_t n) {
         std::size_t k = 0;
         {
             std::lock_guard lock(mutex_);
@@ -40,7 +40,7 @@ public:
         return k;
     }
 
-    bool try_pop(T& out) {
+    [[nodiscard]] bool try_pop(T& out) {
         {
             std::lock_guard lock(mutex_);
             if (items_.empty()) return false;
@@ -52,7 +52,7 @@ public:
     }
 
     template <typename OutIt>
-    std::size_t try_pop_batch(OutIt out, std::size_t max) {
+    [[nodiscard]] std::size_t try_pop_batch(OutIt out, std::size_t max) {
         std::size_t k = 0;
         {
             std::lock_guard lock(mutex_);

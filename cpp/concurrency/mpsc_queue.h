@@ -33,6 +33,12 @@ public:
         : capacity_(ring_capacity(capacity)), mask_(capacity_ - 1), cells_(capacity_) {
         for (std::size_t i = 0; i < capacity_; ++i)
             ::new (&cells_[i].seq) std::atomic<std::size_t>(i);
+        // Producers' shared tail and the consumer's head each on a block of their own.
+        static_assert(alignof(MpscQueue) == kCacheLine);
+        static_assert(offsetof(MpscQueue, tail_) % kCacheLine == 0 &&
+                      offsetof(MpscQueue, head_) % kCacheLine == 0);
+        static_assert(offsetof(MpscQueue, head_) - offsetof(MpscQueue, tail_) >= kCacheLine);
+        static_assert(sizeof(MpscQueue) - offsetof(MpscQueue, head_) == kCacheLine);
     }
 
     ~MpscQueue() {
@@ -51,7 +57,7 @@ public:
 
     // Any thread.
     template <typename U>
-    bool try_push(U&& value) {
+    [[nodiscard]] bool try_push(U&& value) {
         std::size_t pos = tail_.load(std::memory_order_relaxed);
         for (;;) {
             Cell& c = cells_[pos & mask_];
@@ -75,7 +81,7 @@ public:
     // free when its last cell is: the consumer frees cells in position order. The acquire
     // on that last cell also makes the frees of the earlier cells visible.
     template <typename It>
-    std::size_t try_push_batch(It first, std::size_t n) {
+    [[nodiscard]] std::size_t try_push_batch(It first, std::size_t n) {
         if (n == 0) return 0;
         std::size_t pos = tail_.load(std::memory_order_relaxed);
         std::size_t k = n < capacity_ ? n : capacity_;
@@ -113,7 +119,7 @@ public:
     }
 
     // Consumer thread only.
-    bool try_pop(T& out) {
+    [[nodiscard]] bool try_pop(T& out) {
         Cell& c = cells_[head_ & mask_];
         if (c.seq.load(std::memory_order_acquire) != head_ + 1) return false;
         out = std::move(*c.ptr());
@@ -124,7 +130,7 @@ public:
     }
 
     template <typename OutIt>
-    std::size_t try_pop_batch(OutIt out, std::size_t max) {
+    [[nodiscard]] std::size_t try_pop_batch(OutIt out, std::size_t max) {
         std::size_t k = 0;
         for (; k < max; ++k, ++out) {
             Cell& c = cells_[head_ & mask_];

@@ -3,21 +3,18 @@
 #include <cstddef>
 #include <new>
 
+#include "common/bits.h"
+
 namespace gigascroll {
 
-// Producer and consumer state live on separate lines of this size. 64 bytes on x86-64 and
-// most ARM cores; two lines would also defeat the adjacent-line prefetcher, but the
-// measured difference on this hardware was within noise, so one line it is.
+// Producer and consumer state live on separate blocks of this size: two 64-byte cache lines
+// (x86-64 and most ARM cores), because the adjacent-line prefetcher fetches lines in pairs
+// and one line apart would still share the pair (rigtorp's SPSCQueue pads the same way). The
+// queues static_assert this layout.
 inline constexpr std::size_t kCacheLine = 128;
 
-inline constexpr std::size_t round_up_pow2(std::size_t n) {
-    std::size_t p = 1;
-    while (p < n) p <<= 1;
-    return p;
-}
-
 // Ring size for a requested capacity: a power of two, at least 2, so index & mask wraps.
-inline constexpr std::size_t ring_capacity(std::size_t n) { return round_up_pow2(n < 2 ? 2 : n); }
+inline constexpr std::size_t ring_capacity(std::size_t n) { return next_pow2(n < 2 ? std::size_t(2) : n); }
 
 // Uninitialised, suitably aligned storage for n ring slots; the queue constructs and
 // destroys the elements in place.

@@ -28,7 +28,15 @@ class SpscQueue {
 public:
     // Holds up to `capacity` elements (rounded up to a power of two, at least 2).
     explicit SpscQueue(std::size_t capacity)
-        : capacity_(ring_capacity(capacity)), mask_(capacity_ - 1), slots_(capacity_) {}
+        : capacity_(ring_capacity(capacity)), mask_(capacity_ - 1), slots_(capacity_) {
+        // The layout the memory-ordering comment relies on: the consumer's and the
+        // producer's state each on a block of their own, nothing else sharing it.
+        static_assert(alignof(SpscQueue) == kCacheLine);
+        static_assert(offsetof(SpscQueue, head_) % kCacheLine == 0 &&
+                      offsetof(SpscQueue, tail_) % kCacheLine == 0);
+        static_assert(offsetof(SpscQueue, tail_) - offsetof(SpscQueue, head_) >= kCacheLine);
+        static_assert(sizeof(SpscQueue) - offsetof(SpscQueue, tail_) == kCacheLine);
+    }
 
     ~SpscQueue() {
         while (try_pop_discard()) {
@@ -42,7 +50,7 @@ public:
 
     // Producer side.
     template <typename U>
-    bool try_push(U&& value) {
+    [[nodiscard]] bool try_push(U&& value) {
         const std::size_t tail = tail_.load(std::memory_order_relaxed);
         head_cache_ = head_.load(std::memory_order_acquire);  // keeps the batch push's copy fresh
         if (tail - head_cache_ == capacity_) return false;
@@ -54,7 +62,7 @@ public:
     // Moves up to n elements from [first, first + n); returns how many were pushed.
     // One release store publishes the whole batch.
     template <typename It>
-    std::size_t try_push_batch(It first, std::size_t n) {
+    [[nodiscard]] std::size_t try_push_batch(It first, std::size_t n) {
         const std::size_t tail = tail_.load(std::memory_order_relaxed);
         std::size_t room = capacity_ - (tail - head_cache_);
         if (room < n) {
@@ -69,7 +77,7 @@ public:
     }
 
     // Consumer side.
-    bool try_pop(T& out) {
+    [[nodiscard]] bool try_pop(T& out) {
         const std::size_t head = head_.load(std::memory_order_relaxed);
         if (head == tail_cache_) {
             tail_cache_ = tail_.load(std::memory_order_acquire);
@@ -84,7 +92,7 @@ public:
 
     // Moves up to max elements into out (an output iterator); returns how many.
     template <typename OutIt>
-    std::size_t try_pop_batch(OutIt out, std::size_t max) {
+    [[nodiscard]] std::size_t try_pop_batch(OutIt out, std::size_t max) {
         const std::size_t head = head_.load(std::memory_order_relaxed);
         std::size_t avail = tail_cache_ - head;
         if (avail < max) {

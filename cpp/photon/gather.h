@@ -11,18 +11,27 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
+
+#include "common/error.h"
 
 #include "photon/photon_tracer.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 enum class Kernel { Box, Cone };
+// "box" / "cone"; InvalidArgument otherwise.
+inline Kernel parse_kernel(const std::string& s) {
+    if (s == "box") return Kernel::Box;
+    if (s == "cone") return Kernel::Cone;
+    throw InvalidArgument("kernel must be 'box' or 'cone', not '" + s + "'");
+}
 
 // cos of the largest angle between photon and surface normals that still counts.
 constexpr float kNormalAgreement = 0.5f;
 
-inline bool normals_agree(Vec3 photon_n, Vec3 n) { return dot(photon_n, n) > kNormalAgreement; }
+inline bool normals_agree(Vec3f photon_n, Vec3f n) { return dot(photon_n, n) > kNormalAgreement; }
 
 inline float kernel_weight(Kernel k, float d2, float r2) {
     return k == Kernel::Box ? 1.0f : 1.0f - std::sqrt(d2 / r2);
@@ -30,9 +39,9 @@ inline float kernel_weight(Kernel k, float d2, float r2) {
 inline float kernel_norm(Kernel k) { return k == Kernel::Box ? 1.0f : 1.0f / 3.0f; }
 
 template <typename Map>
-Vec3 gather_radius(const Map& map, Vec3 x, Vec3 n, float r, Kernel kernel) {
+Vec3f gather_radius(const Map& map, Vec3f x, Vec3f n, float r, Kernel kernel) {
     float r2 = r * r;
-    Vec3 sum{0, 0, 0};
+    Vec3f sum{0, 0, 0};
     if (kernel == Kernel::Box) {
         map.for_each_in_radius(x, r2, [&](const Photon& p, float) {
             if (normals_agree(p.n, n)) sum += p.power;
@@ -52,7 +61,7 @@ struct KnnHeap {
 };
 
 template <typename Map>
-Vec3 gather_knn(const Map& map, Vec3 x, Vec3 n, float r, int k, Kernel kernel, KnnHeap& heap) {
+Vec3f gather_knn(const Map& map, Vec3f x, Vec3f n, float r, int k, Kernel kernel, KnnHeap& heap) {
     auto& h = heap.items;
     h.clear();
     float r2 = r * r;
@@ -73,9 +82,9 @@ Vec3 gather_knn(const Map& map, Vec3 x, Vec3 n, float r, int k, Kernel kernel, K
     if (h.empty()) return {0, 0, 0};
     // With a full heap the estimate's disc is the k-th distance; otherwise it is r.
     const float rk2 = int(h.size()) == k ? std::max(h.front().first, 1e-30f) : r * r;
-    Vec3 sum{0, 0, 0};
+    Vec3f sum{0, 0, 0};
     for (const auto& [d2, p] : h) sum += p->power * kernel_weight(kernel, d2, rk2);
     return sum * (1.0f / (kernel_norm(kernel) * float(M_PI) * rk2));
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

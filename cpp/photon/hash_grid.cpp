@@ -6,7 +6,7 @@
 #include "common/error.h"
 #include "photon/gather.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 namespace {
 // Beyond this many cells per axis int64 cell arithmetic could overflow: refuse the radius.
@@ -17,7 +17,7 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
     require(std::isfinite(radius) && radius > 0.0f, "HashGrid: radius must be positive and finite");
     inv_r_ = 1.0f / radius;
     const std::size_t n = photons.size();
-    Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+    Vec3f lo{0, 0, 0}, hi{0, 0, 0};
     if (n > 0) {
         lo = hi = photons[0].p;
         for (const Photon& p : photons) {
@@ -26,7 +26,7 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
         }
     }
     // Origin one cell (the padding layer) plus a little below the smallest photon.
-    origin_ = lo - Vec3(1, 1, 1) * (radius * 1.001f);
+    origin_ = lo - Vec3f(1, 1, 1) * (radius * 1.001f);
     double cells = 1;
     for (int a = 0; a < 3; ++a) {
         const double g = std::floor(double(hi[a] - origin_[a]) / double(radius)) + 2.0;  // + padding
@@ -67,7 +67,7 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
     }
 }
 
-Vec3 HashGrid::sum_box(Vec3 q, Vec3 n, float r2) const {
+Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2) const {
     constexpr int kLanes = 8;  // independent partial sums: a fixed-width inner loop vectorises
     float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {};
     PhotonRun rs[27];
@@ -97,12 +97,12 @@ Vec3 HashGrid::sum_box(Vec3 q, Vec3 n, float r2) const {
             sb[l] += w * pb[j];
         }
     }
-    Vec3 sum{0, 0, 0};
-    for (int l = 0; l < kLanes; ++l) sum += Vec3(sr[l], sg[l], sb[l]);
+    Vec3f sum{0, 0, 0};
+    for (int l = 0; l < kLanes; ++l) sum += Vec3f(sr[l], sg[l], sb[l]);
     return sum;
 }
 
-bool HashGrid::cell_of(Vec3 q, std::int64_t c[3]) const {
+bool HashGrid::cell_of(Vec3f q, std::int64_t c[3]) const {
     bool inside = true;
     for (int a = 0; a < 3; ++a) {
         const double f = std::floor(double(q[a] - origin_[a]) * double(inv_r_));
@@ -121,7 +121,7 @@ std::uint64_t HashGrid::bucket(std::int64_t x, std::int64_t y, std::int64_t z) c
     return (h ^ (h >> 29)) & (buckets_ - 1);
 }
 
-int HashGrid::runs(Vec3 q, PhotonRun out[27]) const {
+int HashGrid::runs(Vec3f q, PhotonRun out[27]) const {
     if (photons_.empty()) return 0;
     std::int64_t c[3];
     cell_of(q, c);
@@ -157,4 +157,4 @@ int HashGrid::runs(Vec3 q, PhotonRun out[27]) const {
     return n;
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -14,7 +14,7 @@
 
 #include "photon/photon_tracer.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 // A contiguous range of photons [begin, end) in a map's storage order.
 struct PhotonRun {
@@ -37,18 +37,18 @@ public:
 
     // The runs holding every photon within radius() of q (and others: callers test the
     // distance). Writes at most 27 runs; returns how many.
-    int runs(Vec3 q, PhotonRun out[27]) const;
+    int runs(Vec3f q, PhotonRun out[27]) const;
 
     // Calls f(photon, d2) for each photon with squared distance d2 <= r2. f may shrink r2
     // (k-nearest search does). r2 must start at most radius()^2.
     template <typename F>
-    void for_each_in_radius(Vec3 q, float& r2, F&& f) const {
+    void for_each_in_radius(Vec3f q, float& r2, F&& f) const {
         PhotonRun rs[27];
         const int n = runs(q, rs);
         for (int i = 0; i < n; ++i)
             for (std::uint64_t j = rs[i].begin; j < rs[i].end; ++j) {
                 const Photon& p = photons_[j];
-                const Vec3 d = p.p - q;
+                const Vec3f d = p.p - q;
                 const float d2 = dot(d, d);
                 if (d2 <= r2) f(p, d2);
             }
@@ -57,10 +57,10 @@ public:
     // Heap-free box gather: the summed power of the photons within sqrt(r2) <= radius() of q
     // whose normals agree with n (gather.h), over structure-of-arrays copies so the loop over
     // each run vectorises.
-    Vec3 sum_box(Vec3 q, Vec3 n, float r2) const;
+    Vec3f sum_box(Vec3f q, Vec3f n, float r2) const;
 
     // The cell holding q (clamped to one cell outside the grid); true when inside the grid.
-    bool cell_of(Vec3 q, std::int64_t c[3]) const;
+    bool cell_of(Vec3f q, std::int64_t c[3]) const;
     // A sort key ordering cells as the dense hash does (z, then y, then x).
     std::uint64_t cell_order(const std::int64_t c[3]) const {
         return (std::uint64_t(c[2] + 2) * std::uint64_t(g_[1] + 4) + std::uint64_t(c[1] + 2)) *
@@ -72,7 +72,7 @@ private:
 
     float r_ = 0, inv_r_ = 0;
     bool dense_ = true;
-    Vec3 origin_;
+    Vec3f origin_;
     std::int64_t g_[3] = {0, 0, 0};
     std::uint64_t cells_ = 0, buckets_ = 0;
     std::vector<std::uint64_t> start_;  // prefix sums, one more entry than cells/buckets
@@ -81,4 +81,4 @@ private:
     std::vector<float> px_, py_, pz_, nx_, ny_, nz_, pr_, pg_, pb_;
 };
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

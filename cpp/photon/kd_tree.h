@@ -7,7 +7,7 @@
 
 #include "photon/photon_tracer.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 class KdTree {
 public:
@@ -19,13 +19,13 @@ public:
     // Calls f(photon, d2) for every photon with d2 <= r2; f may shrink r2, which prunes the
     // remaining search (k-nearest search does).
     template <typename F>
-    void for_each_in_radius(Vec3 q, float& r2, F&& f) const {
+    void for_each_in_radius(Vec3f q, float& r2, F&& f) const {
         if (!photons_.empty()) visit(0, photons_.size(), q, r2, f);
     }
 
 private:
     template <typename F>
-    void visit(std::size_t lo, std::size_t hi, Vec3 q, float& r2, F& f) const {
+    void visit(std::size_t lo, std::size_t hi, Vec3f q, float& r2, F& f) const {
         while (hi > lo) {
             const std::size_t mid = lo + (hi - lo) / 2;
             const Photon& p = photons_[mid];
@@ -35,7 +35,7 @@ private:
             const std::size_t nlo = delta < 0 ? lo : mid + 1, nhi = delta < 0 ? mid : hi;
             const std::size_t flo = delta < 0 ? mid + 1 : lo, fhi = delta < 0 ? hi : mid;
             visit(nlo, nhi, q, r2, f);
-            const Vec3 d = p.p - q;
+            const Vec3f d = p.p - q;
             const float d2 = dot(d, d);
             if (d2 <= r2) f(p, d2);
             if (delta * delta > r2) return;
@@ -49,4 +49,4 @@ private:
     std::vector<std::uint8_t> axis_;
 };
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -4,7 +4,25 @@
 
 #include "common/error.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
+
+GridKind parse_grid_kind(const std::string& s) {
+    if (s == "hash") return GridKind::Hash;
+    if (s == "kdtree") return GridKind::KdTree;
+    throw InvalidArgument("grid must be 'hash' or 'kdtree', not '" + s + "'");
+}
+
+HashGrid::Mode parse_hash_mode(const std::string& s) {
+    if (s == "auto") return HashGrid::Mode::Auto;
+    if (s == "dense") return HashGrid::Mode::Dense;
+    if (s == "hashed") return HashGrid::Mode::Hashed;
+    throw InvalidArgument("hash_mode must be 'auto', 'dense' or 'hashed', not '" + s + "'");
+}
+
+bool parse_gather_is_knn(const std::string& s) {
+    if (s == "radius" || s == "knn") return s == "knn";
+    throw InvalidArgument("gather must be 'radius' or 'knn', not '" + s + "'");
+}
 
 PhotonMap::PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind, HashGrid::Mode mode) {
     require(std::isfinite(radius) && radius > 0.0f, "PhotonMap: radius must be positive and finite");
@@ -12,7 +30,7 @@ PhotonMap::PhotonMap(const std::vector<Photon>& photons, float radius, GridKind 
     else kd_ = std::make_unique<KdTree>(photons);
 }
 
-std::vector<std::uint64_t> PhotonMap::query_radius(Vec3 q, float r) const {
+std::vector<std::uint64_t> PhotonMap::query_radius(Vec3f q, float r) const {
     require(std::isfinite(r) && r > 0.0f, "PhotonMap.query_radius: radius must be positive");
     require(!grid_ || r <= grid_->radius(), "PhotonMap.query_radius: radius exceeds the grid's cell size");
     std::vector<std::uint64_t> out;
@@ -23,7 +41,7 @@ std::vector<std::uint64_t> PhotonMap::query_radius(Vec3 q, float r) const {
     return out;
 }
 
-std::vector<std::uint64_t> PhotonMap::query_knn(Vec3 q, int k, float r) const {
+std::vector<std::uint64_t> PhotonMap::query_knn(Vec3f q, int k, float r) const {
     require(k > 0, "PhotonMap.query_knn: k must be positive");
     require(std::isfinite(r) && r > 0.0f, "PhotonMap.query_knn: radius must be positive");
     require(!grid_ || r <= grid_->radius(), "PhotonMap.query_knn: radius exceeds the grid's cell size");
@@ -49,4 +67,4 @@ std::vector<std::uint64_t> PhotonMap::query_knn(Vec3 q, int k, float r) const {
     return out;
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

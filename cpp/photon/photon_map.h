@@ -2,15 +2,22 @@
 // gathers of gather.h dispatched on the settings.
 #pragma once
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "photon/gather.h"
 #include "photon/hash_grid.h"
 #include "photon/kd_tree.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 enum class GridKind { Hash, KdTree };
+// "hash" / "kdtree"; InvalidArgument otherwise.
+GridKind parse_grid_kind(const std::string& name);
+// "auto" / "dense" / "hashed"; InvalidArgument otherwise.
+HashGrid::Mode parse_hash_mode(const std::string& name);
+// "radius" (false) / "knn" (true); InvalidArgument otherwise.
+bool parse_gather_is_knn(const std::string& name);
 
 struct GatherSettings {
     float radius = 0.05f;
@@ -29,7 +36,7 @@ public:
     const KdTree* kdtree() const { return kd_.get(); }
 
     // Flux density at x on a surface with normal n (see gather.h).
-    Vec3 gather(Vec3 x, Vec3 n, const GatherSettings& s, KnnHeap& heap) const {
+    Vec3f gather(Vec3f x, Vec3f n, const GatherSettings& s, KnnHeap& heap) const {
         if (grid_ && !s.knn && s.kernel == Kernel::Box)  // the hot path, vectorised
             return grid_->sum_box(x, n, s.radius * s.radius) * (1.0f / (float(M_PI) * s.radius * s.radius));
         if (grid_) return s.knn ? gather_knn(*grid_, x, n, s.radius, s.k, s.kernel, heap)
@@ -39,14 +46,14 @@ public:
     }
 
     // Indices (into photons()) of every photon within r of q, for tests against brute force.
-    std::vector<std::uint64_t> query_radius(Vec3 q, float r) const;
+    std::vector<std::uint64_t> query_radius(Vec3f q, float r) const;
     // The k nearest photons within r, nearest first.
-    std::vector<std::uint64_t> query_knn(Vec3 q, int k, float r) const;
+    std::vector<std::uint64_t> query_knn(Vec3f q, int k, float r) const;
     const std::vector<Photon>& photons() const { return grid_ ? grid_->photons() : kd_->photons(); }
 
 private:
     template <typename F>
-    void each(Vec3 q, float& r2, F&& f) const {
+    void each(Vec3f q, float& r2, F&& f) const {
         if (grid_) grid_->for_each_in_radius(q, r2, f);
         else kd_->for_each_in_radius(q, r2, f);
     }
@@ -54,4 +61,4 @@ private:
     std::unique_ptr<KdTree> kd_;
 };
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -6,13 +6,13 @@
 #include "common/parallel.h"
 #include "photon/rng.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
-Vec3 sample_cosine(Vec3 n, float u1, float u2) {
+Vec3f sample_cosine(Vec3f n, float u1, float u2) {
     const float r = std::sqrt(u1);
     const float phi = 2.0f * float(M_PI) * u2;
     const float z = std::sqrt(std::max(0.0f, 1.0f - u1));
-    Vec3 t, b;
+    Vec3f t, b;
     basis(n, t, b);
     return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z;
 }
@@ -45,14 +45,14 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
                 const float ut = rng.uniform(), ua = rng.uniform(), ub = rng.uniform();
                 const LightSample ls = scene.sample_emitter(ut, ua, ub);
                 const float w = (ls.radiance.x + ls.radiance.y + ls.radiance.z) / 3.0f;
-                Vec3 power = ls.radiance * float(scale / w);
-                Vec3 o = ls.p + ls.n * eps;
-                Vec3 d = sample_cosine(ls.n, rng.uniform(), rng.uniform());
+                Vec3f power = ls.radiance * float(scale / w);
+                Vec3f o = ls.p + ls.n * eps;
+                Vec3f d = sample_cosine(ls.n, rng.uniform(), rng.uniform());
                 for (int bounce = 0; bounce < max_bounces; ++bounce) {
                     Hit hit;
                     if (!scene.intersect(o, d, hit)) break;
                     if (bounce > 0) part.push_back({hit.p, power, hit.n});
-                    const Vec3 albedo = scene.albedo(hit.tri);
+                    const Vec3f albedo = scene.albedo(hit.tri);
                     const float survive = max_component(albedo);
                     if (!(rng.uniform() < survive)) break;  // Russian roulette by albedo
                     power = power * (albedo / survive);
@@ -74,4 +74,4 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
     return out;
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

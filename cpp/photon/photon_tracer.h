@@ -7,18 +7,18 @@
 
 #include "photon/scene.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 struct Photon {
-    Vec3 p;      // position
-    Vec3 power;  // flux carried (W, per RGB channel)
-    Vec3 n;      // surface normal on the side the photon arrived from
+    Vec3f p;      // position
+    Vec3f power;  // flux carried (W, per RGB channel)
+    Vec3f n;      // surface normal on the side the photon arrived from
 };
 
 struct TraceStats {
     std::uint64_t emitted = 0;
     std::uint64_t stored = 0;
-    Vec3 emitted_power{0, 0, 0};  // total flux of all emitted photons (= the scene's power)
+    Vec3f emitted_power{0, 0, 0};  // total flux of all emitted photons (= the scene's power)
 };
 
 // Traces `count` photons on `threads` threads (0 = all cores). Photon i draws its random
@@ -30,6 +30,6 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
                                   int max_bounces = 256);
 
 // A cosine-distributed direction around n from two uniforms.
-Vec3 sample_cosine(Vec3 n, float u1, float u2);
+Vec3f sample_cosine(Vec3f n, float u1, float u2);
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -10,7 +10,7 @@
 #include "common/parallel.h"
 #include "photon/rng.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -21,6 +21,12 @@ constexpr float kInvPi = float(1.0 / M_PI);
 // Hit points per cooperative block (seed 001 Algorithm 1 uses a thread group).
 constexpr std::size_t kCoopBlock = 64;
 }  // namespace
+
+Pipeline parse_pipeline(const std::string& s) {
+    if (s == "fused") return Pipeline::Fused;
+    if (s == "two-pass") return Pipeline::TwoPass;
+    throw InvalidArgument("pipeline must be 'fused' or 'two-pass', not '" + s + "'");
+}
 
 void RenderSettings::validate() const {
     require(std::isfinite(gather.radius) && gather.radius > 0.0f, "render: radius must be positive and finite");
@@ -63,22 +69,22 @@ void Renderer::add(RenderStats& st, const ShadeCounters& c) {
     st.shadow_rays_skipped += c.shadow_rays_skipped;
 }
 
-Vec3 Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const {
-    Vec3 L = hit.front ? scene_.emission(hit.tri) : Vec3(0, 0, 0);
-    const Vec3 albedo = scene_.albedo(hit.tri);
+Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const {
+    Vec3f L = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
+    const Vec3f albedo = scene_.albedo(hit.tri);
     const bool reflects = max_component(albedo) > 0;
     *needs_gather = reflects && map_ && map_->size() > 0;
     if (!(reflects && map_ && map_->size() > 0)) ++c.gathers_skipped;
     if (!reflects || !s_.direct || scene_.emitter_count() == 0) return L;
 
     const float eps = scene_.epsilon();
-    Vec3 E{0, 0, 0};
+    Vec3f E{0, 0, 0};
     const std::uint64_t key = hash_combine(s_.seed, scene_.position_key(hit.p));
     for (int i = 0; i < s_.light_samples; ++i) {
         Rng rng(hash_combine(key, std::uint64_t(i)));
         const float ut = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         const LightSample ls = scene_.sample_emitter(ut, u1, u2);
-        const Vec3 w = ls.p - hit.p;
+        const Vec3f w = ls.p - hit.p;
         const float d2 = dot(w, w);
         const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
         if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {  // light behind the surface, or facing away
@@ -87,7 +93,7 @@ Vec3 Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_
         }
         ++c.shadow_rays;
         const float d = std::sqrt(d2);
-        const Vec3 o = hit.p + hit.n * eps;
+        const Vec3f o = hit.p + hit.n * eps;
         if (scene_.occluded(o, ls.p - o, 1.0f - 2.0f * eps / d)) continue;
         // cos_x cos_l / d^2 with both cosines still scaled by d.
         E += ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
@@ -95,9 +101,9 @@ Vec3 Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_
     return L + albedo * (kInvPi / float(s_.light_samples)) * E;
 }
 
-Vec3 Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const {
+Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const {
     bool gather = false;
-    Vec3 L = emitted_and_direct(hit, c, &gather);
+    Vec3f L = emitted_and_direct(hit, c, &gather);
     if (gather) {
         ++c.gathers;
         L += scene_.albedo(hit.tri) * kInvPi * map_->gather(hit.p, hit.n, s_.gather, heap);
@@ -108,7 +114,7 @@ Vec3 Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c)
 std::vector<float> Renderer::render(const Camera& cam, RenderStats& st) const {
     const auto t0 = Clock::now();
     st = photon_stats_;
-    std::vector<float> img(std::size_t(cam.width()) * cam.height() * 3, 0.0f);
+    std::vector<float> img(std::size_t(int(cam.width)) * int(cam.height) * 3, 0.0f);
     if (s_.pipeline == Pipeline::Fused) render_fused(cam, img, st);
     else render_two_pass(cam, img, st);
     st.total_seconds = seconds_since(t0) + photon_stats_.photon_seconds + photon_stats_.build_seconds;
@@ -117,7 +123,7 @@ std::vector<float> Renderer::render(const Camera& cam, RenderStats& st) const {
 
 void Renderer::render_fused(const Camera& cam, std::vector<float>& img, RenderStats& st) const {
     const auto t0 = Clock::now();
-    const int w = cam.width(), h = cam.height();
+    const int w = int(cam.width), h = int(cam.height);
     std::mutex m;
     parallel_for(std::size_t(h), 4, [&](std::size_t yb, std::size_t ye) {
         KnnHeap heap;
@@ -125,17 +131,17 @@ void Renderer::render_fused(const Camera& cam, std::vector<float>& img, RenderSt
         for (std::size_t y = yb; y < ye; ++y)
             for (int x = 0; x < w; ++x) {
                 Rng rng(pixel_key(x, int(y), 0));
-                Vec3 sum{0, 0, 0};
+                Vec3f sum{0, 0, 0};
                 for (int s = 0; s < s_.spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                     Hit hit;
-                    if (scene_.intersect(cam.position(), cam.direction(px, py), hit))
+                    if (scene_.intersect(cam.ray_origin(), cam.ray_direction(px, py), hit))
                         sum += surface_radiance(hit, heap, c);
                     else
                         ++c.gathers_skipped;
                 }
                 float* out = &img[(y * std::size_t(w) + std::size_t(x)) * 3];
-                const Vec3 v = sum / float(s_.spp);
+                const Vec3f v = sum / float(s_.spp);
                 out[0] = v.x; out[1] = v.y; out[2] = v.z;
             }
         std::lock_guard lock(m);
@@ -178,24 +184,24 @@ void gather_block(const std::vector<Photon>& photons, const PhotonRun* runs, int
 }
 
 struct HitPoint {
-    Vec3 p, n;
-    Vec3 weight;  // albedo / pi / spp
+    Vec3f p, n;
+    Vec3f weight;  // albedo / pi / spp
     std::uint32_t pixel;
     std::uint64_t key;
 };
 }  // namespace
 
 void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, RenderStats& st) const {
-    const int w = cam.width(), h = cam.height();
+    const int w = int(cam.width), h = int(cam.height);
     const float inv_spp = 1.0f / float(s_.spp);
     // Sort key: the hash grid's own cell order, or cells of edge r over the scene for the kd-tree.
     const HashGrid* grid = map_ ? map_->grid() : nullptr;
-    const Vec3 lo = scene_.bounds_min();
+    const Vec3f lo = scene_.bounds_min();
     const float inv_r = 1.0f / s_.gather.radius;
-    const Vec3 ext = scene_.bounds_max() - lo;
+    const Vec3f ext = scene_.bounds_max() - lo;
     const std::uint64_t gx = std::uint64_t(std::min(ext.x * inv_r + 2.0f, 2097152.0f));
     const std::uint64_t gy = std::uint64_t(std::min(ext.y * inv_r + 2.0f, 2097152.0f));
-    auto sort_key = [&](Vec3 p) -> std::uint64_t {
+    auto sort_key = [&](Vec3f p) -> std::uint64_t {
         std::int64_t c[3];
         if (grid) {
             grid->cell_of(p, c);
@@ -222,11 +228,11 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
                 for (int x = 0; x < w; ++x) {
                     Rng rng(pixel_key(x, int(y), 0));
                     const auto pixel = std::uint32_t(y * std::size_t(w) + std::size_t(x));
-                    Vec3 sum{0, 0, 0};
+                    Vec3f sum{0, 0, 0};
                     for (int s = 0; s < s_.spp; ++s) {
                         const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                         Hit hit;
-                        if (!scene_.intersect(cam.position(), cam.direction(px, py), hit)) {
+                        if (!scene_.intersect(cam.ray_origin(), cam.ray_direction(px, py), hit)) {
                             ++c.gathers_skipped;
                             continue;
                         }
@@ -236,7 +242,7 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
                             part.push_back({hit.p, hit.n, scene_.albedo(hit.tri) * (kInvPi * inv_spp), pixel,
                                             sort_key(hit.p)});
                     }
-                    const Vec3 v = sum * inv_spp;
+                    const Vec3f v = sum * inv_spp;
                     float* out = &img[std::size_t(pixel) * 3];
                     out[0] = v.x; out[1] = v.y; out[2] = v.z;
                 }
@@ -258,7 +264,7 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
     std::sort(hits.begin(), hits.end(), [](const HitPoint& a, const HitPoint& b) {
         return a.key < b.key || (a.key == b.key && a.pixel < b.pixel);
     });
-    std::vector<Vec3> result(hits.size());
+    std::vector<Vec3f> result(hits.size());
     st.gathers += hits.size();
     if (!s_.cooperative) {
         parallel_for(hits.size(), 256, [&](std::size_t b, std::size_t e) {
@@ -290,17 +296,17 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
                 const int nr = grid->runs(hits[first].p, runs);  // the same for the whole cell
                 if (kernel == Kernel::Cone) gather_block<true>(photons, runs, nr, b, count, r2);
                 else gather_block<false>(photons, runs, nr, b, count, r2);
-                for (std::size_t j = 0; j < count; ++j) result[first + j] = Vec3(b.r[j], b.g[j], b.b[j]) * scale;
+                for (std::size_t j = 0; j < count; ++j) result[first + j] = Vec3f(b.r[j], b.g[j], b.b[j]) * scale;
             }
         }, s_.threads);
     }
     // Accumulate serially: a pixel's samples may sit in different blocks.
     for (std::size_t i = 0; i < hits.size(); ++i) {
         float* out = &img[std::size_t(hits[i].pixel) * 3];
-        const Vec3 v = hits[i].weight * result[i];
+        const Vec3f v = hits[i].weight * result[i];
         out[0] += v.x; out[1] += v.y; out[2] += v.z;
     }
     st.gather_seconds = seconds_since(t0);
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

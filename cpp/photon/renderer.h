@@ -17,15 +17,18 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
-#include "photon/camera.h"
+#include "views/camera.h"
 #include "photon/photon_map.h"
 #include "photon/scene.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 enum class Pipeline { Fused, TwoPass };
+// "fused" / "two-pass"; InvalidArgument otherwise.
+Pipeline parse_pipeline(const std::string& name);
 
 struct RenderSettings {
     std::uint64_t photons = 1 << 18;
@@ -71,9 +74,9 @@ public:
 
     // Emitted + direct + photon-map radiance leaving hit toward where its normal faces. Depends
     // on the hit point alone (Lambertian, samples seeded by position), not on the eye.
-    Vec3 surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const;
+    Vec3f surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const;
     // Emission and direct light only; *needs_gather says whether the photon map applies.
-    Vec3 emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const;
+    Vec3f emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const;
 
     const RenderStats& photon_stats() const { return photon_stats_; }  // photon pass only
     const PhotonMap* photon_map() const { return map_.get(); }
@@ -94,4 +97,4 @@ private:
     RenderStats photon_stats_;
 };
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -3,7 +3,7 @@
 #pragma once
 #include <cstdint>
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 inline std::uint64_t mix64(std::uint64_t z) {  // splitmix64 finaliser
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
@@ -37,4 +37,4 @@ private:
     std::uint64_t state_, inc_;
 };
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -7,32 +7,29 @@
 #include "common/error.h"
 #include "photon/rng.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 namespace {
 // Emitters are chosen by power; the mean of the RGB radiance is the per-area weight.
-float emitter_weight(Vec3 le) { return (le.x + le.y + le.z) / 3.0f; }
+float emitter_weight(Vec3f le) { return (le.x + le.y + le.z) / 3.0f; }
 }  // namespace
 
 Scene::Scene() {
-    device_ = rtcNewDevice(nullptr);
-    if (!device_) throw std::runtime_error("Embree: cannot create a device");
-    scene_ = rtcNewScene(device_);
+    scene_ = rtcNewScene(device_.handle());
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 }
 
 Scene::~Scene() {
     if (scene_) rtcReleaseScene(scene_);
-    if (device_) rtcReleaseDevice(device_);
 }
 
 std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::int64_t* triangles,
-                            std::size_t nt, const float* albedo, bool per_triangle, Vec3 emission) {
+                            std::size_t nt, const float* albedo, bool per_triangle, Vec3f emission) {
     require(!committed_, "Scene.add_mesh: the scene is already committed");
     require(nv > 0 && nt > 0, "Scene.add_mesh: a mesh needs at least one vertex and one triangle");
     require(nv <= 0xffffffffu && nt <= 0xffffffffu, "Scene.add_mesh: mesh too large (2^32 limit)");
-    require(finite(emission) && emission.x >= 0 && emission.y >= 0 && emission.z >= 0,
+    require(is_finite(emission) && emission.x >= 0 && emission.y >= 0 && emission.z >= 0,
             "Scene.add_mesh: emission must be finite and non-negative");
     for (std::size_t i = 0; i < 3 * nv; ++i)
         require(std::isfinite(vertices[i]), "Scene.add_mesh: vertex " + std::to_string(i / 3) +
@@ -47,19 +44,19 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
                 "Scene.add_mesh: triangle " + std::to_string(i / 3) + " has vertex index " +
                     std::to_string(triangles[i]) + " outside [0, " + std::to_string(nv) + ")");
 
-    auto vert = [&](std::int64_t i) { return Vec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]); };
+    auto vert = [&](std::int64_t i) { return Vec3f(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]); };
     std::vector<std::uint32_t> kept;
     kept.reserve(nt);
     for (std::size_t t = 0; t < nt; ++t) {
-        const Vec3 a = vert(triangles[3 * t]), b = vert(triangles[3 * t + 1]), c = vert(triangles[3 * t + 2]);
-        const Vec3 ng = cross(b - a, c - a);
+        const Vec3f a = vert(triangles[3 * t]), b = vert(triangles[3 * t + 1]), c = vert(triangles[3 * t + 2]);
+        const Vec3f ng = cross(b - a, c - a);
         const float len = length(ng);
         if (!(len > 0.0f) || !std::isfinite(len)) continue;  // degenerate: dropped
         kept.push_back(std::uint32_t(t));
     }
     if (kept.empty()) return 0;
 
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCGeometry geom = rtcNewGeometry(device_.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
     // rtcSetNewGeometryBuffer pads the buffer as Embree requires (16 bytes after the last vertex).
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
                                                            RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
@@ -74,7 +71,7 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     for (std::size_t k = 0; k < kept.size(); ++k) {
         const std::size_t t = kept[k];
         for (int j = 0; j < 3; ++j) ib[3 * k + j] = std::uint32_t(triangles[3 * t + j]);
-        const Vec3 a = vert(triangles[3 * t]), b = vert(triangles[3 * t + 1]), c = vert(triangles[3 * t + 2]);
+        const Vec3f a = vert(triangles[3 * t]), b = vert(triangles[3 * t + 1]), c = vert(triangles[3 * t + 2]);
         normal_.push_back(normalize(cross(b - a, c - a)));
         const float* al = albedo + (per_triangle ? 3 * t : 0);
         albedo_.emplace_back(al[0], al[1], al[2]);
@@ -86,6 +83,7 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     rtcCommitGeometry(geom);
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
+    device_.check("the mesh");
     if (geom_offset_.size() <= id) geom_offset_.resize(id + 1);
     geom_offset_[id] = first;
     return kept.size();
@@ -95,6 +93,7 @@ void Scene::commit() {
     require(!committed_, "Scene.commit: already committed");
     require(!normal_.empty(), "Scene.commit: the scene is empty (add at least one non-degenerate mesh)");
     rtcCommitScene(scene_);
+    device_.check("the scene build");
     eps_ = std::max(diagonal(), 1e-30f) * 1e-5f;
     // Emitter distribution: geometry is re-read from Embree's buffers.
     double total = 0;
@@ -105,11 +104,11 @@ void Scene::commit() {
         const std::uint32_t begin = geom_offset_[g];
         const std::uint32_t end = g + 1 < geom_offset_.size() ? geom_offset_[g + 1] : std::uint32_t(normal_.size());
         for (std::uint32_t t = begin; t < end; ++t) {
-            const Vec3 le = emission_[t];
+            const Vec3f le = emission_[t];
             if (emitter_weight(le) <= 0) continue;
             const std::uint32_t* tri = ib + 3 * (t - begin);
-            auto v = [&](int j) { return Vec3(vb[3 * tri[j]], vb[3 * tri[j] + 1], vb[3 * tri[j] + 2]); };
-            const Vec3 a = v(0), e1 = v(1) - a, e2 = v(2) - a;
+            auto v = [&](int j) { return Vec3f(vb[3 * tri[j]], vb[3 * tri[j] + 1], vb[3 * tri[j] + 2]); };
+            const Vec3f a = v(0), e1 = v(1) - a, e2 = v(2) - a;
             const float area = 0.5f * length(cross(e1, e2));
             emitters_.push_back(t);
             tri_v0_.push_back(a);
@@ -130,7 +129,7 @@ void Scene::require_committed() const {
     require(committed_, "Scene: call commit() before rendering or tracing");
 }
 
-bool Scene::intersect(Vec3 o, Vec3 d, Hit& hit, float tfar) const {
+bool Scene::intersect(Vec3f o, Vec3f d, Hit& hit, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};
@@ -146,13 +145,13 @@ bool Scene::intersect(Vec3 o, Vec3 d, Hit& hit, float tfar) const {
     hit.t = rh.ray.tfar;
     hit.tri = geom_offset_[rh.hit.geomID] + rh.hit.primID;
     hit.p = o + d * hit.t;
-    const Vec3 n = normal_[hit.tri];
+    const Vec3f n = normal_[hit.tri];
     hit.front = dot(n, d) < 0;
     hit.n = hit.front ? n : -n;
     return true;
 }
 
-bool Scene::occluded(Vec3 o, Vec3 d, float tfar) const {
+bool Scene::occluded(Vec3f o, Vec3f d, float tfar) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay ray{};
@@ -184,8 +183,8 @@ LightSample Scene::sample_emitter(float u_tri, float u1, float u2) const {
     return s;
 }
 
-std::uint64_t Scene::position_key(Vec3 p) const {
-    const Vec3 ext = vmax(hi_ - lo_, Vec3(1e-30f, 1e-30f, 1e-30f));
+std::uint64_t Scene::position_key(Vec3f p) const {
+    const Vec3f ext = vmax(hi_ - lo_, Vec3f(1e-30f, 1e-30f, 1e-30f));
     std::uint64_t key = 0x6a09e667f3bcc909ULL;
     for (int a = 0; a < 3; ++a) {
         // Walls often lie exactly on the bounds (u = 0 or 1): the non-dyadic shift keeps them
@@ -198,4 +197,4 @@ std::uint64_t Scene::position_key(Vec3 p) const {
     return key;
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

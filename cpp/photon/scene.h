@@ -8,21 +8,22 @@
 #include <cstdint>
 #include <vector>
 
-#include "photon/vec.h"
+#include "common/embree_device.h"
+#include "common/vec3.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 struct Hit {
     float t = 0;
-    Vec3 p;                  // hit position
-    Vec3 n;                  // geometric normal, turned toward the ray origin
+    Vec3f p;                  // hit position
+    Vec3f n;                  // geometric normal, turned toward the ray origin
     std::uint32_t tri = 0;   // global triangle index
     bool front = false;      // ray arrived on the side the winding normal points to
 };
 
 // A point sampled on the emitters, with the density it was sampled with (per unit area).
 struct LightSample {
-    Vec3 p, n, radiance;
+    Vec3f p, n, radiance;
     float pdf_area = 0;
     std::uint32_t tri = 0;
 };
@@ -39,50 +40,50 @@ public:
     // [0, 1). Degenerate (zero-area) triangles are dropped: they can be neither hit nor
     // sampled. Returns the number of triangles kept.
     std::size_t add_mesh(const float* vertices, std::size_t nv, const std::int64_t* triangles,
-                         std::size_t nt, const float* albedo, bool per_triangle, Vec3 emission);
+                         std::size_t nt, const float* albedo, bool per_triangle, Vec3f emission);
     void commit();  // builds the BVH and the emitter distribution; no add_mesh afterwards
     bool committed() const { return committed_; }
 
     // Nearest hit along o + t d for t in (0, tfar); d need not be normalised.
-    bool intersect(Vec3 o, Vec3 d, Hit& hit, float tfar = INFINITY) const;
+    bool intersect(Vec3f o, Vec3f d, Hit& hit, float tfar = INFINITY) const;
     // True when something blocks o + t d for t in (0, tfar).
-    bool occluded(Vec3 o, Vec3 d, float tfar) const;
+    bool occluded(Vec3f o, Vec3f d, float tfar) const;
 
     // Picks an emissive triangle in proportion to its power, then a uniform point on it.
     LightSample sample_emitter(float u_tri, float u1, float u2) const;
 
     std::size_t triangle_count() const { return normal_.size(); }
     std::size_t emitter_count() const { return emitters_.size(); }
-    Vec3 albedo(std::uint32_t tri) const { return albedo_[tri]; }
-    Vec3 emission(std::uint32_t tri) const { return emission_[tri]; }
-    Vec3 normal(std::uint32_t tri) const { return normal_[tri]; }
-    Vec3 emitted_power() const { return power_; }   // sum of pi * area * radiance
+    Vec3f albedo(std::uint32_t tri) const { return albedo_[tri]; }
+    Vec3f emission(std::uint32_t tri) const { return emission_[tri]; }
+    Vec3f normal(std::uint32_t tri) const { return normal_[tri]; }
+    Vec3f emitted_power() const { return power_; }   // sum of pi * area * radiance
     float emitter_weight_total() const { return weight_total_; }
     bool reflects_anything() const { return reflects_; }
-    Vec3 bounds_min() const { return lo_; }
-    Vec3 bounds_max() const { return hi_; }
+    Vec3f bounds_min() const { return lo_; }
+    Vec3f bounds_max() const { return hi_; }
     float diagonal() const { return length(hi_ - lo_); }
     // Ray offset that keeps secondary rays off their own surface at any scene scale.
     float epsilon() const { return eps_; }
     // Seeds view-independent shading samples: quantises p within the scene bounds, so the
     // same point gives the same key from either eye and at any scene scale.
-    std::uint64_t position_key(Vec3 p) const;
+    std::uint64_t position_key(Vec3f p) const;
 
 private:
     void require_committed() const;
-    RTCDevice device_ = nullptr;
+    EmbreeDevice device_;
     RTCScene scene_ = nullptr;
     bool committed_ = false;
     std::vector<std::uint32_t> geom_offset_;  // first global triangle of each geometry
-    std::vector<Vec3> albedo_, emission_, normal_;
-    std::vector<Vec3> tri_v0_, tri_e1_, tri_e2_;  // emitters only, indexed like emitters_
+    std::vector<Vec3f> albedo_, emission_, normal_;
+    std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // emitters only, indexed like emitters_
     std::vector<std::uint32_t> emitters_;
     std::vector<float> emitter_cdf_;
-    Vec3 power_{0, 0, 0};
+    Vec3f power_{0, 0, 0};
     float weight_total_ = 0;
     bool reflects_ = false;
-    Vec3 lo_{INFINITY, INFINITY, INFINITY}, hi_{-INFINITY, -INFINITY, -INFINITY};
+    Vec3f lo_{INFINITY, INFINITY, INFINITY}, hi_{-INFINITY, -INFINITY, -INFINITY};
     float eps_ = 1e-4f;
 };
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -7,13 +7,13 @@
 
 #include "common/error.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 namespace {
 
 using Mat34 = std::array<float, 12>;  // row-major 3x4 affine transform
 
-Vec3 apply(const Mat34& m, Vec3 p) {
+Vec3f apply(const Mat34& m, Vec3f p) {
     return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
             m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
 }
@@ -24,28 +24,28 @@ struct MeshBuilder {
     std::vector<std::int64_t> t;
     std::vector<float> albedo;
 
-    std::int64_t vertex(Vec3 p) {
+    std::int64_t vertex(Vec3f p) {
         v.insert(v.end(), {p.x, p.y, p.z});
         return std::int64_t(v.size() / 3 - 1);
     }
-    void tri(std::int64_t a, std::int64_t b, std::int64_t c, Vec3 al) {
+    void tri(std::int64_t a, std::int64_t b, std::int64_t c, Vec3f al) {
         t.insert(t.end(), {a, b, c});
         albedo.insert(albedo.end(), {al.x, al.y, al.z});
     }
-    void quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, Vec3 al) {  // counter-clockwise seen from the front
+    void quad(Vec3f a, Vec3f b, Vec3f c, Vec3f d, Vec3f al) {  // counter-clockwise seen from the front
         const auto i = vertex(a), j = vertex(b), k = vertex(c), l = vertex(d);
         tri(i, j, k, al);
         tri(k, l, i, al);
     }
     // Mitsuba's `rectangle`: [-1, 1]^2 at z = 0, normal +z, under transform m.
-    void rectangle(const Mat34& m, Vec3 al) {
+    void rectangle(const Mat34& m, Vec3f al) {
         quad(apply(m, {-1, -1, 0}), apply(m, {1, -1, 0}), apply(m, {1, 1, 0}), apply(m, {-1, 1, 0}), al);
     }
     // Mitsuba's `cube`: [-1, 1]^3 with outward normals, under transform m.
-    void cube(const Mat34& m, Vec3 al) {
+    void cube(const Mat34& m, Vec3f al) {
         for (int axis = 0; axis < 3; ++axis)
             for (int sign = -1; sign <= 1; sign += 2) {
-                Vec3 n{0, 0, 0}, u{0, 0, 0}, w{0, 0, 0};
+                Vec3f n{0, 0, 0}, u{0, 0, 0}, w{0, 0, 0};
                 n[axis] = float(sign);
                 u[(axis + 1) % 3] = 1;
                 w[(axis + 2) % 3] = 1;
@@ -54,19 +54,19 @@ struct MeshBuilder {
             }
     }
     // Axis-aligned box from its centre and half extents, rotated by `yaw` radians about y.
-    void box(Vec3 c, Vec3 half, Vec3 al, float yaw = 0) {
+    void box(Vec3f c, Vec3f half, Vec3f al, float yaw = 0) {
         const float cs = std::cos(yaw), sn = std::sin(yaw);
         cube({cs * half.x, 0, sn * half.z, c.x, 0, half.y, 0, c.y, -sn * half.x, 0, cs * half.z, c.z}, al);
     }
     // Closed cylinder along y from base centre c.
-    void cylinder(Vec3 c, float r, float height, int segs, Vec3 al) {
-        const auto top = vertex(c + Vec3(0, height, 0)), bottom = vertex(c);
+    void cylinder(Vec3f c, float r, float height, int segs, Vec3f al) {
+        const auto top = vertex(c + Vec3f(0, height, 0)), bottom = vertex(c);
         std::vector<std::int64_t> lo(segs), hi(segs);
         for (int i = 0; i < segs; ++i) {
             const float a = 2.0f * float(M_PI) * float(i) / float(segs);
-            const Vec3 o{r * std::cos(a), 0, -r * std::sin(a)};
+            const Vec3f o{r * std::cos(a), 0, -r * std::sin(a)};
             lo[i] = vertex(c + o);
-            hi[i] = vertex(c + o + Vec3(0, height, 0));
+            hi[i] = vertex(c + o + Vec3f(0, height, 0));
         }
         for (int i = 0; i < segs; ++i) {
             const int j = (i + 1) % segs;
@@ -77,12 +77,12 @@ struct MeshBuilder {
         }
     }
     // Latitude-longitude sphere; inward = true winds the normals toward the centre.
-    void sphere(Vec3 c, float r, int nu, int nv, Vec3 al, bool inward = false) {
+    void sphere(Vec3f c, float r, int nu, int nv, Vec3f al, bool inward = false) {
         const std::int64_t base = std::int64_t(v.size() / 3);
         for (int j = 0; j <= nv; ++j)
             for (int i = 0; i <= nu; ++i) {
                 const float th = float(M_PI) * float(j) / float(nv), ph = 2.0f * float(M_PI) * float(i) / float(nu);
-                vertex(c + Vec3(std::sin(th) * std::cos(ph), std::cos(th), -std::sin(th) * std::sin(ph)) * r);
+                vertex(c + Vec3f(std::sin(th) * std::cos(ph), std::cos(th), -std::sin(th) * std::sin(ph)) * r);
             }
         auto id = [&](int i, int j) { return base + std::int64_t(j) * (nu + 1) + i; };
         for (int j = 0; j < nv; ++j)
@@ -94,7 +94,7 @@ struct MeshBuilder {
             }
     }
     // A floor-like rectangle tessellated into nx x nz quads, normal +y.
-    void grid_y(float x0, float x1, float z0, float z1, float y, int nx, int nz, Vec3 al, Vec3 al2) {
+    void grid_y(float x0, float x1, float z0, float z1, float y, int nx, int nz, Vec3f al, Vec3f al2) {
         for (int j = 0; j < nz; ++j)
             for (int i = 0; i < nx; ++i) {
                 const float xa = x0 + (x1 - x0) * float(i) / float(nx), xb = x0 + (x1 - x0) * float(i + 1) / float(nx);
@@ -103,7 +103,7 @@ struct MeshBuilder {
                 quad({xa, y, zb}, {xb, y, zb}, {xb, y, za}, {xa, y, za}, checker ? al : al2);
             }
     }
-    std::size_t flush(Scene& scene, Vec3 emission = {0, 0, 0}) {
+    std::size_t flush(Scene& scene, Vec3f emission = {0, 0, 0}) {
         if (t.empty()) return 0;
         const std::size_t n = scene.add_mesh(v.data(), v.size() / 3, t.data(), t.size() / 3, albedo.data(),
                                              true, emission);
@@ -118,9 +118,9 @@ struct MeshBuilder {
 
 Camera build_cornell(Scene& scene, int width, int height) {
     // Transforms, reflectances and radiance exactly as printed by mitsuba.cornell_box().
-    const Vec3 white{0.885809f, 0.698859f, 0.666422f};
-    const Vec3 red{0.570068f, 0.0430135f, 0.0443706f};
-    const Vec3 green{0.105421f, 0.37798f, 0.076425f};
+    const Vec3f white{0.885809f, 0.698859f, 0.666422f};
+    const Vec3f red{0.570068f, 0.0430135f, 0.0443706f};
+    const Vec3f green{0.105421f, 0.37798f, 0.076425f};
     const float e = -4.37114e-08f;
     MeshBuilder mb;
     mb.rectangle({1, 0, 0, 0, 0, e, 1, -1, 0, -1, e, 0}, white);    // floor
@@ -133,7 +133,7 @@ Camera build_cornell(Scene& scene, int width, int height) {
     mb.flush(scene);
     mb.rectangle({0.23f, 0, 0, 0, 0, -8.30516e-09f, -0.19f, 0.99f, 0, 0.19f, -8.30516e-09f, 0.01f}, white);
     mb.flush(scene, {18.387f, 13.9873f, 6.75357f});
-    return Camera({0, 0, 3.9f}, {0, 0, 0}, {0, 1, 0}, 39.3077f, width, height);
+    return Camera::look_at({0, 0, 3.9f}, {0, 0, 0}, {0, 1, 0}, 39.3077f, width, height);
 }
 
 Camera build_furnace(Scene& scene, float albedo, float emission, int width, int height) {
@@ -141,15 +141,15 @@ Camera build_furnace(Scene& scene, float albedo, float emission, int width, int 
     MeshBuilder mb;
     mb.sphere({0, 0, 0}, 1.0f, 96, 48, {albedo, albedo, albedo}, /*inward=*/true);
     mb.flush(scene, {emission, emission, emission});
-    return Camera({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60.0f, width, height);
+    return Camera::look_at({0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 60.0f, width, height);
 }
 
 Camera build_office(Scene& scene, int width, int height) {
     // A room 8 m x 3 m x 6 m: x in [-4, 4], y in [0, 3], z in [-3, 3].
-    const Vec3 wall{0.72f, 0.70f, 0.65f}, ceiling{0.8f, 0.8f, 0.8f};
-    const Vec3 carpet{0.25f, 0.28f, 0.33f}, carpet2{0.30f, 0.31f, 0.35f};
-    const Vec3 wood{0.55f, 0.38f, 0.22f}, metal{0.45f, 0.45f, 0.47f}, dark{0.05f, 0.05f, 0.06f};
-    const Vec3 fabric{0.20f, 0.25f, 0.55f}, keycap{0.80f, 0.80f, 0.78f}, screen{0.02f, 0.02f, 0.03f};
+    const Vec3f wall{0.72f, 0.70f, 0.65f}, ceiling{0.8f, 0.8f, 0.8f};
+    const Vec3f carpet{0.25f, 0.28f, 0.33f}, carpet2{0.30f, 0.31f, 0.35f};
+    const Vec3f wood{0.55f, 0.38f, 0.22f}, metal{0.45f, 0.45f, 0.47f}, dark{0.05f, 0.05f, 0.06f};
+    const Vec3f fabric{0.20f, 0.25f, 0.55f}, keycap{0.80f, 0.80f, 0.78f}, screen{0.02f, 0.02f, 0.03f};
     MeshBuilder mb;
     // Walls and ceiling, facing inward.
     mb.quad({-4, 0, -3}, {4, 0, -3}, {4, 3, -3}, {-4, 3, -3}, wall);   // back, normal +z
@@ -180,16 +180,16 @@ Camera build_office(Scene& scene, int width, int height) {
             // Mouse.
             mb.sphere({cx + 0.32f, 0.77f, cz + 0.1f}, 0.025f, 24, 12, dark);
             // Chair: five legs with wheels, a post, a seat and a back.
-            const Vec3 chair{cx, 0, cz + 0.7f};
+            const Vec3f chair{cx, 0, cz + 0.7f};
             for (int leg = 0; leg < 5; ++leg) {
                 const float a = 2.0f * float(M_PI) * float(leg) / 5.0f;
-                const Vec3 dir{std::cos(a), 0, std::sin(a)};
-                mb.box(chair + dir * 0.15f + Vec3(0, 0.07f, 0), {0.15f, 0.015f, 0.02f}, metal, -a);
-                mb.sphere(chair + dir * 0.3f + Vec3(0, 0.03f, 0), 0.03f, 48, 24, dark);
+                const Vec3f dir{std::cos(a), 0, std::sin(a)};
+                mb.box(chair + dir * 0.15f + Vec3f(0, 0.07f, 0), {0.15f, 0.015f, 0.02f}, metal, -a);
+                mb.sphere(chair + dir * 0.3f + Vec3f(0, 0.03f, 0), 0.03f, 48, 24, dark);
             }
-            mb.cylinder(chair + Vec3(0, 0.08f, 0), 0.03f, 0.35f, 48, metal);
-            mb.box(chair + Vec3(0, 0.45f, 0), {0.23f, 0.04f, 0.23f}, fabric);
-            mb.box(chair + Vec3(0, 0.8f, 0.22f), {0.22f, 0.28f, 0.03f}, fabric);
+            mb.cylinder(chair + Vec3f(0, 0.08f, 0), 0.03f, 0.35f, 48, metal);
+            mb.box(chair + Vec3f(0, 0.45f, 0), {0.23f, 0.04f, 0.23f}, fabric);
+            mb.box(chair + Vec3f(0, 0.8f, 0.22f), {0.22f, 0.28f, 0.03f}, fabric);
         }
     // Shelves along the back wall with books.
     int book = 0;
@@ -202,7 +202,7 @@ Camera build_office(Scene& scene, int width, int height) {
             while (x < sx + 0.7f) {
                 const float wdt = 0.02f + 0.015f * float((book * 7) % 5) / 4.0f;
                 const float hgt = 0.14f + 0.08f * float((book * 3) % 7) / 6.0f;
-                const Vec3 col{0.15f + 0.6f * float((book * 5) % 7) / 6.0f, 0.1f + 0.5f * float((book * 3) % 5) / 4.0f,
+                const Vec3f col{0.15f + 0.6f * float((book * 5) % 7) / 6.0f, 0.1f + 0.5f * float((book * 3) % 5) / 4.0f,
                                0.1f + 0.6f * float((book * 11) % 9) / 8.0f};
                 mb.box({x + wdt, sy + 0.015f + hgt / 2, -2.78f}, {wdt * 0.95f, hgt / 2, 0.13f}, col);
                 x += 2 * wdt + 0.002f;
@@ -233,7 +233,7 @@ Camera build_office(Scene& scene, int width, int height) {
     mb.flush(scene);
     mb.sphere({-2.3f, 1.15f, -2.1f}, 0.07f, 32, 16, {0.8f, 0.5f, 0.2f});
     mb.flush(scene, {30.0f, 12.0f, 3.0f});
-    return Camera({0.3f, 1.6f, 2.8f}, {-0.3f, 0.8f, -1.5f}, {0, 1, 0}, 60.0f, width, height);
+    return Camera::look_at({0.3f, 1.6f, 2.8f}, {-0.3f, 0.8f, -1.5f}, {0, 1, 0}, 60.0f, width, height);
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -6,13 +6,13 @@
 //  - furnace: a closed sphere, uniform albedo rho and emission Le everywhere, so the radiance
 //    is Le / (1 - rho) in every direction.
 #pragma once
-#include "photon/camera.h"
+#include "views/camera.h"
 #include "photon/scene.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 Camera build_cornell(Scene& scene, int width = 256, int height = 256);
 Camera build_office(Scene& scene, int width = 256, int height = 256);
 Camera build_furnace(Scene& scene, float albedo, float emission, int width = 64, int height = 64);
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -9,7 +9,7 @@
 #include "common/parallel.h"
 #include "photon/rng.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -20,7 +20,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
     require(R.settings().pipeline == Pipeline::Fused, "render_stereo: stereo reuse renders with the fused pipeline");
     const Camera& L = eyes.left;
     const Camera& Rt = eyes.right;
-    const int w = L.width(), h = L.height();
+    const int w = int(L.width), h = int(L.height);
     const std::size_t n = std::size_t(w) * std::size_t(h);
     const int spp = R.settings().spp;
     const Scene& scene = R.scene();
@@ -41,7 +41,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
     out.right_stats = R.photon_stats();
     std::mutex m;
     auto t0 = Clock::now();
-    const Vec3 right_eye = Rt.position();
+    const Vec3f right_eye = Rt.ray_origin();
     std::atomic<std::uint64_t> reused{0};
     parallel_for(std::size_t(h), 4, [&](std::size_t yb, std::size_t ye) {
         KnnHeap heap;
@@ -50,20 +50,20 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
         for (std::size_t y = yb; y < ye; ++y)
             for (int x = 0; x < w; ++x) {
                 Rng rng(R.pixel_key(x, int(y), 0));
-                Vec3 sum{0, 0, 0};
+                Vec3f sum{0, 0, 0};
                 for (int s = 0; s < spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                     Hit hit;
-                    if (!scene.intersect(L.position(), L.direction(px, py), hit)) continue;
-                    const Vec3 col = R.surface_radiance(hit, heap, c);
+                    if (!scene.intersect(L.ray_origin(), L.ray_direction(px, py), hit)) continue;
+                    const Vec3f col = R.surface_radiance(hit, heap, c);
                     sum += col;
                     if (!reuse) continue;
                     int rx, ry;
-                    const Vec3 to_eye = right_eye - hit.p;
+                    const Vec3f to_eye = right_eye - hit.p;
                     if (dot(to_eye, hit.n) <= 0 || !Rt.project(hit.p, rx, ry)) continue;
                     const std::size_t ri = std::size_t(ry) * std::size_t(w) + std::size_t(rx);
                     if (claimed[ri].load(std::memory_order_relaxed) != 0) continue;  // cheap early out
-                    const Vec3 o = hit.p + hit.n * eps;
+                    const Vec3f o = hit.p + hit.n * eps;
                     if (scene.occluded(o, right_eye - o, 1.0f)) continue;
                     std::uint32_t expected = 0;
                     if (!claimed[ri].compare_exchange_strong(expected, 1, std::memory_order_relaxed)) continue;
@@ -72,7 +72,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
                     if (keep_sources) out.sources[ri] = hit;
                     ++won;
                 }
-                const Vec3 v = sum / float(spp);
+                const Vec3f v = sum / float(spp);
                 float* dst = &out.left[(y * std::size_t(w) + std::size_t(x)) * 3];
                 dst[0] = v.x; dst[1] = v.y; dst[2] = v.z;
             }
@@ -93,14 +93,14 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
                 const std::size_t i = y * std::size_t(w) + std::size_t(x);
                 if (claimed[i].load(std::memory_order_relaxed) != 0) continue;
                 Rng rng(R.pixel_key(x, int(y), 1));
-                Vec3 sum{0, 0, 0};
+                Vec3f sum{0, 0, 0};
                 for (int s = 0; s < spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                     Hit hit;
-                    if (scene.intersect(Rt.position(), Rt.direction(px, py), hit))
+                    if (scene.intersect(Rt.ray_origin(), Rt.ray_direction(px, py), hit))
                         sum += R.surface_radiance(hit, heap, c);
                 }
-                const Vec3 v = sum / float(spp);
+                const Vec3f v = sum / float(spp);
                 float* dst = &out.right[i * 3];
                 dst[0] = v.x; dst[1] = v.y; dst[2] = v.z;
             }
@@ -115,4 +115,4 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
     return out;
 }
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -9,7 +9,7 @@
 
 #include "photon/renderer.h"
 
-namespace gigascroll::photon {
+namespace gigascroll {
 
 struct StereoImages {
     std::vector<float> left, right;  // (height, width, 3) each
@@ -22,4 +22,4 @@ struct StereoImages {
 StereoImages render_stereo(const Renderer& renderer, const StereoCamera& eyes, bool reuse,
                            bool keep_sources = false);
 
-}  // namespace gigascroll::photon
+}  // namespace gigascroll

@@ -68,7 +68,7 @@ def _sample(target, args, u, v, lod, filter, threads):
     u, v, lod_array, lod_scalar, shape = _uv(u, v, lod)
     out = np.empty((u.size, 3), np.float32)
     levels = np.empty(u.size, np.int8)
-    target._sample_into(*args, u, v, lod_array, lod_scalar, filter, out, levels, int(threads))
+    _core._sample_into(target, *args, u, v, lod_array, lod_scalar, filter, out, levels, int(threads))
     return out.reshape(shape + (3,)), levels.reshape(shape)
 
 

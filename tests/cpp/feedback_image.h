@@ -4,13 +4,13 @@
 #include <cstdint>
 #include <vector>
 
-#include "vt/feedback.h"
+#include "views/feedback.h"
 
 namespace gigascroll {
 
 struct PaintingOnWall {
     ExhibitionScene scene;
-    explicit PaintingOnWall(const PaintingTiles& tiles) {
+    explicit PaintingOnWall(const PaintingGeometry& tiles) {
         scene.add_painting(0, tiles, {0, 1, 0}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.7);
         scene.commit();
     }

@@ -12,10 +12,11 @@
 #include <vector>
 
 #include "common/checksum.h"
-#include "vt/exhibition.h"
+#include "views/exhibition.h"
 #include "feedback_image.h"
-#include "vt/request.h"
-#include "vt/virtual_texture.h"
+#include "pack/tile_key.h"
+#include "cache/virtual_texture.h"
+#include "sampling/sampler.h"
 
 using namespace gigascroll;
 
@@ -31,7 +32,7 @@ std::uint64_t digest(const std::vector<T>& v) {
 TEST(BuildResults, FeedbackPassGivesTheSameFloatsInEveryBuild) {
     // The view lies inside the painting (seen at an angle, so levels vary), away from its
     // edges: which surface a ray hits does not then depend on the ray tracer's kernel.
-    const PaintingOnWall wall(PaintingTiles(20000, 14000));
+    const PaintingOnWall wall(PaintingGeometry(20000, 14000));
     const Camera cam({0.4, 0.7, -0.5}, {0.3, -0.1, 1}, {0, 1, 0}, 0.3, 0.3, 1600, 1600);
     const auto [keys, lod, uv] = feedback_image(wall.scene, cam, 200, 200);
     std::set<std::uint32_t> levels;
@@ -46,7 +47,7 @@ TEST(BuildResults, FeedbackPassGivesTheSameFloatsInEveryBuild) {
 }
 
 TEST(BuildResults, SamplingGivesTheSameFloatsInEveryBuild) {
-    const VtLayout layout = VtLayout::make(32, 2, {{500, 300}});
+    const PackGeometry layout = PackGeometry::make(32, 2, {{500, 300}});
     // Tile content from its key and texel index alone.
     auto source = [](const TileKey& k, std::uint8_t* out) {
         std::mt19937 rng(std::uint32_t(k.packed() * 2654435761u));
@@ -54,10 +55,10 @@ TEST(BuildResults, SamplingGivesTheSameFloatsInEveryBuild) {
     };
     VirtualTexture vt(layout, 20, 20, source);
     std::vector<std::uint8_t> tile(layout.tile_bytes());
-    const VtPainting& p = layout.paintings[0];
-    for (std::uint32_t l = 0; l < p.level_count(); l += 2)  // every other level: fallbacks too
-        for (std::uint32_t y = 0; y < p.tiles_y[l]; ++y)
-            for (std::uint32_t x = 0; x < p.tiles_x[l]; ++x) {
+    const PaintingGeometry& p = layout.paintings[0];
+    for (std::uint32_t l = 0; l < p.levels(); l += 2)  // every other level: fallbacks too
+        for (std::uint32_t y = 0; y < p.tiles_y(l); ++y)
+            for (std::uint32_t x = 0; x < p.tiles_x(l); ++x) {
                 source({0, l, x, y}, tile.data());
                 vt.insert({0, l, x, y}, tile.data());
             }
@@ -67,13 +68,13 @@ TEST(BuildResults, SamplingGivesTheSameFloatsInEveryBuild) {
     std::vector<double> u(n), v(n);
     std::vector<float> lod(n);
     for (std::size_t i = 0; i < n; ++i)
-        u[i] = unit(rng), v[i] = unit(rng), lod[i] = float(unit(rng) * p.level_count());
+        u[i] = unit(rng), v[i] = unit(rng), lod[i] = float(unit(rng) * p.levels());
     for (Filter filter : {Filter::Bilinear, Filter::Trilinear}) {
         std::vector<float> out(3 * n);
         SampleRequest r;
         r.u = u.data(), r.v = v.data(), r.lod = lod.data(), r.count = n, r.filter = filter;
         r.out = out.data();
-        vt.sample(r);
+        sample(vt, r);
         const std::uint64_t expect = filter == Filter::Bilinear ? 0xdd6fa3c267c74237ull : 0xbfba62f8cb88f6a4ull;
         EXPECT_EQ(digest(out), expect) << std::hex << "filter " << int(filter) << ": 0x" << digest(out);
     }

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "common/error.h"
-#include "vt/load_strategy.h"
-#include "vt/residency.h"
+#include "loading/load_strategy.h"
+#include "views/residency.h"
 
 using namespace gigascroll;
 
@@ -20,7 +20,7 @@ std::vector<std::uint64_t> level0_row(std::uint32_t n) {
 }  // namespace
 
 TEST(DirectLoading, CapsPerFrameAndCarriesTheRestUntilReplaced) {
-    const ResidentSet resident({PaintingTiles(120 * 40, 120)});  // 40 x 1 level-0 tiles
+    const ResidentSet resident({PaintingGeometry(120 * 40, 120)});  // 40 x 1 level-0 tiles
     DirectLoading direct(16);
     const auto commands = level0_row(40);
     direct.set_commands(commands);
@@ -45,7 +45,7 @@ TEST(DirectLoading, CapsPerFrameAndCarriesTheRestUntilReplaced) {
 
 TEST(MipByMipLoading, LoadsCoarsestMissingAncestorFirst) {
     // 1000 x 1000 texels: levels 9x9, 5x5, 3x3, 2x2, 1x1; level 4 always resident.
-    ResidentSet resident({PaintingTiles(1000, 1000)});
+    ResidentSet resident({PaintingGeometry(1000, 1000)});
     MipByMipLoading mip(16);
     const std::uint64_t q = pack_request(0, 0, 7, 8), q2 = pack_request(0, 0, 8, 8);
     // Only level 4 resident: each needs its level-3 ancestor, (0, 1) and (1, 1); a second

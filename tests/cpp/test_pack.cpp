@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "common/error.h"
-#include "vt/ink_landscape.h"
-#include "vt/pack_builder.h"
-#include "vt/page_layout.h"
-#include "vt/tile_pack.h"
+#include "pack/ink_landscape.h"
+#include "pack/builder.h"
+#include "pack/page_layout.h"
+#include "pack/reader.h"
 
 using namespace gigascroll;
 namespace fs = std::filesystem;
@@ -62,8 +62,8 @@ void build(const fs::path& dir, const std::vector<std::uint8_t>& img, std::uint3
     for (std::uint32_t y = 0; y < h; y += band)
         b.add_rows(img.data() + std::size_t(y) * w * 3, std::min(band, h - y), w);
     b.end_painting();
-    const PaintingGeometry g = make_geometry(w, h, tile, border);
-    b.finish(g.table_width, g.table_height);
+    const PaintingGeometry g = PaintingGeometry(w, h, tile, border);
+    b.finish(g.page_table_width(), g.page_table_height());
 }
 
 void expect_matches_reference(const TilePack& pack, const std::vector<std::uint8_t>& img,
@@ -71,8 +71,8 @@ void expect_matches_reference(const TilePack& pack, const std::vector<std::uint8
     const auto& g = pack.paintings().at(0).geometry;
     const std::uint32_t T = pack.tile_size(), b = pack.border(), P = pack.payload();
     std::vector<std::uint8_t> tile(pack.tile_bytes());
-    for (std::uint32_t l = 0; l < g.level_count(); ++l) {
-        const auto& lv = g.levels[l];
+    for (std::uint32_t l = 0; l < g.levels(); ++l) {
+        const auto& lv = g.level(l);
         for (std::uint32_t ty = 0; ty < lv.tiles_y; ++ty)
             for (std::uint32_t tx = 0; tx < lv.tiles_x; ++tx) {
                 ASSERT_TRUE(pack.has_tile(0, l, tx, ty));
@@ -92,16 +92,16 @@ void expect_matches_reference(const TilePack& pack, const std::vector<std::uint8
 }  // namespace
 
 TEST(PackGeometry, Table4PaintingHasPowerOfTwoPageTable) {
-    const PaintingGeometry g = make_geometry(152089, 6083, 128, 4);
-    EXPECT_EQ(g.table_width, 2048u);
-    EXPECT_EQ(g.table_height, 64u);
-    EXPECT_EQ(g.levels[0].tiles_x, 1268u);
-    EXPECT_EQ(g.levels[0].tiles_y, 51u);
-    EXPECT_EQ(g.level_count(), 12u);
-    EXPECT_LE(g.levels.back().width, 120u);
-    EXPECT_GT(g.levels[g.level_count() - 2].width, 120u);
-    EXPECT_THROW(make_geometry(10, 10, 8, 4), InvalidArgument);
-    EXPECT_THROW(make_geometry(0, 10, 128, 4), InvalidArgument);
+    const PaintingGeometry g = PaintingGeometry(152089, 6083, 128, 4);
+    EXPECT_EQ(g.page_table_width(), 2048u);
+    EXPECT_EQ(g.page_table_height(), 64u);
+    EXPECT_EQ(g.level(0).tiles_x, 1268u);
+    EXPECT_EQ(g.level(0).tiles_y, 51u);
+    EXPECT_EQ(g.levels(), 12u);
+    EXPECT_LE(g.level(g.levels() - 1).width, 120u);
+    EXPECT_GT(g.level(g.levels() - 2).width, 120u);
+    EXPECT_THROW(PaintingGeometry(10, 10, 8, 4), InvalidArgument);
+    EXPECT_THROW(PaintingGeometry(0, 10, 128, 4), InvalidArgument);
 }
 
 TEST(PackBuilder, RawAndZstdMatchBruteForceOnOddSizes) {
@@ -169,9 +169,9 @@ TEST(TilePack, ConcurrentReadsAgreeWithSerialReads) {
     const TilePack pack(dir.path.string());
     struct Key { std::uint32_t l, tx, ty; };
     std::vector<Key> keys;
-    for (std::uint32_t l = 0; l < pack.paintings()[0].level_count(); ++l)
-        for (std::uint32_t ty = 0; ty < pack.paintings()[0].geometry.levels[l].tiles_y; ++ty)
-            for (std::uint32_t tx = 0; tx < pack.paintings()[0].geometry.levels[l].tiles_x; ++tx)
+    for (std::uint32_t l = 0; l < pack.paintings()[0].geometry.levels(); ++l)
+        for (std::uint32_t ty = 0; ty < pack.paintings()[0].geometry.level(l).tiles_y; ++ty)
+            for (std::uint32_t tx = 0; tx < pack.paintings()[0].geometry.level(l).tiles_x; ++tx)
                 keys.push_back({l, tx, ty});
     std::vector<std::vector<std::uint8_t>> serial(keys.size(), std::vector<std::uint8_t>(pack.tile_bytes()));
     for (std::size_t i = 0; i < keys.size(); ++i)
@@ -218,8 +218,8 @@ TEST(PageLayout, PackersAreAlignedDisjointAtEveryLevelAndDeterministic) {
         EXPECT_GE(a.fill_ratio, shelf_layout(tables).fill_ratio);
     }
     EXPECT_THROW(shelf_layout({{3, 4}}), InvalidArgument);
-    EXPECT_THROW(check_layout({{4, 4}, {4, 4}}, PageLayout{8, 8, {{0, 0}, {0, 0}}, 0, 0}), InvalidArgument);
-    EXPECT_THROW(check_layout({{4, 4}}, PageLayout{8, 8, {{2, 0}}, 0, 0}), InvalidArgument);
+    EXPECT_THROW(check_layout({{4, 4}, {4, 4}}, PageLayout{8, 8, {{0, 0}, {0, 0}}, 0}), InvalidArgument);
+    EXPECT_THROW(check_layout({{4, 4}}, PageLayout{8, 8, {{2, 0}}, 0}), InvalidArgument);
 }
 
 TEST(InkLandscape, BandsAreIndependent) {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "photon/camera.h"
+#include "views/camera.h"
 #include "photon/hash_grid.h"
 #include "photon/kd_tree.h"
 #include "photon/photon_map.h"
@@ -17,7 +17,7 @@
 #include "photon/scenes.h"
 #include "photon/stereo.h"
 
-using namespace gigascroll::photon;
+using namespace gigascroll;
 
 namespace {
 
@@ -33,22 +33,22 @@ std::vector<Photon> random_photons(std::size_t n, unsigned seed, float extent = 
     return ph;
 }
 
-std::vector<Vec3> brute_radius(const std::vector<Photon>& ph, Vec3 q, float r) {
-    std::vector<Vec3> out;
+std::vector<Vec3f> brute_radius(const std::vector<Photon>& ph, Vec3f q, float r) {
+    std::vector<Vec3f> out;
     for (const auto& p : ph)
         if (dot(p.p - q, p.p - q) <= r * r) out.push_back(p.p);
     return out;
 }
 
-bool less3(Vec3 a, Vec3 b) { return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z))); }
+bool less3(Vec3f a, Vec3f b) { return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z))); }
 
-std::vector<Vec3> positions(const PhotonMap& m, const std::vector<std::uint64_t>& idx) {
-    std::vector<Vec3> out;
+std::vector<Vec3f> positions(const PhotonMap& m, const std::vector<std::uint64_t>& idx) {
+    std::vector<Vec3f> out;
     for (auto i : idx) out.push_back(m.photons()[i].p);
     return out;
 }
 
-void expect_same_set(std::vector<Vec3> a, std::vector<Vec3> b) {
+void expect_same_set(std::vector<Vec3f> a, std::vector<Vec3f> b) {
     std::sort(a.begin(), a.end(), less3);
     std::sort(b.begin(), b.end(), less3);
     ASSERT_EQ(a.size(), b.size());
@@ -73,7 +73,7 @@ TEST(PhotonSearch, RadiusQueriesMatchBruteForceForEveryStructure) {
     std::uniform_real_distribution<float> u(-1.2f, 1.2f);  // some queries outside the photons' box
     std::size_t total = 0;
     for (int i = 0; i < 300; ++i) {
-        const Vec3 q{u(rng), u(rng), u(rng) * 0.3f};
+        const Vec3f q{u(rng), u(rng), u(rng) * 0.3f};
         const float rq = i % 2 ? r : r * 0.6f;
         const auto ref = brute_radius(ph, q, rq);
         total += ref.size();
@@ -92,8 +92,8 @@ TEST(PhotonSearch, KnnMatchesBruteForce) {
     std::mt19937 rng(4);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     for (int i = 0; i < 100; ++i) {
-        const Vec3 q{u(rng), u(rng), u(rng) * 0.3f};
-        std::vector<std::pair<float, Vec3>> all;
+        const Vec3f q{u(rng), u(rng), u(rng) * 0.3f};
+        std::vector<std::pair<float, Vec3f>> all;
         for (const auto& p : ph) {
             const float d2 = dot(p.p - q, p.p - q);
             if (d2 <= r * r) all.push_back({d2, p.p});
@@ -134,17 +134,17 @@ TEST(PhotonSearch, EmptyMapFindsNothing) {
 }
 
 TEST(Camera, ProjectInvertsTheRayThroughAPixel) {
-    Camera cam({0.3f, 1.0f, 4.0f}, {0, 0, 0}, {0, 1, 0}, 45.0f, 80, 60);
+    const Camera cam = Camera::look_at({0.3, 1.0, 4.0}, {0, 0, 0}, {0, 1, 0}, 45.0, 80, 60);
     for (int y = 0; y < 60; y += 7)
         for (int x = 0; x < 80; x += 9) {
-            const Vec3 p = cam.position() + cam.direction(float(x) + 0.5f, float(y) + 0.5f) * 3.7f;
+            const Vec3f p = cam.ray_origin() + cam.ray_direction(float(x) + 0.5f, float(y) + 0.5f) * 3.7f;
             int px = -1, py = -1;
             ASSERT_TRUE(cam.project(p, px, py));
             EXPECT_EQ(px, x);
             EXPECT_EQ(py, y);
         }
     int px, py;
-    EXPECT_FALSE(cam.project(cam.position() - cam.forward(), px, py));  // behind the eye
+    EXPECT_FALSE(cam.project(cam.ray_origin() - Vec3f(cam.forward), px, py));  // behind the eye
 }
 
 TEST(PhotonTracer, SameSeedSamePhotonsForAnyThreadCount) {
@@ -212,7 +212,7 @@ TEST(Stereo, ReusedPixelsMatchWhatTheRightEyeComputesForThatHitPoint) {
         // The right eye's own ray toward that hit point: it reaches the same triangle, from
         // the same side, within float rounding of the same point.
         Hit h;
-        ASSERT_TRUE(scene.intersect(eyes.right.position(), src.p - eyes.right.position(), h));
+        ASSERT_TRUE(scene.intersect(eyes.right.ray_origin(), src.p - eyes.right.ray_origin(), h));
         ASSERT_EQ(h.tri, src.tri);
         ASSERT_EQ(h.front, src.front);
         ASSERT_LT(length(h.p - src.p), 1e-4f);
@@ -220,14 +220,14 @@ TEST(Stereo, ReusedPixelsMatchWhatTheRightEyeComputesForThatHitPoint) {
         // Shaded for that hit point as the right eye sees it: exactly the reused colour.
         const Hit right_hit = h;
         h.p = src.p;
-        const Vec3 exact = R.surface_radiance(h, heap, c);
+        const Vec3f exact = R.surface_radiance(h, heap, c);
         const float* got = &out.right[3 * i];
         EXPECT_EQ(exact.x, got[0]);
         EXPECT_EQ(exact.y, got[1]);
         EXPECT_EQ(exact.z, got[2]);
         // With the right eye's own rounding of the point: photons exactly on the gather
         // sphere or a position-quantisation boundary may change, rarely.
-        const Vec3 mine = R.surface_radiance(right_hit, heap, c);
+        const Vec3f mine = R.surface_radiance(right_hit, heap, c);
         if (std::abs(mine.x - got[0]) <= 1e-3f * (1 + mine.x)) ++matched;
     }
     EXPECT_EQ(checked, out.right_stats.reused_pixels);

@@ -13,9 +13,9 @@
 #include <unistd.h>
 
 #include "common/error.h"
-#include "vt/pack_builder.h"
-#include "vt/tile_loader.h"
-#include "vt/tile_pack.h"
+#include "pack/builder.h"
+#include "loading/tile_loader.h"
+#include "pack/reader.h"
 
 using namespace gigascroll;
 namespace fs = std::filesystem;
@@ -39,20 +39,20 @@ protected:
         o.border = E;
         o.threads = 1;
         PackBuilder b(dir_.string(), o);
-        const PaintingGeometry g = make_geometry(W, H, T, E);
+        const PaintingGeometry g = PaintingGeometry(W, H, T, E);
         b.begin_painting(PaintingSpec{"test", "array", "none", W, H, 0, 0});
         b.add_rows(image_.data(), H, W);
         b.end_painting();
-        b.finish(g.table_width, g.table_height);
+        b.finish(g.page_table_width(), g.page_table_height());
     }
     static void TearDownTestSuite() { fs::remove_all(dir_); }
 
     static std::vector<TileKey> all_keys(const TilePack& pack) {
         std::vector<TileKey> keys;
         const auto& g = pack.paintings()[0].geometry;
-        for (std::uint32_t l = 0; l < g.level_count(); ++l)
-            for (std::uint32_t y = 0; y < g.levels[l].tiles_y; ++y)
-                for (std::uint32_t x = 0; x < g.levels[l].tiles_x; ++x) keys.push_back({0, l, x, y});
+        for (std::uint32_t l = 0; l < g.levels(); ++l)
+            for (std::uint32_t y = 0; y < g.level(l).tiles_y; ++y)
+                for (std::uint32_t x = 0; x < g.level(l).tiles_x; ++x) keys.push_back({0, l, x, y});
         return keys;
     }
 

@@ -7,11 +7,13 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "common/error.h"
-#include "vt/mip_texture.h"
-#include "vt/virtual_texture.h"
+#include "sampling/mip_texture.h"
+#include "cache/virtual_texture.h"
+#include "sampling/sampler.h"
 
 using namespace gigascroll;
 
@@ -56,13 +58,13 @@ void cut_tile(const MipTexture::Level& lv, std::uint32_t T, std::uint32_t E, con
         }
 }
 
-std::vector<TileKey> all_tiles(const VtLayout& layout) {
+std::vector<TileKey> all_tiles(const PackGeometry& layout) {
     std::vector<TileKey> keys;
     for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
         const auto& pt = layout.paintings[p];
-        for (std::uint32_t l = 0; l < pt.level_count(); ++l)
-            for (std::uint32_t y = 0; y < pt.tiles_y[l]; ++y)
-                for (std::uint32_t x = 0; x < pt.tiles_x[l]; ++x) keys.push_back({p, l, x, y});
+        for (std::uint32_t l = 0; l < pt.levels(); ++l)
+            for (std::uint32_t y = 0; y < pt.tiles_y(l); ++y)
+                for (std::uint32_t x = 0; x < pt.tiles_x(l); ++x) keys.push_back({p, l, x, y});
     }
     return keys;
 }
@@ -71,9 +73,9 @@ std::vector<TileKey> all_tiles(const VtLayout& layout) {
 // A random painting (make_levels) as the pack would cut it, and a cache to fill with its tiles.
 struct CutPainting {
     CutPainting(std::uint32_t W, std::uint32_t H, std::uint32_t T, std::uint32_t E, std::uint32_t seed)
-        : layout(VtLayout::make(T, E, {{W, H}})),
-          levels(make_levels(W, H, layout.paintings[0].level_count(), seed)) {}
-    std::uint32_t level_count() const { return layout.paintings[0].level_count(); }
+        : layout(PackGeometry::make(T, E, {{W, H}})),
+          levels(make_levels(W, H, layout.paintings[0].levels(), seed)) {}
+    std::uint32_t level_count() const { return layout.paintings[0].levels(); }
     VirtualTexture::TileSource source() const {
         return [this](const TileKey& k, std::uint8_t* out) {
             cut_tile(levels[k.level], layout.tile_size, layout.border, k, out);
@@ -100,29 +102,29 @@ struct CutPainting {
         std::shuffle(keys.begin(), keys.end(), rng);
         return insert(vt, keys, std::size_t(share * keys.size()));
     }
-    VtLayout layout;
+    PackGeometry layout;
     std::vector<MipTexture::Level> levels;
 };
 
 }  // namespace
 
-TEST(VtLayout, TailLevelsOfTheScroll) {
+TEST(PackGeometry, TailLevelsOfTheScroll) {
     // The seed's scroll: Mp = 2048, Np = 64, levels 0..11; levels 7..11 are the tail (21 tiles).
-    const VtLayout layout = VtLayout::make(128, 4, {{152089, 6083}});
-    const VtPainting& p = layout.paintings[0];
-    EXPECT_EQ(p.table_w, 2048u);
-    EXPECT_EQ(p.table_h, 64u);
-    EXPECT_EQ(p.level_count(), 12u);
+    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
+    const PaintingGeometry& p = layout.paintings[0];
+    EXPECT_EQ(p.page_table_width(), 2048u);
+    EXPECT_EQ(p.page_table_height(), 64u);
+    EXPECT_EQ(p.levels(), 12u);
     EXPECT_EQ(p.merged_levels(), 7u);
     std::uint32_t tail = 0;
-    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x[l] * p.tiles_y[l];
+    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x(l) * p.tiles_y(l);
     EXPECT_EQ(tail, 21u);
-    EXPECT_EQ(p.tiles_x[11] * p.tiles_y[11], 1u);
+    EXPECT_EQ(p.tiles_x(11) * p.tiles_y(11), 1u);
 }
 
 TEST(PageTable, IncrementalUpdatesMatchFullRebuild) {
     // Three paintings of awkward sizes; a small cache so LRU evictions happen constantly.
-    const VtLayout layout = VtLayout::make(16, 2, {{500, 90}, {37, 301}, {12, 12}});
+    const PackGeometry layout = PackGeometry::make(16, 2, {{500, 90}, {37, 301}, {12, 12}});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
     VirtualTexture vt(layout, 6, 6, [](const TileKey&, std::uint8_t*) {});
     const auto keys = all_tiles(layout);
@@ -141,11 +143,11 @@ TEST(PageTable, IncrementalUpdatesMatchFullRebuild) {
 }
 
 TEST(PageTable, LookupIsTheFinestResidentAncestor) {
-    const VtLayout layout = VtLayout::make(16, 2, {{300, 200}});
+    const PackGeometry layout = PackGeometry::make(16, 2, {{300, 200}});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
     VirtualTexture vt(layout, 8, 8, [](const TileKey&, std::uint8_t*) {});
     const auto& pt = layout.paintings[0];
-    const std::uint32_t L = pt.level_count();
+    const std::uint32_t L = pt.levels();
     // Nothing streamed yet: every entry falls back to the finest pinned level (the first
     // tail level, or the coarsest level when there is no tail).
     const std::uint32_t first_pinned = std::min(pt.merged_levels(), L - 1);
@@ -160,7 +162,7 @@ TEST(PageTable, LookupIsTheFinestResidentAncestor) {
 }
 
 TEST(VirtualTexture, LruEvictsLeastRecentlyUsedAndKeepsPinned) {
-    const VtLayout layout = VtLayout::make(16, 2, {{200, 30}});
+    const PackGeometry layout = PackGeometry::make(16, 2, {{200, 30}});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
     VirtualTexture vt(layout, 4, 3, [](const TileKey&, std::uint8_t*) {});
     const std::uint64_t pinned = vt.stats().pinned;
@@ -178,11 +180,11 @@ TEST(VirtualTexture, LruEvictsLeastRecentlyUsedAndKeepsPinned) {
     EXPECT_EQ(s.evictions, 1u);
     EXPECT_EQ(s.resident, 12u);
     const auto& pt = layout.paintings[0];
-    EXPECT_TRUE(vt.is_pinned({0, pt.level_count() - 1, 0, 0}));
+    EXPECT_TRUE(vt.is_pinned({0, pt.levels() - 1, 0, 0}));
 }
 
 TEST(VirtualTexture, RejectsTooFewSlotsAndBadKeys) {
-    const VtLayout layout = VtLayout::make(128, 4, {{152089, 6083}});
+    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
     EXPECT_THROW(VirtualTexture(layout, 4, 4, [](const TileKey&, std::uint8_t*) {}), InvalidArgument);
     VirtualTexture vt(layout, 5, 5, [](const TileKey&, std::uint8_t*) {});
     std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
@@ -207,7 +209,7 @@ static float max_difference(const VirtualTexture& vt, const MipTexture& ref, Fil
     r.out = a.data();
     r.level_out = answered.data();
     r.threads = 2;
-    vt.sample(r);
+    sample(vt, r);
     std::vector<float> lod_ref(lod);
     if (use_answered_level)
         for (std::size_t i = 0; i < n; ++i) lod_ref[i] = answered[i];
@@ -268,7 +270,7 @@ TEST(VirtualTexture, MissingTilesFallBackToTheFinestResidentAncestor) {
     SampleRequest r;
     r.u = u.data(); r.v = v.data(); r.lod = lod.data(); r.count = u.size();
     r.out = a.data(); r.level_out = answered.data();
-    vt.sample(r);
+    sample(vt, r);
     std::size_t fell_back = 0;
     for (std::size_t i = 0; i < u.size(); ++i) {
         EXPECT_GE(answered[i], lod[i]);
@@ -305,7 +307,7 @@ TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
         SampleRequest r;
         r.u = u.data(), r.v = v.data(), r.lod = lod.data(), r.count = n, r.filter = filter;
         r.out = out.data(), r.level_out = answered.data(), r.threads = threads;
-        serial ? vt.sample_serial(r) : vt.sample(r);
+        serial ? sample_serial(vt, r) : sample(vt, r);
     };
     std::vector<float> ref, got;
     std::vector<std::int8_t> ref_level, got_level;
@@ -351,7 +353,10 @@ TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
                 SampleRequest r;
                 r.u = pu, r.v = pv, r.uv_stride = stride, r.count = n, r.filter = filter;
                 r.lod = lod, r.lod_scalar = lod_scalar, r.out = out.data();
-                texture.sample(r);
+                if constexpr (std::is_same_v<std::decay_t<decltype(texture)>, VirtualTexture>)
+                    gigascroll::sample(texture, r);
+                else
+                    texture.sample(r);
                 return out;
             };
             const float lod_clean = std::isnan(lod_scalar) ? 0.0f : lod_scalar;
@@ -366,8 +371,8 @@ TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
     std::vector<float> out(3 * n);
     SampleRequest bad;
     bad.u = u.data(), bad.v = v.data(), bad.uv_stride = 0, bad.count = n, bad.out = out.data();
-    EXPECT_THROW(vt.sample(bad), InvalidArgument);
-    EXPECT_THROW(vt.sample_serial(bad), InvalidArgument);
+    EXPECT_THROW(sample(vt, bad), InvalidArgument);
+    EXPECT_THROW(sample_serial(vt, bad), InvalidArgument);
     EXPECT_THROW(ref.sample(bad), InvalidArgument);
 }
 
@@ -375,7 +380,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     // 196301 x 5197 (seed 000 Table 4). Level 0 alternates 0 / 255 between columns, so a
     // bilinear sample between two texels reads the fraction directly: value = 255 f or 255 (1-f).
     const std::uint32_t W = 196301, H = 5197, T = 128, E = 4, P = T - 2 * E;
-    const VtLayout layout = VtLayout::make(T, E, {{W, H}});
+    const PackGeometry layout = PackGeometry::make(T, E, {{W, H}});
     auto texel = [&](std::int64_t x) -> std::uint8_t { return (std::clamp<std::int64_t>(x, 0, W - 1) % 2) ? 255 : 0; };
     auto source = [&](const TileKey& k, std::uint8_t* out) {
         for (std::uint32_t j = 0; j < T; ++j)
@@ -385,7 +390,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     };
     VirtualTexture vt(layout, 8, 8, source);
     std::vector<std::uint8_t> tile(layout.tile_bytes());
-    const std::uint32_t last = layout.paintings[0].tiles_x[0] - 1;
+    const std::uint32_t last = layout.paintings[0].tiles_x(0) - 1;
     for (std::uint32_t tx : {last - 1, last}) {
         source({0, 0, tx, 20}, tile.data());
         vt.insert({0, 0, tx, 20}, tile.data());
@@ -403,7 +408,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     std::vector<std::int8_t> answered(u.size());
     SampleRequest r;
     r.u = u.data(); r.v = v.data(); r.count = u.size(); r.out = out.data(); r.level_out = answered.data();
-    vt.sample(r);
+    sample(vt, r);
     double worst = 0, worst32 = 0;
     for (std::size_t i = 0; i < u.size(); ++i) {
         ASSERT_EQ(answered[i], 0);
@@ -415,7 +420,7 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     std::vector<double> u32(u.size());
     for (std::size_t i = 0; i < u.size(); ++i) u32[i] = double(float(u[i]));
     r.u = u32.data(); r.out = out32.data();
-    vt.sample(r);
+    sample(vt, r);
     for (std::size_t i = 0; i < u.size(); ++i) worst32 = std::max(worst32, std::abs(out32[3 * i] - expect[i]));
     EXPECT_GT(worst32, 1.0);
 }

@@ -184,15 +184,15 @@ def test_bad_processing_input_is_rejected(scroll):
     for proc in (v.BasicProcessor(), v.FlagArrayProcessor(scroll.tiles), v.HashProcessor()):
         with pytest.raises(ValueError, match="uint64"):
             proc.process([good.astype(np.int64)], resident, 0)
-        with pytest.raises(ValueError, match="contiguous"):
-            proc.process([np.repeat(good, 4)[::2]], resident, 0)
+        # A strided buffer is read as its contiguous copy (nanobind converts it).
+        strided = np.repeat(good, 4)[::2]
+        assert not strided.flags.c_contiguous
+        assert proc.process([strided], resident, 2)["requests"].tolist() == good.tolist()
         with pytest.raises(ValueError, match="names no tile"):
             proc.process([np.array([v.pack_request(3, 0, 0, 0)], dtype=np.uint64)], resident, 0)
         assert proc.process([good], resident, 1)["requests"].tolist() == good.tolist()
     with pytest.raises(ValueError):
         v.HashProcessor(table_bits=40)
-    with pytest.raises(ValueError):
-        v.HashProcessor(modulus="odd")
     with pytest.raises(ValueError):
         v.pack_request(0, 32, 0, 0)
     scene = v.ExhibitionScene()

@@ -1,0 +1,76 @@
+// Read side of a tile pack (format in pack_format.h). Opening parses the manifest, checks the
+// binaries' magic, version and sizes, and maps the index; a lookup is then O(1).
+// Thread safety: after construction the object is immutable; read_tile uses pread on one
+// shared descriptor and per-thread scratch, so loader threads may call it concurrently.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pack/format.h"
+#include "pack/geometry.h"
+#include "pack/manifest.h"
+
+namespace gigascroll {
+
+struct TileLocation {
+    std::uint64_t offset;
+    std::uint32_t length;
+    std::uint64_t checksum;
+};
+
+class TilePack {
+public:
+    // IoError: missing/unreadable manifest or binaries, wrong magic or version, truncation,
+    // inconsistent geometry.
+    explicit TilePack(const std::string& directory);
+    ~TilePack();
+    TilePack(const TilePack&) = delete;
+    TilePack& operator=(const TilePack&) = delete;
+
+    const std::string& directory() const { return directory_; }
+    const std::vector<PaintingInfo>& paintings() const { return paintings_; }
+    std::uint32_t tile_size() const { return tile_size_; }
+    std::uint32_t border() const { return border_; }
+    std::uint32_t payload() const { return tile_size_ - 2 * border_; }
+    Codec codec() const { return codec_; }
+    std::uint32_t table_width() const { return table_width_; }   // merged Mc
+    std::uint32_t table_height() const { return table_height_; } // merged Nc
+    // The paintings' placed geometry and the merged table: what the runtime needs.
+    PackGeometry geometry() const;
+    std::uint64_t tile_count() const { return entry_count_; }
+    std::size_t tile_bytes() const { return std::size_t(tile_size_) * tile_size_ * 3; }
+    // The manifest as this reader parsed it, serialised again (JSON text).
+    const std::string& manifest_json() const { return manifest_json_; }
+
+    // InvalidArgument when p or l is out of range or (tx, ty) lies outside the level's
+    // power-of-two page-table grid; false for padding tiles inside that grid.
+    bool has_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;
+    // InvalidArgument for a key that is out of range or not stored.
+    TileLocation locate(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;
+    // Reads, decompresses and verifies one tile into out[tile_bytes()] (RGB, row-major).
+    // IoError on a short read, a checksum mismatch or a corrupt zstd frame.
+    void read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty,
+                   std::uint8_t* out) const;
+
+private:
+    void release();
+    const TileEntry& entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
+                           std::uint32_t ty) const;
+
+    std::string directory_;
+    std::string manifest_json_;
+    std::vector<PaintingInfo> paintings_;
+    std::uint32_t tile_size_ = 0, border_ = 0;
+    Codec codec_ = Codec::Raw;
+    std::uint32_t table_width_ = 0, table_height_ = 0;
+    int tiles_fd_ = -1;
+    std::uint64_t tiles_size_ = 0;
+    void* index_map_ = nullptr;
+    std::size_t index_map_size_ = 0;
+    const TileEntry* entries_ = nullptr;
+    std::uint64_t entry_count_ = 0;
+};
+
+}  // namespace gigascroll

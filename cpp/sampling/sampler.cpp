@@ -1,0 +1,259 @@
+#include "sampling/sampler.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <mutex>
+#include <shared_mutex>
+
+#include "common/divider.h"
+#include "common/error.h"
+#include "common/parallel.h"
+#include "sampling/bilinear.h"
+
+namespace gigascroll {
+
+Filter parse_filter(const std::string& f) {
+    if (f == "bilinear") return Filter::Bilinear;
+    if (f == "trilinear") return Filter::Trilinear;
+    throw InvalidArgument("filter must be 'bilinear' or 'trilinear', got '" + f + "'");
+}
+
+namespace {
+void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
+void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
+
+void check_request(const VirtualTexture& vt, const SampleRequest& r) {
+    require(r.painting < vt.layout().paintings.size(), "painting out of range");
+    require(r.u && r.v && r.out, "sample: missing arrays");
+    require(r.uv_stride >= 1, "sample: uv_stride must be >= 1");
+}
+}  // namespace
+
+void sample(const VirtualTexture& vt, const SampleRequest& r) {
+    check_request(vt, r);
+    const auto lock = vt.read_lock();
+    parallel_for(r.count, 4096, [&](std::size_t b, std::size_t e) { sample_range(vt, r, b, e); },
+                 r.threads);
+}
+
+void sample_serial(const VirtualTexture& vt, const SampleRequest& r) {
+    check_request(vt, r);
+    const auto lock = vt.read_lock();
+    sample_range(vt, r, 0, r.count);
+}
+
+namespace {
+// Tile column holding the tap's sample point: floor((i0 + 0.5 + f) / P) (i0 >= 0 after the
+// clamp; 32-bit division is the cheaper one).
+inline std::uint32_t tap_tile(const Tap& t, const Divider& P) {
+    return P(static_cast<std::uint32_t>(t.i0 + (t.f >= 0.5f ? 1 : 0)));
+}
+
+// What both sampling paths do once a sample's tile is known: its page-table entry (looked up
+// again only when a sample leaves the last tile; neighbours mostly share it) and the
+// physical address of a texel of the tile that answered.
+class TexelFinder {
+public:
+    TexelFinder(const PageTable& table, std::uint32_t painting, const std::uint8_t* physical)
+        : table_(table), painting_(painting), physical_(physical),
+          P_(table.layout().payload()), E_(table.layout().border), T_(table.layout().tile_size),
+          tile_bytes_(table.layout().tile_bytes()) {}
+
+    std::size_t row_bytes() const { return std::size_t(T_) * 3; }
+
+    // Entry of tile (cx, cy) at level l: the level and slot of its finest resident ancestor.
+    PageEntry entry(std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
+        if (l != last_l_ || cx != last_cx_ || cy != last_cy_)
+            last_l_ = l, last_cx_ = cx, last_cy_ = cy, last_ = table_.lookup(painting_, l, cx, cy);
+        return last_;
+    }
+
+    // Texel (i, j) of e's level, where e answers tile (cx, cy) from s levels coarser:
+    // eq (7,8)'s in-tile offset with the border, clamped so the 2 x 2 footprint stays inside.
+    const std::uint8_t* texel(PageEntry e, std::uint32_t s, std::int64_t i, std::int64_t j,
+                              std::uint32_t cx, std::uint32_t cy) const {
+        const std::int64_t jx = std::clamp<std::int64_t>(i - std::int64_t(cx >> s) * P_ + E_, 0, T_ - 2);
+        const std::int64_t jy = std::clamp<std::int64_t>(j - std::int64_t(cy >> s) * P_ + E_, 0, T_ - 2);
+        return physical_ + e.slot() * tile_bytes_ + jy * row_bytes() + jx * 3;
+    }
+
+private:
+    const PageTable& table_;
+    const std::uint32_t painting_;
+    const std::uint8_t* const physical_;
+    const std::int64_t P_, E_, T_;
+    const std::size_t tile_bytes_;
+    std::uint32_t last_l_ = ~0u, last_cx_ = 0, last_cy_ = 0;
+    PageEntry last_;
+};
+
+constexpr std::size_t kBatch = 64;
+
+// Per sample of a batch: level-0 position, level asked for, the taps at that level (integer
+// texel and weight per axis) and the tile column / row holding the sample point.
+struct TapBatch {
+    alignas(64) double x0[kBatch], y0[kBatch];
+    alignas(64) std::int32_t ix[kBatch], iy[kBatch];
+    alignas(64) float fx[kBatch], fy[kBatch];
+    alignas(64) std::uint32_t level[kBatch], cx[kBatch], cy[kBatch];
+};
+
+struct PyramidExtent {
+    std::uint32_t width, height;  // level 0, texels
+    float top;                    // the coarsest level
+};
+
+// The sampler's per-sample arithmetic without branches and on restrict pointers, so GCC
+// vectorises it; the same operations as sample_range's taps (bilinear_tap, tap_tile), hence
+// the same results. Min and max are selects; "0 < x ? x : 0" also maps NaN to 0.
+void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
+                   const float* __restrict lod_in, std::size_t n, const PyramidExtent e,
+                   const Divider divide_p, TapBatch& __restrict b) {
+    auto lo0 = [](auto x) { return decltype(x)(0) < x ? x : decltype(x)(0); };
+    auto below = [](auto x, auto hi) { return x < hi ? x : hi; };
+    auto above = [](auto x, auto lo) { return lo < x ? x : lo; };
+    const std::uint32_t width = e.width, height = e.height;
+    const double W = width, H = height;
+    const float top = e.top;
+    for (std::size_t k = 0; k < n; ++k) {
+        const double u = below(lo0(u_in[k]), 1.0), v = below(lo0(v_in[k]), 1.0);
+        const float lod = below(lo0(lod_in[k]), top);
+        // lod >= 0 here, so lround(lod) = floor(lod + 0.5).
+        const auto l = static_cast<std::uint32_t>(lod + 0.5f);
+        const double x0 = u * W, y0 = v * H;
+        // x0 2^-l exactly (2^-l from its exponent bits) and level l's extent, as LevelAxes
+        // computes them.
+        const double scale = std::bit_cast<double>(std::uint64_t(1023 - l) << 52);
+        const std::uint32_t wl = (width + (1u << l) - 1) >> l;
+        const std::uint32_t hl = (height + (1u << l) - 1) >> l;
+        const double tx = below(above(x0 * scale, 0.5), double(wl) - 0.5) - 0.5;
+        const double ty = below(above(y0 * scale, 0.5), double(hl) - 0.5) - 0.5;
+        const auto i = static_cast<std::int32_t>(tx), j = static_cast<std::int32_t>(ty);
+        const float f = static_cast<float>(tx - double(i)), g = static_cast<float>(ty - double(j));
+        b.x0[k] = x0, b.y0[k] = y0, b.level[k] = l;
+        b.ix[k] = i, b.iy[k] = j, b.fx[k] = f, b.fy[k] = g;
+        b.cx[k] = divide_p.by_double(std::uint32_t(i) + (f >= 0.5f ? 1u : 0u));
+        b.cy[k] = divide_p.by_double(std::uint32_t(j) + (g >= 0.5f ? 1u : 0u));
+    }
+}
+// Seed 000 eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
+// its padded page table and eq (5,6) normalise by the merged table; we instead keep the
+// level-0 texel position x0 = u W in double, derive the level-l position x0 2^-l exactly, and
+// index the table by the integer tile column floor(x / P) (+ the painting's offset >> l,
+// inside PageTable). Eq (7,8)'s in-tile offset with border E becomes the integer texel
+// i0 - tx P + E plus the fraction, and eq (9,10)'s physical coordinate the slot's texel
+// origin plus that: no normalised float coordinate ever exists, so 1/256 texel holds at u
+// near 1 on the widest painting.
+void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
+    if (r.filter == Filter::Bilinear) {
+        sample_bilinear(vt, r, begin, end);
+        return;
+    }
+    const PaintingGeometry& pt = vt.layout().paintings[r.painting];
+    const std::uint32_t L = pt.levels();
+    const LevelAxes axes(pt.width(), pt.height(), L);
+    const Divider divide_p(vt.layout().payload());
+    TexelFinder finder(vt.page_table(), r.painting, vt.physical());
+
+    // Bilinear sample at level l with page-table fallback; returns the level that answered.
+    auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out)
+                        __attribute__((always_inline)) -> std::uint32_t {
+        Tap tx = axes.tap_x(x0, l), ty = axes.tap_y(y0, l);
+        const std::uint32_t cx = tap_tile(tx, divide_p), cy = tap_tile(ty, divide_p);
+        const PageEntry e = finder.entry(l, cx, cy);
+        const std::uint32_t al = e.level(), s = al - l;
+        if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
+            tx = axes.tap_x(x0, al);
+            ty = axes.tap_y(y0, al);
+        }
+        bilerp_rgb8(finder.texel(e, s, tx.i0, ty.i0, cx, cy), finder.row_bytes(), 3, 1, tx.f,
+                    ty.f, out);
+        return al;
+    };
+
+    for (std::size_t i = begin; i < end; ++i) {
+        const double ui = r.u[i * r.uv_stride], vi = r.v[i * r.uv_stride];
+        const double u = std::isnan(ui) ? 0.0 : std::clamp(ui, 0.0, 1.0);
+        const double v = std::isnan(vi) ? 0.0 : std::clamp(vi, 0.0, 1.0);
+        const double x0 = u * pt.width(), y0 = v * pt.height();
+        float lod = r.lod ? r.lod[i] : r.lod_scalar;
+        lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
+        float* out = r.out + 3 * i;
+        const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
+        const float f = lod - float(l0);
+        std::uint32_t answered = bilinear(x0, y0, l0, out);
+        if (f > 0 && l0 + 1 < L) {
+            float c[3];
+            bilinear(x0, y0, l0 + 1, c);
+            for (int k = 0; k < 3; ++k) out[k] += f * (c[k] - out[k]);
+        }
+        if (r.level_out) r.level_out[i] = static_cast<std::int8_t>(answered);
+    }
+}
+
+// The same arithmetic as the trilinear path's bilinear taps, in batches and three passes,
+// because the samples' texel reads are scattered over the physical texture and each used to
+// wait for its cache miss: (1) per sample, branch-free so it vectorises, the level and the
+// taps and tile at that level; (2) the page-table lookup (reused while samples stay in one
+// tile), the fallback to a resident ancestor, the texel address, and a prefetch of both
+// rows; (3) the blends, whose reads the prefetches have mostly brought in by then.
+void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
+    const PaintingGeometry& pt = vt.layout().paintings[r.painting];
+    const std::uint32_t L = pt.levels(), width = pt.width(), height = pt.height();
+    const LevelAxes axes(width, height, L);
+    const Divider divide_p(vt.layout().payload());
+    TexelFinder finder(vt.page_table(), r.painting, vt.physical());
+    const std::size_t row = finder.row_bytes();
+
+    TapBatch b;
+    const std::uint8_t* texel[kBatch];
+    float lod_scalar[kBatch];
+    double u_dense[kBatch], v_dense[kBatch];
+    std::fill(lod_scalar, lod_scalar + kBatch, r.lod_scalar);
+    const PyramidExtent pyramid{width, height, float(L - 1)};
+
+    for (std::size_t b0 = begin; b0 < end; b0 += kBatch) {
+        const std::size_t n = std::min(kBatch, end - b0);
+        // (1)
+        const float* l_in = r.lod ? r.lod + b0 : lod_scalar;
+        const double *u_in = r.u + b0, *v_in = r.v + b0;
+        if (r.uv_stride != 1) {  // gathered here so the tap loop stays contiguous
+            const std::size_t st = r.uv_stride;
+            for (std::size_t k = 0; k < n; ++k)
+                u_dense[k] = r.u[(b0 + k) * st], v_dense[k] = r.v[(b0 + k) * st];
+            u_in = u_dense, v_in = v_dense;
+        }
+        bilinear_taps(u_in, v_in, l_in, n, pyramid, divide_p, b);
+        // (2)
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint32_t l = b.level[k], cx = b.cx[k], cy = b.cy[k];
+            const PageEntry e = finder.entry(l, cx, cy);
+            const std::uint32_t al = e.level(), s = al - l;
+            std::int64_t i = b.ix[k], j = b.iy[k];
+            if (s != 0) {  // fallback: the resident ancestor answers at its own resolution
+                const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
+                i = tx.i0, j = ty.i0, b.fx[k] = tx.f, b.fy[k] = ty.f;
+            }
+            const std::uint8_t* p = finder.texel(e, s, i, j, cx, cy);
+            __builtin_prefetch(p);
+            __builtin_prefetch(p + row);
+            texel[k] = p;
+            if (r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
+        }
+        // (3)
+        // Four-float stores overlap the next sample's first channel, which is written
+        // after; not past this range's end (another thread may own the next sample).
+        float* out = r.out + 3 * b0;
+        std::size_t k = 0;
+#if defined(__SSE2__)
+        for (; k + 1 < n || (k < n && b0 + n < end); ++k)
+            bilerp_rgb8_wide(texel[k], row, b.fx[k], b.fy[k], out + 3 * k);
+#endif
+        for (; k < n; ++k) bilerp_rgb8(texel[k], row, 3, 1, b.fx[k], b.fy[k], out + 3 * k);
+    }
+}
+
+}  // namespace
+}  // namespace gigascroll

@@ -1,0 +1,41 @@
+// Software virtual-texture sampling (seed 000 eqs 3-10, seed 002's fallback): reads a
+// VirtualTexture's page table and physical texture under its read lock. Bilinear uses the
+// nearest level, trilinear blends floor(lod) and floor(lod) + 1; clamp-to-edge.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "cache/virtual_texture.h"
+
+namespace gigascroll {
+
+enum class Filter { Bilinear, Trilinear };
+
+// Where samples come from and where results go. lod: per-sample array, or nullptr to use
+// lod_scalar for all. level_out (optional): the level that answered (the finer one for
+// trilinear), which differs from the one asked for when that tile was not resident.
+struct SampleRequest {
+    std::uint32_t painting = 0;
+    const double* u = nullptr;          // sample i at u[i * uv_stride]
+    const double* v = nullptr;          // sample i at v[i * uv_stride]
+    std::size_t uv_stride = 1;          // 2 for interleaved (u, v) pairs
+    const float* lod = nullptr;
+    float lod_scalar = 0.0f;
+    std::size_t count = 0;
+    Filter filter = Filter::Bilinear;
+    float* out = nullptr;               // count x 3, 0..255
+    std::int8_t* level_out = nullptr;   // count, may be null
+    unsigned threads = 0;
+};
+
+// "bilinear" / "trilinear"; InvalidArgument otherwise.
+Filter parse_filter(const std::string& name);
+
+// Samples r.count points of painting r.painting on r.threads threads (0 = all cores).
+void sample(const VirtualTexture& vt, const SampleRequest& r);
+// The same on the calling thread only (r.threads ignored): for callers that already run one
+// task per core, such as the display pass.
+void sample_serial(const VirtualTexture& vt, const SampleRequest& r);
+
+}  // namespace gigascroll
