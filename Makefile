@@ -46,7 +46,7 @@ ctest: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 pytest: build
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q
 
 test: ctest pytest
 

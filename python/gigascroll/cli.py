@@ -5,15 +5,13 @@ Errors the user can fix (bad files, bad parameters) print one line and exit with
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 
+from .commands import bench, demo, info, pack, render, scenario, synth
+from .errors import UserError
+
 # Subcommand modules, in the order `gigascroll --help` lists them.
-COMMANDS = ["demo", "synth", "pack", "info", "bench", "render", "scenario"]
-
-
-class UserError(Exception):
-    """An error caused by the user's input: printed without a traceback."""
+COMMANDS = [demo, synth, pack, info, bench, render, scenario]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -22,13 +20,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Gigapixel paintings in VR: virtual texturing and photon mapping.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"gigascroll.commands.{name}")
-        except ModuleNotFoundError as e:
-            if e.name == f"gigascroll.commands.{name}":
-                continue  # not written yet
-            raise
+    for module in COMMANDS:
         module.register(sub)
     return parser
 

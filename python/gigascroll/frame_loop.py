@@ -15,24 +15,25 @@ processing.
 
 from __future__ import annotations
 
-import math
 import statistics
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import runtime
 from . import views as v
 from ._core import VirtualTextureLookup
-from .baselines import BASELINES, make_baseline
+from .views.baselines import BASELINES, make_baseline
 
 __all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
 
 METHODS = v.PROCESSING_METHODS + BASELINES
 
 LOADING_STRATEGIES = ("direct", "mip-by-mip")
-# The columns of seed 000 Table 5 (physical and page-table update are one call here: the
-# runtime's VirtualTexture.insert updates both).
+# The columns of seed 000 Table 5. The physical and page-table updates are part of "drain"
+# here (VirtualTexture.drain inserts each arrived tile into both); "update" is the loading
+# strategy's bookkeeping and the LRU touch of the tiles on screen.
 STAGES = ("feedback", "processing", "issue", "drain", "update", "display")
 
 
@@ -94,7 +95,6 @@ class FrameLoop:
                                  f"(tile {t.tile_size}, border {t.border})")
 
     def run(self, progress: bool = False) -> dict:
-        from . import runtime
         vt = runtime.VirtualTexture(self.pack, self.slots)
         lookup = VirtualTextureLookup(vt)
         baseline = None
@@ -158,31 +158,26 @@ class FrameLoop:
                         direct.set_commands(commands)
                 issue = direct.issue(lookup) if direct is not None else mip.issue(commands, lookup)
                 if issue.size:
-                    loader.submit(np.stack(v.unpack_requests(issue), axis=1).astype(np.int64))
+                    loader.submit(issue)
                 t["issue"] = time.perf_counter() - t0
 
+                # The loader's finished tiles go into the physical cache and the page table in
+                # one C++ call; a tile that failed to load comes back without being inserted.
                 t0 = time.perf_counter()
-                loaded = loader.poll()
+                arrived, _ = vt.drain(loader)
                 if self.wait_loads:
-                    while len(loaded) < issue.size:
+                    while arrived.size < issue.size:
                         time.sleep(0.0002)
-                        loaded += loader.poll()
+                        arrived = np.concatenate([arrived, vt.drain(loader)[0]])
                 t["drain"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
-                keys = []
-                for key, data in loaded:
-                    if isinstance(data, np.ndarray):
-                        vt.insert(key, data)
-                    keys.append(v.pack_request(*key))
-                if keys:
-                    done = np.array(keys, dtype=np.uint64)
-                    loading.loaded(done)
+                if arrived.size:
+                    loading.loaded(arrived)
                 if new_set is not None and new_set["responses"].size:
                     # The tiles the display samples become most recently used, so the LRU
                     # evicts what the views left, not what they still show.
-                    vt.request(np.stack(v.unpack_requests(new_set["responses"]),
-                                        axis=1).astype(np.int64))
+                    vt.request(new_set["responses"])
                 t["update"] = time.perf_counter() - t0
 
                 t0 = time.perf_counter()
@@ -200,7 +195,7 @@ class FrameLoop:
                     "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in STAGES},
                     "total_ms": 1e3 * sum(t.values()), "requests": hit_rate[1],
                     "hit_rate": hit_rate[0], "issued": int(issue.size),
-                    "loaded": len(loaded), "latency_frames": latency,
+                    "loaded": int(arrived.size), "latency_frames": latency,
                     "moving": frame + 1 < len(self.path) and not np.array_equal(
                         self.path.position[frame], self.path.position[frame + 1]),
                     "time_s": time.perf_counter() - start})

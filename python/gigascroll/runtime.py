@@ -2,12 +2,12 @@
 virtual-texture sampling (seed 000 §4.2-4.4, seed 002's fallback, seed 004 §3.3).
 
 Tile keys are ``(painting, level, tx, ty)``; several keys are an ``(n, 4)`` integer array or a
-sequence of 4-tuples. Sampled colours are float32 RGB in the 0..255 range of the stored tiles.
+sequence of 4-tuples, or a 1-D uint64 array of request keys (the views' ``pack_request``
+layout), which the frame loop keeps from request processing to the cache. Sampled colours
+are float32 RGB in the 0..255 range of the stored tiles.
 """
 
 from __future__ import annotations
-
-from typing import Iterable
 
 import numpy as np
 
@@ -21,7 +21,7 @@ class LoadError(OSError):
 
 
 def _keys(keys) -> np.ndarray:
-    """(n, 4) C-contiguous int64 from an array or a sequence of 4-tuples."""
+    """(n, 4) int64 from an array or a sequence of 4-tuples."""
     a = np.asarray(keys)
     if a.size == 0:
         return np.zeros((0, 4), np.int64)
@@ -31,7 +31,12 @@ def _keys(keys) -> np.ndarray:
         a = a.reshape(1, -1)
     if a.ndim != 2 or a.shape[1] != 4:
         raise ValueError(f"tile keys must have shape (n, 4) (painting, level, tx, ty), got {a.shape}")
-    return np.ascontiguousarray(a, dtype=np.int64)
+    return np.asarray(a, dtype=np.int64)
+
+
+def _is_request_keys(keys) -> bool:
+    """A 1-D uint64 array: request keys, not (painting, level, tx, ty) rows."""
+    return isinstance(keys, np.ndarray) and keys.ndim == 1 and keys.dtype == np.uint64
 
 
 def _uv(u, v, lod):
@@ -43,8 +48,7 @@ def _uv(u, v, lod):
     if np.isnan(u).any() or np.isnan(v).any():
         raise ValueError("u and v must not contain NaN")
     shape = u.shape
-    u = np.ascontiguousarray(u.ravel())
-    v = np.ascontiguousarray(v.ravel())
+    u, v = u.ravel(), v.ravel()
     lod_array, lod_scalar = None, 0.0
     if lod is not None:
         lod = np.asarray(lod, dtype=np.float32)
@@ -55,7 +59,7 @@ def _uv(u, v, lod):
         else:
             if lod.shape != shape:
                 raise ValueError(f"lod must be a scalar or have the shape of u, got {lod.shape}")
-            lod_array = np.ascontiguousarray(lod.ravel())
+            lod_array = lod.ravel()
     return u, v, lod_array, lod_scalar, shape
 
 
@@ -71,15 +75,19 @@ class TileLoader(_core.TileLoader):
     """Asynchronous tile loading from a :class:`gigascroll.TilePack`.
 
     ``TileLoader(pack, mode="lockfree" | "locked", threads=1, queue_capacity=4096,
-    pool_tiles=64)``. The main thread calls :meth:`submit` and, once per frame, :meth:`poll`;
-    neither blocks in lock-free mode. Commands that do not fit in the queues wait in a backlog
+    pool_tiles=64)``. The main thread calls :meth:`submit` and, once per frame, :meth:`poll`
+    (or :meth:`VirtualTexture.drain`); neither blocks in lock-free mode. Commands that do not fit in the queues wait in a backlog
     flushed by later calls (back-pressure, nothing is dropped). Use as a context manager, or
     call :meth:`close`.
     """
 
     def submit(self, keys) -> None:
-        """Queues load commands; ValueError (nothing queued) if a key is not a tile of the pack."""
-        self._submit(_keys(keys))
+        """Queues load commands, given as (n, 4) tile keys or a 1-D uint64 array of request
+        keys; ValueError (nothing queued) if a key is not a tile of the pack."""
+        if _is_request_keys(keys):
+            self._submit_requests(keys)
+        else:
+            self._submit(_keys(keys))
 
     def poll(self, max_tiles: int | None = None) -> list:
         """Finished tiles as ``[(key, data)]``: data is a (T, T, 3) uint8 array, or a
@@ -103,20 +111,26 @@ class VirtualTexture(_core.VirtualTexture):
 
     ``VirtualTexture(pack, slots=(30, 30))``: slots_x x slots_y tiles, LRU replacement; every
     tile of each painting's coarse "tail" levels (at least its single coarsest tile) is pinned,
-    so every lookup has a resident answer.
+    so every lookup has a resident answer. ``drain(loader, max_tiles=2**64 - 1)`` polls the
+    loader and inserts its finished tiles in C++, returning ``(arrived, failed)``: the request
+    keys (1-D uint64) of every tile that came back, inserted or not, and
+    ``[((painting, level, tx, ty), message), ...]`` for the loads that failed.
     """
 
     def insert(self, key, data: np.ndarray):
-        """Copies one tile (a C-contiguous (T, T, 3) uint8 array) into the cache and updates
+        """Copies one tile (a (T, T, 3) uint8 array) into the cache and updates
         the page table; returns the evicted tile's key, or None."""
         data = np.asarray(data)
         if data.dtype != np.uint8:
             raise ValueError(f"tile data must be uint8, got {data.dtype}")
         return super().insert(tuple(int(k) for k in key), data)
 
-    def request(self, keys) -> list:
+    def request(self, keys):
         """One frame's requests: resident tiles count as hits and become most recently used;
-        the missing ones (misses) are returned, each once, in request order."""
+        the missing ones (misses) are returned, each once, in request order: a 1-D uint64
+        array for request keys in, a list of (painting, level, tx, ty) tuples otherwise."""
+        if _is_request_keys(keys):
+            return self._request_keys(keys)
         return super().request(_keys(keys))
 
     def sample(self, painting: int, u, v, lod=None, filter: str = "bilinear", threads: int = 0):

@@ -1,10 +1,9 @@
-"""Photon mapper: accuracy against analytic results and Mitsuba 3, numerical stability, bad input."""
+"""Photon mapper (gigascroll.photon): accuracy against analytic results and Mitsuba 3, numerical
+stability, bad input."""
 
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +44,7 @@ def mitsuba_reference():
 
 # --- scene and camera -------------------------------------------------------------------------
 
-def test_cornell_matches_mitsuba_geometry_and_camera(cornell64):
+def test_cornell_matches_mitsuba_geometry_and_camera(cornell64, rng):
     """Rays from Mitsuba's own sensor hit our Cornell box at the same distances."""
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
@@ -54,7 +53,6 @@ def test_cornell_matches_mitsuba_geometry_and_camera(cornell64):
     mscene = mi.load_dict(d)
     sensor = mscene.sensors()[0]
     scene, camera = cornell64
-    rng = np.random.default_rng(0)
     for u, v in rng.random((200, 2)):
         ray, _ = sensor.sample_ray(0.0, 0.0, mi.Point2f(u, v), mi.Point2f(0.5, 0.5))
         assert np.allclose(camera.direction(u * REF_SIZE, v * REF_SIZE), np.array(ray.d), atol=1e-5)
@@ -216,8 +214,7 @@ def test_python_cornell_arrays_equal_builtin(cornell64):
 
 # --- structures and pipelines ------------------------------------------------------------------
 
-def test_photon_map_queries_match_numpy_brute_force():
-    rng = np.random.default_rng(1)
+def test_photon_map_queries_match_numpy_brute_force(rng):
     pts = rng.random((30_000, 3), dtype=np.float32) * np.float32([2, 2, 0.5])
     for grid, mode in (("hash", "dense"), ("hash", "hashed"), ("kdtree", "auto")):
         pm = g.PhotonMap(pts, 0.08, grid=grid, hash_mode=mode)
@@ -390,37 +387,3 @@ def test_photon_counts_beyond_2_24():
     assert ph["emitted"] == n
     assert len(ph["position"]) == 0  # nothing to bounce off
     assert ph["emitted_power"] == pytest.approx([math.pi * 0.5] * 3, rel=1e-6)
-
-
-# --- CLI --------------------------------------------------------------------------------------
-
-def test_render_command_writes_exr_and_png(tmp_path):
-    oiio = pytest.importorskip("OpenImageIO")
-    out = tmp_path / "cornell.exr"
-    r = subprocess.run([sys.executable, "-m", "gigascroll", "render", "cornell", "-o", str(out), "--width", "32",
-                        "--height", "32", "--photons", "20000"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    assert "gather" in r.stdout and "photons" in r.stdout
-    img = oiio.ImageInput.open(str(out))
-    data = img.read_image("float")
-    img.close()
-    assert data.shape == (32, 32, 3) and np.isfinite(data).all() and data.mean() > 0.05
-    png = tmp_path / "cornell.png"
-    r = subprocess.run([sys.executable, "-m", "gigascroll", "render", "cornell", "-o", str(png), "--width", "16",
-                        "--height", "16", "--photons", "5000"], capture_output=True, text=True)
-    assert r.returncode == 0 and png.stat().st_size > 0
-
-
-@pytest.mark.parametrize("args,match", [
-    (["render", "kitchen", "-o", "x.exr"], "invalid choice"),
-    (["render", "cornell", "-o", "x.exr", "--radius", "-1"], "radius"),
-    (["render", "cornell", "-o", "x.bmpx"], "format"),
-    (["render", "cornell", "-o", "/nonexistent-dir/x.exr", "--width", "8", "--height", "8",
-      "--photons", "100"], "directory"),
-])
-def test_render_command_bad_input(args, match, tmp_path):
-    r = subprocess.run([sys.executable, "-m", "gigascroll", *args], capture_output=True, text=True, cwd=tmp_path)
-    assert r.returncode == 2
-    assert match in r.stderr
-    assert "Traceback" not in r.stderr
-    assert not (tmp_path / "x.exr").exists()

@@ -1,7 +1,7 @@
-"""Streaming runtime against independent references: numpy bilinear/trilinear sampling of the
-source image and of whole mip levels, brute-force fallback levels, direct pack reads."""
+"""Streaming runtime (gigascroll.runtime) against independent references: numpy
+bilinear/trilinear sampling of the source image and of whole mip levels, brute-force
+fallback levels, direct pack reads."""
 
-import os
 import shutil
 import time
 
@@ -117,8 +117,7 @@ def finest_resident_ancestor(vt, pack, level, u, v):
     raise AssertionError("no resident ancestor: the coarsest tile must be pinned")
 
 
-def test_missing_tiles_answer_with_the_finest_resident_ancestor(pack, levels):
-    rng = np.random.default_rng(3)
+def test_missing_tiles_answer_with_the_finest_resident_ancestor(pack, levels, rng):
     vt = VirtualTexture(pack, (4, 4))  # 16 slots: most tiles cannot be resident
     keys = all_keys(pack)
     for i in rng.permutation(len(keys))[:40]:
@@ -191,9 +190,8 @@ def test_physical_texture_holds_each_resident_tile_in_its_slot(pack, vt_full):
         np.testing.assert_array_equal(phys[slot], pack.read_tile(*k).reshape(T, T, 3))
 
 
-def test_plain_mip_texture_matches_the_full_vt(pack, vt_full):
+def test_plain_mip_texture_matches_the_full_vt(pack, vt_full, rng):
     mip = MipTexture(pack)
-    rng = np.random.default_rng(5)
     u, v = rng.random((40, 50)), rng.random((40, 50))
     lod = rng.random((40, 50)) * (mip.levels - 1)
     for f in ("bilinear", "trilinear"):
@@ -246,11 +244,13 @@ def test_loader_reports_a_corrupt_tile_and_keeps_going(pack, tmp_path):
         assert isinstance(res[(0, 0, 0, 0)], np.ndarray)
         vt = VirtualTexture(copy, (4, 4))
         loader.submit([(0, 1, 0, 0), (0, 0, 2, 1)])
-        inserted, failed = 0, []
+        arrived, failed = [], []
         deadline = time.monotonic() + 60
-        while inserted + len(failed) < 2 and time.monotonic() < deadline:
-            n, f = vt.insert_loaded(loader)
-            inserted, failed = inserted + n, failed + f
+        while len(arrived) < 2 and time.monotonic() < deadline:
+            a, f = vt.drain(loader)
+            arrived, failed = arrived + a.tolist(), failed + f
+        inserted = len(arrived) - len(failed)
+        assert sorted(arrived) == sorted(gigascroll.pack_request(*k) for k in [(0, 1, 0, 0), (0, 0, 2, 1)])
         assert inserted == 1 and vt.is_resident((0, 1, 0, 0))
         assert failed[0][0] == (0, 0, 2, 1) and "checksum" in failed[0][1]
 
@@ -322,3 +322,46 @@ def test_empty_and_single_key_batches_are_accepted(pack):
             got = loader.poll()
             time.sleep(0.001)
     assert [k for k, _ in got] == [tuple(key)]
+
+
+def test_request_keys_in_and_out(pack):
+    # A 1-D uint64 array of request keys (views' pack_request layout) is the same set of
+    # tiles as the (n, 4) form: the same misses, loads and drained arrivals.
+    keys = all_keys(pack)[:12]
+    requests = np.array([gigascroll.pack_request(*k) for k in keys], np.uint64)
+    a, b = VirtualTexture(pack, (8, 8)), VirtualTexture(pack, (8, 8))
+    missing = a.request(requests)
+    assert missing.dtype == np.uint64 and missing.ndim == 1
+    assert [gigascroll.pack_request(*k) for k in b.request(keys)] == missing.tolist()
+    assert a.stats() == b.stats()
+    with TileLoader(pack, "lockfree", 1) as loader:
+        loader.submit(missing)
+        arrived, failed = np.zeros(0, np.uint64), []
+        deadline = time.monotonic() + 30
+        while arrived.size < missing.size and time.monotonic() < deadline:
+            got, f = a.drain(loader)
+            arrived, failed = np.concatenate([arrived, got]), failed + f
+    assert failed == [] and sorted(arrived.tolist()) == sorted(missing.tolist())
+    assert a.request(requests).size == 0  # all resident now
+    with TileLoader(pack) as loader:
+        with pytest.raises(ValueError):
+            loader.submit(np.array([gigascroll.pack_request(0, 0, 99, 0)], np.uint64))
+
+
+def test_strided_inputs_read_as_their_contiguous_copies(pack, vt_full, rng):
+    # The wrappers leave contiguity to the core: strided uv, lod and keys give what their
+    # contiguous copies give.
+    u, v, lod = rng.random(40), rng.random(40), rng.random(40).astype(np.float32) * 3
+    strided = (u[::2], v[::2], lod[::2])
+    assert not strided[0].flags.c_contiguous
+    a, la = vt_full.sample(0, *strided, filter="trilinear")
+    b, lb = vt_full.sample(0, *(np.ascontiguousarray(x) for x in strided), filter="trilinear")
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(la, lb)
+    keys = np.array([gigascroll.pack_request(*k) for k in all_keys(pack)], np.uint64)
+    x, y = VirtualTexture(pack, (8, 8)), VirtualTexture(pack, (8, 8))
+    assert x.request(keys[::3]).tolist() == y.request(np.ascontiguousarray(keys[::3])).tolist()
+    rows = np.array(all_keys(pack), np.int64)[::2]
+    fortran = np.asfortranarray(rows)
+    assert not fortran.flags.c_contiguous
+    assert x.request(fortran) == y.request(rows)

@@ -1,4 +1,4 @@
-"""Every scenario in quick mode: its invariants (methods agree, nothing lost in loading, the
+"""Every scenario (gigascroll.scenarios) in quick mode: its invariants (methods agree, nothing lost in loading, the
 frame salt, latency bounds, the magnifier sharp only with its requests), its outputs, and the
 CLI's answers to bad input."""
 

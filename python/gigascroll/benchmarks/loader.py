@@ -20,7 +20,6 @@ per-tile work (read, checksum, zstd decode) the loaders parallelise.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import statistics
@@ -29,10 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import UserError
+from ..experiments import TEXEL_M, pyplot, save_figure, timed, write_json
+
 SEED_TABLE1 = {"locked:1": 11.45, "locked:2": 10.5, "locked:3": 10.51, "locked:4": 10.87,
                "lockfree:1": 4.81}
 DEFAULT_CONFIGS = "locked:1,locked:2,locked:3,locked:4,lockfree:1,lockfree:2"
-TEXEL_M = 12.0 / 152089  # seed 000: the 152089-pixel scroll is 12 m long
 
 
 def add_arguments(p) -> None:
@@ -164,7 +165,6 @@ def run_loader(pack, mode: str, threads: int, args, frames: list[np.ndarray]) ->
 def run_physical(pack, nbytes: int) -> float:
     """Seconds to read nbytes of tiles.bin sequentially in 1 MiB chunks (wrapping around)."""
     path = Path(pack.path) / "tiles.bin"
-    size = path.stat().st_size
     buf = bytearray(1 << 20)
     fd = os.open(path, os.O_RDONLY)
     try:
@@ -227,7 +227,7 @@ def run_sampling(cache: Path, args) -> dict:
                 t = {name: float("inf") for name in fns}
                 for _ in range(5):  # alternate, best of 5: load on a shared machine hits both
                     for name, fn in fns.items():
-                        t[name] = min(t[name], _timed(fn))
+                        t[name] = min(t[name], timed(fn)[0])
                 res_vt, lv = vt.sample(0, u, v, lod, filt, threads)
                 res_plain, _ = mip.sample(u, v, lod, filt, threads)
                 assert (lv == np.floor(lod)).all() or filt == "bilinear"
@@ -239,20 +239,11 @@ def run_sampling(cache: Path, args) -> dict:
     return out
 
 
-def _timed(fn) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
-
-
 # ----------------------------------------------------------------------------- driver
 
 def _plot(result: dict, path: Path) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     codecs = list(result["loading"])
-    fig, axes = plt.subplots(1, len(codecs), figsize=(5.5 * len(codecs), 4), squeeze=False)
+    fig, axes = pyplot().subplots(1, len(codecs), figsize=(5.5 * len(codecs), 4), squeeze=False)
     for ax, codec in zip(axes[0], codecs):
         rows = result["loading"][codec]["rows"]
         names = [r["config"] for r in rows]
@@ -268,12 +259,10 @@ def _plot(result: dict, path: Path) -> None:
         ax.tick_params(axis="x", rotation=30)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def run(args) -> int:
-    from ..cli import UserError
     if args.quick:
         args.width, args.height, args.tiles, args.repeat = 12000, 1000, 3000, 1
         args.samples, args.sample_size = 200_000, "4096x1024"
@@ -341,7 +330,7 @@ def run(args) -> int:
         print(f"sampling {r['pattern']:6s} {r['filter']:9s} {r['threads']} threads: VT "
               f"{r['vt_samples_per_s'] / 1e6:7.2f} M/s, plain {r['plain_samples_per_s'] / 1e6:7.2f} M/s, "
               f"cost x{r['cost_ratio']:.2f}", flush=True)
-    (out_dir / "loader.json").write_text(json.dumps(result, indent=2))
+    write_json(out_dir / "loader.json", result, indent=2)
     if result["loading"]:
         _plot(result, out_dir / "loader.png")
     print(f"wrote {out_dir / 'loader.json'} and {out_dir / 'loader.png'}")

@@ -8,7 +8,6 @@ own wall time around the build call, peak RSS comes from wait4() for that child 
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import statistics
@@ -16,6 +15,9 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+from ..errors import UserError
+from ..experiments import pyplot, save_figure, write_json
 
 OURS = """
 import sys, time, gigascroll
@@ -70,7 +72,6 @@ def _measure(code: str, args: list[str]) -> dict:
 
 
 def run(args) -> int:
-    from ..cli import UserError
     from ..pack import synth_painting
     if args.width <= 0 or args.height <= 0 or args.repeat <= 0:
         raise UserError("--width, --height and --repeat must be positive")
@@ -131,17 +132,14 @@ def run(args) -> int:
         print(f"speed ratio gigascroll / libvips = {result['speed_ratio']:.2f}; "
               f"peak RSS {ours['peak_rss_mb']:.0f} MB vs {vips['peak_rss_mb']:.0f} MB "
               f"(goal: ratio >= 1, RSS < 1024 MB)")
-    (work / "bench_pack.json").write_text(json.dumps(result, indent=2))
+    write_json(work / "bench_pack.json", result, indent=2)
     _plot(summary, Path(args.plot) if args.plot else work / "bench_pack.png", args)
     return 0
 
 
 def _plot(summary: dict, png: Path, args) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     names = list(summary)
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2), constrained_layout=True)
+    fig, axes = pyplot().subplots(1, 2, figsize=(9, 3.2), constrained_layout=True)
     colors = ["tab:blue", "tab:gray"][:len(names)]
     axes[0].bar(names, [summary[n]["mpixel_per_s"] for n in names], color=colors)
     axes[0].set_ylabel("Mpixel/s (higher is better)")
@@ -150,6 +148,5 @@ def _plot(summary: dict, png: Path, args) -> None:
     axes[1].set_ylabel("peak RSS, MB")
     axes[1].legend()
     fig.suptitle(f"tile-pack build, {args.width} x {args.height}, 128-px tiles")
-    fig.savefig(png, dpi=100)
-    plt.close(fig)
+    save_figure(fig, png, dpi=100)
     print(f"plot: {png}")

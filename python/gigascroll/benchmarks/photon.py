@@ -17,6 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import UserError
+from ..experiments import pyplot, save_figure, timed, write_json
+
 # Seed 001's settings and numbers (RTX 2080 Ti, ms), to print next to ours.
 SEED_TABLE1 = {  # (photons side, radius): (kd-tree, hash grid)
     (512, 0.02): (7.28, 3.89), (512, 0.05): (118.35, 90.74), (512, 0.1): (426.39, 501.79),
@@ -45,8 +48,6 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
-    from ..cli import UserError
-
     scenes = [s for s in args.scenes.split(",") if s]
     for s in scenes:
         if s not in SCALE:
@@ -67,7 +68,7 @@ def run(args) -> int:
         results["nanoflann"] = _nanoflann(args.quick)
     if "error" not in skip:
         results["error"] = _runtime_vs_error(args, out)
-    (out / "results.json").write_text(json.dumps(results, indent=1))
+    write_json(out / "results.json", results, indent=1)
     print(f"\nwrote {out / 'results.json'}")
     return 0
 
@@ -79,13 +80,13 @@ def _machine() -> str:
     return f"{os.cpu_count()} cores, {platform.machine()}, {platform.system()}"
 
 
-def _median_time(fn, repeat: int, key: str | None = None):
-    """Median over repeat runs of fn() -> stats dict (key: a stats entry in seconds), in ms."""
+def _median_time(fn, repeat: int, key: str):
+    """Median over repeat runs of fn() -> stats dict of stats[key] (seconds), in ms; and the
+    last stats."""
     times, last = [], None
     for _ in range(repeat):
-        t0 = time.perf_counter()
         last = fn()
-        times.append(last[key] if key else time.perf_counter() - t0)
+        times.append(last[key])
     return 1000 * statistics.median(times), last
 
 
@@ -245,26 +246,23 @@ def _runtime_vs_error(args, out: Path) -> dict:
     d["sensor"]["film"].update(width=size, height=size, rfilter={"type": "box"})
     d["integrator"] = {"type": "path", "max_depth": -1}
     mscene = mi.load_dict(d)
-    t0 = time.perf_counter()
-    ref = np.array(mi.render(mscene, spp=args.reference_spp, seed=12345), dtype=np.float32)
+    seconds, ref = timed(lambda: np.array(mi.render(mscene, spp=args.reference_spp, seed=12345),
+                                          dtype=np.float32))
     print(f"\nreference: Mitsuba path tracer, {size}x{size}, {args.reference_spp} spp, "
-          f"{time.perf_counter() - t0:.1f} s")
+          f"{seconds:.1f} s")
     spps = [1, 4, 16, 64, 256] if args.quick else [1, 4, 16, 64, 256, 1024]
     mitsuba = []
     for spp in tqdm(spps, desc="mitsuba", unit="run"):
-        t0 = time.perf_counter()
-        img = np.array(mi.render(mscene, spp=spp, seed=spp), dtype=np.float32)
-        mitsuba.append(dict(spp=spp, seconds=time.perf_counter() - t0, relmse=P.relmse(img, ref)))
+        seconds, img = timed(lambda: np.array(mi.render(mscene, spp=spp, seed=spp), dtype=np.float32))
+        mitsuba.append(dict(spp=spp, seconds=seconds, relmse=P.relmse(img, ref)))
     scene, cam = P.builtin_scene("cornell", resolution=(size, size))
     P.render(scene, cam, photons=1000, radius=0.05)  # warm-up
     ours = []
     photon_counts = [1 << 14, 1 << 16, 1 << 18] if args.quick else [1 << 14, 1 << 16, 1 << 18, 1 << 20, 1 << 22]
     configs = [(n, r, spp) for n in photon_counts for r in (0.01, 0.02, 0.04) for spp in (4, 16, 64)]
     for n, r, spp in tqdm(configs, desc="photon mapping", unit="run"):
-        t0 = time.perf_counter()
-        img = P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7)
-        ours.append(dict(photons=n, radius=r, spp=spp, seconds=time.perf_counter() - t0,
-                         relmse=P.relmse(img, ref)))
+        seconds, img = timed(lambda: P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7))
+        ours.append(dict(photons=n, radius=r, spp=spp, seconds=seconds, relmse=P.relmse(img, ref)))
     front = _pareto(ours)
     print("\nRun time against error, Cornell box (relMSE to the reference)")
     print("| Mitsuba spp | s | relMSE | our fastest config at or below that relMSE | s | speedup |")
@@ -297,12 +295,7 @@ def _pareto(points: list[dict]) -> list[dict]:
 
 
 def _plot(mitsuba, ours, front, path: Path, size: int, ref_spp: int) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = pyplot().subplots(figsize=(7, 5))
     ax.loglog([m["seconds"] for m in mitsuba], [m["relmse"] for m in mitsuba], "o-", color="tab:blue",
               label="Mitsuba 3 path tracer (spp 1..1024)")
     for m in mitsuba:
@@ -318,6 +311,5 @@ def _plot(mitsuba, ours, front, path: Path, size: int, ref_spp: int) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
     print(f"wrote {path}")

@@ -11,6 +11,9 @@ import re
 import subprocess
 from pathlib import Path
 
+from ..errors import UserError
+from ..experiments import pyplot, save_figure, write_json
+
 PEERS = {  # kind -> (ours, peers)
     "spsc": ("OurSpsc", ["BoostSpsc", "RWQueue", "OurMpsc", "BoostQueue", "CQueue", "Locked"]),
     "mpsc": ("OurMpsc", ["BoostQueue", "CQueue", "Locked"]),
@@ -25,7 +28,6 @@ def add_arguments(p) -> None:
 
 
 def _find_binary(explicit: str | None) -> Path:
-    from ..cli import UserError
     if explicit:
         path = Path(explicit)
     else:
@@ -81,10 +83,7 @@ def summarise(rows: list[dict]) -> list[str]:
 
 
 def _plot(rows: list[dict], path: Path) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    fig, axes = pyplot().subplots(1, 2, figsize=(11, 4))
     for ax, producers in zip(axes, (1, 2)):
         sel = [r for r in rows if r["bench"] in ("Throughput", "ThroughputBatch") and r["producers"] == producers]
         names = [r["queue"] + (" batch" if r["bench"] == "ThroughputBatch" else "") for r in sel]
@@ -94,12 +93,10 @@ def _plot(rows: list[dict], path: Path) -> None:
         ax.set_xlabel("M items / s (log)")
         ax.set_title(f"{producers} producer(s), 1 consumer")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def run(args) -> int:
-    from ..cli import UserError
     binary = _find_binary(args.binary)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -109,7 +106,7 @@ def run(args) -> int:
         raise UserError(f"{binary} failed: {proc.stderr.strip()[-500:]}")
     report = json.loads(proc.stdout)
     rows = parse(report)
-    (out / "queues.json").write_text(json.dumps({"context": report.get("context"), "rows": rows}, indent=2))
+    write_json(out / "queues.json", {"context": report.get("context"), "rows": rows}, indent=2)
     _plot(rows, out / "queues.png")
     print("\n".join(summarise(rows)))
     print(f"wrote {out / 'queues.json'} and {out / 'queues.png'}")

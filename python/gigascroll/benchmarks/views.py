@@ -8,16 +8,21 @@ Times are medians over frames of the same run; ratios compare methods within the
 
 from __future__ import annotations
 
-import json
 import math
 import statistics
+import tempfile
 import time
 from pathlib import Path
 
 from tqdm import tqdm
 
 from .. import views as v
-from ..cli import UserError
+from ..experiments import (painting_sweep, pattern_image, pyplot, save_figure, spec_of,
+                           time_processing, width_for_tiles, write_json)
+from .._core import hardware_threads
+from ..errors import UserError
+from ..frame_loop import STAGES, FrameLoop
+from ..pack import build_pack
 
 PAINTING_COUNTS = (8, 16, 24, 32, 40)
 PARTS = ("paintings", "tiles", "latency", "losses", "loop", "pace")
@@ -37,60 +42,6 @@ def add_arguments(parser) -> None:
                         help="run only these parts (repeatable; default: all)")
 
 
-def time_processing(configs, threads, repeats) -> list[dict]:
-    """Per configuration (exhibition, feedback frames) and method: milliseconds per frame,
-    wall time and CPU time of the whole process (all worker threads; a machine shared with
-    other jobs distorts it much less). Each method runs all frames of a configuration in one
-    block, as a frame loop running that method alone would (interleaving methods frame by
-    frame let the flag array's megabytes evict the other methods' tables from the cache,
-    charging them for the flag array's size); the whole sweep runs `repeats` times
-    round-robin and we keep the median over frames of the least disturbed repeat. cpu-async
-    counts submit plus waiting for its result: its work, not its latency."""
-    state = []
-    for ex, frames_buffers in configs:
-        resident = ex.resident_set()
-        procs = {m: v.make_processor(m, ex.tiles, threads) for m in v.PROCESSING_METHODS}
-        state.append((resident, procs, frames_buffers))
-    best = [{m: None for m in v.PROCESSING_METHODS} for _ in configs]
-    frame_no = 0
-    for _ in tqdm(range(repeats), desc="round-robin repeats", unit="repeat"):
-        for ci, (resident, procs, frames_buffers) in enumerate(state):
-            wall = {m: [] for m in procs}
-            cpu = {m: [] for m in procs}
-            requests = []  # distinct requests per frame, from the exact method
-            for m, proc in procs.items():
-                for f, bufs in enumerate(frames_buffers):
-                    c0, t0 = time.process_time(), time.perf_counter()
-                    r = v.run_processor(proc, bufs, resident, frame_no + f)
-                    wall[m].append(time.perf_counter() - t0)
-                    cpu[m].append(time.process_time() - c0)
-                    if m == "basic":
-                        requests.append(len(r["requests"]))
-            frame_no += len(frames_buffers)
-            for m in procs:
-                cur = {"ms": 1e3 * statistics.median(wall[m]),
-                       "cpu_ms": 1e3 * statistics.median(cpu[m]),
-                       "requests": statistics.mean(requests)}
-                if best[ci][m] is None or cur["cpu_ms"] < best[ci][m]["cpu_ms"]:
-                    best[ci][m] = cur
-    return best
-
-
-def painting_sweep(counts, frames: int, repeats: int, threads: int = 0) -> list[dict]:
-    """Request processing alone on the full-size room (the Table 4 paintings at full
-    resolution: 0.57-2.8 million tiles for 8-40 paintings): feedback buffers along each
-    route, every method timed on the same buffers. Also used by `gigascroll scenario multi`."""
-    configs = []
-    for n in tqdm(counts, desc="feedback, paintings", unit="config"):
-        ex = v.multi_exhibition(n)
-        path = v.multi_route(n, duration=frames / v.FPS)
-        configs.append((ex, [v.feedback_buffers(ex, path, f, threads=threads)
-                             for f in range(len(path))]))
-    res = time_processing(configs, threads, repeats)
-    return [{"paintings": n, "tiles": sum(t.total_tiles for t in ex.tiles), **r}
-            for n, (ex, _), r in zip(counts, configs, res)]
-
-
 def _painting_sweep(args, frames) -> list[dict]:
     return painting_sweep(PAINTING_COUNTS, frames, args.repeats, args.threads)
 
@@ -101,11 +52,8 @@ TILE_TOTALS = tuple(4096 * k for k in range(1, 6)) + (1 << 18, 1 << 20, 1 << 22)
 
 def _painting_with_tiles(total: int) -> v.PaintingSpec:
     """The scroll cropped or extended in width (same texel size) to about `total` tiles."""
-    lo, hi = 120, 65535 * 120
-    while lo < hi:  # smallest width whose pyramid has >= total tiles
-        mid = (lo + hi) // 2
-        lo, hi = (mid + 1, hi) if v.PaintingTiles(mid, 6083).total_tiles < total else (lo, mid)
-    return v.PaintingSpec(f"crop{total}", lo, 6083, 12.0 * lo / 152089, 0.5)
+    width = width_for_tiles(total, 6083)
+    return v.PaintingSpec(f"crop{total}", width, 6083, 12.0 * width / 152089, 0.5)
 
 
 def _tile_sweep(args, frames) -> list[dict]:
@@ -197,22 +145,18 @@ def _loop(args, quick) -> list[dict]:
     at the scroll's texel size, eyes at 40 cm plus the magnifier, 1 m/s then a stop, paced at
     90 Hz with the lock-free loader thread; Table 2's methods with direct loading, and
     mip-by-mip with the hash."""
-    import tempfile
-
-    from .. import pack as pk
-    from ..scenarios.common import pattern_image, spec_of
     width, height = (12000, 1600) if quick else (24000, 1600)
     rows = []
     with tempfile.TemporaryDirectory() as d:
-        pack = pk.build_pack([pattern_image(width, height)], Path(d) / "loop.pack")
+        pack = build_pack([pattern_image(width, height)], Path(d) / "loop.pack")
         ex = v.single_scroll(spec_of("loop", width, height))
         moving = 0.2 if quick else 1.2
         path = v.scroll_path(distance=0.40, speed=1.0, duration=moving, start_x=0.3,
                              exhibition=ex, stop_frames=10 if quick else 60)
         for method, strategy in (("cpu-async", "direct"), ("flag-array", "direct"),
                                  ("hash", "direct"), ("hash", "mip-by-mip")):
-            loop = v.FrameLoop(ex, pack, path, method=method, strategy=strategy,
-                               pace=True, threads=args.threads)
+            loop = FrameLoop(ex, pack, path, method=method, strategy=strategy,
+                             pace=True, threads=args.threads)
             s = loop.run(progress=True)
             rows.append({"method": method, "strategy": strategy, **s})
     return rows
@@ -225,18 +169,14 @@ def _pace(args, quick) -> dict:
     costs) and 24000 texels wide (the passes do not depend on the width), 1 s at 1 m/s then
     10 still frames. Wall time per frame includes the
     loop's own measurement (the exact request set for the hit rate)."""
-    import tempfile
-
-    from .. import pack as pk
-    from ..scenarios.common import pattern_image, spec_of
     width, height = (6000, 1600) if quick else (24000, 6083)
     with tempfile.TemporaryDirectory() as d:
-        pack = pk.build_pack([pattern_image(width, height)], Path(d) / "pace.pack")
+        pack = build_pack([pattern_image(width, height)], Path(d) / "pace.pack")
         ex = v.single_scroll(spec_of("pace", width, height))
         path = v.scroll_path(distance=0.40, speed=1.0, duration=0.1 if quick else 1.0,
                              start_x=0.3, exhibition=ex, stop_frames=10)
-        loop = v.FrameLoop(ex, pack, path, method="hash", strategy="direct", pace=False,
-                           threads=args.threads)
+        loop = FrameLoop(ex, pack, path, method="hash", strategy="direct", pace=False,
+                         threads=args.threads)
         s = loop.run(progress=True)
     r = loop.records
     wall = (r[-1]["time_s"] - r[0]["time_s"]) / (len(r) - 1)
@@ -245,10 +185,7 @@ def _pace(args, quick) -> dict:
 
 
 def _plot(rows, key, xlabel, path, log_x=False):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    fig, axes = pyplot().subplots(1, 2, figsize=(11, 4))
     xs = [r[key] for r in rows]
     for ax, field, label in ((axes[0], "cpu_ms", "CPU time per frame, all threads (ms)"),
                              (axes[1], "ms", "wall time per frame (ms)")):
@@ -262,19 +199,14 @@ def _plot(rows, key, xlabel, path, log_x=False):
         ax.grid(alpha=0.3)
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
 
 
 def _plot_pace(p: dict, path) -> None:
     """One stacked bar of the loop's mean stage times against the 90 Hz frame budget."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    stages = ("feedback", "processing", "issue", "drain", "update", "display")
-    fig, ax = plt.subplots(figsize=(9, 2.6))
+    fig, ax = pyplot().subplots(figsize=(9, 2.6))
     left = 0.0
-    for s in stages:
+    for s in STAGES:
         w = p[s + "_ms"]
         ax.barh([0], [w], left=left, label=f"{s} {w:.2f}")
         left += w
@@ -284,8 +216,7 @@ def _plot_pace(p: dict, path) -> None:
     ax.set_yticks([])
     ax.set_xlabel("ms per frame (mean), flat out: hash / direct, eyes + 512 x 512 magnifier")
     ax.legend(ncol=4, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.35))
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    plt.close(fig)
+    save_figure(fig, path, dpi=120, bbox_inches="tight")
 
 
 def _table(rows, key, label) -> str:
@@ -317,7 +248,7 @@ def run(args) -> int:
     if args.quick:
         args.repeats = 1
     results = {"frames": frames, "repeats": args.repeats,
-               "machine_threads": v._core.hardware_threads()}
+               "machine_threads": hardware_threads()}
     parts = set(args.part or PARTS)
     if "paintings" in parts:
         results["paintings"] = _painting_sweep(args, frames)
@@ -360,8 +291,7 @@ def run(args) -> int:
             print(f"| {r['method']} | {r['strategy']} | {r['fps']:.1f} | {r['frame_ms_std']:.2f} | "
                   f"{100 * r['hit_rate']:.1f}% | {r['latency_frames']:.2f} | "
                   f"{r['display_latency_frames']} | " +
-                  " | ".join(f"{r[s + '_ms']:.2f}" for s in ("feedback", "processing", "issue",
-                                                              "drain", "update", "display")) + " |")
+                  " | ".join(f"{r[s + '_ms']:.2f}" for s in STAGES) + " |")
     if "pace" in parts:
         p = results["pace"] = _pace(args, args.quick)
         _plot_pace(p, out / "views_pace.png")
@@ -369,13 +299,10 @@ def run(args) -> int:
               f"{p['frames']} frames)\n")
         print("| feedback | processing | issue | drain | update | display | stages | wall | fps |")
         print("|---|---|---|---|---|---|---|---|---|")
-        print(" | ".join([""] + [f"{p[s + '_ms']:.2f}" for s in ("feedback", "processing", "issue",
-                                                                 "drain", "update", "display")] +
+        print(" | ".join([""] + [f"{p[s + '_ms']:.2f}" for s in STAGES] +
                          [f"{p['stage_ms_sum']:.2f}", f"{p['wall_ms']:.2f}",
                           f"{p['wall_fps']:.1f}", ""]).strip())
     name = "views.json" if parts == set(PARTS) else f"views_{'_'.join(sorted(parts))}.json"
-    tmp = out / (name + ".tmp")
-    tmp.write_text(json.dumps(results, indent=1))
-    tmp.replace(out / name)
+    write_json(out / name, results, indent=1)
     print(f"\nwrote {out / name} and the plots of the sweeps run")
     return 0

@@ -1,11 +1,9 @@
 """`gigascroll bench WHAT`: scenario benchmarks. Each lives in gigascroll.benchmarks.<what>
-with `add_arguments(parser)` and `run(args) -> int`; missing ones are simply not offered."""
+with `add_arguments(parser)` and `run(args) -> int`."""
 
 from __future__ import annotations
 
-import importlib
-
-# what -> one-line description
+# what -> one-line description, in the order `gigascroll bench --help` lists them
 BENCHMARKS = {
     "pack": "tile-pack build throughput and memory against libvips dzsave",
     "queues": "lock-free queues against peer queues and a mutex queue",
@@ -16,16 +14,15 @@ BENCHMARKS = {
 
 
 def register(sub) -> None:
+    from ..benchmarks import loader, pack, photon, queues, views
+
+    modules = {"pack": pack, "queues": queues, "loader": loader, "views": views,
+               "photon": photon}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True
     for what, description in BENCHMARKS.items():
-        try:
-            module = importlib.import_module(f"gigascroll.benchmarks.{what}")
-        except ModuleNotFoundError as e:
-            if e.name == f"gigascroll.benchmarks.{what}":
-                continue
-            raise
+        module = modules[what]
         p = whats.add_parser(what, help=description, description=description)
         module.add_arguments(p)
         p.set_defaults(func=module.run)

@@ -90,7 +90,7 @@ def stream_view(pack, png: Path, frames_max: int = 200, per_frame: int = 16) -> 
             new = [k for k in missing if k not in in_flight][:max(0, per_frame - len(pending))]
             loader.submit(new)
             pending += new
-            vt.insert_loaded(loader)
+            vt.drain(loader)
             rgb, answered = vt.sample(0, u, v, lod=level)
             sharp = int(answered.max()) == level  # every pixel answered at the level asked for
             if frame in (0, 2) or sharp:
@@ -123,15 +123,14 @@ def render_room(png: Path) -> None:
 def write_preview(pack, png: Path, painting: int = 0) -> None:
     """A matplotlib figure: the painting at a coarse level, the same region at three levels,
     and single tiles with their borders outlined."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
+    from ..experiments import pyplot, save_figure
     from ..pack import read_level
 
+    plt = pyplot()
     p = pack.paintings[painting]
-    T, b, P = pack.tile_size, pack.border, pack.payload
+    b, P = pack.border, pack.payload
     # Coarse overview: the finest level at most 2400 texels wide.
     overview_level = next(l for l, (w, _) in enumerate(p.level_sizes) if w <= 2400)
     overview = read_level(pack, painting, overview_level)
@@ -173,5 +172,4 @@ def write_preview(pack, png: Path, painting: int = 0) -> None:
         ax.imshow(tile, interpolation="nearest")
         ax.set_title(f"level {level}, right-edge tile ({nx - 1}, {ty})")
         ax.axis("off")
-    fig.savefig(png, dpi=90)
-    plt.close(fig)
+    save_figure(fig, png, dpi=90)

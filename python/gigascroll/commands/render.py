@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..cli import UserError
+from ..errors import UserError
 
 FORMATS = (".exr", ".hdr", ".png", ".jpg", ".jpeg", ".tif", ".tiff")
 

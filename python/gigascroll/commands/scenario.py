@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..errors import UserError
+
 
 def register(sub) -> None:
     from ..scenarios import SCENARIOS
@@ -32,7 +34,6 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..cli import UserError
     from ..scenarios import SCENARIOS, Options, run_scenario
     if args.name not in SCENARIOS:
         raise UserError(f"unknown scenario {args.name!r}; choose from {', '.join(SCENARIOS)}")

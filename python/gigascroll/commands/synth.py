@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..cli import UserError
+from ..errors import UserError
 
 # seed 000 Table 4: the test paintings' sizes.
 TABLE4 = [(152089, 6083), (196301, 5197), (159010, 4339), (102680, 5229), (109321, 7183),

@@ -5,8 +5,6 @@ invariants); full runs are the benchmarks recorded in bench/RESULTS.md."""
 
 from __future__ import annotations
 
-import importlib
-
 from .common import Options
 
 __all__ = ["SCENARIOS", "Options", "run_scenario"]
@@ -17,6 +15,7 @@ SCENARIOS = ("single", "multi", "sweep", "latency")
 def run_scenario(name: str, opts: Options | None = None, **kw) -> dict:
     if name not in SCENARIOS:
         raise ValueError(f"unknown scenario {name!r}; choose from {', '.join(SCENARIOS)}")
+    from . import latency, multi, single, sweep
     opts = opts or Options(**kw)
     opts.out.mkdir(parents=True, exist_ok=True)
-    return importlib.import_module(f"{__name__}.{name}").run(opts)
+    return {"single": single, "multi": multi, "sweep": sweep, "latency": latency}[name].run(opts)

@@ -1,19 +1,26 @@
-"""What every scenario shares: test paintings and their packs (built once into a cache
-directory), loop runs, and the report (results JSON, matplotlib plots, Markdown, PNG frames)."""
+"""What every scenario shares beyond gigascroll.experiments: options, the test packs and
+camera paths a run uses (its own, built once into the cache directory, or the user's), loop
+runs and their rows and checks, and the report (results JSON, matplotlib plots, Markdown,
+PNG frames)."""
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .. import views as v
+from ..experiments import (cached_pack, pattern_image, pyplot, save_figure, scroll_pack, spec_of,
+                           write_json)
+from ..frame_loop import STAGES, FrameLoop
+from ..pack import TilePack
+from ..views.baselines import LodMapping
 
-TEXEL_M = v.SCROLL.width_m / v.SCROLL.width  # every painting at the scroll's 78.9 um/texel
+# The scaled-down painting of the quick single-scroll runs: 0.95 m x 12.6 cm at the scroll's
+# texel size.
+QUICK_SIZE = (12000, 1600)
 
 
 @dataclass
@@ -43,57 +50,27 @@ class Options:
         self.cache = Path(self.cache)
 
 
-def pattern_image(width: int, height: int, seed: int = 0) -> np.ndarray:
-    """A cheap synthetic painting whose every tile differs (the loop measures loading and
-    sampling, not the picture)."""
-    yy = np.arange(height, dtype=np.int32)[:, None]
-    xx = np.arange(width, dtype=np.int32)[None, :]
-    img = np.empty((height, width, 3), np.uint8)
-    img[..., 0] = (xx * 7 + yy + seed * 31) % 256
-    img[..., 1] = (xx // 3 + yy * 5) % 256
-    img[..., 2] = ((xx >> 2) ^ (yy >> 2)) % 256
-    return img
-
-
-def cached_pack(opts: Options, key: str, images):
-    """Opens pack `key` from the cache, or builds it from `images()` (a callable returning a
-    list of arrays or image paths). A build goes into a temporary directory renamed at the
-    end, so an interrupted run leaves no pack that looks complete."""
-    from .. import pack as pk
-    path = opts.cache / f"{key}.pack"
-    if path.exists():
-        try:
-            return pk.TilePack(str(path))
-        except (OSError, ValueError) as e:
-            raise OSError(f"{path}: cached pack is unreadable ({e}); delete it to rebuild") \
-                from None
-    opts.cache.mkdir(parents=True, exist_ok=True)
-    return pk.build_pack(images(), path, progress=not opts.quick)
-
-
-def scroll_pack(opts: Options):
-    """The full 152089 x 6083 built-in ink landscape (seed 000's scroll), synthesized and
-    packed on first use (several minutes), then read from the cache."""
-    from .. import pack as pk
-    w, h = v.SCROLL.width, v.SCROLL.height
-
-    def images():
-        tif = opts.cache / f"ink-{w}x{h}-s0.tif"
-        if not tif.exists():
-            pk.synth_painting(tif, w, h, seed=0, progress=True)
-        return [str(tif)]
-    return cached_pack(opts, f"ink-{w}x{h}-s0-raw", images)
-
-
-def spec_of(name: str, width: int, height: int) -> v.PaintingSpec:
-    return v.PaintingSpec(name, width, height, width * TEXEL_M, height * TEXEL_M)
-
-
-def open_user_pack(opts: Options):
-    from .. import pack as pk
+def open_user_pack(opts: Options) -> TilePack:
     if not Path(opts.pack).exists():
         raise OSError(f"{opts.pack}: no such pack")
-    return pk.TilePack(str(opts.pack))
+    return TilePack(str(opts.pack))
+
+
+def pattern_pack(opts: Options, width: int, height: int) -> TilePack:
+    """The user's pack, or a cached pack of one pattern painting of width x height."""
+    if opts.pack:
+        return open_user_pack(opts)
+    return cached_pack(opts.cache, f"pattern-{width}x{height}-raw",
+                       lambda: [pattern_image(width, height)], progress=not opts.quick)
+
+
+def scroll_room(opts: Options) -> tuple[v.Exhibition, TilePack]:
+    """The single-scroll room and its pack: the quick pattern painting (QUICK_SIZE) or, in a
+    full run, the full scroll (synthesized and packed on first use); --pack replaces it."""
+    if opts.quick:
+        return v.single_scroll(spec_of("pattern", *QUICK_SIZE)), pattern_pack(opts, *QUICK_SIZE)
+    pack = open_user_pack(opts) if opts.pack else scroll_pack(opts.cache)
+    return v.single_scroll(), pack
 
 
 def user_path(opts: Options, default: v.CameraPath, exhibition: v.Exhibition) -> v.CameraPath:
@@ -111,6 +88,41 @@ def check_methods(opts: Options, allowed: tuple[str, ...], default: tuple[str, .
         raise ValueError(f"unknown method {bad[0]!r} for this scenario; choose from "
                          f"{', '.join(allowed)}")
     return tuple(methods)
+
+
+def frame_loop(opts: Options, ex: v.Exhibition, pack, path: v.CameraPath,
+               per_frame: int | None = None, **kw) -> FrameLoop:
+    """A frame loop with the run's threshold and threads. Quick runs wait for each frame's
+    loads (deterministic invariants); full runs are paced at 90 Hz with the loader draining
+    whatever is ready."""
+    return FrameLoop(ex, pack, path, per_frame=opts.threshold if per_frame is None else per_frame,
+                     pace=opts.pace and not opts.quick, wait_loads=opts.quick,
+                     threads=opts.threads, **kw)
+
+
+def lod_slots(ex: v.Exhibition, path: v.CameraPath, frame: int = 0) -> tuple[int, int]:
+    """Cache slots that hold the whole levels LOD mapping picks (its memory)."""
+    lod = LodMapping(ex)
+    n = sum(pl[1].tile_count(lv) for pl, lv in zip(lod.paintings, lod.chosen_levels(path, frame)))
+    n += sum(t.levels for t in ex.tiles) + 64
+    side = max(30, math.isqrt(n) + 1)
+    return side, side
+
+
+def methods_agree(ex: v.Exhibition, path: v.CameraPath, frames=(0, -1), threads: int = 0) -> bool:
+    """The four processing methods give the same three sets on the same buffers (the
+    reference residency with the coarsest tiles resident)."""
+    resident = ex.resident_set()
+    for f in frames:
+        f = f % len(path)
+        bufs = v.feedback_buffers(ex, path, f, threads=threads)
+        sets = [v.run_processor(v.make_processor(m, ex.tiles, threads), bufs, resident, f)
+                for m in v.PROCESSING_METHODS]
+        for s in sets[1:]:
+            for k in ("requests", "responses", "commands"):
+                if not np.array_equal(np.sort(s[k]), np.sort(sets[0][k])):
+                    return False
+    return True
 
 
 def loop_row(loop, summary: dict, **extra) -> dict:
@@ -171,10 +183,29 @@ class Report:
         self.lines.append("")
 
     def figure(self, fig, file: str, caption: str) -> None:
-        fig.savefig(self.out / file, dpi=110, bbox_inches="tight")
-        import matplotlib.pyplot as plt
-        plt.close(fig)
+        save_figure(fig, self.out / file, dpi=110, bbox_inches="tight")
         self.lines.append(f"![{caption}]({file})\n")
+
+    def hit_rate_figure(self, rows: list[dict], labels: list[str], file: str,
+                        caption: str) -> None:
+        """The hit rate per frame of each row's loop."""
+        fig, ax = pyplot().subplots(figsize=(7, 3.2))
+        for r, label in zip(rows, labels):
+            ax.plot([f["hit_rate"] for f in r["records"]], label=label)
+        ax.set_xlabel("frame")
+        ax.set_ylabel("hit rate")
+        ax.legend(fontsize=7)
+        self.figure(fig, file, caption)
+
+    def stage_table(self, header: str, rows: list[dict], labels: list) -> None:
+        """Each row's mean stage times per frame (ms) and their total."""
+        self.table([header, *STAGES, "total"],
+                   [[label, *[r[f"{s}_ms"] for s in STAGES], sum(r[f"{s}_ms"] for s in STAGES)]
+                    for r, label in zip(rows, labels)])
+
+    def checks(self, checks: dict) -> None:
+        self.text("## Invariants\n")
+        self.table(["check", "holds"], [[k, ok] for k, ok in checks.items()])
 
     def image(self, rgb: np.ndarray, file: str, caption: str) -> None:
         save_png(self.out / file, rgb)
@@ -183,9 +214,7 @@ class Report:
     def write(self) -> Path:
         self.out.mkdir(parents=True, exist_ok=True)
         # Results first, report last: a report on disk means the run completed.
-        tmp = self.out / f"{self.name}.json.tmp"
-        tmp.write_text(json.dumps(self.results, indent=1))
-        os.replace(tmp, self.out / f"{self.name}.json")
+        write_json(self.out / f"{self.name}.json", self.results, indent=1)
         md = self.out / f"{self.name}.md"
         md.write_text(f"# {self.title}\n\n" + "\n".join(self.lines) + "\n")
         return md

@@ -6,9 +6,8 @@ mapping, all with the same loader."""
 from __future__ import annotations
 
 from .. import views as v
+from ..views.baselines import LodMapping
 from . import common as c
-from .single import QUICK_SIZE
-from .sweep import lod_slots
 
 METHODS = ("hash", "cpu-async", "ma-vt", "lod-mapping", "flag-array", "basic")
 
@@ -25,19 +24,11 @@ def moving_then_stop(ex, start_x: float, duration: float, warm: int, stop: int) 
 
 def run(opts: c.Options) -> dict:
     from tqdm import tqdm
-
-    from ..baselines import LodMapping
     methods = c.check_methods(opts, METHODS, METHODS[:4])
+    ex, pack = c.scroll_room(opts)
     if opts.quick:
-        spec = c.spec_of("pattern", *QUICK_SIZE)
-        ex = v.single_scroll(spec)
-        pack = c.open_user_pack(opts) if opts.pack else c.cached_pack(
-            opts, f"pattern-{QUICK_SIZE[0]}x{QUICK_SIZE[1]}-raw",
-            lambda: [c.pattern_image(*QUICK_SIZE)])
         path = moving_then_stop(ex, 0.3, 0.1, warm=20, stop=10)
     else:
-        ex = v.single_scroll()
-        pack = c.open_user_pack(opts) if opts.pack else c.scroll_pack(opts)
         path = moving_then_stop(ex, 1.0, opts.duration or 2.0, warm=60, stop=90)
     path = c.user_path(opts, path, ex)
     rep = c.Report("latency", opts.out, "Scenario latency: display latency after a stop "
@@ -46,11 +37,10 @@ def run(opts: c.Options) -> dict:
     res.update({"quick": opts.quick, "frames": len(path), "rows": []})
     for m in tqdm(methods, desc="latency: methods", unit="method"):
         lod = m == "lod-mapping"
-        loop = v.FrameLoop(ex, pack, path, method=m, strategy="direct",
-                           per_frame=1 << 20 if lod else opts.threshold,
-                           slots=lod_slots(ex, path, len(path) - 1) if lod else (30, 30),
-                           pace=opts.pace and not opts.quick, wait_loads=opts.quick,
-                           magnifier=False, threads=opts.threads)
+        loop = c.frame_loop(opts, ex, pack, path, method=m, strategy="direct",
+                            per_frame=1 << 20 if lod else None,
+                            slots=c.lod_slots(ex, path, len(path) - 1) if lod else (30, 30),
+                            magnifier=False)
         row = c.loop_row(loop, loop.run(), method=m)
         if lod:
             row["lod_memory_mb"] = LodMapping(ex).memory_bytes(
@@ -78,7 +68,6 @@ def run(opts: c.Options) -> dict:
 
 
 def _report(rep, res):
-    import matplotlib.pyplot as plt
     rep.text(f"{'Quick' if res['quick'] else 'Full'} run, {res['frames']} frames.\n")
     rep.table(["method", "display latency (frames)", "(ms at 90 Hz)", "fps (paced)",
                "fps from frame time", "hit rate", "LOD memory MB"],
@@ -87,12 +76,6 @@ def _report(rep, res):
                 else 1e3 * r["display_latency_frames"] / 90, r["fps"], r["fps_from_frame_time"],
                 f"{100 * r['hit_rate']:.1f}%", r.get("lod_memory_mb")] for r in res["rows"]])
     rep.text("Seed 000 §5.5.2: ours 3-4 frames (33-44 ms), Unreal SVT ~30 frames (~500 ms).\n")
-    fig, ax = plt.subplots(figsize=(7, 3.2))
-    for r in res["rows"]:
-        ax.plot([x["hit_rate"] for x in r["records"]], label=r["method"])
-    ax.set_xlabel("frame")
-    ax.set_ylabel("hit rate")
-    ax.legend(fontsize=7)
-    rep.figure(fig, "latency_hit_rate.png", "hit rate per frame; the camera stops near the end")
-    rep.text("## Invariants\n")
-    rep.table(["check", "holds"], [[k, x] for k, x in res["checks"].items()])
+    rep.hit_rate_figure(res["rows"], [r["method"] for r in res["rows"]], "latency_hit_rate.png",
+                        "hit rate per frame; the camera stops near the end")
+    rep.checks(res["checks"])

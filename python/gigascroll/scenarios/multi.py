@@ -11,9 +11,8 @@ full-size tile totals is measured separately by `gigascroll bench views`."""
 from __future__ import annotations
 
 from .. import views as v
-from ..frame_loop import STAGES
+from ..experiments import cached_pack, painting_sweep, pattern_image, pyplot
 from . import common as c
-from .single import methods_agree
 
 METHODS = ("flag-array", "hash", "basic", "cpu-async")
 
@@ -33,10 +32,10 @@ def run(opts: c.Options) -> dict:
     if opts.pack:
         pack = c.open_user_pack(opts)
     else:
-        pack = c.cached_pack(
-            opts, f"table4-1_{scale}-x{copies}-raw",
-            lambda: [c.pattern_image(s.width, s.height, seed=i) for i, s in enumerate(specs)]
-            * copies)
+        pack = cached_pack(
+            opts.cache, f"table4-1_{scale}-x{copies}-raw",
+            lambda: [pattern_image(s.width, s.height, seed=i) for i, s in enumerate(specs)]
+            * copies, progress=not opts.quick)
     if len(pack.paintings) < max(counts):
         raise ValueError(f"the pack has {len(pack.paintings)} paintings, the room needs "
                          f"{max(counts)}: a painting is missing from the pack")
@@ -49,18 +48,15 @@ def run(opts: c.Options) -> dict:
         ex = v.multi_exhibition(n, specs)
         path = c.user_path(opts, v.multi_route(n, duration=duration, specs=specs), ex)
         if n == counts[0]:
-            checks["methods_agree"] = methods_agree(ex, path, threads=opts.threads)
+            checks["methods_agree"] = c.methods_agree(ex, path, threads=opts.threads)
         for m in methods:
-            loop = v.FrameLoop(ex, pack, path, method=m, strategy="direct",
-                               per_frame=opts.threshold, slots=(45, 45),
-                               pace=opts.pace and not opts.quick, wait_loads=opts.quick,
-                               threads=opts.threads)
+            loop = c.frame_loop(opts, ex, pack, path, method=m, strategy="direct",
+                                slots=(45, 45))
             res["rows"].append(c.loop_row(loop, loop.run(), paintings=n, method=m,
                                           tiles=sum(t.total_tiles for t in ex.tiles)))
     checks.update(c.loading_checks(res["rows"], opts.threshold, opts.quick))
     # Request processing alone at the full-size tile totals, where a flag array's length
     # shows (the scaled room above has too few tiles for that).
-    from ..benchmarks.views import painting_sweep
     res["full_size"] = painting_sweep(counts, frames=5 if opts.quick else 45,
                                       repeats=1 if opts.quick else 3, threads=opts.threads)
     if not opts.quick:
@@ -73,11 +69,10 @@ def run(opts: c.Options) -> dict:
 
 
 def _report(rep, res, methods):
-    import matplotlib.pyplot as plt
     rep.text(f"{'Quick' if res['quick'] else 'Full'} run: paintings at 1/{res['scale']} "
              f"resolution per axis, counts {res['counts']}.\n")
     rep.text("## Fig. 11: frame rate against the painting count\n")
-    fig, ax = plt.subplots(figsize=(6, 3.5))
+    fig, ax = pyplot().subplots(figsize=(6, 3.5))
     for m in methods:
         rows = [r for r in res["rows"] if r["method"] == m]
         ax.plot([r["paintings"] for r in rows], [r["fps_from_frame_time"] for r in rows], "o-",
@@ -101,11 +96,8 @@ def _report(rep, res, methods):
                for r in res["full_size"]])
     rep.text("## Table 5: per-stage times (ms per frame, hash)\n")
     rows = [r for r in res["rows"] if r["method"] == "hash"] or res["rows"]
-    rep.table(["paintings", *STAGES, "total"],
-              [[r["paintings"], *[r[f"{s}_ms"] for s in STAGES],
-                sum(r[f"{s}_ms"] for s in STAGES)] for r in rows])
+    rep.stage_table("paintings", rows, [r["paintings"] for r in rows])
     rep.text("Seed 000 Table 5 (8..40 paintings): total 2.79..4.41 ms; request computation "
              "0.89..1.21; command issue 0.12; physical update 0.14..0.47; page-table update "
              "1.17..1.89.\n")
-    rep.text("## Invariants\n")
-    rep.table(["check", "holds"], [[k, x] for k, x in res["checks"].items()])
+    rep.checks(res["checks"])

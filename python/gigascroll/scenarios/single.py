@@ -11,32 +11,17 @@ from .. import views as v
 from . import common as c
 
 METHODS = ("cpu-async", "flag-array", "hash", "basic")
-QUICK_SIZE = (12000, 1600)  # 0.95 m x 12.6 cm at the scroll's texel size
 
 
 def setup(opts: c.Options):
+    ex, pack = c.scroll_room(opts)
     if opts.quick:
-        spec = c.spec_of("pattern", *QUICK_SIZE)
-        ex = v.single_scroll(spec)
-        pack = (c.open_user_pack(opts) if opts.pack else
-                c.cached_pack(opts, f"pattern-{QUICK_SIZE[0]}x{QUICK_SIZE[1]}-raw",
-                              lambda: [c.pattern_image(*QUICK_SIZE)]))
         path = v.scroll_path(distance=0.40, speed=1.0, duration=0.12, start_x=0.3,
                              exhibition=ex, stop_frames=6)
     else:
-        ex = v.single_scroll()
-        pack = c.open_user_pack(opts) if opts.pack else c.scroll_pack(opts)
         path = v.scroll_path(distance=0.40, speed=1.0, duration=opts.duration or 10.0,
                              start_x=1.0, exhibition=ex, stop_frames=60)
     return ex, pack, c.user_path(opts, path, ex)
-
-
-def _loop(opts, ex, pack, path, **kw):
-    # Quick runs wait for each frame's loads (deterministic invariants); full runs are paced
-    # at 90 Hz with the loader draining whatever is ready.
-    return v.FrameLoop(ex, pack, path, per_frame=opts.threshold,
-                       pace=opts.pace and not opts.quick, wait_loads=opts.quick,
-                       threads=opts.threads, **kw)
 
 
 def salt_losses(ex, path, frames: int, threads: int = 0) -> dict:
@@ -58,22 +43,6 @@ def salt_losses(ex, path, frames: int, threads: int = 0) -> dict:
     return {"frames": n, "lost": int(lost_total), "lost_twice_in_a_row": int(repeats)}
 
 
-def methods_agree(ex, path, frames=(0, -1), threads: int = 0) -> bool:
-    """The four processing methods give the same three sets on the same buffers (the
-    reference residency with the coarsest tiles resident)."""
-    resident = ex.resident_set()
-    for f in frames:
-        f = f % len(path)
-        bufs = v.feedback_buffers(ex, path, f, threads=threads)
-        sets = [v.run_processor(v.make_processor(m, ex.tiles, threads), bufs, resident, f)
-                for m in v.PROCESSING_METHODS]
-        for s in sets[1:]:
-            for k in ("requests", "responses", "commands"):
-                if not np.array_equal(np.sort(s[k]), np.sort(sets[0][k])):
-                    return False
-    return True
-
-
 def run(opts: c.Options) -> dict:
     from tqdm import tqdm
     methods = c.check_methods(opts, METHODS, METHODS[:3])
@@ -87,7 +56,7 @@ def run(opts: c.Options) -> dict:
     res["table2"] = []
     runs = {}
     for m in tqdm(methods, desc="single: Table 2", unit="method"):
-        loop = _loop(opts, ex, pack, path, method=m, strategy="direct")
+        loop = c.frame_loop(opts, ex, pack, path, method=m, strategy="direct")
         runs[m] = loop
         res["table2"].append(c.loop_row(loop, loop.run(), method=m, strategy="direct"))
     res["table3"] = []
@@ -96,14 +65,14 @@ def run(opts: c.Options) -> dict:
             row = next(r for r in res["table2"] if r["method"] == "hash")
             res["table3"].append(row)
             continue
-        loop = _loop(opts, ex, pack, path, method="hash", strategy=strat)
+        loop = c.frame_loop(opts, ex, pack, path, method="hash", strategy=strat)
         res["table3"].append(c.loop_row(loop, loop.run(), method="hash", strategy=strat))
 
     # The magnifier with and without its own requests.
     shown = {}
     for with_req in (True, False):
-        loop = _loop(opts, ex, pack, path, method="hash", strategy="direct",
-                     magnifier_requests=with_req)
+        loop = c.frame_loop(opts, ex, pack, path, method="hash", strategy="direct",
+                            magnifier_requests=with_req)
         loop.run()
         shown[with_req] = (loop.last_images, loop.records[-1]["view_hit_rates"])
     res["magnifier"] = {"hit_rate_with_requests": shown[True][1][-1],
@@ -114,7 +83,7 @@ def run(opts: c.Options) -> dict:
                               threads=opts.threads)
 
     # Invariants (tests assert them on the quick run).
-    checks = {"methods_agree": methods_agree(ex, path, threads=opts.threads)}
+    checks = {"methods_agree": c.methods_agree(ex, path, threads=opts.threads)}
     sync = [r for r in res["table2"] if r["method"] in ("basic", "flag-array", "hash")]
     checks["sync_latency_zero"] = all(r["latency_frames"] == 0 for r in sync)
     checks.update(c.loading_checks(res["table2"] + res["table3"][1:], opts.threshold,
@@ -133,7 +102,6 @@ def run(opts: c.Options) -> dict:
 
 
 def _report(rep, res, shown):
-    import matplotlib.pyplot as plt
     rep.text(f"{'Quick (scaled-down) run' if res['quick'] else 'Full run'}: painting "
              f"{res['painting'][0]} x {res['painting'][1]}, {res['frames']} frames.\n")
     rep.text("## Table 2: request processing (direct loading, threshold as given)\n")
@@ -152,17 +120,10 @@ def _report(rep, res, shown):
     rep.text("Seed 000 Table 3: mip-by-mip 89.76 fps (std 0.65), 6 frames; direct 89.81 "
              "(0.72), 3 frames.\n")
     rep.text("## Per-stage times (ms, mean per frame)\n")
-    from ..frame_loop import STAGES
-    rep.table(["method / strategy", *STAGES, "total"],
-              [[f"{r['method']} / {r['strategy']}", *[r[f"{s}_ms"] for s in STAGES],
-                sum(r[f"{s}_ms"] for s in STAGES)] for r in res["table2"] + res["table3"][1:]])
-    fig, ax = plt.subplots(figsize=(7, 3.2))
-    for r in res["table2"] + res["table3"][1:]:
-        ax.plot([x["hit_rate"] for x in r["records"]], label=f"{r['method']}/{r['strategy']}")
-    ax.set_xlabel("frame")
-    ax.set_ylabel("hit rate")
-    ax.legend(fontsize=7)
-    rep.figure(fig, "single_hit_rate.png", "hit rate per frame")
+    rows = res["table2"] + res["table3"][1:]
+    rep.stage_table("method / strategy", rows, [f"{r['method']} / {r['strategy']}" for r in rows])
+    rep.hit_rate_figure(rows, [f"{r['method']}/{r['strategy']}" for r in rows],
+                        "single_hit_rate.png", "hit rate per frame")
     rep.text("## The magnifier with and without its requests (last frame)\n")
     m = res["magnifier"]
     rep.text(f"Magnifier hit rate with its requests {m['hit_rate_with_requests']:.3f}, "
@@ -177,5 +138,4 @@ def _report(rep, res, shown):
     s = res["salt"]
     rep.text(f"## Hash losses\n\nOver {s['frames']} frames the hash lost {s['lost']} requests "
              f"against the exact set; lost two frames in a row: {s['lost_twice_in_a_row']}.\n")
-    rep.text("## Invariants\n")
-    rep.table(["check", "holds"], [[k, x] for k, x in res["checks"].items()])
+    rep.checks(res["checks"])

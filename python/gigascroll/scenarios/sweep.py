@@ -5,10 +5,9 @@ mapping and ours (hash). Both eyes, no magnifier."""
 
 from __future__ import annotations
 
-import math
-
 from .. import views as v
-from ..baselines import LodMapping
+from ..experiments import pyplot, spec_of, width_for_tiles
+from ..views.baselines import LodMapping
 from . import common as c
 
 METHODS = ("basic", "ma-vt", "lod-mapping", "hash")
@@ -17,20 +16,8 @@ HEIGHT = 1600  # 12.6 cm: the pack bytes stay at what the tile totals need
 
 def painting_for(total: int, height: int = HEIGHT) -> v.PaintingSpec:
     """The narrowest painting of `height` whose pyramid has at least `total` tiles."""
-    lo, hi = 1, 65535 * 120
-    while lo < hi:
-        mid = (lo + hi) // 2
-        lo, hi = (mid + 1, hi) if v.PaintingTiles(mid, height).total_tiles < total else (lo, mid)
-    return c.spec_of(f"w{lo}", lo, height)
-
-
-def lod_slots(ex, path, frame=0) -> tuple[int, int]:
-    """Cache slots that hold the whole levels LOD mapping picks (its memory)."""
-    lod = LodMapping(ex)
-    n = sum(pl[1].tile_count(lv) for pl, lv in zip(lod.paintings, lod.chosen_levels(path, frame)))
-    n += sum(t.levels for t in ex.tiles) + 64
-    side = max(30, math.isqrt(n) + 1)
-    return side, side
+    width = width_for_tiles(total, height)
+    return spec_of(f"w{width}", width, height)
 
 
 def run(opts: c.Options) -> dict:
@@ -45,19 +32,17 @@ def run(opts: c.Options) -> dict:
     for total in tqdm(totals, desc="sweep: tile totals", unit="config"):
         spec = painting_for(total)
         ex = v.single_scroll(spec)
-        pack = c.open_user_pack(opts) if opts.pack else c.cached_pack(
-            opts, f"pattern-{spec.width}x{spec.height}-raw",
-            lambda: [c.pattern_image(spec.width, spec.height)])
-        x = min(0.5, spec.width_m / 2)
+        pack = c.pattern_pack(opts, spec.width, spec.height)
+        start = min(0.5, spec.width_m / 2)
         path = c.user_path(opts, v.scroll_path(distance=0.25, speed=0.0, duration=frames / 90,
-                                               start_x=x, magnifier=False, exhibition=ex), ex)
+                                               start_x=start, magnifier=False, exhibition=ex),
+                           ex)
         for m in methods:
             lod = m == "lod-mapping"
-            loop = v.FrameLoop(ex, pack, path, method=m, strategy="direct",
-                               per_frame=1 << 20 if lod else opts.threshold,
-                               slots=lod_slots(ex, path) if lod else (30, 30),
-                               pace=opts.pace and not opts.quick, wait_loads=opts.quick,
-                               magnifier=False, threads=opts.threads)
+            loop = c.frame_loop(opts, ex, pack, path, method=m, strategy="direct",
+                                per_frame=1 << 20 if lod else None,
+                                slots=c.lod_slots(ex, path) if lod else (30, 30),
+                                magnifier=False)
             row = c.loop_row(loop, loop.run(), tiles=ex.tiles[0].total_tiles, method=m,
                              width=spec.width)
             if lod:
@@ -86,8 +71,7 @@ def _grows(rows) -> bool | None:
 
 
 def _report(rep, res, methods):
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
+    fig, axes = pyplot().subplots(1, 2, figsize=(10, 3.5))
     for m in methods:
         rows = [r for r in res["rows"] if r["method"] == m]
         axes[0].plot([r["tiles"] for r in rows], [r["fps_from_frame_time"] for r in rows], "o-",
@@ -108,5 +92,4 @@ def _report(rep, res, methods):
     rep.text("Seed 000 Fig. 12: ours and Unreal SVT stay at 90 fps, basic VT is slow, Ma VT "
              "falls as the tiles grow. For the baselines the rays of the display pass count "
              "as display, not feedback.\n")
-    rep.text("## Invariants\n")
-    rep.table(["check", "holds"], [[k, x] for k, x in res["checks"].items()])
+    rep.checks(res["checks"])

@@ -16,7 +16,7 @@
   plane the painting takes its coarsest level. Every tile of the chosen level is requested:
   `memory_bytes` reports what that costs.
 
-Both return request keys (views.pack_request layout) that go through the same request
+Both return request keys (views' pack_request layout) that go through the same request
 processing (the basic method as a lookup) and loading as the feedback-based methods.
 """
 
@@ -26,19 +26,19 @@ import math
 
 import numpy as np
 
-from . import views as v
+from .camera_paths import CameraPath
+from .exhibition import HEADSET, TEXEL_M, Exhibition, Headset
 
 __all__ = ["BASELINES", "MaVT", "LodMapping", "make_baseline", "LOD_BANDS_M"]
 
 BASELINES = ("ma-vt", "lod-mapping")
 # Seed 003's bands (scene units 100, 200, 300, 500), scaled so that LOD1 ends where a
 # head-on view of the scroll's texels stops needing level 0: 2 texels per display pixel.
-_LEVEL0_END_M = (2 * (v.SCROLL.width_m / v.SCROLL.width)
-                 / (2 * v.HEADSET.tan_half_x / v.HEADSET.width))
+_LEVEL0_END_M = 2 * TEXEL_M / (2 * HEADSET.tan_half_x / HEADSET.width)
 LOD_BANDS_M = tuple(_LEVEL0_END_M * b / 100 for b in (100, 200, 300, 500))
 
 
-def _placements(exhibition: v.Exhibition):
+def _placements(exhibition: Exhibition):
     for p, pl in enumerate(exhibition.placements):
         yield (p, exhibition.tiles[p], np.asarray(pl["origin"], float),
                np.asarray(pl["u_axis"], float), np.asarray(pl["v_axis"], float),
@@ -48,7 +48,7 @@ def _placements(exhibition: v.Exhibition):
 class MaVT:
     """Per-tile distance test over all level-0 tiles (Ma VT)."""
 
-    def __init__(self, exhibition: v.Exhibition, headset: v.Headset = v.HEADSET):
+    def __init__(self, exhibition: Exhibition, headset: Headset = HEADSET):
         self.headset = headset
         self.paintings = []
         for p, tiles, origin, u, vax, spec in _placements(exhibition):
@@ -65,7 +65,7 @@ class MaVT:
     def tile_total(self) -> int:
         return sum(len(t[2]) for t in self.paintings)
 
-    def requests(self, path: v.CameraPath, frame: int) -> np.ndarray:
+    def requests(self, path: CameraPath, frame: int) -> np.ndarray:
         pos, fwd, up = path.position[frame], path.forward[frame], path.up[frame]
         fwd = fwd / np.linalg.norm(fwd)
         right = np.cross(fwd, up)
@@ -102,7 +102,7 @@ class MaVT:
 class LodMapping:
     """Seed 003: one whole level per painting by viewer distance."""
 
-    def __init__(self, exhibition: v.Exhibition, bands=LOD_BANDS_M):
+    def __init__(self, exhibition: Exhibition, bands=LOD_BANDS_M):
         if any(not (b > 0 and math.isfinite(b)) for b in bands) or list(bands) != sorted(bands):
             raise ValueError("LOD distance bands must be positive, finite and increasing")
         self.bands = tuple(bands)
@@ -126,7 +126,7 @@ class LodMapping:
             out.append(float(np.linalg.norm(d - a * u - b * vax)))
         return out
 
-    def chosen_levels(self, path: v.CameraPath, frame: int) -> list[int]:
+    def chosen_levels(self, path: CameraPath, frame: int) -> list[int]:
         return [self.level_of(dist, pl[1].levels) for dist, pl in
                 zip(self.distances(path.position[frame]), self.paintings)]
 
@@ -140,12 +140,12 @@ class LodMapping:
                                    _morton(tx.ravel(), ty.ravel()))
         return self._level_keys[k]
 
-    def requests(self, path: v.CameraPath, frame: int) -> np.ndarray:
+    def requests(self, path: CameraPath, frame: int) -> np.ndarray:
         levels = self.chosen_levels(path, frame)
         return np.concatenate([self._keys(pl[0], pl[1], lvl)
                                for pl, lvl in zip(self.paintings, levels)])
 
-    def memory_bytes(self, path: v.CameraPath, frame: int, tile_bytes: int) -> int:
+    def memory_bytes(self, path: CameraPath, frame: int, tile_bytes: int) -> int:
         """Texture memory of the whole levels chosen at this frame."""
         return int(sum(pl[1].tile_count(lvl) for pl, lvl in
                        zip(self.paintings, self.chosen_levels(path, frame))) * tile_bytes)
@@ -160,7 +160,7 @@ def _morton(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return spread(x) | (spread(y) << np.uint64(1))
 
 
-def make_baseline(name: str, exhibition: v.Exhibition):
+def make_baseline(name: str, exhibition: Exhibition):
     if name == "ma-vt":
         return MaVT(exhibition)
     if name == "lod-mapping":

@@ -1,19 +1,18 @@
-"""The feedback-free baselines: Ma VT's per-tile test against the ray-cast feedback (the
-brute-force reference of what the view needs), seed 003's LOD bands and memory."""
+"""The feedback-free baselines (gigascroll.views.baselines): Ma VT's per-tile test against the
+ray-cast feedback (the brute-force reference of what the view needs), seed 003's LOD bands
+and memory."""
 
 import numpy as np
 import pytest
 
-from gigascroll import baselines as b
 from gigascroll import views as v
-
-W, H = 12000, 1600
+from gigascroll.views import baselines as b
 
 
 @pytest.fixture(scope="module")
-def scene():
-    spec = v.PaintingSpec("small", W, H, W * 12 / 152089, H * 12 / 152089)
-    return v.single_scroll(spec)
+def scene(small_scroll):
+    """The small painting on the wall (conftest)."""
+    return small_scroll
 
 
 def _feedback_requests(ex, path):

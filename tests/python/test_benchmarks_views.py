@@ -1,4 +1,5 @@
-"""`gigascroll bench views` runs end to end in quick mode and rejects bad arguments."""
+"""`gigascroll bench views` (gigascroll.benchmarks.views) runs end to end in quick mode and
+rejects bad arguments."""
 
 import json
 

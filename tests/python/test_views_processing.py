@@ -1,28 +1,20 @@
-"""Views: scene, cameras, camera paths, feedback levels against a finite-difference reference,
-the four request-processing methods against each other, the hash's frame salt, bad input."""
+"""Tile determination and the display pass (gigascroll.views.processing): feedback levels
+against a finite-difference reference, the four request-processing methods against each
+other, the hash's frame salt, the loading strategies, the display pass against per-pixel
+sampling, and bad input."""
 
 import math
 
 import numpy as np
 import pytest
 
-import gigascroll
+from gigascroll import pack as pk
 from gigascroll import views as v
-
-
-@pytest.fixture(scope="module")
-def scroll():
-    return v.single_scroll()
 
 
 def _sets(result):
     return (set(result["requests"].tolist()), set(result["commands"].tolist()),
             set(zip(result["requests"].tolist(), result["responses"].tolist())))
-
-
-def test_exports_reach_package():
-    assert gigascroll.HashProcessor is v.HashProcessor
-    assert "multi_exhibition" in gigascroll.__all__
 
 
 def test_eye_and_magnifier_levels_match_seed(scroll):
@@ -63,7 +55,8 @@ def test_lod_matches_finite_difference_footprint(scroll, yaw_deg, pitch_deg):
     h = v.HEADSET
     cam = v.ViewCamera((6.0 - 0.6 * math.tan(yaw), 1.5, -0.6), fwd, (0, 1, 0), h.tan_half_x,
                    h.tan_half_y, h.width, h.height)
-    keys, lod = v.render_feedback(scroll.scene, cam, 45, 48, with_lod=True)
+    view = v.render_view(scroll.scene, cam, 45, 48)
+    keys, lod = view["keys"], view["lod"]
     iy, ix = np.nonzero(keys != v.NO_REQUEST)
     assert ix.size > 100
     px, py = (ix + 0.5) * h.width / 45, (iy + 0.5) * h.height / 48
@@ -90,14 +83,13 @@ def _processors(ex):
 
 
 @pytest.mark.parametrize("scene", ["single", "multi"])
-def test_four_methods_agree_on_real_feedback(scene):
+def test_four_methods_agree_on_real_feedback(scene, scroll, rng):
     if scene == "single":
-        ex, path = v.single_scroll(), v.scroll_path(duration=0.3)
+        ex, path = scroll, v.scroll_path(duration=0.3)
     else:
         ex, path = v.multi_exhibition(16), v.multi_route(16, duration=0.3)
     resident = ex.resident_set()
     procs = _processors(ex)
-    rng = np.random.default_rng(0)
     for frame in range(0, len(path), 9):
         bufs = v.feedback_buffers(ex, path, frame)
         ref = procs["basic"].process(bufs, resident)
@@ -110,8 +102,8 @@ def test_four_methods_agree_on_real_feedback(scene):
         assert len(ref["commands"]) < len(ref["requests"])
 
 
-def test_async_latency_is_measured():
-    ex, path = v.single_scroll(), v.scroll_path(duration=0.2)
+def test_async_latency_is_measured(scroll):
+    ex, path = scroll, v.scroll_path(duration=0.2)
     resident = ex.resident_set()
     proc = v.AsyncProcessor()
     arrived = {}
@@ -134,7 +126,7 @@ def test_hash_salt_on_the_scroll_path(scroll):
     path = v.scroll_path(duration=0.7)
     resident = scroll.resident_set()
     basic, salted, fixed = v.BasicProcessor(), v.HashProcessor(14), v.HashProcessor(14)
-    prev, prev_fixed = set(), None
+    prev, prev_fixed, ref_prev = set(), None, set()
     lost_total = repeats = fixed_lost = fixed_repeats = 0
     for frame in range(len(path)):
         bufs = v.feedback_buffers(scroll, path, frame)
@@ -167,47 +159,26 @@ def test_visibility_lists_alive_and_remove(scroll):
         previous = now
 
 
-def test_camera_paths_are_shared_data(tmp_path):
-    path = v.scroll_path(duration=1.0, stop_frames=20, loops=2)
-    assert len(path) == 2 * 90 + 20
-    step = np.diff(path.position[:90, 0])
-    np.testing.assert_allclose(step, 1.0 / 90)  # constant 1 m/s at 90 Hz
-    assert np.all(path.position[-20:] == path.position[-1])  # the stop
-    assert path.position[90, 0] == path.position[0, 0]  # loop back to the start
-    path.save(tmp_path / "p.json")
-    back = v.CameraPath.load(tmp_path / "p.json")
-    np.testing.assert_array_equal(back.position, path.position)
-    np.testing.assert_array_equal(back.magnifier_target, path.magnifier_target)
-    for n in (8, 16, 24, 32, 40):
-        ex = v.multi_exhibition(n)
-        route = v.multi_route(n, duration=0.1)
-        assert ex.scene.painting_count == n and ex.scene.box_count == 5 * n // 8 + 1
-        assert route.position[0, 1] == pytest.approx(1.70)
-        bufs = v.feedback_buffers(ex, route, 0)
-        seen = np.unique(v.unpack_requests(np.concatenate([b.ravel() for b in bufs])
-                                           [np.concatenate([b.ravel() for b in bufs])
-                                            != v.NO_REQUEST])[0])
-        assert seen.size >= 8  # the first table's paintings are in view
-
-
-def test_bad_input_is_rejected(scroll, tmp_path):
-    pos = np.zeros((3, 3))
-    pos[1, 2] = np.nan
-    with pytest.raises(ValueError, match="NaN"):
-        v.CameraPath(pos, np.tile([0, 0, 1.0], (3, 1)), np.tile([0, 1.0, 0], (3, 1)))
+def test_loading_strategies_from_python(scroll):
+    resident = scroll.resident_set()
+    keys = np.array([v.pack_request(0, 0, x, 10) for x in range(40)], dtype=np.uint64)
+    direct = v.DirectLoading(16)
+    direct.set_commands(keys)
+    assert direct.issue(resident).tolist() == keys[:16].tolist()
+    assert direct.backlog == 24 and direct.in_flight == 16
+    mip = v.MipByMipLoading(16)
+    first = mip.issue(keys, resident)
+    # Only the coarsest level (11) is resident: every command asks its level-10 ancestor.
+    assert set(v.unpack_requests(first)[1].tolist()) == {10}
     with pytest.raises(ValueError):
-        v.scroll_path(speed=float("nan"))
-    with pytest.raises(ValueError, match="runs off"):
-        v.scroll_path(duration=20.0)
-    with pytest.raises(ValueError, match="multiple of 8"):
-        v.multi_exhibition(12)
+        v.DirectLoading(0)
+    with pytest.raises(ValueError, match="uint64"):
+        direct.set_commands(keys.astype(np.float64))
+
+
+def test_bad_processing_input_is_rejected(scroll):
     with pytest.raises(ValueError, match="unknown request-processing method"):
         v.make_processor("gpu", scroll.tiles)
-    (tmp_path / "bad.json").write_text("{not json")
-    with pytest.raises(ValueError):
-        v.CameraPath.load(tmp_path / "bad.json")
-    with pytest.raises(ValueError, match="NaN"):
-        v.ViewCamera((0, 0, float("nan")), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8)
     resident = scroll.resident_set()
     good = np.array([v.pack_request(0, 0, 1, 1)], dtype=np.uint64)
     for proc in (v.BasicProcessor(), v.FlagArrayProcessor(scroll.tiles), v.HashProcessor()):
@@ -226,23 +197,64 @@ def test_bad_input_is_rejected(scroll, tmp_path):
         v.pack_request(0, 32, 0, 0)
     scene = v.ExhibitionScene()
     with pytest.raises(ValueError, match="commit"):
-        v.render_feedback(scene, v.ViewCamera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
-    with pytest.raises(ValueError, match="orthonormal"):
-        scene.add_painting(0, v.PaintingTiles(100, 100), (0, 0, 0), (1, 0, 0), (1, 0, 0), 1, 1)
+        v.render_view(scene, v.ViewCamera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
 
 
-def test_loading_strategies_from_python(scroll):
-    resident = scroll.resident_set()
-    keys = np.array([v.pack_request(0, 0, x, 10) for x in range(40)], dtype=np.uint64)
-    direct = v.DirectLoading(16)
-    direct.set_commands(keys)
-    assert direct.issue(resident).tolist() == keys[:16].tolist()
-    assert direct.backlog == 24 and direct.in_flight == 16
-    mip = v.MipByMipLoading(16)
-    first = mip.issue(keys, resident)
-    # Only the coarsest level (11) is resident: every command asks its level-10 ancestor.
-    assert set(v.unpack_requests(first)[1].tolist()) == {10}
-    with pytest.raises(ValueError):
-        v.DirectLoading(0)
-    with pytest.raises(ValueError, match="uint64"):
-        direct.set_commands(keys.astype(np.float64))
+# ----------------------------------------------------------------------------- display pass
+
+
+@pytest.mark.parametrize("step", [1, 2])
+@pytest.mark.parametrize("case", ["two-paintings", "one-painting-everywhere", "nothing"])
+def test_display_pass_matches_per_pixel_sampling(tmp_path, step, case, rng):
+    # The display pass gathers and groups pixels for speed; the reference samples each pixel
+    # alone through the same virtual texture.
+    from gigascroll import runtime
+    imgs = [rng.integers(0, 256, (300, 500, 3), np.uint8) for _ in range(2)]
+    pack = pk.build_pack(imgs, tmp_path / "two.pack")
+    vt = runtime.VirtualTexture(pack, (4, 4))
+    h, w = 9, 14
+    painting = {"two-paintings": rng.integers(-1, 2, (h, w)),
+                "one-painting-everywhere": np.ones((h, w), int),
+                "nothing": -np.ones((h, w), int)}[case]
+    keys = np.array([[v.NO_REQUEST if p < 0 else v.pack_request(int(p), 0, 0, 0) for p in row]
+                     for row in painting], np.uint64)
+    uv = rng.random((h, w, 2))
+    lod = rng.uniform(-1.0, 3.0, (h, w)).astype(np.float32)
+    uv[painting < 0] = np.nan
+    lod[painting < 0] = np.nan
+    # lod and uv on the display grid, as render_view(..., display_step=step) returns them.
+    got = v.display_view(vt, keys, np.ascontiguousarray(lod[::step, ::step]),
+                         np.ascontiguousarray(uv[::step, ::step]), step)
+    sub = painting[::step, ::step]
+    assert got.shape == sub.shape + (3,)
+    for (i, j), p in np.ndenumerate(sub):
+        if p < 0:
+            assert (got[i, j] == 0).all()
+            continue
+        a, b = i * step, j * step
+        want, _ = vt.sample(int(p), uv[a, b, :1], uv[a, b, 1:], np.maximum(lod[a, b:b + 1], 0))
+        np.testing.assert_array_equal(got[i, j], want[0])
+    if case == "two-paintings":
+        assert len(np.unique(sub)) == 3
+        # Bad input: display-grid arrays of the wrong size, a painting the texture lacks.
+        with pytest.raises(ValueError, match="display grid"):
+            v.display_view(vt, keys, lod, uv, 2)
+        bad = keys.copy()
+        bad[0, 0] = v.pack_request(5, 0, 0, 0)
+        with pytest.raises(ValueError, match="painting"):
+            v.display_view(vt, bad, lod, uv, 1)
+
+
+@pytest.mark.parametrize("step", [2, 3])
+def test_render_view_display_grid_is_the_full_views_subgrid(step, scroll):
+    # lod and uv on the display grid are exactly the full-resolution ones at every step-th
+    # pixel; the keys do not depend on the step.
+    ex = scroll
+    path = v.scroll_path(duration=0.1)
+    for cam, w, h in v.frame_cameras(path, 3, magnifier=v.MAGNIFIER):
+        full = v.render_view(ex.scene, cam, w, h)
+        sub = v.render_view(ex.scene, cam, w, h, display_step=step)
+        np.testing.assert_array_equal(sub["keys"], full["keys"])
+        np.testing.assert_array_equal(sub["lod"], full["lod"][::step, ::step])
+        np.testing.assert_array_equal(sub["uv"], full["uv"][::step, ::step])
+        assert sub["display_step"] == step
