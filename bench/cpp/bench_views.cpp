@@ -75,10 +75,10 @@ struct Feedback {
         const double x = std::min(6.0, 6.0 * tiles.width() / 152089);
         for (double eye : {-0.0315, 0.0315}) {
             buffers.emplace_back(225 * 240);
-            render_feedback(scene, eye_camera(x + eye), {225, 240, 0, 0}, buffers.back().data());
+            render_view(scene, eye_camera(x + eye), {225, 240, 0, 0}, buffers.back().data());
         }
         buffers.emplace_back(512 * 512);
-        render_feedback(scene, magnifier_camera(x), {512, 512, 0, 0}, buffers.back().data());
+        render_view(scene, magnifier_camera(x), {512, 512, 0, 0}, buffers.back().data());
         views.assign(buffers.begin(), buffers.end());
     }
 };
@@ -149,7 +149,7 @@ void BM_FeedbackEye(benchmark::State& state) {
     const ScrollScene s;
     const Camera cam = eye_camera(6);
     std::vector<std::uint64_t> keys(225 * 240);
-    for (auto _ : state) render_feedback(s.scene, cam, {225, 240, 0, unsigned(state.range(0))}, keys.data());
+    for (auto _ : state) render_view(s.scene, cam, {225, 240, 0, unsigned(state.range(0))}, keys.data());
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
 BENCHMARK(BM_FeedbackEye)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
@@ -163,14 +163,14 @@ void BM_FeedbackMagnifier(benchmark::State& state) {
     std::vector<float> lod(keys.size());
     std::vector<double> uv(2 * keys.size());
     for (auto _ : state)
-        render_feedback(s.scene, cam, {512, 512, 0, unsigned(state.range(0))}, keys.data(),
+        render_view(s.scene, cam, {512, 512, 0, unsigned(state.range(0))}, keys.data(),
                         state.range(1) ? lod.data() : nullptr, state.range(1) ? uv.data() : nullptr);
     state.SetItemsProcessed(state.iterations() * std::int64_t(keys.size()));
 }
 BENCHMARK(BM_FeedbackMagnifier)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime()->UseRealTime();
 
 // Embree alone on the magnifier's rays (one thread, 16-ray packets along each row, the same
-// set-up as render_feedback's): the part of BM_FeedbackMagnifier/1/0 that is ray tracing.
+// set-up as render_view's): the part of BM_FeedbackMagnifier/1/0 that is ray tracing.
 void BM_EmbreeMagnifier(benchmark::State& state) {
     const ScrollScene s;
     const Camera cam = magnifier_camera(6);
@@ -222,7 +222,7 @@ void BM_Display(benchmark::State& state) {
     std::vector<std::uint64_t> keys(std::size_t(w) * h);
     std::vector<float> lod(std::size_t(dw) * dh);
     std::vector<double> uv(2 * lod.size());
-    render_feedback(s.scene, cam, o, keys.data(), lod.data(), uv.data());
+    render_view(s.scene, cam, o, keys.data(), lod.data(), uv.data());
     VirtualTexture vt(PackGeometry::make(128, 4, {{152089, 6083}}), 30, 30,
                       [](const TileKey&, std::uint8_t* d) { std::fill_n(d, 128 * 128 * 3, 128); });
     std::vector<std::uint8_t> texels(128 * 128 * 3);

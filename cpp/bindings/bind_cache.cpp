@@ -62,27 +62,6 @@ void bind_cache(nb::module_& m) {
             const auto ev = vt.insert(to_key(key), data.data());
             return ev ? std::optional<KeyTuple>(to_tuple(*ev)) : std::nullopt; },
             "key"_a, "data"_a, "Copies a tile into the cache; returns the evicted tile's key, if any.")
-        .def("insert_loaded", [](VirtualTexture& vt, TileLoader& loader, std::size_t max) {
-            std::vector<LoadedTile> results;
-            std::vector<std::pair<KeyTuple, std::string>> failed;
-            std::size_t inserted = 0;
-            {
-                nb::gil_scoped_release release;
-                loader.poll(results, max);
-                for (auto& r : results) {
-                    if (r.buffer < 0) {
-                        failed.emplace_back(to_tuple(r.key), r.error);
-                        continue;
-                    }
-                    vt.insert(r.key, loader.data(r.buffer));
-                    loader.release(r.buffer);
-                    ++inserted;
-                }
-            }
-            return std::make_pair(inserted, failed); },
-            "loader"_a, "max_tiles"_a = std::size_t(-1),
-            "Polls the loader and inserts its finished tiles without copies through Python; "
-            "returns (inserted, [(key, error), ...]).")
         .def("drain", [](VirtualTexture& vt, TileLoader& loader, std::size_t max) {
             DrainResult r;
             {

@@ -95,7 +95,6 @@ void bind_pack(nb::module_& m) {
                    ", tile_size=" + std::to_string(p.tile_size()) +
                    ", border=" + std::to_string(p.border()) + ")";
         });
-    m.attr("PaintingTiles") = m.attr("PaintingGeometry");  // the views' old name
 
     m.def("pack_request", [](std::int64_t p, std::int64_t l, std::int64_t x, std::int64_t y) {
         return pack_request(checked_u32(p, kMaxPaintings - 1, "painting"),

@@ -100,7 +100,6 @@ void bind_views(nb::module_& m) {
         .def("direction", [](const Camera& c, double px, double py) {
             return arr3(normalize(c.direction(px, py)));
         }, "px"_a, "py"_a, "Unit direction through film position (px, py) in pixels.");
-    m.attr("ViewCamera") = m.attr("Camera");
 
     nb::class_<StereoCamera>(m, "StereoCamera",
                              "Two parallel eyes ipd apart along the camera's right vector.")
@@ -142,28 +141,6 @@ void bind_views(nb::module_& m) {
             return d;
         }, "index"_a);
 
-    // Deprecated duplicate of render_view (removed once Python no longer uses it).
-    m.def("render_feedback", [](const ExhibitionScene& scene, const Camera& camera,
-                                std::int64_t width, std::int64_t height, double lod_bias,
-                                unsigned threads, bool with_lod) {
-        require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
-                "feedback resolution out of range");
-        FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads};
-        const std::size_t w = feedback_width(camera, o), h = feedback_height(camera, o);
-        std::vector<std::uint64_t> keys(w * h);
-        std::vector<float> lod(with_lod ? w * h : 0);
-        {
-            nb::gil_scoped_release release;
-            render_feedback(scene, camera, o, keys.data(), with_lod ? lod.data() : nullptr);
-        }
-        nb::object keys2d = nb::cast(to_numpy(std::move(keys), {h, w}));
-        if (!with_lod) return keys2d;
-        return nb::object(nb::make_tuple(keys2d, to_numpy(std::move(lod), {h, w})));
-    }, "scene"_a, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
-          "with_lod"_a = false,
-          "Feedback pass: (height, width) uint64 request keys (NO_REQUEST where no painting);\n"
-          "width/height 0 = 1/8 of the camera's resolution. with_lod also returns lambda.");
-
     m.def("render_view", [](const ExhibitionScene& scene, const Camera& camera, std::int64_t width,
                             std::int64_t height, double lod_bias, unsigned threads,
                             std::int64_t display_step, bool display) {
@@ -182,7 +159,7 @@ void bind_views(nb::module_& m) {
         if (!display) {
             {
                 nb::gil_scoped_release release;
-                render_feedback(scene, camera, o, keys.data);
+                render_view(scene, camera, o, keys.data);
             }
             d["lod"] = nb::none();
             d["uv"] = nb::none();
@@ -192,7 +169,7 @@ void bind_views(nb::module_& m) {
         FreshArray<double> uv({dh, dw, 2});
         {
             nb::gil_scoped_release release;
-            render_feedback(scene, camera, o, keys.data, lod.data, uv.data);
+            render_view(scene, camera, o, keys.data, lod.data, uv.data);
         }
         d["lod"] = lod.array;
         d["uv"] = uv.array;

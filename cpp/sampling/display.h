@@ -13,7 +13,7 @@ namespace gigascroll {
 // the pixel's key at (u, v), bilinear at the level round(lambda) (falling back to the
 // finest resident ancestor like any lookup). Pixels without a painting are black. keys is
 // the full width x height buffer; lod, uv and out are on the display grid of
-// ceil(height / step) x ceil(width / step) pixels (render_feedback with display_step =
+// ceil(height / step) x ceil(width / step) pixels (render_view with display_step =
 // step); out holds 3 floats in 0..255 per pixel, row-major.
 void display_view(const VirtualTexture& vt, const std::uint64_t* keys, const float* lod,
                   const double* uv, std::uint32_t width, std::uint32_t height,

@@ -168,7 +168,7 @@ void plane_keys(const PlaneFrame& f, const double* __restrict sx, double s_y, st
 
 }  // namespace
 
-void render_feedback(const ExhibitionScene& scene, const Camera& camera,
+void render_view(const ExhibitionScene& scene, const Camera& camera,
                      const FeedbackOptions& options, std::uint64_t* keys, float* lod,
                      double* uv) {
     require(scene.committed(), "commit() the exhibition scene before the feedback pass");

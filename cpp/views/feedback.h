@@ -36,7 +36,7 @@ std::uint32_t mip_level(double lambda, std::uint32_t levels);
 // the painting coordinates in [0, 1] that the display pass samples, both on the display
 // grid (FeedbackOptions::display_step; the full resolution by default). Casts Embree
 // packets of 16 rays along each row, rows shared among `threads` threads.
-void render_feedback(const ExhibitionScene& scene, const Camera& camera,
+void render_view(const ExhibitionScene& scene, const Camera& camera,
                      const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr,
                      double* uv = nullptr);
 

@@ -18,15 +18,15 @@ from .runtime import LoadError, MipTexture, TileLoader, VirtualTexture
 from .views import (HEADSET, MAGNIFIER, NO_REQUEST, PROCESSING_METHODS, SCROLL, TABLE4_PAINTINGS,
                     AsyncProcessor, BasicProcessor, CameraPath, DirectLoading, Exhibition,
                     ExhibitionScene, FlagArrayProcessor, HashProcessor, Headset, Magnifier,
-                    MipByMipLoading, PaintingSpec, PaintingTiles, ResidencyLookup, ResidentSet,
-                    ViewCamera, VisibilityLists, display_view, feedback_buffers, frame_cameras,
+                    MipByMipLoading, PaintingSpec, PaintingGeometry, ResidencyLookup, ResidentSet,
+                    Camera, VisibilityLists, display_view, feedback_buffers, frame_cameras,
                     make_processor, mip_level, multi_exhibition, multi_route, pack_request,
                     render_view, run_processor, scroll_path, single_scroll, texel_footprint,
                     unpack_requests)
 # the frame loop over views and runtime
 from .frame_loop import LOADING_STRATEGIES, FrameLoop
 # photon-mapping renderer
-from .photon import (BUILTIN_SCENES, Camera, PhotonMap, Scene, StereoCamera, builtin_scene,
+from .photon import (BUILTIN_SCENES, PhotonMap, Scene, StereoCamera, builtin_scene,
                      default_radius, relmse, render, render_stereo, save_image, trace_photons)
 
 __version__ = "0.1.0"
@@ -40,8 +40,8 @@ __all__ = [
     # runtime
     "TileLoader", "VirtualTexture", "MipTexture", "LoadError",
     # views
-    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "ViewCamera", "DirectLoading",
-    "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingTiles",
+    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "DirectLoading",
+    "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingGeometry",
     "ResidencyLookup", "ResidentSet", "VisibilityLists", "display_view", "mip_level",
     "pack_request", "render_view", "texel_footprint", "unpack_requests", "HEADSET", "MAGNIFIER",
     "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier", "PaintingSpec", "Exhibition",
@@ -51,6 +51,6 @@ __all__ = [
     # frame loop
     "FrameLoop", "LOADING_STRATEGIES",
     # photon
-    "Scene", "Camera", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
+    "Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
     "default_radius", "render", "render_stereo", "trace_photons", "save_image", "relmse",
 ]

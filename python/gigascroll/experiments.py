@@ -43,7 +43,7 @@ def width_for_tiles(total: int, height: int) -> int:
     lo, hi = 1, 65535 * 120
     while lo < hi:
         mid = (lo + hi) // 2
-        lo, hi = (mid + 1, hi) if v.PaintingTiles(mid, height).total_tiles < total else (lo, mid)
+        lo, hi = (mid + 1, hi) if v.PaintingGeometry(mid, height).total_tiles < total else (lo, mid)
     return lo
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from . import _core
 from ._core import Camera, PhotonMap, StereoCamera
 
-__all__ = ["Scene", "Camera", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
+__all__ = ["Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
            "default_radius", "render", "render_stereo", "trace_photons", "save_image", "relmse"]
 
 # name -> the scene's size scale: seed 001's radii (0.02-0.2, a Cornell box about 2 units

@@ -33,4 +33,4 @@ def test_bad_camera_paths_are_rejected(tmp_path):
     with pytest.raises(ValueError):
         v.CameraPath.load(tmp_path / "bad.json")
     with pytest.raises(ValueError, match="NaN"):
-        v.ViewCamera((0, 0, float("nan")), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8)
+        v.Camera((0, 0, float("nan")), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8)

@@ -25,4 +25,4 @@ def test_bad_exhibitions_are_rejected():
         v.multi_exhibition(12)
     scene = v.ExhibitionScene()
     with pytest.raises(ValueError, match="orthonormal"):
-        scene.add_painting(0, v.PaintingTiles(100, 100), (0, 0, 0), (1, 0, 0), (1, 0, 0), 1, 1)
+        scene.add_painting(0, v.PaintingGeometry(100, 100), (0, 0, 0), (1, 0, 0), (1, 0, 0), 1, 1)

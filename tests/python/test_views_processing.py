@@ -53,7 +53,7 @@ def test_lod_matches_finite_difference_footprint(scroll, yaw_deg, pitch_deg):
     yaw, pitch = math.radians(yaw_deg), math.radians(pitch_deg)
     fwd = (math.sin(yaw) * math.cos(pitch), math.sin(pitch), math.cos(yaw) * math.cos(pitch))
     h = v.HEADSET
-    cam = v.ViewCamera((6.0 - 0.6 * math.tan(yaw), 1.5, -0.6), fwd, (0, 1, 0), h.tan_half_x,
+    cam = v.Camera((6.0 - 0.6 * math.tan(yaw), 1.5, -0.6), fwd, (0, 1, 0), h.tan_half_x,
                    h.tan_half_y, h.width, h.height)
     view = v.render_view(scroll.scene, cam, 45, 48)
     keys, lod = view["keys"], view["lod"]
@@ -197,7 +197,7 @@ def test_bad_processing_input_is_rejected(scroll):
         v.pack_request(0, 32, 0, 0)
     scene = v.ExhibitionScene()
     with pytest.raises(ValueError, match="commit"):
-        v.render_view(scene, v.ViewCamera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
+        v.render_view(scene, v.Camera((0, 0, 0), (0, 0, 1), (0, 1, 0), 1, 1, 8, 8))
 
 
 # ----------------------------------------------------------------------------- display pass

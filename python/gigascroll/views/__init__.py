@@ -12,7 +12,7 @@ The frame loop that runs all of it (gigascroll.frame_loop) builds on this packag
 here imports it.
 """
 
-from .._core import ExhibitionScene, PaintingTiles, ResidentSet, ViewCamera
+from .._core import ExhibitionScene, PaintingGeometry, ResidentSet, Camera
 from . import baselines
 from .camera_paths import CameraPath, frame_cameras, multi_route, scroll_path
 from .exhibition import (FPS, HEADSET, MAGNIFIER, SCROLL, TABLE4_PAINTINGS, TEXEL_M, Exhibition,
@@ -25,8 +25,8 @@ from .processing import (NO_REQUEST, PROCESSING_METHODS, AsyncProcessor, BasicPr
                          texel_footprint, unpack_requests)
 
 __all__ = [
-    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "ViewCamera", "DirectLoading",
-    "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingTiles",
+    "NO_REQUEST", "AsyncProcessor", "BasicProcessor", "Camera", "DirectLoading",
+    "ExhibitionScene", "FlagArrayProcessor", "MipByMipLoading", "HashProcessor", "PaintingGeometry",
     "ResidencyLookup", "ResidentSet", "VisibilityLists", "display_view", "mip_level",
     "pack_request", "render_view", "texel_footprint", "unpack_requests",
     "HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier", "PaintingSpec",

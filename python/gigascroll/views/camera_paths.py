@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._core import ViewCamera
+from .._core import Camera
 from .exhibition import (FPS, HEADSET, MAGNIFIER, SCROLL, TABLE4_PAINTINGS, Exhibition, Headset,
                          Magnifier, PaintingSpec)
 
@@ -175,7 +175,7 @@ def multi_route(n_paintings: int, speed: float = 1.0, duration: float = 10.0,
 
 
 def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
-                  magnifier: Magnifier | None = MAGNIFIER) -> list[tuple[ViewCamera, int, int]]:
+                  magnifier: Magnifier | None = MAGNIFIER) -> list[tuple[Camera, int, int]]:
     """The views of one frame as (camera, feedback width, feedback height): left eye, right
     eye (parallel, +-ipd/2 along the head's right vector), and the magnifier when the path
     has a target that frame."""
@@ -188,7 +188,7 @@ def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
     views = []
     for side in (-1, 1):
         eye = p + side * headset.ipd / 2 * right
-        views.append((ViewCamera(tuple(eye), tuple(f), tuple(u), headset.tan_half_x,
+        views.append((Camera(tuple(eye), tuple(f), tuple(u), headset.tan_half_x,
                              headset.tan_half_y, headset.width, headset.height), fw, fh))
     if magnifier is not None and path.magnifier_target is not None \
             and np.all(np.isfinite(path.magnifier_target[frame])):
@@ -198,6 +198,6 @@ def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
         up_hint = u if abs(np.dot(u, normal)) < 0.99 else right
         tan_half = magnifier.field / 2 / magnifier.lens_distance
         r = magnifier.resolution
-        views.append((ViewCamera(tuple(cam_pos), tuple(-normal), tuple(up_hint), tan_half, tan_half,
+        views.append((Camera(tuple(cam_pos), tuple(-normal), tuple(up_hint), tan_half, tan_half,
                              r, r), r, r))
     return views

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .._core import ExhibitionScene, PaintingTiles, ResidentSet
+from .._core import ExhibitionScene, PaintingGeometry, ResidentSet
 
 __all__ = ["HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier",
            "PaintingSpec", "Exhibition", "single_scroll", "multi_exhibition", "FPS", "TEXEL_M",
@@ -62,8 +62,8 @@ class PaintingSpec:
     width_m: float
     height_m: float
 
-    def tiles(self, tile_size: int = 128, border: int = 4) -> PaintingTiles:
-        return PaintingTiles(self.width, self.height, tile_size, border)
+    def tiles(self, tile_size: int = 128, border: int = 4) -> PaintingGeometry:
+        return PaintingGeometry(self.width, self.height, tile_size, border)
 
 
 # Every painting is scanned at the scroll's resolution: 12 m over 152089 texels.
@@ -87,7 +87,7 @@ class Exhibition:
     """A committed scene plus what request processing needs to know about its paintings."""
     scene: ExhibitionScene
     specs: list[PaintingSpec]          # by painting id
-    tiles: list[PaintingTiles]         # by painting id
+    tiles: list[PaintingGeometry]         # by painting id
     placements: list[dict] = field(default_factory=list)
 
     def resident_set(self) -> ResidentSet:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import (NO_REQUEST, AsyncProcessor, BasicProcessor, DirectLoading,
-                     FlagArrayProcessor, HashProcessor, MipByMipLoading, PaintingTiles,
+                     FlagArrayProcessor, HashProcessor, MipByMipLoading, PaintingGeometry,
                      ResidencyLookup, VisibilityLists, display_view, mip_level, pack_request,
                      render_view, texel_footprint, unpack_requests)
 from .camera_paths import CameraPath, frame_cameras
@@ -34,7 +34,7 @@ def feedback_buffers(exhibition: Exhibition, path: CameraPath, frame: int,
 PROCESSING_METHODS = ("basic", "cpu-async", "flag-array", "hash")
 
 
-def make_processor(method: str, tiles: list[PaintingTiles], threads: int = 0,
+def make_processor(method: str, tiles: list[PaintingGeometry], threads: int = 0,
                    table_bits: int = 16):
     """A request processor by name (PROCESSING_METHODS)."""
     if method == "basic":

@@ -26,7 +26,7 @@ inline FeedbackImage feedback_image(const ExhibitionScene& scene, const Camera& 
                                     std::uint32_t width, std::uint32_t height, unsigned threads = 2) {
     const std::size_t n = std::size_t(width) * height;
     FeedbackImage f{std::vector<std::uint64_t>(n), std::vector<float>(n), std::vector<double>(2 * n)};
-    render_feedback(scene, camera, {width, height, 0, threads}, f.keys.data(), f.lod.data(),
+    render_view(scene, camera, {width, height, 0, threads}, f.keys.data(), f.lod.data(),
                     f.uv.data());
     return f;
 }

@@ -44,7 +44,7 @@ TEST(Feedback, HeadOnLevelMatchesAnalyticFootprint) {
         FeedbackOptions o{45, 48, 0, 2};
         std::vector<std::uint64_t> keys(45 * 48);
         std::vector<float> lod(keys.size());
-        render_feedback(w.scene, cam, o, keys.data(), lod.data());
+        render_view(w.scene, cam, o, keys.data(), lod.data());
         int seen = 0;
         for (std::size_t i = 0; i < keys.size(); ++i) {
             if (keys[i] == kNoRequest) continue;
@@ -76,7 +76,7 @@ TEST(Feedback, GrazingLevelMatchesAnalyticFootprint) {
         FeedbackOptions o{W, W, 0, 2};
         std::vector<std::uint64_t> keys(W * W);
         std::vector<float> lod(keys.size());
-        render_feedback(w.scene, cam, o, keys.data(), lod.data());
+        render_view(w.scene, cam, o, keys.data(), lod.data());
         const std::size_t centre = (W / 2) * W + W / 2;
         ASSERT_NE(keys[centre], kNoRequest);
         EXPECT_NEAR(lod[centre], std::log2(rho), 1e-4) << deg;
@@ -98,9 +98,9 @@ TEST(Feedback, LodBiasAndDisplayGrid) {
     std::vector<std::uint64_t> keys(W * H), keys_b(W * H), keys_s(W * H);
     std::vector<float> lod(W * H), lod_b(W * H);
     std::vector<double> uv(2 * W * H);
-    render_feedback(w.scene, cam, {W, H, 0, 2}, keys.data(), lod.data(), uv.data());
+    render_view(w.scene, cam, {W, H, 0, 2}, keys.data(), lod.data(), uv.data());
     // A bias shifts lambda and the level by the same amount (textureQueryLod with bias).
-    render_feedback(w.scene, cam, {W, H, 0.7, 2}, keys_b.data(), lod_b.data());
+    render_view(w.scene, cam, {W, H, 0.7, 2}, keys_b.data(), lod_b.data());
     int seen = 0;
     for (std::size_t i = 0; i < keys.size(); ++i) {
         if (keys[i] == kNoRequest) {
@@ -118,7 +118,7 @@ TEST(Feedback, LodBiasAndDisplayGrid) {
     std::vector<float> lod_s(DW * DH);
     std::vector<double> uv_s(2 * DW * DH);
     FeedbackOptions o{W, H, 0, 2, S};
-    render_feedback(w.scene, cam, o, keys_s.data(), lod_s.data(), uv_s.data());
+    render_view(w.scene, cam, o, keys_s.data(), lod_s.data(), uv_s.data());
     EXPECT_EQ(keys_s, keys);
     for (std::uint32_t y = 0; y < DH; ++y)
         for (std::uint32_t x = 0; x < DW; ++x) {
@@ -132,7 +132,7 @@ TEST(Feedback, LodBiasAndDisplayGrid) {
             EXPECT_EQ(uv_s[2 * sub + 1], uv[2 * full + 1]);
         }
     o.display_step = 0;
-    EXPECT_THROW(render_feedback(w.scene, cam, o, keys_s.data()), InvalidArgument);
+    EXPECT_THROW(render_view(w.scene, cam, o, keys_s.data()), InvalidArgument);
 }
 
 TEST(Feedback, KeysMatchTheTileUnderEveryPixel) {
@@ -172,10 +172,10 @@ TEST(Feedback, OccludersAndMissesGiveNoRequest) {
     scene.commit();
     const Camera cam({0.5, 0.5, -1}, {0, 0, 1}, {0, 1, 0}, 1, 1, 64, 64);
     std::vector<std::uint64_t> keys(8 * 8);
-    render_feedback(scene, cam, {}, keys.data());
+    render_view(scene, cam, {}, keys.data());
     for (auto k : keys) EXPECT_EQ(k, kNoRequest);
     ExhibitionScene open;
-    EXPECT_THROW(render_feedback(open, cam, {}, keys.data()), InvalidArgument);
+    EXPECT_THROW(render_view(open, cam, {}, keys.data()), InvalidArgument);
     EXPECT_THROW(Camera({0, 0, NAN}, {0, 0, 1}, {0, 1, 0}, 1, 1, 8, 8), InvalidArgument);
     EXPECT_THROW(Camera({0, 0, 0}, {0, 1, 0}, {0, 1, 0}, 1, 1, 8, 8), InvalidArgument);
     EXPECT_THROW(open.add_painting(0, tiles, {0, 0, 0}, {1, 0, 0}, {1, 0, 0}, 1, 1), InvalidArgument);
