@@ -1,4 +1,4 @@
-// Read side of a tile pack (format in pack_format.h). Opening parses the manifest, checks the
+// Read side of a tile pack (format in format.h). Opening parses the manifest, checks the
 // binaries' magic, version and sizes, and maps the index; a lookup is then O(1).
 // Thread safety: after construction the object is immutable; read_tile uses pread on one
 // shared descriptor and per-thread scratch, so loader threads may call it concurrently.

@@ -55,7 +55,7 @@ std::uint32_t feedback_height(const Camera& camera, const FeedbackOptions& optio
 namespace {
 
 // A painting plane seen through a pinhole camera. With the ray direction
-// d = F + sx R + sy U (view.h), the hit's texel position is a ratio of linear forms in the
+// d = F + sx R + sy U (views/camera.h), the hit's texel position is a ratio of linear forms in the
 // screen factors (sx, sy):
 //   x0 = su (u . (C - O) + N (u . d) / (n . d)),  N = (O - C) . n,  t = N / (n . d),
 // and its derivative per display pixel, kx = dsx/dpx, is the Igehy ray differential

@@ -1,6 +1,6 @@
 // The feedback pass (tile determination): rays through a view at reduced resolution find,
 // per feedback pixel, the painting texel seen and the mip level a GPU's textureQueryLod
-// would pick for a display pixel there, and write the request key (request.h).
+// would pick for a display pixel there, and write the request key (pack/tile_key.h).
 #pragma once
 #include <cstdint>
 

@@ -1,5 +1,5 @@
 """Building tile packs: the merged page-table layout and the streamed build of one pack
-from images (format in README.md and the core's pack_format.h). A build goes into a
+from images (format in README.md and the core's pack/format.h). A build goes into a
 temporary sibling directory renamed into place at the end."""
 
 from __future__ import annotations
