@@ -230,20 +230,14 @@ void bind_pack(nb::module_& m) {
 
     m.def("layout_page_tables", [](const std::vector<std::pair<std::uint32_t, std::uint32_t>>& sizes,
                                    const std::string& method, std::uint64_t seed) {
-        require(method == "brkga" || method == "shelf",
-                "unknown layout method '" + method + "' (expected brkga or shelf)");
         std::vector<TableSize> tables;
         for (auto [w, h] : sizes) tables.push_back({w, h});
-        PageLayout shelf, brkga;
+        PlannedLayout plan;
         {
             nb::gil_scoped_release release;
-            shelf = shelf_layout(tables);
-            BrkgaOptions o;
-            o.seed = seed;
-            brkga = brkga_layout(tables, o);
+            plan = plan_layout(tables, method, seed);
         }
-        const PageLayout& chosen = method == "shelf" ? shelf : brkga;
-        check_layout(tables, chosen);
+        const PageLayout &chosen = plan.chosen, &shelf = plan.shelf, &brkga = plan.brkga;
         nb::dict info;
         info["packer"] = method;
         info["fill_ratio"] = chosen.fill_ratio;

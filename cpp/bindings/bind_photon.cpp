@@ -146,10 +146,7 @@ void bind_photon(nb::module_& m) {
     m.def("_build_scene", [](const std::string& name, Scene& scene, int width, int height, float albedo,
                               float emission) {
         nb::gil_scoped_release release;
-        if (name == "cornell") return build_cornell(scene, width, height);
-        if (name == "office") return build_office(scene, width, height);
-        if (name == "furnace") return build_furnace(scene, albedo, emission, width, height);
-        throw InvalidArgument("unknown scene '" + name + "' (built-in: cornell, office, furnace)");
+        return build_scene(name, scene, width, height, albedo, emission);
     });
 
     m.def("_trace_photons", [](const Scene& scene, std::uint64_t count, std::uint64_t seed, unsigned threads) {

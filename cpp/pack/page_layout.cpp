@@ -171,6 +171,20 @@ PageLayout shelf_layout(const std::vector<TableSize>& tables) {
     return best;
 }
 
+PlannedLayout plan_layout(const std::vector<TableSize>& tables, const std::string& method,
+                          std::uint64_t seed) {
+    require(method == "brkga" || method == "shelf",
+            "unknown layout method '" + method + "' (expected brkga or shelf)");
+    PlannedLayout p;
+    p.shelf = shelf_layout(tables);
+    BrkgaOptions o;
+    o.seed = seed;
+    p.brkga = brkga_layout(tables, o);
+    p.chosen = method == "shelf" ? p.shelf : p.brkga;
+    check_layout(tables, p.chosen);
+    return p;
+}
+
 PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions& o) {
     check_tables(tables);
     require(o.elite_fraction > 0 && o.elite_fraction < 1 && o.mutant_fraction >= 0 &&

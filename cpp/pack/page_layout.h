@@ -10,6 +10,7 @@
 // left-bottom over aligned corner positions), the last one the strip width.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,15 @@ struct BrkgaOptions {
 };
 
 PageLayout shelf_layout(const std::vector<TableSize>& tables);
+
+// The layout a pack build uses: both packers run (their fill ratios go into the manifest) and
+// `method` ("brkga" or "shelf", InvalidArgument otherwise) picks the one whose offsets are
+// used; the chosen layout is checked.
+struct PlannedLayout {
+    PageLayout chosen, shelf, brkga;
+};
+PlannedLayout plan_layout(const std::vector<TableSize>& tables, const std::string& method,
+                          std::uint64_t seed);
 PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions& options = {});
 
 // InvalidArgument unless every table is a power of two, aligned to its size, inside the merged

@@ -236,4 +236,12 @@ Camera build_office(Scene& scene, int width, int height) {
     return Camera::look_at({0.3f, 1.6f, 2.8f}, {-0.3f, 0.8f, -1.5f}, {0, 1, 0}, 60.0f, width, height);
 }
 
+Camera build_scene(const std::string& name, Scene& scene, int width, int height, float albedo,
+                   float emission) {
+    if (name == "cornell") return build_cornell(scene, width, height);
+    if (name == "office") return build_office(scene, width, height);
+    if (name == "furnace") return build_furnace(scene, albedo, emission, width, height);
+    throw InvalidArgument("unknown scene '" + name + "' (built-in: cornell, office, furnace)");
+}
+
 }  // namespace gigascroll

@@ -6,6 +6,8 @@
 //  - furnace: a closed sphere, uniform albedo rho and emission Le everywhere, so the radiance
 //    is Le / (1 - rho) in every direction.
 #pragma once
+#include <string>
+
 #include "views/camera.h"
 #include "photon/scene.h"
 
@@ -14,5 +16,9 @@ namespace gigascroll {
 Camera build_cornell(Scene& scene, int width = 256, int height = 256);
 Camera build_office(Scene& scene, int width = 256, int height = 256);
 Camera build_furnace(Scene& scene, float albedo, float emission, int width = 64, int height = 64);
+// By name: "cornell", "office" or "furnace" (albedo and emission are the furnace's);
+// InvalidArgument for any other name.
+Camera build_scene(const std::string& name, Scene& scene, int width, int height, float albedo,
+                   float emission);
 
 }  // namespace gigascroll
