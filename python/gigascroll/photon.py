@@ -131,7 +131,9 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
            grid: str = "hash", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
            kernel: str = "box", light_samples: int = 1, pipeline: str = "fused",
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
-           hash_mode: str = "auto", return_stats: bool = False):
+           hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
+           passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
+           snapshots: Sequence[int] = ()):
     """Render linear radiance, float32 (H, W, 3).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
@@ -140,10 +142,33 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     hash grid, radius gather) streams each photon once through a block of hit points in one cell.
     The same seed gives the same image for any thread count. return_stats=True also returns a
     dict of pass times (seconds) and counts.
+
+    progressive=True: stochastic progressive photon mapping (consistent: converges to the exact
+    image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
+    takes one camera sample per pixel and `photons` new photons; `radius` is the initial radius,
+    shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
+    in stats['snapshots'] as (passes, seconds, image).
     """
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
                   cooperative, direct, indirect, threads, hash_mode)
-    image, stats = _core._render(scene, camera, **s)
+    if not progressive:
+        if snapshots:
+            raise ValueError("snapshots need progressive=True")
+        image, stats = _core._render(scene, camera, **s)
+        return (image, stats) if return_stats else image
+    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or not 1 <= passes <= 1 << 24:
+        raise ValueError(f"passes must be an integer in [1, 2^24], got {passes!r}")
+    budget = 0.0 if time_budget is None else float(time_budget)
+    if not math.isfinite(budget) or budget <= 0 and time_budget is not None:
+        raise ValueError(f"time_budget must be positive and finite, got {time_budget!r}")
+    alpha = float(alpha)
+    if not 0 < alpha < 1:
+        raise ValueError(f"alpha must be in (0, 1), got {alpha}")
+    shots = [int(x) for x in snapshots]
+    if any(x < 1 for x in shots):
+        raise ValueError("snapshots must be positive pass counts")
+    image, stats = _core._render_progressive(scene, camera, **s, passes=int(passes), time_budget=budget,
+                                             alpha=alpha, snapshots=shots)
     return (image, stats) if return_stats else image
 
 
