@@ -10,6 +10,7 @@ Everything is Lambertian. Radiance is linear; `save_image` writes EXR (float) or
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
@@ -19,11 +20,15 @@ from . import _core
 from ._core import Camera, PhotonMap, StereoCamera
 
 __all__ = ["Scene", "Camera", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
-           "default_radius", "render", "render_stereo", "trace_photons", "save_image", "relmse"]
+           "RoomScene", "room_scene", "ROOMS", "default_radius", "render", "render_stereo",
+           "trace_photons", "save_image", "relmse"]
+
+# The test rooms built from rectangles (see RoomScene); Mitsuba can render each of them.
+ROOMS = ("room_lit", "room_indirect", "room_partition")
 
 # name -> the scene's size scale: seed 001's radii (0.02-0.2, a Cornell box about 2 units
 # wide) are multiplied by it.
-BUILTIN_SCENES = {"cornell": 1.0, "office": 4.0, "furnace": 1.0}
+BUILTIN_SCENES = {"cornell": 1.0, "office": 4.0, "furnace": 1.0, **{name: 2.0 for name in ROOMS}}
 
 
 class Scene(_core._Scene):
@@ -88,16 +93,142 @@ def _float_array(x, name: str) -> np.ndarray:
 def builtin_scene(name: str, resolution: Sequence[int] | None = None, albedo: float = 0.5,
                   emission: float = 1.0) -> tuple[Scene, Camera]:
     """A committed built-in scene and its camera: 'cornell' (Mitsuba 3's cornell_box()),
-    'office' (~710k triangles) or 'furnace' (closed sphere, uniform albedo and emission)."""
+    'office' (~710k triangles), 'furnace' (closed sphere, uniform albedo and emission) or one of
+    ROOMS (see room_scene)."""
     if name not in BUILTIN_SCENES:
         raise ValueError(f"unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN_SCENES)}")
     if name == "furnace" and not (0.0 <= albedo < 1.0):
         raise ValueError("furnace: albedo must be in [0, 1)")
     w, h = resolution if resolution is not None else ((64, 64) if name == "furnace" else (256, 256))
+    if name in ROOMS:
+        return room_scene(name).build(resolution=(w, h))
     scene = Scene()
     camera = _core._build_scene(name, scene, int(w), int(h), float(albedo), float(emission))
     scene.commit()
     return scene, camera
+
+
+@dataclass(frozen=True)
+class _Rect:
+    """A parallelogram c + s a + t b, s, t in [-1, 1]: Mitsuba's `rectangle` under the
+    transform with columns (a, b, unit normal, c). Emits (one-sided) toward a x b."""
+    c: tuple
+    a: tuple
+    b: tuple
+    albedo: tuple
+    emission: tuple = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class RoomScene:
+    """A scene made of rectangles only, so that it is built identically here and in Mitsuba 3.
+
+    `build()` gives the committed gigascroll Scene and Camera; `to_mitsuba_dict()` the same
+    scene for `mitsuba.load_dict` (path tracer, perspective sensor with fov_axis 'y' like our
+    camera, box pixel filter like our jittered pixels, every BSDF `twosided` because our
+    surfaces reflect on both sides). `regions` names pixel masks used to measure bias."""
+    name: str
+    rects: tuple
+    eye: tuple
+    target: tuple
+    fov: float
+
+    def build(self, resolution=(64, 64)) -> tuple[Scene, Camera]:
+        scene = Scene()
+        for r in self.rects:
+            c, a, b = (np.array(x, np.float64) for x in (r.c, r.a, r.b))
+            v = np.array([c - a - b, c + a - b, c + a + b, c - a + b])
+            scene.add_mesh(v, [[0, 1, 2], [2, 3, 0]], r.albedo, r.emission)
+        scene.commit()
+        w, h = resolution
+        return scene, Camera(list(self.eye), list(self.target), [0, 1, 0], self.fov, resolution=(int(w), int(h)))
+
+    def to_mitsuba_dict(self, resolution=(64, 64), integrator: dict | None = None) -> dict:
+        import mitsuba as mi
+
+        if mi.variant() is None:
+            mi.set_variant("scalar_rgb")
+        w, h = resolution
+        d = {"type": "scene",
+             "integrator": integrator or {"type": "path", "max_depth": -1},
+             "sensor": {"type": "perspective", "fov_axis": "y", "fov": float(self.fov),
+                        "to_world": mi.ScalarTransform4f().look_at(origin=list(self.eye), target=list(self.target),
+                                                                   up=[0, 1, 0]),
+                        "film": {"type": "hdrfilm", "width": int(w), "height": int(h),
+                                 "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+                        "sampler": {"type": "independent"}}}
+        for i, r in enumerate(self.rects):
+            a, b = np.array(r.a, float), np.array(r.b, float)
+            n = np.cross(a, b)
+            n /= np.linalg.norm(n)
+            m = np.eye(4)
+            m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = a, b, n, r.c
+            shape = {"type": "rectangle", "to_world": mi.ScalarTransform4f(m.tolist()),
+                     "bsdf": {"type": "twosided", "bsdf": {"type": "diffuse",
+                                                           "reflectance": {"type": "rgb", "value": list(r.albedo)}}}}
+            if any(e > 0 for e in r.emission):
+                shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(r.emission)}}
+            d[f"rect{i:03d}"] = shape
+        return d
+
+
+def _box(c, half, albedo) -> list[_Rect]:
+    """An axis-aligned box as six outward-facing rectangles."""
+    out = []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            u, w = np.zeros(3), np.zeros(3)
+            u[(axis + 1) % 3], w[(axis + 2) % 3] = half[(axis + 1) % 3], half[(axis + 2) % 3]
+            if sign < 0:
+                u, w = w, u  # keep u x w pointing outward
+            centre = np.array(c, float)
+            centre[axis] += sign * half[axis]
+            out.append(_Rect(tuple(centre), tuple(u), tuple(w), albedo))
+    return out
+
+
+def _room_shell(ceiling_light: bool) -> list[_Rect]:
+    """A 4 m x 2.6 m x 4 m room, x and z in [-2, 2], y in [0, 2.6], surfaces facing inward."""
+    wall, floor, ceiling = (0.75, 0.73, 0.70), (0.45, 0.42, 0.40), (0.80, 0.80, 0.80)
+    rects = [
+        _Rect((0, 0, 0), (0, 0, 2), (2, 0, 0), floor),              # floor, normal +y
+        _Rect((0, 2.6, 0), (2, 0, 0), (0, 0, 2), ceiling),          # ceiling, normal -y
+        _Rect((0, 1.3, -2), (2, 0, 0), (0, 1.3, 0), wall),          # back, normal +z
+        _Rect((0, 1.3, 2), (0, 1.3, 0), (2, 0, 0), wall),           # front, normal -z
+        _Rect((-2, 1.3, 0), (0, 1.3, 0), (0, 0, 2), wall),          # left, normal +x
+        _Rect((2, 1.3, 0), (0, 0, 2), (0, 1.3, 0), wall),           # right, normal -x
+    ]
+    if ceiling_light:  # a 0.8 m square panel 1 cm below the ceiling, emitting downward
+        rects.append(_Rect((0, 2.59, 0), (0.4, 0, 0), (0, 0, 0.4), (0.0, 0.0, 0.0), (10.0, 10.0, 10.0)))
+    return rects
+
+
+def room_scene(name: str) -> RoomScene:
+    """The three rooms the photon mapper's accuracy is tested on (against Mitsuba):
+    - room_lit: a ceiling panel lights the room directly; a strongly red painting (1 cm thick)
+      hangs 2 cm in front of the back wall, a white cube stands on the floor;
+    - room_indirect: the panel hangs 30 cm below the ceiling and emits upward: every surface
+      but the ceiling is lit indirectly;
+    - room_partition: a 2 cm partition at x = 0 splits the room, with a full-height slit
+      30 cm wide; the light is on the far side, the camera on the dark side looks at the partition's
+      foot, where a sphere gather leaks light along the coplanar floor."""
+    if name == "room_lit":
+        rects = _room_shell(True) + _box((0, 1.4, -1.975), (0.6, 0.4, 0.005), (0.80, 0.06, 0.04))
+        rects += _box((0.9, 0.25, -0.9), (0.25, 0.25, 0.25), (0.75, 0.75, 0.75))
+        return RoomScene(name, tuple(rects), (0.0, 1.3, 1.9), (0.0, 1.1, -2.0), 60.0)
+    if name == "room_indirect":
+        rects = _room_shell(False)
+        rects.append(_Rect((0, 1.9, 0), (0, 0, 0.5), (0.5, 0, 0), (0.0, 0.0, 0.0), (10.0, 10.0, 10.0)))  # emits +y
+        rects += _box((0.9, 0.25, -0.9), (0.25, 0.25, 0.25), (0.75, 0.75, 0.75))
+        return RoomScene(name, tuple(rects), (0.0, 1.3, 1.9), (0.0, 1.0, -2.0), 60.0)
+    if name == "room_partition":
+        rects = [r for r in _room_shell(False)]
+        rects.append(_Rect((-1.0, 2.59, 0), (0.4, 0, 0), (0, 0, 0.4), (0.0, 0.0, 0.0), (20.0, 20.0, 20.0)))
+        partition = (0.75, 0.73, 0.70)
+        rects += _box((0, 1.3, -1.075), (0.01, 1.3, 0.925), partition)  # z in [-2, -0.15]
+        rects += _box((0, 1.3, 1.075), (0.01, 1.3, 0.925), partition)   # z in [0.15, 2]
+        return RoomScene(name, tuple(rects), (1.9, 1.3, 0.6), (0.0, 0.4, -0.2), 60.0)
+    raise ValueError(f"unknown test room {name!r}; test rooms: {', '.join(ROOMS)}")
 
 
 def default_radius(scene: Scene) -> float:
