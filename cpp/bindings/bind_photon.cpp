@@ -64,7 +64,7 @@ RenderSettings make_settings(std::uint64_t photons, float radius, const std::str
                              const std::string& gather, int k, const std::string& kernel, int spp,
                              int light_samples, std::uint64_t seed, const std::string& pipeline,
                              bool cooperative, bool direct, bool indirect, unsigned threads,
-                             const std::string& mode) {
+                             const std::string& mode, bool disc) {
     RenderSettings s;
     s.photons = photons;
     s.gather.radius = radius;
@@ -81,6 +81,7 @@ RenderSettings make_settings(std::uint64_t photons, float radius, const std::str
     s.indirect = indirect;
     s.threads = threads;
     s.hash_mode = parse_hash_mode(mode);
+    s.gather.disc = disc;
     s.validate();
     return s;
 }
@@ -105,7 +106,7 @@ nb::dict stats_dict(const RenderStats& st) {
 #define RENDER_ARGS                                                                                   \
     "photons"_a, "radius"_a, "grid"_a = "hash", "gather"_a = "radius", "k"_a = 50, "kernel"_a = "box", \
         "spp"_a = 1, "light_samples"_a = 1, "seed"_a = 0, "pipeline"_a = "fused", "cooperative"_a = false, \
-        "direct"_a = true, "indirect"_a = true, "threads"_a = 0, "hash_mode"_a = "auto"
+        "direct"_a = true, "indirect"_a = true, "threads"_a = 0, "hash_mode"_a = "auto", "disc"_a = false
 
 }  // namespace
 
@@ -201,9 +202,10 @@ void bind_photon(nb::module_& m) {
     m.def("_render", [](const Scene& scene, const Camera& cam, std::uint64_t photons, float radius,
                         const std::string& grid, const std::string& gather, int k, const std::string& kernel,
                         int spp, int light_samples, std::uint64_t seed, const std::string& pipeline,
-                        bool cooperative, bool direct, bool indirect, unsigned threads, const std::string& mode) {
+                        bool cooperative, bool direct, bool indirect, unsigned threads, const std::string& mode,
+                        bool disc) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
-                                               pipeline, cooperative, direct, indirect, threads, mode);
+                                               pipeline, cooperative, direct, indirect, threads, mode, disc);
         RenderStats st;
         std::vector<float> img;
         {
@@ -219,10 +221,10 @@ void bind_photon(nb::module_& m) {
                                     const std::string& grid, const std::string& gather, int k,
                                     const std::string& kernel, int spp, int light_samples, std::uint64_t seed,
                                     const std::string& pipeline, bool cooperative, bool direct, bool indirect,
-                                    unsigned threads, const std::string& mode, int passes, double time_budget,
+                                    unsigned threads, const std::string& mode, bool disc, int passes, double time_budget,
                                     float alpha, const std::vector<int>& snapshots) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
-                                               pipeline, cooperative, direct, indirect, threads, mode);
+                                               pipeline, cooperative, direct, indirect, threads, mode, disc);
         ProgressiveSettings p;
         p.passes = passes;
         p.time_budget = time_budget;
@@ -262,9 +264,9 @@ void bind_photon(nb::module_& m) {
                                float radius, const std::string& grid, const std::string& gather, int k,
                                const std::string& kernel, int spp, int light_samples, std::uint64_t seed,
                                const std::string& pipeline, bool cooperative, bool direct, bool indirect,
-                               unsigned threads, const std::string& mode) {
+                               unsigned threads, const std::string& mode, bool disc) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
-                                               pipeline, cooperative, direct, indirect, threads, mode);
+                                               pipeline, cooperative, direct, indirect, threads, mode, disc);
         StereoImages out;
         {
             nb::gil_scoped_release release;

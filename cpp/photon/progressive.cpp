@@ -10,6 +10,7 @@
 #include "photon/hash_grid.h"
 #include "photon/photon_tracer.h"
 #include "photon/rng.h"
+#include "photon/surface_disc.h"
 
 namespace gigascroll {
 
@@ -128,7 +129,17 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                         if (!s.has_point) continue;
                         ++g;
                         float found = 0;
-                        const Vec3f power = grid.sum_box(s.p, s.normal, s.r * s.r, &found);
+                        Vec3f power;
+                        if (settings.gather.disc) {
+                            // The clipped disc's flux, scaled to the full disc's area so the
+                            // final tau / (pi R^2) divides by the area actually gathered.
+                            const SurfaceDisc d = make_surface_disc(scene, s.p, s.normal, s.r);
+                            const float full = float(M_PI) * s.r * s.r;
+                            if (!(d.area > 1e-3f * full)) continue;
+                            power = gather_disc(grid, d, &found) * (full / d.area);
+                        } else {
+                            power = grid.sum_box(s.p, s.normal, s.r * s.r, &found);
+                        }
                         if (!(found > 0)) continue;
                         const double n_new = s.n + alpha * double(found);
                         const double shrink2 = n_new / (s.n + double(found));  // (R' / R)^2

@@ -41,7 +41,8 @@ struct ProgressiveStats {
 using PassCallback = std::function<void(int passes, const std::vector<float>& image, double seconds)>;
 
 // settings.photons is the photon count per pass, settings.gather.radius the initial radius;
-// settings.spp must be 1 (each pass is one camera sample per pixel). Box kernel, radius gather.
+// settings.spp must be 1 (each pass is one camera sample per pixel). Box kernel, radius gather,
+// over the sphere or (settings.gather.disc) the surface disc.
 std::vector<float> render_progressive(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                                       const ProgressiveSettings& progressive, ProgressiveStats& stats,
                                       const PassCallback& on_pass = {});

@@ -38,6 +38,8 @@ void RenderSettings::validate() const {
             "render: the cooperative gather needs the two-pass pipeline");
     require(!cooperative || grid == GridKind::Hash, "render: the cooperative gather needs the hash grid");
     require(!cooperative || !gather.knn, "render: the cooperative gather is a radius gather (no k-nearest)");
+    require(!gather.disc || (!gather.knn && gather.kernel == Kernel::Box && !cooperative),
+            "render: the surface disc is a box radius gather (no knn, cone kernel or cooperative gather)");
 }
 
 Renderer::Renderer(const Scene& scene, const RenderSettings& settings) : scene_(scene), s_(settings) {
@@ -107,9 +109,18 @@ Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c
     Vec3f L = emitted_and_direct(hit, c, &gather);
     if (gather) {
         ++c.gathers;
-        L += scene_.albedo(hit.tri) * kInvPi * map_->gather(hit.p, hit.n, s_.gather, heap);
+        L += scene_.albedo(hit.tri) * kInvPi * indirect_density(hit.p, hit.n, heap);
     }
     return L;
+}
+
+Vec3f Renderer::indirect_density(Vec3f p, Vec3f n, KnnHeap& heap) const {
+    if (!s_.gather.disc) return map_->gather(p, n, s_.gather, heap);
+    const SurfaceDisc d = make_surface_disc(scene_, p, n, s_.gather.radius);
+    // A disc clipped to (almost) nothing carries no usable estimate.
+    const float r2 = s_.gather.radius * s_.gather.radius;
+    if (!(d.area > 1e-3f * float(M_PI) * r2)) return {0, 0, 0};
+    return map_->gather_disc(d) * (1.0f / d.area);
 }
 
 std::vector<float> Renderer::render(const Camera& cam, RenderStats& st) const {
@@ -270,7 +281,7 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
     if (!s_.cooperative) {
         parallel_for(hits.size(), 256, [&](std::size_t b, std::size_t e) {
             KnnHeap heap;
-            for (std::size_t i = b; i < e; ++i) result[i] = map_->gather(hits[i].p, hits[i].n, s_.gather, heap);
+            for (std::size_t i = b; i < e; ++i) result[i] = indirect_density(hits[i].p, hits[i].n, heap);
         }, s_.threads);
     } else {
         // Blocks: runs of at most kCoopBlock hit points in one grid cell (equal keys).

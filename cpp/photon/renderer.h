@@ -76,6 +76,9 @@ public:
     // Emitted + direct + photon-map radiance leaving hit toward where its normal faces. Depends
     // on the hit point alone (Lambertian, samples seeded by position), not on the eye.
     Vec3f surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const;
+    // Flux density of the photon map at a hit point: the sphere gather of gather.h, or the
+    // surface disc's when settings.gather.disc.
+    Vec3f indirect_density(Vec3f p, Vec3f n, KnnHeap& heap) const;
     // Emission and direct light only; *needs_gather says whether the photon map applies.
     // `pass` selects the progressive pass's light samples (0 for one-shot renders).
     Vec3f emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather,
