@@ -247,6 +247,9 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
             raise ValueError(f"{name} must be an integer, got {value!r}")
         if value < 0:
             raise ValueError(f"{name} must be non-negative, got {value}")
+        limit = 1 << 64 if name in ("photons", "seed") else 1 << 31
+        if value >= limit:
+            raise ValueError(f"{name} must be below 2^{limit.bit_length() - 1}, got {value}")
     radius = float(radius)
     if not math.isfinite(radius) or radius <= 0:
         raise ValueError(f"radius must be positive and finite, got {radius}")

@@ -98,3 +98,11 @@ def test_snapshots_need_progressive(cornell32):
     scene, cam = cornell32
     with pytest.raises(ValueError, match="progressive"):
         g.render(scene, cam, photons=1000, radius=0.05, snapshots=[1])
+
+
+@pytest.mark.parametrize("kw", [dict(photons=1 << 70), dict(seed=1 << 64), dict(threads=1 << 40), dict(spp=1 << 33)])
+def test_out_of_range_integers_are_value_errors(cornell32, kw):
+    scene, cam = cornell32
+    for progressive in (False, True):
+        with pytest.raises(ValueError, match="below"):
+            g.render(scene, cam, **(dict(photons=1000, radius=0.05, progressive=progressive) | kw))
