@@ -47,9 +47,10 @@ public:
                      : gather_radius(*kd_, x, n, s.radius, s.kernel);
     }
 
-    // Summed power in a surface disc (radius at most the grid's); *count gets how many.
-    Vec3f gather_disc(const SurfaceDisc& d, float* count = nullptr) const {
-        return grid_ ? gigascroll::gather_disc(*grid_, d, count) : gigascroll::gather_disc(*kd_, d, count);
+    // The surface-disc gather (surface_disc.h) at x, radius at most the grid's.
+    DiscEstimate gather_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) const {
+        return grid_ ? gigascroll::gather_surface_disc(scene, *grid_, x, n, r)
+                     : gigascroll::gather_surface_disc(scene, *kd_, x, n, r);
     }
 
     // Indices (into photons()) of every photon within r of q, for tests against brute force.

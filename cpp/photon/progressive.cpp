@@ -137,10 +137,11 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                         if (settings.gather.disc) {
                             // The clipped disc's flux, scaled to the full disc's area so the
                             // final tau / (pi R^2) divides by the area actually gathered.
-                            const SurfaceDisc d = make_surface_disc(scene, s.p, s.normal, s.r);
+                            const DiscEstimate d = gather_surface_disc(scene, grid, s.p, s.normal, s.r);
                             const float full = float(M_PI) * s.r * s.r;
                             if (!(d.area > 1e-3f * full)) continue;
-                            power = gather_disc(grid, d, &found) * (full / d.area);
+                            power = d.power * (full / d.area);
+                            found = d.count;
                         } else {
                             power = grid.sum_box(s.p, s.normal, s.r * s.r, &found);
                         }

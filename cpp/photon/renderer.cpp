@@ -116,11 +116,11 @@ Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c
 
 Vec3f Renderer::indirect_density(Vec3f p, Vec3f n, KnnHeap& heap) const {
     if (!s_.gather.disc) return map_->gather(p, n, s_.gather, heap);
-    const SurfaceDisc d = make_surface_disc(scene_, p, n, s_.gather.radius);
+    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, s_.gather.radius);
     // A disc clipped to (almost) nothing carries no usable estimate.
     const float r2 = s_.gather.radius * s_.gather.radius;
-    if (!(d.area > 1e-3f * float(M_PI) * r2)) return {0, 0, 0};
-    return map_->gather_disc(d) * (1.0f / d.area);
+    if (!(e.area > 1e-3f * float(M_PI) * r2)) return {0, 0, 0};
+    return e.power * (1.0f / e.area);
 }
 
 std::vector<float> Renderer::render(const Camera& cam, RenderStats& st) const {

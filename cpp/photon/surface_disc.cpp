@@ -11,13 +11,20 @@ namespace {
 constexpr float kThickness = 0.1f;
 }  // namespace
 
-SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
+SurfaceDisc full_surface_disc(Vec3f x, Vec3f n, float r) {
     SurfaceDisc d;
     d.x = x;
     d.n = n;
     d.r = r;
     d.thickness = kThickness * r;
     basis(n, d.t, d.b);
+    for (float& r2 : d.reach2) r2 = r * r;
+    d.area = float(M_PI) * r * r;
+    return d;
+}
+
+SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
+    SurfaceDisc d = full_surface_disc(x, n, r);
     // Probes run half the tolerance above the surface: clear of it, below anything that
     // stands on it.
     const float lift = std::max(0.5f * d.thickness, 4.0f * scene.epsilon());

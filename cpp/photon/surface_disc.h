@@ -12,7 +12,8 @@
 // It is a ray-traced variant of the clipped-kernel boundary corrections of density estimation
 // (e.g. the "boundary bias" discussion in Jensen's Realistic Image Synthesis Using Photon
 // Mapping, §7.5, and Hey & Purgathofer 2002, who estimate the disc area actually covered);
-// the cost is kSectors * (1 + kDepthProbes) rays per gather.
+// the cost is kSectors * (1 + kDepthProbes) rays per gather, paid only near other surfaces
+// (gather_surface_disc).
 #pragma once
 #include <cmath>
 
@@ -49,26 +50,57 @@ struct SurfaceDisc {
 
 // The surface disc of radius r at hit point x with normal n (facing the viewer).
 SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r);
+// The same disc unclipped (the thickness tolerance only), without rays.
+SurfaceDisc full_surface_disc(Vec3f x, Vec3f n, float r);
 
 }  // namespace gigascroll
 
 namespace gigascroll {
 
 // Summed power of the photons of `map` inside the disc whose normals agree with its own;
-// *count receives how many.
+// *count receives how many, *foreign (if given) how many photons within r were rejected.
 template <typename Map>
-Vec3f gather_disc(const Map& map, const SurfaceDisc& d, float* count) {
+Vec3f gather_disc(const Map& map, const SurfaceDisc& d, float* count, float* foreign = nullptr) {
     Vec3f sum{0, 0, 0};
-    float found = 0;
+    float found = 0, rejected = 0;
     float r2 = d.r * d.r;
     map.for_each_in_radius(d.x, r2, [&](const Photon& p, float) {
         if (dot(p.n, d.n) > 0.5f && d.contains(p.p)) {
             sum += p.power;
             found += 1;
+        } else {
+            rejected += 1;
         }
     });
     if (count) *count = found;
+    if (foreign) *foreign = rejected;
     return sum;
+}
+
+struct DiscEstimate {
+    Vec3f power{0, 0, 0};  // summed photon power in the disc
+    float count = 0;       // photons summed
+    float area = 0;        // the disc's (clipped) area
+};
+
+// The surface-disc gather at x. The disc is clipped (24 rays) only where the sphere holds a
+// photon of another surface: a wall, partition, box face or the wall behind a painting always
+// receives some. Where every photon within r lies on the query's own plane the full disc
+// stands, with no rays. (A surface that ends with no lit surface within r keeps the full
+// disc, as the sphere gather does.)
+template <typename Map>
+DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Vec3f n, float r) {
+    DiscEstimate e;
+    SurfaceDisc d = full_surface_disc(x, n, r);
+    float foreign = 0;
+    e.power = gather_disc(map, d, &e.count, &foreign);
+    e.area = d.area;
+    if (foreign > 0) {
+        d = make_surface_disc(scene, x, n, r);
+        e.power = gather_disc(map, d, &e.count);
+        e.area = d.area;
+    }
+    return e;
 }
 
 }  // namespace gigascroll
