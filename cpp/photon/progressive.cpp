@@ -117,11 +117,7 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
             for (const PixelState& s : px)
                 if (s.has_point) r_max = std::max(r_max, s.r);
             if (r_max > 0 && !photons.empty()) {
-                // Auto takes the hashed table: the dense grid's floor of 2^22 cells would cost
-                // a 32 MB prefix sum every pass, more than a small pass's photons and gathers.
-                const HashGrid grid(photons, r_max,
-                                    settings.hash_mode == HashGrid::Mode::Auto ? HashGrid::Mode::Hashed
-                                                                               : settings.hash_mode);
+                const HashGrid grid(photons, r_max, settings.hash_mode);
                 stats.render.build_seconds += seconds_since(t0);
                 t0 = Clock::now();
                 const float alpha = prog.alpha;
