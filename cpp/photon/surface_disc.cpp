@@ -1,5 +1,6 @@
 #include "photon/surface_disc.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace gigascroll {
@@ -24,6 +25,9 @@ SurfaceDisc full_surface_disc(Vec3f x, Vec3f n, float r) {
 }
 
 SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
+    // Nothing lies farther than the scene's diagonal: rays stay within it (and within the
+    // range Embree accepts), whatever the radius.
+    r = std::min(r, scene.diagonal());
     SurfaceDisc d = full_surface_disc(x, n, r);
     // Probes run half the tolerance above the surface: clear of it, below anything that
     // stands on it.
