@@ -267,7 +267,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
            passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
-           snapshots: Sequence[int] = (), disc: bool = False):
+           snapshots: Sequence[int] = (), disc: bool | None = None):
     """Render linear radiance, float32 (H, W, 3).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
@@ -281,7 +281,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     tangent plane only, the disc clipped per octant by rays to where walls stand or the surface
     ends, and divided by the clipped area (removes the darkening at edges and corners, the leak
     along a floor under a thin partition and a wall's light on a painting in front of it; costs
-    24 rays per gather).
+    24 rays per gather where another surface is within r). Default (None): on for progressive
+    rendering, whose bias would otherwise dominate at many passes, off for one-shot renders.
 
     progressive=True: stochastic progressive photon mapping (consistent: converges to the exact
     image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
@@ -289,6 +290,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
     in stats['snapshots'] as (passes, seconds, image).
     """
+    if disc is None:  # where the options allow it; otherwise their own error message comes first
+        disc = bool(progressive) and kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
                   cooperative, direct, indirect, threads, hash_mode, disc)
     if not progressive:

@@ -70,3 +70,14 @@ def test_disc_pipelines_agree_and_progressive_runs():
     assert np.allclose(a, b, rtol=1e-5, atol=1e-6)
     p = g.render(scene, cam, photons=20_000, progressive=True, passes=4, disc=True)
     assert np.isfinite(p).all() and p.mean() > 0
+    # The disc is progressive rendering's default, and off for one-shot renders.
+    assert np.array_equal(p, g.render(scene, cam, photons=20_000, progressive=True, passes=4))
+    assert not np.array_equal(a, g.render(scene, cam, photons=20_000, spp=2))
+
+
+def test_disc_with_a_huge_radius_gives_a_finite_image():
+    """Probe rays are kept within the scene's diagonal (Embree rejects rays beyond ~1e18)."""
+    scene, cam = g.builtin_scene("cornell", resolution=(8, 8))
+    for progressive in (False, True):
+        img = g.render(scene, cam, photons=1000, radius=1e30, disc=True, progressive=progressive, passes=2)
+        assert np.isfinite(img).all()

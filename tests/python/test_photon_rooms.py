@@ -77,8 +77,9 @@ def test_rooms_unknown_name():
 # relMSE to Mitsuba at 48 x 48, measured with these settings (deterministic seeds), and the
 # bound asserted (1.5x): one-shot at the default radius, 2^18 photons, 16 spp.
 ONE_SHOT = {"room_lit": (0.0037, 0.0056), "room_indirect": (0.0085, 0.013), "room_partition": (0.0080, 0.012)}
-# Progressive, 32 passes of 2^15 photons from twice the default radius.
-PROGRESSIVE = {"room_lit": (0.0024, 0.0036), "room_indirect": (0.0052, 0.0080), "room_partition": (0.0037, 0.0056)}
+# Progressive (surface disc, its default), 32 passes of 2^15 photons from twice the default
+# radius. With the sphere gather instead: 0.0024, 0.0052, 0.0037.
+PROGRESSIVE = {"room_lit": (0.0012, 0.0018), "room_indirect": (0.0034, 0.0051), "room_partition": (0.0030, 0.0045)}
 
 
 def test_one_shot_against_mitsuba(room):
@@ -95,8 +96,8 @@ def test_one_shot_against_mitsuba(room):
 
 def test_progressive_against_mitsuba_and_error_slope(room):
     """The progressive error falls with the passes: the least-squares slope of log relMSE
-    against log passes (1 .. 32) is clearly negative (measured -0.6 to -0.8; bias and
-    variance both shrink), and 32 passes end within the bound."""
+    against log passes (1 .. 32) is clearly negative (measured -0.76 to -0.86; -0.6 to -0.8
+    with the sphere gather; bias and variance both shrink), and 32 passes end within the bound."""
     name, scene, camera, ref = room
     passes = [1, 2, 4, 8, 16, 32]
     _, st = g.render(scene, camera, photons=1 << 15, radius=2 * g.default_radius(scene), progressive=True,
