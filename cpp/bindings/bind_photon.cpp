@@ -6,7 +6,9 @@
 #include <nanobind/stl/array.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <string>
@@ -17,6 +19,7 @@
 #include "common/error.h"
 #include "photon/photon_map.h"
 #include "photon/photon_tracer.h"
+#include "photon/progressive.h"
 #include "photon/renderer.h"
 #include "photon/scene.h"
 #include "photon/scenes.h"
@@ -61,7 +64,7 @@ RenderSettings make_settings(std::uint64_t photons, float radius, const std::str
                              const std::string& gather, int k, const std::string& kernel, int spp,
                              int light_samples, std::uint64_t seed, const std::string& pipeline,
                              bool cooperative, bool direct, bool indirect, unsigned threads,
-                             const std::string& mode) {
+                             const std::string& mode, bool disc) {
     RenderSettings s;
     s.photons = photons;
     s.gather.radius = radius;
@@ -78,6 +81,7 @@ RenderSettings make_settings(std::uint64_t photons, float radius, const std::str
     s.indirect = indirect;
     s.threads = threads;
     s.hash_mode = parse_hash_mode(mode);
+    s.gather.disc = disc;
     s.validate();
     return s;
 }
@@ -102,7 +106,7 @@ nb::dict stats_dict(const RenderStats& st) {
 #define RENDER_ARGS                                                                                   \
     "photons"_a, "radius"_a, "grid"_a = "hash", "gather"_a = "radius", "k"_a = 50, "kernel"_a = "box", \
         "spp"_a = 1, "light_samples"_a = 1, "seed"_a = 0, "pipeline"_a = "fused", "cooperative"_a = false, \
-        "direct"_a = true, "indirect"_a = true, "threads"_a = 0, "hash_mode"_a = "auto"
+        "direct"_a = true, "indirect"_a = true, "threads"_a = 0, "hash_mode"_a = "auto", "disc"_a = false
 
 }  // namespace
 
@@ -195,9 +199,10 @@ void bind_photon(nb::module_& m) {
     m.def("_render", [](const Scene& scene, const Camera& cam, std::uint64_t photons, float radius,
                         const std::string& grid, const std::string& gather, int k, const std::string& kernel,
                         int spp, int light_samples, std::uint64_t seed, const std::string& pipeline,
-                        bool cooperative, bool direct, bool indirect, unsigned threads, const std::string& mode) {
+                        bool cooperative, bool direct, bool indirect, unsigned threads, const std::string& mode,
+                        bool disc) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
-                                               pipeline, cooperative, direct, indirect, threads, mode);
+                                               pipeline, cooperative, direct, indirect, threads, mode, disc);
         RenderStats st;
         std::vector<float> img;
         {
@@ -209,13 +214,56 @@ void bind_photon(nb::module_& m) {
                               stats_dict(st));
     }, "scene"_a, "camera"_a, RENDER_ARGS);
 
+    m.def("_render_progressive", [](const Scene& scene, const Camera& cam, std::uint64_t photons, float radius,
+                                    const std::string& grid, const std::string& gather, int k,
+                                    const std::string& kernel, int spp, int light_samples, std::uint64_t seed,
+                                    const std::string& pipeline, bool cooperative, bool direct, bool indirect,
+                                    unsigned threads, const std::string& mode, bool disc, int passes, double time_budget,
+                                    float alpha, const std::vector<int>& snapshots) {
+        const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
+                                               pipeline, cooperative, direct, indirect, threads, mode, disc);
+        ProgressiveSettings p;
+        p.passes = passes;
+        p.time_budget = time_budget;
+        p.alpha = alpha;
+        p.validate();
+        ProgressiveStats st;
+        std::vector<float> img;
+        struct Snapshot {
+            int passes;
+            double seconds;
+            std::vector<float> image;
+        };
+        std::vector<Snapshot> shots;
+        {
+            nb::gil_scoped_release release;
+            PassCallback keep;
+            if (!snapshots.empty())
+                keep = [&](int done, const std::vector<float>& image, double seconds) {
+                    if (std::find(snapshots.begin(), snapshots.end(), done) != snapshots.end())
+                        shots.push_back({done, seconds, image});
+                };
+            img = render_progressive(scene, cam, s, p, st, keep);
+        }
+        const std::size_t h = std::size_t(cam.height), w = std::size_t(cam.width);
+        nb::dict d = stats_dict(st.render);
+        d["passes"] = st.passes;
+        d["mean_radius"] = st.mean_radius;
+        nb::list l;
+        for (auto& shot : shots)
+            l.append(nb::make_tuple(shot.passes, shot.seconds, to_numpy(std::move(shot.image), {h, w, 3})));
+        d["snapshots"] = l;
+        return nb::make_tuple(to_numpy(std::move(img), {h, w, 3}), d);
+    }, "scene"_a, "camera"_a, RENDER_ARGS, "passes"_a = 16, "time_budget"_a = 0.0, "alpha"_a = 2.0f / 3.0f,
+       "snapshots"_a = std::vector<int>{});
+
     m.def("_render_stereo", [](const Scene& scene, const StereoCamera& eyes, bool reuse, std::uint64_t photons,
                                float radius, const std::string& grid, const std::string& gather, int k,
                                const std::string& kernel, int spp, int light_samples, std::uint64_t seed,
                                const std::string& pipeline, bool cooperative, bool direct, bool indirect,
-                               unsigned threads, const std::string& mode) {
+                               unsigned threads, const std::string& mode, bool disc) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
-                                               pipeline, cooperative, direct, indirect, threads, mode);
+                                               pipeline, cooperative, direct, indirect, threads, mode, disc);
         StereoImages out;
         {
             nb::gil_scoped_release release;

@@ -67,9 +67,9 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
     }
 }
 
-Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2) const {
+Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2, float* count) const {
     constexpr int kLanes = 8;  // independent partial sums: a fixed-width inner loop vectorises
-    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {};
+    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {};
     PhotonRun rs[27];
     const int nr = runs(q, rs);
     const float* px = px_.data(); const float* py = py_.data(); const float* pz = pz_.data();
@@ -89,16 +89,23 @@ Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2) const {
                 sr[l] += w * pr[j + l];
                 sg[l] += w * pg[j + l];
                 sb[l] += w * pb[j + l];
+                sw[l] += w;
             }
         for (int l = 0; j < rs[i].end; ++j, ++l) {
             const float w = weight(j);
             sr[l] += w * pr[j];
             sg[l] += w * pg[j];
             sb[l] += w * pb[j];
+            sw[l] += w;
         }
     }
     Vec3f sum{0, 0, 0};
-    for (int l = 0; l < kLanes; ++l) sum += Vec3f(sr[l], sg[l], sb[l]);
+    float total = 0;
+    for (int l = 0; l < kLanes; ++l) {
+        sum += Vec3f(sr[l], sg[l], sb[l]);
+        total += sw[l];
+    }
+    if (count) *count = total;
     return sum;
 }
 

@@ -56,8 +56,8 @@ public:
 
     // Heap-free box gather: the summed power of the photons within sqrt(r2) <= radius() of q
     // whose normals agree with n (gather.h), over structure-of-arrays copies so the loop over
-    // each run vectorises.
-    Vec3f sum_box(Vec3f q, Vec3f n, float r2) const;
+    // each run vectorises. *count (if given) receives how many photons were summed.
+    Vec3f sum_box(Vec3f q, Vec3f n, float r2, float* count = nullptr) const;
 
     // The cell holding q (clamped to one cell outside the grid); true when inside the grid.
     bool cell_of(Vec3f q, std::int64_t c[3]) const;

@@ -8,6 +8,7 @@
 #include "photon/gather.h"
 #include "photon/hash_grid.h"
 #include "photon/kd_tree.h"
+#include "photon/surface_disc.h"
 
 namespace gigascroll {
 
@@ -24,6 +25,7 @@ struct GatherSettings {
     bool knn = false;  // k-nearest with a heap instead of the heap-free radius gather
     int k = 50;
     Kernel kernel = Kernel::Box;
+    bool disc = false;  // gather over the surface disc (surface_disc.h) instead of the sphere
 };
 
 class PhotonMap {
@@ -43,6 +45,12 @@ public:
                                 : gather_radius(*grid_, x, n, s.radius, s.kernel);
         return s.knn ? gather_knn(*kd_, x, n, s.radius, s.k, s.kernel, heap)
                      : gather_radius(*kd_, x, n, s.radius, s.kernel);
+    }
+
+    // The surface-disc gather (surface_disc.h) at x, radius at most the grid's.
+    DiscEstimate gather_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) const {
+        return grid_ ? gigascroll::gather_surface_disc(scene, *grid_, x, n, r)
+                     : gigascroll::gather_surface_disc(scene, *kd_, x, n, r);
     }
 
     // Indices (into photons()) of every photon within r of q, for tests against brute force.

@@ -18,9 +18,11 @@ Vec3f sample_cosine(Vec3f n, float u1, float u2) {
 }
 
 std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::uint64_t seed,
-                                  unsigned threads, TraceStats* stats, int max_bounces) {
+                                  unsigned threads, TraceStats* stats, std::uint32_t pass, int max_bounces) {
     require(scene.committed(), "trace_photons: call Scene.commit() first");
     require(count > 0, "trace_photons: the photon count must be positive");
+    require(pass < kMaxPasses, "trace_photons: pass out of range");
+    const std::uint32_t stream = stream_id(StreamKind::Photon, pass);
     TraceStats st;
     st.emitted = count;
     st.emitted_power = scene.emitted_power();
@@ -41,7 +43,7 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
             auto& part = parts[c];
             const std::uint64_t end = std::min<std::uint64_t>(count, (c + 1) * kChunk);
             for (std::uint64_t i = c * kChunk; i < end; ++i) {
-                Rng rng(hash_combine(seed, i));
+                Rng rng(seed, stream, i);
                 const float ut = rng.uniform(), ua = rng.uniform(), ub = rng.uniform();
                 const LightSample ls = scene.sample_emitter(ut, ua, ub);
                 const float w = (ls.radiance.x + ls.radiance.y + ls.radiance.z) / 3.0f;

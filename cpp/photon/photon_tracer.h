@@ -23,11 +23,12 @@ struct TraceStats {
 
 // Traces `count` photons on `threads` threads (0 = all cores). Photon i draws its random
 // numbers from (seed, i) alone and the result is concatenated in photon order, so the output
-// is identical for any thread count. max_bounces caps a path (a safety net: with albedo < 1
+// is identical for any thread count; `pass` selects an independent photon set of the same
+// seed (progressive rendering traces one per pass). max_bounces caps a path (a safety net: with albedo < 1
 // Russian roulette ends every path with probability one).
 std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::uint64_t seed,
                                   unsigned threads = 0, TraceStats* stats = nullptr,
-                                  int max_bounces = 256);
+                                  std::uint32_t pass = 0, int max_bounces = 256);
 
 // A cosine-distributed direction around n from two uniforms.
 Vec3f sample_cosine(Vec3f n, float u1, float u2);

@@ -38,6 +38,8 @@ void RenderSettings::validate() const {
             "render: the cooperative gather needs the two-pass pipeline");
     require(!cooperative || grid == GridKind::Hash, "render: the cooperative gather needs the hash grid");
     require(!cooperative || !gather.knn, "render: the cooperative gather is a radius gather (no k-nearest)");
+    require(!gather.disc || (!gather.knn && gather.kernel == Kernel::Box && !cooperative),
+            "render: the surface disc is a box radius gather (no knn, cone kernel or cooperative gather)");
 }
 
 Renderer::Renderer(const Scene& scene, const RenderSettings& settings) : scene_(scene), s_(settings) {
@@ -57,9 +59,9 @@ Renderer::Renderer(const Scene& scene, const RenderSettings& settings) : scene_(
     photon_stats_.build_seconds = seconds_since(t0);
 }
 
-std::uint64_t Renderer::pixel_key(int x, int y, int view) const {
-    return hash_combine(hash_combine(s_.seed ^ 0x243f6a8885a308d3ULL, std::uint64_t(view)),
-                        (std::uint64_t(std::uint32_t(y)) << 32) | std::uint32_t(x));
+Rng Renderer::pixel_rng(int x, int y, int view, std::uint32_t pass) const {
+    return Rng(s_.seed, stream_id(StreamKind::Pixel, pass, std::uint32_t(view)),
+               (std::uint64_t(std::uint32_t(y)) << 32) | std::uint32_t(x));
 }
 
 void Renderer::add(RenderStats& st, const ShadeCounters& c) {
@@ -69,7 +71,8 @@ void Renderer::add(RenderStats& st, const ShadeCounters& c) {
     st.shadow_rays_skipped += c.shadow_rays_skipped;
 }
 
-Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const {
+Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather,
+                                   std::uint32_t pass) const {
     Vec3f L = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
     const Vec3f albedo = scene_.albedo(hit.tri);
     const bool reflects = max_component(albedo) > 0;
@@ -79,9 +82,9 @@ Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs
 
     const float eps = scene_.epsilon();
     Vec3f E{0, 0, 0};
-    const std::uint64_t key = hash_combine(s_.seed, scene_.position_key(hit.p));
+    // Keyed by position, not pixel: both stereo eyes draw the same samples at one point.
+    Rng rng(s_.seed, stream_id(StreamKind::Light, pass), scene_.position_key(hit.p));
     for (int i = 0; i < s_.light_samples; ++i) {
-        Rng rng(hash_combine(key, std::uint64_t(i)));
         const float ut = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         const LightSample ls = scene_.sample_emitter(ut, u1, u2);
         const Vec3f w = ls.p - hit.p;
@@ -106,9 +109,18 @@ Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c
     Vec3f L = emitted_and_direct(hit, c, &gather);
     if (gather) {
         ++c.gathers;
-        L += scene_.albedo(hit.tri) * kInvPi * map_->gather(hit.p, hit.n, s_.gather, heap);
+        L += scene_.albedo(hit.tri) * kInvPi * indirect_density(hit.p, hit.n, heap);
     }
     return L;
+}
+
+Vec3f Renderer::indirect_density(Vec3f p, Vec3f n, KnnHeap& heap) const {
+    if (!s_.gather.disc) return map_->gather(p, n, s_.gather, heap);
+    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, s_.gather.radius);
+    // A disc clipped to (almost) nothing carries no usable estimate.
+    const float r2 = s_.gather.radius * s_.gather.radius;
+    if (!(e.area > 1e-3f * float(M_PI) * r2)) return {0, 0, 0};
+    return e.power * (1.0f / e.area);
 }
 
 std::vector<float> Renderer::render(const Camera& cam, RenderStats& st) const {
@@ -130,7 +142,7 @@ void Renderer::render_fused(const Camera& cam, std::vector<float>& img, RenderSt
         ShadeCounters c;
         for (std::size_t y = yb; y < ye; ++y)
             for (int x = 0; x < w; ++x) {
-                Rng rng(pixel_key(x, int(y), 0));
+                Rng rng = pixel_rng(x, int(y), 0);
                 Vec3f sum{0, 0, 0};
                 for (int s = 0; s < s_.spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
@@ -226,7 +238,7 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
             const std::size_t ye = std::min(std::size_t(h), (ch + 1) * rows_per_chunk);
             for (std::size_t y = ch * rows_per_chunk; y < ye; ++y)
                 for (int x = 0; x < w; ++x) {
-                    Rng rng(pixel_key(x, int(y), 0));
+                    Rng rng = pixel_rng(x, int(y), 0);
                     const auto pixel = std::uint32_t(y * std::size_t(w) + std::size_t(x));
                     Vec3f sum{0, 0, 0};
                     for (int s = 0; s < s_.spp; ++s) {
@@ -269,7 +281,7 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
     if (!s_.cooperative) {
         parallel_for(hits.size(), 256, [&](std::size_t b, std::size_t e) {
             KnnHeap heap;
-            for (std::size_t i = b; i < e; ++i) result[i] = map_->gather(hits[i].p, hits[i].n, s_.gather, heap);
+            for (std::size_t i = b; i < e; ++i) result[i] = indirect_density(hits[i].p, hits[i].n, heap);
         }, s_.threads);
     } else {
         // Blocks: runs of at most kCoopBlock hit points in one grid cell (equal keys).

@@ -22,6 +22,7 @@
 
 #include "views/camera.h"
 #include "photon/photon_map.h"
+#include "photon/rng.h"
 #include "photon/scene.h"
 
 namespace gigascroll {
@@ -75,16 +76,21 @@ public:
     // Emitted + direct + photon-map radiance leaving hit toward where its normal faces. Depends
     // on the hit point alone (Lambertian, samples seeded by position), not on the eye.
     Vec3f surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const;
+    // Flux density of the photon map at a hit point: the sphere gather of gather.h, or the
+    // surface disc's when settings.gather.disc.
+    Vec3f indirect_density(Vec3f p, Vec3f n, KnnHeap& heap) const;
     // Emission and direct light only; *needs_gather says whether the photon map applies.
-    Vec3f emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather) const;
+    // `pass` selects the progressive pass's light samples (0 for one-shot renders).
+    Vec3f emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather,
+                             std::uint32_t pass = 0) const;
 
     const RenderStats& photon_stats() const { return photon_stats_; }  // photon pass only
     const PhotonMap* photon_map() const { return map_.get(); }
     const Scene& scene() const { return scene_; }
     const RenderSettings& settings() const { return s_; }
 
-    // Deterministic per-pixel sample stream.
-    std::uint64_t pixel_key(int x, int y, int view) const;
+    // Deterministic per-pixel sample stream of one view (stereo eye) and pass.
+    Rng pixel_rng(int x, int y, int view, std::uint32_t pass = 0) const;
     static void add(RenderStats& st, const ShadeCounters& c);
 
 private:

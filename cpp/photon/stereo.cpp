@@ -49,7 +49,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
         std::uint64_t won = 0;
         for (std::size_t y = yb; y < ye; ++y)
             for (int x = 0; x < w; ++x) {
-                Rng rng(R.pixel_key(x, int(y), 0));
+                Rng rng = R.pixel_rng(x, int(y), 0);
                 Vec3f sum{0, 0, 0};
                 for (int s = 0; s < spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
@@ -92,7 +92,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
             for (int x = 0; x < w; ++x) {
                 const std::size_t i = y * std::size_t(w) + std::size_t(x);
                 if (claimed[i].load(std::memory_order_relaxed) != 0) continue;
-                Rng rng(R.pixel_key(x, int(y), 1));
+                Rng rng = R.pixel_rng(x, int(y), 1);
                 Vec3f sum{0, 0, 0};
                 for (int s = 0; s < spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();

@@ -26,8 +26,9 @@ from .views import (HEADSET, MAGNIFIER, NO_REQUEST, PROCESSING_METHODS, SCROLL, 
 # the frame loop over views and runtime
 from .frame_loop import LOADING_STRATEGIES, FrameLoop
 # photon-mapping renderer
-from .photon import (BUILTIN_SCENES, PhotonMap, Scene, StereoCamera, builtin_scene,
-                     default_radius, relmse, render, render_stereo, save_image, trace_photons)
+from .photon import (BUILTIN_SCENES, ROOMS, PhotonMap, RoomScene, Scene, StereoCamera,
+                     builtin_scene, default_radius, relmse, render, render_stereo, room_scene,
+                     save_image, trace_photons)
 
 __version__ = "0.1.0"
 
@@ -51,6 +52,6 @@ __all__ = [
     # frame loop
     "FrameLoop", "LOADING_STRATEGIES",
     # photon
-    "Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
+    "Scene", "StereoCamera", "PhotonMap", "RoomScene", "room_scene", "ROOMS", "builtin_scene", "BUILTIN_SCENES",
     "default_radius", "render", "render_stereo", "trace_photons", "save_image", "relmse",
 ]

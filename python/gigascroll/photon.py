@@ -10,6 +10,7 @@ Everything is Lambertian. Radiance is linear; `save_image` writes EXR (float) or
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
@@ -19,11 +20,15 @@ from . import _core
 from ._core import Camera, PhotonMap, StereoCamera
 
 __all__ = ["Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
-           "default_radius", "render", "render_stereo", "trace_photons", "save_image", "relmse"]
+           "RoomScene", "room_scene", "ROOMS", "default_radius", "render", "render_stereo",
+           "trace_photons", "save_image", "relmse"]
+
+# The test rooms built from rectangles (see RoomScene); Mitsuba can render each of them.
+ROOMS = ("room_lit", "room_indirect", "room_partition")
 
 # name -> the scene's size scale: seed 001's radii (0.02-0.2, a Cornell box about 2 units
 # wide) are multiplied by it.
-BUILTIN_SCENES = {"cornell": 1.0, "office": 4.0, "furnace": 1.0}
+BUILTIN_SCENES = {"cornell": 1.0, "office": 4.0, "furnace": 1.0, **{name: 2.0 for name in ROOMS}}
 
 
 class Scene(_core._Scene):
@@ -88,16 +93,142 @@ def _float_array(x, name: str) -> np.ndarray:
 def builtin_scene(name: str, resolution: Sequence[int] | None = None, albedo: float = 0.5,
                   emission: float = 1.0) -> tuple[Scene, Camera]:
     """A committed built-in scene and its camera: 'cornell' (Mitsuba 3's cornell_box()),
-    'office' (~710k triangles) or 'furnace' (closed sphere, uniform albedo and emission)."""
+    'office' (~710k triangles), 'furnace' (closed sphere, uniform albedo and emission) or one of
+    ROOMS (see room_scene)."""
     if name not in BUILTIN_SCENES:
         raise ValueError(f"unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN_SCENES)}")
     if name == "furnace" and not (0.0 <= albedo < 1.0):
         raise ValueError("furnace: albedo must be in [0, 1)")
     w, h = resolution if resolution is not None else ((64, 64) if name == "furnace" else (256, 256))
+    if name in ROOMS:
+        return room_scene(name).build(resolution=(w, h))
     scene = Scene()
     camera = _core._build_scene(name, scene, int(w), int(h), float(albedo), float(emission))
     scene.commit()
     return scene, camera
+
+
+@dataclass(frozen=True)
+class _Rect:
+    """A parallelogram c + s a + t b, s, t in [-1, 1]: Mitsuba's `rectangle` under the
+    transform with columns (a, b, unit normal, c). Emits (one-sided) toward a x b."""
+    c: tuple
+    a: tuple
+    b: tuple
+    albedo: tuple
+    emission: tuple = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class RoomScene:
+    """A scene made of rectangles only, so that it is built identically here and in Mitsuba 3.
+
+    `build()` gives the committed gigascroll Scene and Camera; `to_mitsuba_dict()` the same
+    scene for `mitsuba.load_dict` (path tracer, perspective sensor with fov_axis 'y' like our
+    camera, box pixel filter like our jittered pixels, every BSDF `twosided` because our
+    surfaces reflect on both sides). `regions` names pixel masks used to measure bias."""
+    name: str
+    rects: tuple
+    eye: tuple
+    target: tuple
+    fov: float
+
+    def build(self, resolution=(64, 64)) -> tuple[Scene, Camera]:
+        scene = Scene()
+        for r in self.rects:
+            c, a, b = (np.array(x, np.float64) for x in (r.c, r.a, r.b))
+            v = np.array([c - a - b, c + a - b, c + a + b, c - a + b])
+            scene.add_mesh(v, [[0, 1, 2], [2, 3, 0]], r.albedo, r.emission)
+        scene.commit()
+        w, h = resolution
+        return scene, Camera(list(self.eye), list(self.target), [0, 1, 0], self.fov, resolution=(int(w), int(h)))
+
+    def to_mitsuba_dict(self, resolution=(64, 64), integrator: dict | None = None) -> dict:
+        import mitsuba as mi
+
+        if mi.variant() is None:
+            mi.set_variant("scalar_rgb")
+        w, h = resolution
+        d = {"type": "scene",
+             "integrator": integrator or {"type": "path", "max_depth": -1},
+             "sensor": {"type": "perspective", "fov_axis": "y", "fov": float(self.fov),
+                        "to_world": mi.ScalarTransform4f().look_at(origin=list(self.eye), target=list(self.target),
+                                                                   up=[0, 1, 0]),
+                        "film": {"type": "hdrfilm", "width": int(w), "height": int(h),
+                                 "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+                        "sampler": {"type": "independent"}}}
+        for i, r in enumerate(self.rects):
+            a, b = np.array(r.a, float), np.array(r.b, float)
+            n = np.cross(a, b)
+            n /= np.linalg.norm(n)
+            m = np.eye(4)
+            m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = a, b, n, r.c
+            shape = {"type": "rectangle", "to_world": mi.ScalarTransform4f(m.tolist()),
+                     "bsdf": {"type": "twosided", "bsdf": {"type": "diffuse",
+                                                           "reflectance": {"type": "rgb", "value": list(r.albedo)}}}}
+            if any(e > 0 for e in r.emission):
+                shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": list(r.emission)}}
+            d[f"rect{i:03d}"] = shape
+        return d
+
+
+def _box(c, half, albedo) -> list[_Rect]:
+    """An axis-aligned box as six outward-facing rectangles."""
+    out = []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            u, w = np.zeros(3), np.zeros(3)
+            u[(axis + 1) % 3], w[(axis + 2) % 3] = half[(axis + 1) % 3], half[(axis + 2) % 3]
+            if sign < 0:
+                u, w = w, u  # keep u x w pointing outward
+            centre = np.array(c, float)
+            centre[axis] += sign * half[axis]
+            out.append(_Rect(tuple(centre), tuple(u), tuple(w), albedo))
+    return out
+
+
+def _room_shell(ceiling_light: bool) -> list[_Rect]:
+    """A 4 m x 2.6 m x 4 m room, x and z in [-2, 2], y in [0, 2.6], surfaces facing inward."""
+    wall, floor, ceiling = (0.75, 0.73, 0.70), (0.45, 0.42, 0.40), (0.80, 0.80, 0.80)
+    rects = [
+        _Rect((0, 0, 0), (0, 0, 2), (2, 0, 0), floor),              # floor, normal +y
+        _Rect((0, 2.6, 0), (2, 0, 0), (0, 0, 2), ceiling),          # ceiling, normal -y
+        _Rect((0, 1.3, -2), (2, 0, 0), (0, 1.3, 0), wall),          # back, normal +z
+        _Rect((0, 1.3, 2), (0, 1.3, 0), (2, 0, 0), wall),           # front, normal -z
+        _Rect((-2, 1.3, 0), (0, 1.3, 0), (0, 0, 2), wall),          # left, normal +x
+        _Rect((2, 1.3, 0), (0, 0, 2), (0, 1.3, 0), wall),           # right, normal -x
+    ]
+    if ceiling_light:  # a 0.8 m square panel 1 cm below the ceiling, emitting downward
+        rects.append(_Rect((0, 2.59, 0), (0.4, 0, 0), (0, 0, 0.4), (0.0, 0.0, 0.0), (10.0, 10.0, 10.0)))
+    return rects
+
+
+def room_scene(name: str) -> RoomScene:
+    """The three rooms the photon mapper's accuracy is tested on (against Mitsuba):
+    - room_lit: a ceiling panel lights the room directly; a strongly red painting (1 cm thick)
+      hangs 2 cm in front of the back wall, a white cube stands on the floor;
+    - room_indirect: the panel hangs 30 cm below the ceiling and emits upward: every surface
+      but the ceiling is lit indirectly;
+    - room_partition: a 2 cm partition at x = 0 splits the room, with a full-height slit
+      30 cm wide; the light is on the far side, the camera on the dark side looks at the partition's
+      foot, where a sphere gather leaks light along the coplanar floor."""
+    if name == "room_lit":
+        rects = _room_shell(True) + _box((0, 1.4, -1.975), (0.6, 0.4, 0.005), (0.80, 0.06, 0.04))
+        rects += _box((0.9, 0.25, -0.9), (0.25, 0.25, 0.25), (0.75, 0.75, 0.75))
+        return RoomScene(name, tuple(rects), (0.0, 1.3, 1.9), (0.0, 1.1, -2.0), 60.0)
+    if name == "room_indirect":
+        rects = _room_shell(False)
+        rects.append(_Rect((0, 1.9, 0), (0, 0, 0.5), (0.5, 0, 0), (0.0, 0.0, 0.0), (10.0, 10.0, 10.0)))  # emits +y
+        rects += _box((0.9, 0.25, -0.9), (0.25, 0.25, 0.25), (0.75, 0.75, 0.75))
+        return RoomScene(name, tuple(rects), (0.0, 1.3, 1.9), (0.0, 1.0, -2.0), 60.0)
+    if name == "room_partition":
+        rects = [r for r in _room_shell(False)]
+        rects.append(_Rect((-1.0, 2.59, 0), (0.4, 0, 0), (0, 0, 0.4), (0.0, 0.0, 0.0), (20.0, 20.0, 20.0)))
+        partition = (0.75, 0.73, 0.70)
+        rects += _box((0, 1.3, -1.075), (0.01, 1.3, 0.925), partition)  # z in [-2, -0.15]
+        rects += _box((0, 1.3, 1.075), (0.01, 1.3, 0.925), partition)   # z in [0.15, 2]
+        return RoomScene(name, tuple(rects), (1.9, 1.3, 0.6), (0.0, 0.4, -0.2), 60.0)
+    raise ValueError(f"unknown test room {name!r}; test rooms: {', '.join(ROOMS)}")
 
 
 def default_radius(scene: Scene) -> float:
@@ -107,7 +238,7 @@ def default_radius(scene: Scene) -> float:
 
 
 def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
-              cooperative, direct, indirect, threads, hash_mode) -> dict:
+              cooperative, direct, indirect, threads, hash_mode, disc=False) -> dict:
     if radius is None:
         radius = default_radius(scene)
     for name, value in (("photons", photons), ("k", k), ("spp", spp), ("light_samples", light_samples),
@@ -116,6 +247,9 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
             raise ValueError(f"{name} must be an integer, got {value!r}")
         if value < 0:
             raise ValueError(f"{name} must be non-negative, got {value}")
+        limit = 1 << 64 if name in ("photons", "seed") else 1 << 31
+        if value >= limit:
+            raise ValueError(f"{name} must be below 2^{limit.bit_length() - 1}, got {value}")
     radius = float(radius)
     if not math.isfinite(radius) or radius <= 0:
         raise ValueError(f"radius must be positive and finite, got {radius}")
@@ -124,14 +258,16 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
     return dict(photons=int(photons) if photons else 1, radius=radius, grid=grid, gather=gather, k=int(k),
                 kernel=kernel, spp=int(spp), light_samples=int(light_samples), seed=int(seed),
                 pipeline=pipeline, cooperative=bool(cooperative), direct=bool(direct),
-                indirect=bool(indirect), threads=int(threads), hash_mode=hash_mode)
+                indirect=bool(indirect), threads=int(threads), hash_mode=hash_mode, disc=bool(disc))
 
 
 def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float | None = None,
            grid: str = "hash", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
            kernel: str = "box", light_samples: int = 1, pipeline: str = "fused",
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
-           hash_mode: str = "auto", return_stats: bool = False):
+           hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
+           passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
+           snapshots: Sequence[int] = (), disc: bool | None = None):
     """Render linear radiance, float32 (H, W, 3).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
@@ -140,10 +276,42 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     hash grid, radius gather) streams each photon once through a block of hit points in one cell.
     The same seed gives the same image for any thread count. return_stats=True also returns a
     dict of pass times (seconds) and counts.
+
+    disc=True gathers over the surface disc instead of the sphere: photons within 0.1 r of the
+    tangent plane only, the disc clipped per octant by rays to where walls stand or the surface
+    ends, and divided by the clipped area (removes the darkening at edges and corners, the leak
+    along a floor under a thin partition and a wall's light on a painting in front of it; costs
+    24 rays per gather where another surface is within r). Default (None): on for progressive
+    rendering, whose bias would otherwise dominate at many passes, off for one-shot renders.
+
+    progressive=True: stochastic progressive photon mapping (consistent: converges to the exact
+    image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
+    takes one camera sample per pixel and `photons` new photons; `radius` is the initial radius,
+    shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
+    in stats['snapshots'] as (passes, seconds, image).
     """
+    if disc is None:  # where the options allow it; otherwise their own error message comes first
+        disc = bool(progressive) and kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
-                  cooperative, direct, indirect, threads, hash_mode)
-    image, stats = _core._render(scene, camera, **s)
+                  cooperative, direct, indirect, threads, hash_mode, disc)
+    if not progressive:
+        if snapshots:
+            raise ValueError("snapshots need progressive=True")
+        image, stats = _core._render(scene, camera, **s)
+        return (image, stats) if return_stats else image
+    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or not 1 <= passes <= 1 << 24:
+        raise ValueError(f"passes must be an integer in [1, 2^24], got {passes!r}")
+    budget = 0.0 if time_budget is None else float(time_budget)
+    if not math.isfinite(budget) or budget <= 0 and time_budget is not None:
+        raise ValueError(f"time_budget must be positive and finite, got {time_budget!r}")
+    alpha = float(alpha)
+    if not 0 < alpha < 1:
+        raise ValueError(f"alpha must be in (0, 1), got {alpha}")
+    shots = [int(x) for x in snapshots]
+    if any(x < 1 for x in shots):
+        raise ValueError("snapshots must be positive pass counts")
+    image, stats = _core._render_progressive(scene, camera, **s, passes=int(passes), time_budget=budget,
+                                             alpha=alpha, snapshots=shots)
     return (image, stats) if return_stats else image
 
 

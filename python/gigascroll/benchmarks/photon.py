@@ -1,5 +1,6 @@
 """`gigascroll bench photon`: seed 001's Tables 1-5 on the CPU, the C++ radius-search benchmark
-against nanoflann, and run time against error for our estimator and Mitsuba 3's path tracer.
+against nanoflann, and run time against error (one-shot and progressive photon mapping
+against Mitsuba 3's path and particle tracers) for the Cornell box and the three test rooms.
 
 Every time is the median over --repeat runs, measured in this process on the same cores;
 speedups are ratios within the same run. Radii are the seed's (0.02-0.2, for its Cornell box
@@ -18,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from ..experiments import pyplot, save_figure, timed, write_json
+from ..experiments import pyplot, save_figure, write_json
 
 # Seed 001's settings and numbers (RTX 2080 Ti, ms), to print next to ours.
 SEED_TABLE1 = {  # (photons side, radius): (kd-tree, hash grid)
@@ -44,6 +45,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp")
     parser.add_argument("--quick", action="store_true", help="small settings, for a smoke test")
     parser.add_argument("--skip", default="", help="comma-separated parts to skip: tables, nanoflann, error")
+    parser.add_argument("--part", choices=("all", "tables", "nanoflann", "error"), default="all",
+                        help="run only this part (error: run time against error for the Cornell box and "
+                             "the three test rooms, one plot per scene)")
     parser.add_argument("--out", default="bench/photon", help="directory for results.json and the plot")
 
 
@@ -59,6 +63,8 @@ def run(args) -> int:
     if args.quick:
         args.width, args.repeat, args.error_size, args.reference_spp = 64, 1, 32, 256
     skip = set(args.skip.split(","))
+    if args.part != "all":
+        skip |= {"tables", "nanoflann", "error"} - {args.part}
     results: dict = {"machine": _machine(), "date": time.strftime("%Y-%m-%d"), "width": args.width,
                      "repeat": args.repeat, "k": args.k}
     if "tables" not in skip:
@@ -228,61 +234,121 @@ def _nanoflann(quick: bool) -> dict | None:
     return {f"{s}/{r}": v for (s, r), v in rows.items()}
 
 
-def _runtime_vs_error(args, out: Path) -> dict:
-    """relMSE to a Mitsuba reference against wall-clock seconds: our estimator over photon
-    counts, radii and spp, and Mitsuba's path tracer at increasing spp, on the same cores."""
-    from tqdm import tqdm
+ERROR_SCENES = ("cornell", "room_lit", "room_indirect", "room_partition")
+
+
+def _mitsuba_dict(name: str, size: int, integrator: str) -> dict:
+    """The scene for mitsuba.load_dict: mi.cornell_box() with our pixel filter, or the room's
+    own export (RoomScene.to_mitsuba_dict)."""
+    import mitsuba as mi
 
     from .. import photon as P
 
+    if name == "cornell":
+        d = mi.cornell_box()
+        d["sensor"]["film"].update(width=size, height=size, rfilter={"type": "box"})
+        d["integrator"] = {"type": integrator, "max_depth": -1}
+        return d
+    return P.room_scene(name).to_mitsuba_dict(resolution=(size, size), integrator={"type": integrator,
+                                                                                  "max_depth": -1})
+
+
+def _runtime_vs_error(args, out: Path) -> dict:
+    """relMSE to a Mitsuba reference against wall-clock seconds, per scene: the one-shot photon
+    mapper over photon counts, radii and spp; the progressive one (one render, an image after
+    each power-of-two pass count), sphere and surface-disc gathers; Mitsuba's path tracer at
+    increasing spp (and its particle tracer in the indirectly lit room), all on the same cores."""
     try:
         import mitsuba as mi
     except ImportError:
         print("\n(mitsuba not installed: skipping run time against error)")
         return {}
     mi.set_variant("scalar_rgb")
+    return {name: _error_study(name, args, out) for name in ERROR_SCENES}
+
+
+def _reference(name: str, size: int, spp: int, integrator: str) -> np.ndarray:
+    """The scene's Mitsuba reference, cached under build/photon-reference (rendered once)."""
+    import mitsuba as mi
+
+    path = Path("build") / "photon-reference" / f"bench_{name}{size}_{integrator}{spp}spp_seed12345.npy"
+    if path.exists():
+        return np.load(path)
+    t0 = time.perf_counter()
+    ref = np.array(mi.render(mi.load_dict(_mitsuba_dict(name, size, integrator)), spp=spp, seed=12345),
+                   dtype=np.float32)
+    print(f"reference {name}: Mitsuba {integrator}, {size}x{size}, {spp} spp, {time.perf_counter() - t0:.1f} s")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.save(path, ref)
+    return ref
+
+
+def _error_study(name: str, args, out: Path) -> dict:
+    import mitsuba as mi
+    from tqdm import tqdm
+
+    from .. import photon as P
+
     size = args.error_size
-    d = mi.cornell_box()
-    d["sensor"]["film"].update(width=size, height=size, rfilter={"type": "box"})
-    d["integrator"] = {"type": "path", "max_depth": -1}
-    mscene = mi.load_dict(d)
-    seconds, ref = timed(lambda: np.array(mi.render(mscene, spp=args.reference_spp, seed=12345),
-                                          dtype=np.float32))
-    print(f"\nreference: Mitsuba path tracer, {size}x{size}, {args.reference_spp} spp, "
-          f"{seconds:.1f} s")
+    # The particle tracer converges ~3x faster than the path tracer in the indirectly lit room.
+    ref_integrator = "ptracer" if name == "room_indirect" else "path"
+    ref = _reference(name, size, args.reference_spp, ref_integrator)
     spps = [1, 4, 16, 64, 256] if args.quick else [1, 4, 16, 64, 256, 1024]
-    mitsuba = []
-    for spp in tqdm(spps, desc="mitsuba", unit="run"):
-        seconds, img = timed(lambda: np.array(mi.render(mscene, spp=spp, seed=spp), dtype=np.float32))
-        mitsuba.append(dict(spp=spp, seconds=seconds, relmse=P.relmse(img, ref)))
-    scene, cam = P.builtin_scene("cornell", resolution=(size, size))
-    P.render(scene, cam, photons=1000, radius=0.05)  # warm-up
-    ours = []
-    photon_counts = [1 << 14, 1 << 16, 1 << 18] if args.quick else [1 << 14, 1 << 16, 1 << 18, 1 << 20, 1 << 22]
-    configs = [(n, r, spp) for n in photon_counts for r in (0.01, 0.02, 0.04) for spp in (4, 16, 64)]
-    for n, r, spp in tqdm(configs, desc="photon mapping", unit="run"):
-        seconds, img = timed(lambda: P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7))
-        ours.append(dict(photons=n, radius=r, spp=spp, seconds=seconds, relmse=P.relmse(img, ref)))
-    front = _pareto(ours)
-    print("\nRun time against error, Cornell box (relMSE to the reference)")
-    print("| Mitsuba spp | s | relMSE | our fastest config at or below that relMSE | s | speedup |")
-    print("|---|---|---|---|---|---|")
-    comparisons = []
-    for m in mitsuba:
-        best = min((o for o in ours if o["relmse"] <= m["relmse"]), key=lambda o: o["seconds"], default=None)
-        if best is None:
-            print(f"| {m['spp']} | {m['seconds']:.2f} | {m['relmse']:.5f} | none (below our bias floor) | - | - |")
-        else:
-            cfg = f"2^{int(math.log2(best['photons']))} photons, r {best['radius']:g}, {best['spp']} spp"
-            print(f"| {m['spp']} | {m['seconds']:.2f} | {m['relmse']:.5f} | {cfg} ({best['relmse']:.5f}) | "
-                  f"{best['seconds']:.2f} | {m['seconds'] / best['seconds']:.1f}x |")
-        comparisons.append(dict(mitsuba=m, ours=best))
-    print("\nOur Pareto front:")
-    for o in front:
-        print(f"  2^{int(math.log2(o['photons']))} photons, r {o['radius']:g}, {o['spp']} spp: "
-              f"{o['seconds']:.2f} s, relMSE {o['relmse']:.5f}")
-    _plot(mitsuba, ours, front, out / "runtime_vs_error.png", size, args.reference_spp)
-    return dict(size=size, reference_spp=args.reference_spp, mitsuba=mitsuba, ours=ours, comparisons=comparisons)
+    curves: dict[str, list[dict]] = {}
+    for integrator in ("path", "ptracer") if name == "room_indirect" else ("path",):
+        mscene = mi.load_dict(_mitsuba_dict(name, size, integrator))
+        pts = []
+        for spp in tqdm(spps, desc=f"{name}: mitsuba {integrator}", unit="run"):
+            t0 = time.perf_counter()
+            img = np.array(mi.render(mscene, spp=spp, seed=spp), dtype=np.float32)
+            pts.append(dict(spp=spp, seconds=time.perf_counter() - t0, relmse=P.relmse(img, ref)))
+        curves[f"mitsuba {integrator}"] = pts
+    scene, cam = P.builtin_scene(name, resolution=(size, size))
+    r0 = P.default_radius(scene)
+    P.render(scene, cam, photons=1000, radius=r0)  # warm-up
+    one_shot = []
+    photon_counts = [1 << 14, 1 << 16, 1 << 18] if args.quick else [1 << 14, 1 << 16, 1 << 18, 1 << 20]
+    configs = [(n, r, spp) for n in photon_counts for r in (0.5 * r0, r0) for spp in (4, 16, 64)]
+    for n, r, spp in tqdm(configs, desc=f"{name}: one-shot", unit="run"):
+        t0 = time.perf_counter()
+        img = P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7)
+        one_shot.append(dict(photons=n, radius=r, spp=spp, seconds=time.perf_counter() - t0,
+                             relmse=P.relmse(img, ref)))
+    curves["one-shot (Pareto front)"] = _pareto(one_shot)
+    # Progressive: 4 photons per pixel and pass from 4x the default radius (a sweep at 32x32
+    # found it ahead of 1 per pixel and of 2^15 per pass), for as long as Mitsuba's longest run
+    # plus half; the curve is the image after each power-of-two pass count.
+    budget = 1.5 * max(p["seconds"] for pts in curves.values() for p in pts)
+    shots = [1 << i for i in range(21)]
+    for disc in (False, True):
+        _, st = P.render(scene, cam, photons=4 * size * size, radius=4 * r0, progressive=True, passes=1 << 20,
+                         time_budget=budget, snapshots=shots, disc=disc, seed=7, return_stats=True)
+        curves["progressive" + (" disc" if disc else "")] = [
+            dict(passes=k, seconds=sec, relmse=P.relmse(im, ref)) for k, sec, im in st["snapshots"]]
+    _print_error_table(name, curves)
+    _plot(name, curves, out / f"runtime_vs_error_{name}.png", size, args.reference_spp, ref_integrator)
+    return dict(size=size, reference=f"{ref_integrator} {args.reference_spp} spp", one_shot=one_shot, curves=curves)
+
+
+def _time_to(curve: list[dict], target: float) -> float | None:
+    """Seconds the curve needs to reach relMSE <= target (its fastest such point)."""
+    return min((p["seconds"] for p in curve if p["relmse"] <= target), default=None)
+
+
+def _print_error_table(name: str, curves: dict) -> None:
+    ours = [k for k in curves if not k.startswith("mitsuba")]
+    print(f"\nRun time against error, {name}: seconds to reach each Mitsuba point's relMSE")
+    print("| Mitsuba | spp | s | relMSE | " + " | ".join(ours) + " |")
+    print("|---|---|---|---|" + "---|" * len(ours))
+    for key in (k for k in curves if k.startswith("mitsuba")):
+        for m in curves[key]:
+            cells = []
+            for o in ours:
+                t = _time_to(curves[o], m["relmse"])
+                cells.append("-" if t is None else f"{t:.2f} ({m['seconds'] / t:.1f}x)")
+            print(f"| {key[8:]} | {m['spp']} | {m['seconds']:.2f} | {m['relmse']:.5f} | " + " | ".join(cells) + " |")
+    for o in ours:
+        print(f"  {o}: lowest relMSE {min(p['relmse'] for p in curves[o]):.5f}")
 
 
 def _pareto(points: list[dict]) -> list[dict]:
@@ -294,20 +360,14 @@ def _pareto(points: list[dict]) -> list[dict]:
     return front
 
 
-def _plot(mitsuba, ours, front, path: Path, size: int, ref_spp: int) -> None:
+def _plot(name: str, curves: dict, path: Path, size: int, ref_spp: int, ref_integrator: str) -> None:
     fig, ax = pyplot().subplots(figsize=(7, 5))
-    ax.loglog([m["seconds"] for m in mitsuba], [m["relmse"] for m in mitsuba], "o-", color="tab:blue",
-              label="Mitsuba 3 path tracer (spp 1..1024)")
-    for m in mitsuba:
-        ax.annotate(f"{m['spp']}", (m["seconds"], m["relmse"]), fontsize=7, textcoords="offset points",
-                    xytext=(3, 3))
-    ax.scatter([o["seconds"] for o in ours], [o["relmse"] for o in ours], s=10, color="tab:orange", alpha=0.4,
-               label="photon mapping (photons x radius x spp)")
-    ax.loglog([o["seconds"] for o in front], [o["relmse"] for o in front], "s-", color="tab:red",
-              label="photon mapping, Pareto front")
-    ax.set_xlabel("wall-clock seconds (2 cores)")
-    ax.set_ylabel(f"relMSE to Mitsuba {ref_spp} spp")
-    ax.set_title(f"Cornell box {size}x{size}: run time against error")
+    for key, pts in curves.items():
+        ax.loglog([p["seconds"] for p in pts], [p["relmse"] for p in pts], "o-" if key.startswith("mitsuba") else "s-",
+                  label=key, markersize=4)
+    ax.set_xlabel("wall-clock seconds (same cores)")
+    ax.set_ylabel(f"relMSE to Mitsuba {ref_integrator} {ref_spp} spp")
+    ax.set_title(f"{name} {size}x{size}: run time against error")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

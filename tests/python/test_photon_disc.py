@@ -1,0 +1,83 @@
+"""Bias near edges and thin walls, sphere gather against the surface disc, measured against
+Mitsuba's cached references in the test rooms (regions from each pixel's primary hit)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import gigascroll as g
+from test_photon_rooms import SIZE, room_reference
+
+
+def _hit_points(scene, cam) -> np.ndarray:
+    pts = np.full((SIZE, SIZE, 3), np.nan)
+    for y in range(SIZE):
+        for x in range(SIZE):
+            hit = scene.intersect(list(cam.position), list(cam.direction(x + 0.5, y + 0.5)))
+            if hit is not None:
+                pts[y, x] = hit[1]
+    return pts
+
+
+def _region(name: str, pts: np.ndarray) -> np.ndarray:
+    x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
+    if name == "room_partition":  # the dark side's floor along the partition, away from the slit
+        return (np.abs(y) < 1e-3) & (x > 0.01) & (x < 0.11) & (np.abs(z) > 0.25)
+    # Within 10 cm of a room edge: on a wall, floor or ceiling and near a second one.
+    d = np.sort(np.stack([np.abs(x + 2), np.abs(x - 2), np.abs(y), np.abs(y - 2.6), np.abs(z + 2),
+                          np.abs(z - 2)], -1), -1)
+    return (d[..., 0] < 1e-3) & (d[..., 1] < 0.1)
+
+
+@pytest.fixture(scope="module", params=g.ROOMS)
+def region_bias(request):
+    """Relative bias of the region's summed radiance, sphere and disc, 2^20 photons, 64 spp."""
+    name = request.param
+    scene, cam = g.builtin_scene(name, resolution=(SIZE, SIZE))
+    ref = room_reference(name)
+    mask = _region(name, _hit_points(scene, cam))
+    assert mask.sum() > 30
+    out = {}
+    for disc in (False, True):
+        img = g.render(scene, cam, photons=1 << 20, spp=64, disc=disc)
+        out[disc] = float(img[mask].sum() / ref[mask].sum() - 1)
+    return name, out
+
+
+def test_surface_disc_removes_edge_and_leak_bias(region_bias):
+    """Measured at the default radius: sphere -7.9% / -10.1% at the lit and indirect rooms'
+    edges and +29% leak along the partition's floor; the disc -0.7%, -0.7%, -0.1%."""
+    name, bias = region_bias
+    if name == "room_partition":
+        assert bias[False] > 0.15, bias  # the sphere leaks the lit side's floor photons
+    else:
+        assert bias[False] < -0.05, bias  # the sphere darkens edges
+    assert abs(bias[True]) < 0.02, (name, bias)
+
+
+def test_disc_rejects_incompatible_options():
+    scene, cam = g.builtin_scene("cornell", resolution=(8, 8))
+    for kw in (dict(gather="knn"), dict(kernel="cone"), dict(pipeline="two-pass", cooperative=True)):
+        with pytest.raises(ValueError, match="disc"):
+            g.render(scene, cam, photons=1000, radius=0.05, disc=True, **kw)
+
+
+def test_disc_pipelines_agree_and_progressive_runs():
+    scene, cam = g.builtin_scene("room_lit", resolution=(16, 16))
+    a = g.render(scene, cam, photons=20_000, spp=2, disc=True)
+    b = g.render(scene, cam, photons=20_000, spp=2, disc=True, pipeline="two-pass")
+    assert np.allclose(a, b, rtol=1e-5, atol=1e-6)
+    p = g.render(scene, cam, photons=20_000, progressive=True, passes=4, disc=True)
+    assert np.isfinite(p).all() and p.mean() > 0
+    # The disc is progressive rendering's default, and off for one-shot renders.
+    assert np.array_equal(p, g.render(scene, cam, photons=20_000, progressive=True, passes=4))
+    assert not np.array_equal(a, g.render(scene, cam, photons=20_000, spp=2))
+
+
+def test_disc_with_a_huge_radius_gives_a_finite_image():
+    """Probe rays are kept within the scene's diagonal (Embree rejects rays beyond ~1e18)."""
+    scene, cam = g.builtin_scene("cornell", resolution=(8, 8))
+    for progressive in (False, True):
+        img = g.render(scene, cam, photons=1000, radius=1e30, disc=True, progressive=progressive, passes=2)
+        assert np.isfinite(img).all()
