@@ -1,0 +1,97 @@
+#include "pack/colour.h"
+
+#include <lcms2.h>
+
+#include <algorithm>
+#include <memory>
+#include <thread>
+
+#include "common/error.h"
+
+namespace gigascroll {
+namespace {
+
+// LittleCMS reports errors through a callback: keep the last message per thread.
+thread_local std::string lcms_message;
+
+void on_lcms_error(cmsContext, cmsUInt32Number, const char* text) { lcms_message = text ? text : ""; }
+
+struct ProfileCloser {
+    void operator()(void* p) const { if (p) cmsCloseProfile(static_cast<cmsHPROFILE>(p)); }
+};
+using Profile = std::unique_ptr<void, ProfileCloser>;
+
+}  // namespace
+
+RenderingIntent parse_intent(const std::string& name) {
+    if (name == "perceptual") return RenderingIntent::Perceptual;
+    if (name == "relative") return RenderingIntent::Relative;
+    if (name == "saturation") return RenderingIntent::Saturation;
+    if (name == "absolute") return RenderingIntent::Absolute;
+    throw InvalidArgument("unknown rendering intent '" + name +
+                          "' (expected perceptual, relative, saturation or absolute)");
+}
+
+IccTransform::IccTransform(const std::vector<std::uint8_t>& profile, RenderingIntent intent,
+                           bool black_point_compensation) {
+    cmsSetLogErrorHandler(on_lcms_error);
+    lcms_message.clear();
+    require(!profile.empty(), "empty ICC profile");
+    Profile in(cmsOpenProfileFromMem(profile.data(), static_cast<cmsUInt32Number>(profile.size())));
+    require(in != nullptr, "LittleCMS cannot open the ICC profile (corrupt?)" +
+                               (lcms_message.empty() ? std::string() : ": " + lcms_message));
+    const auto h = static_cast<cmsHPROFILE>(in.get());
+    const cmsColorSpaceSignature space = cmsGetColorSpace(h);
+    const cmsProfileClassSignature cls = cmsGetDeviceClass(h);
+    require(cls != cmsSigLinkClass && cls != cmsSigAbstractClass && cls != cmsSigNamedColorClass,
+            "the ICC profile is a device link, abstract or named-colour profile");
+    require(space == cmsSigRgbData || space == cmsSigGrayData,
+            "unsupported ICC colour space (only RGB and grey profiles can be converted)");
+    channels_ = space == cmsSigRgbData ? 3 : 1;
+    Profile srgb(cmsCreate_sRGBProfile());
+    // No optimisation: a precalculated 16-bit CLUT interpolates across the gamut boundary
+    // (errors of several 8-bit steps where channels clip); the full pipeline is exact.
+    cmsUInt32Number flags = cmsFLAGS_NOCACHE | cmsFLAGS_NOOPTIMIZE;
+    if (black_point_compensation) flags |= cmsFLAGS_BLACKPOINTCOMPENSATION;
+    transform_ = cmsCreateTransform(h, channels_ == 3 ? TYPE_RGB_16 : TYPE_GRAY_16,
+                                    static_cast<cmsHPROFILE>(srgb.get()), TYPE_RGB_16,
+                                    static_cast<cmsUInt32Number>(intent), flags);
+    require(transform_ != nullptr, "LittleCMS cannot build a transform from the ICC profile" +
+                                       (lcms_message.empty() ? std::string() : ": " + lcms_message));
+}
+
+IccTransform::~IccTransform() {
+    if (transform_) cmsDeleteTransform(static_cast<cmsHTRANSFORM>(transform_));
+}
+
+void IccTransform::apply(const std::uint16_t* in, std::size_t pixels, std::uint16_t* out,
+                         unsigned threads) const {
+    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t chunk = 1 << 16;
+    const std::size_t parts = std::min<std::size_t>(threads, (pixels + chunk - 1) / chunk);
+    auto run = [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; i += chunk) {
+            const std::size_t n = std::min(chunk, end - i);
+            cmsDoTransform(static_cast<cmsHTRANSFORM>(transform_), in + i * channels_, out + i * 3,
+                           static_cast<cmsUInt32Number>(n));
+        }
+    };
+    if (parts <= 1) {
+        run(0, pixels);
+        return;
+    }
+    std::vector<std::thread> pool;
+    const std::size_t per = (pixels + parts - 1) / parts;
+    for (std::size_t t = 0; t < parts; ++t) {
+        const std::size_t b = t * per, e = std::min(pixels, b + per);
+        if (b < e) pool.emplace_back(run, b, e);
+    }
+    for (auto& t : pool) t.join();
+}
+
+std::string lcms_version() {
+    const int v = cmsGetEncodedCMMversion();  // e.g. 2140
+    return std::to_string(v / 1000) + "." + std::to_string((v / 10) % 100);
+}
+
+}  // namespace gigascroll
