@@ -49,12 +49,14 @@ IccTransform::IccTransform(const std::vector<std::uint8_t>& profile, RenderingIn
             "unsupported ICC colour space (only RGB and grey profiles can be converted)");
     channels_ = space == cmsSigRgbData ? 3 : 1;
     Profile srgb(cmsCreate_sRGBProfile());
-    // No optimisation: a precalculated 16-bit CLUT interpolates across the gamut boundary
-    // (errors of several 8-bit steps where channels clip); the full pipeline is exact.
-    cmsUInt32Number flags = cmsFLAGS_NOCACHE | cmsFLAGS_NOOPTIMIZE;
+    // Float in and out: LittleCMS then evaluates the profiles' curves and matrices exactly
+    // (a 16-bit transform would be resampled into a CLUT that interpolates across the gamut
+    // boundary, several 8-bit steps off where channels clip). Out-of-gamut values are
+    // clipped per channel afterwards.
+    cmsUInt32Number flags = cmsFLAGS_NOCACHE;
     if (black_point_compensation) flags |= cmsFLAGS_BLACKPOINTCOMPENSATION;
-    transform_ = cmsCreateTransform(h, channels_ == 3 ? TYPE_RGB_16 : TYPE_GRAY_16,
-                                    static_cast<cmsHPROFILE>(srgb.get()), TYPE_RGB_16,
+    transform_ = cmsCreateTransform(h, channels_ == 3 ? TYPE_RGB_FLT : TYPE_GRAY_FLT,
+                                    static_cast<cmsHPROFILE>(srgb.get()), TYPE_RGB_FLT,
                                     static_cast<cmsUInt32Number>(intent), flags);
     require(transform_ != nullptr, "LittleCMS cannot build a transform from the ICC profile" +
                                        (lcms_message.empty() ? std::string() : ": " + lcms_message));
@@ -67,13 +69,21 @@ IccTransform::~IccTransform() {
 void IccTransform::apply(const std::uint16_t* in, std::size_t pixels, std::uint16_t* out,
                          unsigned threads) const {
     if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-    const std::size_t chunk = 1 << 16;
+    const std::size_t chunk = 1 << 14;
     const std::size_t parts = std::min<std::size_t>(threads, (pixels + chunk - 1) / chunk);
     auto run = [&](std::size_t begin, std::size_t end) {
+        std::vector<float> src(chunk * channels_), dst(chunk * 3);
         for (std::size_t i = begin; i < end; i += chunk) {
             const std::size_t n = std::min(chunk, end - i);
-            cmsDoTransform(static_cast<cmsHTRANSFORM>(transform_), in + i * channels_, out + i * 3,
+            const std::uint16_t* p = in + i * channels_;
+            for (std::size_t k = 0; k < n * channels_; ++k) src[k] = p[k] * (1.0f / 65535.0f);
+            cmsDoTransform(static_cast<cmsHTRANSFORM>(transform_), src.data(), dst.data(),
                            static_cast<cmsUInt32Number>(n));
+            std::uint16_t* q = out + i * 3;
+            for (std::size_t k = 0; k < n * 3; ++k) {
+                const float v = std::clamp(dst[k], 0.0f, 1.0f);  // NaN-safe: clamp(NaN) -> NaN
+                q[k] = static_cast<std::uint16_t>(v == v ? v * 65535.0f + 0.5f : 0.0f);
+            }
         }
     };
     if (parts <= 1) {

@@ -1,5 +1,5 @@
 // Colour management at ingest: an ICC profile's pixels converted to sRGB with LittleCMS 2,
-// 16 bits per channel in and out, a band at a time (the builder's Python side feeds it).
+// 16 bits per channel in and out (float inside), a band at a time (fed by the Python build).
 // Thread safety: apply() may be called from several threads at once (no transform cache).
 #pragma once
 #include <cstddef>
