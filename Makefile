@@ -8,7 +8,7 @@ BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
 APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
-  liblcms2-dev colord-data
+  liblcms2-dev colord-data iipimage-server lighttpd
 JOBS ?= $(shell nproc)
 
 .PHONY: all deps venv build demo test ctest pytest sanitize bench clean
