@@ -21,7 +21,7 @@ class LoadError(OSError):
 
 
 def _keys(keys) -> np.ndarray:
-    """(n, 4) C-contiguous int64 from an array or a sequence of 4-tuples."""
+    """(n, 4) int64 from an array or a sequence of 4-tuples."""
     a = np.asarray(keys)
     if a.size == 0:
         return np.zeros((0, 4), np.int64)
@@ -31,7 +31,7 @@ def _keys(keys) -> np.ndarray:
         a = a.reshape(1, -1)
     if a.ndim != 2 or a.shape[1] != 4:
         raise ValueError(f"tile keys must have shape (n, 4) (painting, level, tx, ty), got {a.shape}")
-    return np.ascontiguousarray(a, dtype=np.int64)
+    return np.asarray(a, dtype=np.int64)
 
 
 def _is_request_keys(keys) -> bool:
@@ -48,8 +48,7 @@ def _uv(u, v, lod):
     if np.isnan(u).any() or np.isnan(v).any():
         raise ValueError("u and v must not contain NaN")
     shape = u.shape
-    u = np.ascontiguousarray(u.ravel())
-    v = np.ascontiguousarray(v.ravel())
+    u, v = u.ravel(), v.ravel()
     lod_array, lod_scalar = None, 0.0
     if lod is not None:
         lod = np.asarray(lod, dtype=np.float32)
@@ -60,7 +59,7 @@ def _uv(u, v, lod):
         else:
             if lod.shape != shape:
                 raise ValueError(f"lod must be a scalar or have the shape of u, got {lod.shape}")
-            lod_array = np.ascontiguousarray(lod.ravel())
+            lod_array = lod.ravel()
     return u, v, lod_array, lod_scalar, shape
 
 
@@ -86,7 +85,7 @@ class TileLoader(_core.TileLoader):
         """Queues load commands, given as (n, 4) tile keys or a 1-D uint64 array of request
         keys; ValueError (nothing queued) if a key is not a tile of the pack."""
         if _is_request_keys(keys):
-            self._submit_requests(np.ascontiguousarray(keys))
+            self._submit_requests(keys)
         else:
             self._submit(_keys(keys))
 
@@ -119,7 +118,7 @@ class VirtualTexture(_core.VirtualTexture):
     """
 
     def insert(self, key, data: np.ndarray):
-        """Copies one tile (a C-contiguous (T, T, 3) uint8 array) into the cache and updates
+        """Copies one tile (a (T, T, 3) uint8 array) into the cache and updates
         the page table; returns the evicted tile's key, or None."""
         data = np.asarray(data)
         if data.dtype != np.uint8:
@@ -131,7 +130,7 @@ class VirtualTexture(_core.VirtualTexture):
         the missing ones (misses) are returned, each once, in request order: a 1-D uint64
         array for request keys in, a list of (painting, level, tx, ty) tuples otherwise."""
         if _is_request_keys(keys):
-            return self._request_keys(np.ascontiguousarray(keys))
+            return self._request_keys(keys)
         return super().request(_keys(keys))
 
     def sample(self, painting: int, u, v, lod=None, filter: str = "bilinear", threads: int = 0):

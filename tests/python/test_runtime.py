@@ -2,7 +2,6 @@
 bilinear/trilinear sampling of the source image and of whole mip levels, brute-force
 fallback levels, direct pack reads."""
 
-import os
 import shutil
 import time
 
@@ -347,3 +346,22 @@ def test_request_keys_in_and_out(pack):
     with TileLoader(pack) as loader:
         with pytest.raises(ValueError):
             loader.submit(np.array([gigascroll.pack_request(0, 0, 99, 0)], np.uint64))
+
+
+def test_strided_inputs_read_as_their_contiguous_copies(pack, vt_full, rng):
+    # The wrappers leave contiguity to the core: strided uv, lod and keys give what their
+    # contiguous copies give.
+    u, v, lod = rng.random(40), rng.random(40), rng.random(40).astype(np.float32) * 3
+    strided = (u[::2], v[::2], lod[::2])
+    assert not strided[0].flags.c_contiguous
+    a, la = vt_full.sample(0, *strided, filter="trilinear")
+    b, lb = vt_full.sample(0, *(np.ascontiguousarray(x) for x in strided), filter="trilinear")
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(la, lb)
+    keys = np.array([gigascroll.pack_request(*k) for k in all_keys(pack)], np.uint64)
+    x, y = VirtualTexture(pack, (8, 8)), VirtualTexture(pack, (8, 8))
+    assert x.request(keys[::3]).tolist() == y.request(np.ascontiguousarray(keys[::3])).tolist()
+    rows = np.array(all_keys(pack), np.int64)[::2]
+    fortran = np.asfortranarray(rows)
+    assert not fortran.flags.c_contiguous
+    assert x.request(fortran) == y.request(rows)

@@ -126,7 +126,7 @@ def test_hash_salt_on_the_scroll_path(scroll):
     path = v.scroll_path(duration=0.7)
     resident = scroll.resident_set()
     basic, salted, fixed = v.BasicProcessor(), v.HashProcessor(14), v.HashProcessor(14)
-    prev, prev_fixed = set(), None
+    prev, prev_fixed, ref_prev = set(), None, set()
     lost_total = repeats = fixed_lost = fixed_repeats = 0
     for frame in range(len(path)):
         bufs = v.feedback_buffers(scroll, path, frame)

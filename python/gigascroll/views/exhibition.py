@@ -64,6 +64,8 @@ class PaintingSpec:
 
     def tiles(self, tile_size: int = 128, border: int = 4) -> PaintingTiles:
         return PaintingTiles(self.width, self.height, tile_size, border)
+
+
 # Every painting is scanned at the scroll's resolution: 12 m over 152089 texels.
 TEXEL_M = 12.0 / 152089
 
