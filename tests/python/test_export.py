@@ -79,8 +79,10 @@ def test_iiif_level0_tiles_equal_the_pack(pack, tmp_path, reader):
         assert Image.open(f).size == (size["width"], size["height"])
 
 
-def test_dzi_levels_down_to_one_pixel(pack, tmp_path):
-    dzi = export_pack(pack.path, tmp_path / "deep", "dzi", painting="scroll", quality=95)
+@pytest.mark.parametrize("reader", ["core", "python"])
+def test_dzi_levels_down_to_one_pixel(pack, tmp_path, reader):
+    dzi = export_pack(pack.path, tmp_path / "deep", "dzi", painting="scroll", quality=95,
+                      reader=reader)
     assert dzi.name == "deep.dzi"
     root = ET.parse(dzi).getroot()
     ns = "{http://schemas.microsoft.com/deepzoom/2008}"
@@ -109,11 +111,12 @@ def test_dzi_levels_down_to_one_pixel(pack, tmp_path):
             assert (h, w) == (1, 1)
 
 
-@pytest.mark.parametrize("compression", ["deflate", "jpeg"])
-def test_pyramidal_tiff_level_by_level(pack, tmp_path, compression):
+@pytest.mark.parametrize("compression, reader", [("deflate", "core"), ("deflate", "python"),
+                                                 ("jpeg", "core")])
+def test_pyramidal_tiff_level_by_level(pack, tmp_path, compression, reader):
     import pyvips
     out = export_pack(pack.path, tmp_path / "pyr.tif", "tiff", compression=compression,
-                      quality=95)
+                      quality=95, reader=reader)
     p = pack.paintings[0]
     inp = oiio.ImageInput.open(str(out))
     assert inp is not None, oiio.geterror()

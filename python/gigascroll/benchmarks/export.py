@@ -13,6 +13,8 @@ from __future__ import annotations
 import os
 import shutil
 import statistics
+import subprocess
+import sys
 from pathlib import Path
 
 from ..errors import UserError
@@ -68,8 +70,29 @@ def _outputs_mb(path: Path) -> float:
     return sum(_dir_bytes(p) for p in paths if p.exists()) / 2**20
 
 
+PREPARE = """
+import sys
+from gigascroll.pack import build_pack, synth_painting
+src, pack, w, h = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+if src != "-":
+    synth_painting(src, w, h, progress=True)
+if pack != "-":
+    build_pack(src, pack, tile_size=128, border=4, force=True, progress=True)
+"""
+
+
+def _prepare(src: Path, pack: Path, width: int, height: int) -> None:
+    """Synthesizes the painting and builds its pack in a child process: a child forked from a
+    large parent would report the parent's peak RSS as its own (ru_maxrss survives exec)."""
+    need_src, need_pack = not src.exists(), not (pack / "manifest.json").exists()
+    if not (need_src or need_pack):
+        return
+    print(f"preparing {src if need_src else ''} {pack if need_pack else ''} (cached for later runs)")
+    subprocess.run([sys.executable, "-c", PREPARE, str(src) if need_src else "-",
+                    str(pack) if need_pack else "-", str(width), str(height)], check=True)
+
+
 def run(args) -> int:
-    from ..pack import build_pack, synth_painting
     formats = [f for f in args.formats.split(",") if f]
     if not formats or any(f not in ("iiif", "dzi", "tiff") for f in formats):
         raise UserError(f"--formats must name iiif, dzi or tiff, got '{args.formats}'")
@@ -78,13 +101,8 @@ def run(args) -> int:
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
     src = work / f"ink-{args.width}x{args.height}.tif"
-    if not src.exists():
-        print(f"synthesizing {src} (cached for later runs)")
-        synth_painting(src, args.width, args.height, progress=True)
     pack = work / f"ink-{args.width}x{args.height}.pack"
-    if not (pack / "manifest.json").exists():
-        print(f"building {pack} (cached for later runs)")
-        build_pack(src, pack, tile_size=128, border=4, force=True, progress=True)
+    _prepare(src, pack, args.width, args.height)
     mpx = args.width * args.height / 1e6
 
     rows = []
