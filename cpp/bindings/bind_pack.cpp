@@ -28,7 +28,6 @@ namespace {
 
 using Rows = nb::ndarray<const std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 using TileOut = nb::ndarray<std::uint8_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
-using Band16 = nb::ndarray<const std::uint16_t, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 
 nb::dict geometry_dict(const PaintingGeometry& g) {
     nb::dict d;
@@ -61,6 +60,21 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> level_pairs(const PaintingG
         out.emplace_back(tiles ? lv.tiles_x : lv.width, tiles ? lv.tiles_y : lv.height);
     }
     return out;
+}
+
+template <typename T>
+nb::ndarray<nb::numpy, std::uint16_t, nb::ndim<3>> icc_apply(
+    const IccTransform& t, nb::ndarray<const T, nb::ndim<3>, nb::c_contig, nb::device::cpu> band,
+    unsigned threads) {
+    require(band.shape(2) == t.channels(),
+            "band must have shape (h, w, " + std::to_string(t.channels()) + ")");
+    const std::size_t h = band.shape(0), w = band.shape(1);
+    FreshArray<std::uint16_t, nb::ndim<3>> out({h, w, 3});
+    {
+        nb::gil_scoped_release release;
+        t.apply(band.data(), h * w, out.data, threads);
+    }
+    return out.array;
 }
 
 void check_tile_out(const TilePack& pack, const TileOut& out) {
@@ -232,18 +246,10 @@ void bind_pack(nb::module_& m) {
                                     parse_intent(intent), bpc); },
             "profile"_a, "intent"_a = "relative", "black_point_compensation"_a = true)
         .def_prop_ro("channels", &IccTransform::channels)
-        .def("apply", [](const IccTransform& t, Band16 band, unsigned threads) {
-            require(band.shape(2) == t.channels(), "band must have shape (h, w, " +
-                                                       std::to_string(t.channels()) + ")");
-            const std::size_t h = band.shape(0), w = band.shape(1);
-            FreshArray<std::uint16_t, nb::ndim<3>> out({h, w, 3});
-            {
-                nb::gil_scoped_release release;
-                t.apply(band.data(), h * w, out.data, threads);
-            }
-            return out.array; },
-            "band"_a, "threads"_a = 0,
-            "(h, w, channels) uint16 in the profile's space -> (h, w, 3) uint16 sRGB.");
+        .def("apply", &icc_apply<std::uint16_t>, "band"_a.noconvert(), "threads"_a = 0,
+             "(h, w, channels) uint16 in the profile's space -> (h, w, 3) uint16 sRGB.")
+        .def("apply", &icc_apply<std::uint8_t>, "band"_a.noconvert(), "threads"_a = 0,
+             "(h, w, channels) uint8 in the profile's space -> (h, w, 3) uint16 sRGB.");
     m.def("lcms_version", &lcms_version, "LittleCMS version the core links.");
 
     m.def("render_ink_landscape", [](std::uint32_t width, std::uint32_t height, std::uint32_t y0,

@@ -30,9 +30,13 @@ public:
     // threads (0 = all cores).
     void apply(const std::uint16_t* in, std::size_t pixels, std::uint16_t* out,
                unsigned threads = 0) const;
+    // The same for 8-bit input (matrix/TRC RGB profiles: LittleCMS' matrix-shaper path).
+    void apply(const std::uint8_t* in, std::size_t pixels, std::uint16_t* out,
+               unsigned threads = 0) const;
 
 private:
-    void* transform_ = nullptr;  // cmsHTRANSFORM
+    void* transform_ = nullptr;   // cmsHTRANSFORM, float in and out
+    void* transform8_ = nullptr;  // 8-bit RGB in, 16 out (matrix/TRC profiles only)
     unsigned channels_ = 3;
 };
 

@@ -2,9 +2,10 @@
 converted to sRGB with LittleCMS 2 (linked by the core: gigascroll._core.IccTransform), band
 by band.
 
-Every band is transformed at 16 bits per channel (8-bit inputs are widened, float inputs
-quantised to 16 bits after clamping to [0, 1]) and then rounded to 8 bits like any 16-bit
-input, so the mip chain (built by the core from level 0) stays the exact average of the
+Every band is transformed to 16 bits per channel (16-bit and float inputs through
+LittleCMS' float pipeline, floats clamped to [0, 1] and quantised to 16 bits first; 8-bit
+RGB inputs of matrix/TRC profiles through its matrix-shaper path) and then rounded to 8 bits
+like any 16-bit input, so the mip chain (built by the core from level 0) stays the exact average of the
 converted pixels. A profile that cannot be used (corrupt, CMYK or another colour space, a
 device link, abstract or named-colour profile, or one that does not match the image's
 channels) is a ValueError, never a silent pass-through.
@@ -215,13 +216,11 @@ class ColourPlan:
         """(h, w, c) uint8 / uint16 / float -> (h, w, 3) uint16 sRGB. Extra channels (alpha)
         are dropped before the transform."""
         a = band[:, :, :self.channels] if band.ndim == 3 else band[:, :, None]
-        if a.dtype == np.uint8:
-            a = a.astype(np.uint16) * 257
-        elif a.dtype.kind == "f":
+        if a.dtype.kind == "f":
             if np.isnan(a).any():
                 raise ValueError("image contains NaN pixels")
             a = np.rint(np.clip(a, 0.0, 1.0) * 65535.0).astype(np.uint16)
-        elif a.dtype != np.uint16:
+        elif a.dtype not in (np.uint8, np.uint16):
             raise ValueError(f"unsupported pixel type {a.dtype.name}")
         return self._transform().apply(np.ascontiguousarray(a))
 
