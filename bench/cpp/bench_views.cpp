@@ -229,8 +229,8 @@ void BM_Display(benchmark::State& state) {
     for (std::size_t i = 0; i < texels.size(); ++i) texels[i] = std::uint8_t(i * 2654435761u >> 24);
     for (std::uint64_t k : std::set<std::uint64_t>(keys.begin(), keys.end())) {
         if (k == kNoRequest) continue;
-        const Request r = unpack_request(k);
-        vt.insert({r.painting, r.level, r.x, r.y}, texels.data());
+        const TileKey r = unpack_request(k);
+        vt.insert({r.painting, r.level, r.tx, r.ty}, texels.data());
     }
     std::vector<float> out(3 * lod.size());
     for (auto _ : state)

@@ -103,7 +103,7 @@ using RequestKeys = nanobind::ndarray<const std::uint64_t, nanobind::ndim<1>, na
 // Request keys (pack_request layout) as tile keys; the loader and the cache check ranges.
 inline std::vector<TileKey> to_tile_keys(const RequestKeys& a) {
     std::vector<TileKey> keys(a.shape(0));
-    for (std::size_t i = 0; i < keys.size(); ++i) keys[i] = tile_key_of(a.data()[i]);
+    for (std::size_t i = 0; i < keys.size(); ++i) keys[i] = unpack_request(a.data()[i]);
     return keys;
 }
 

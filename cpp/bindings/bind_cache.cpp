@@ -98,7 +98,7 @@ void bind_cache(nb::module_& m) {
             "[(key, error), ...] of the loads that failed.")
         .def("_request_keys", [](VirtualTexture& vt, const RequestKeys& keys) {
             std::vector<std::uint64_t> out;
-            for (const auto& k : vt.request(to_tile_keys(keys))) out.push_back(request_of(k));
+            for (const auto& k : vt.request(to_tile_keys(keys))) out.push_back(pack_request(k));
             return to_numpy(std::move(out)); }, "keys"_a)
         .def("request", [](VirtualTexture& vt, const Keys& keys) {
             const auto missing = vt.request(to_keys(keys));

@@ -123,8 +123,8 @@ void bind_pack(nb::module_& m) {
         HeldBuffer b = as_buffer(keys, "keys");
         std::vector<std::uint32_t> p(b.view.size()), l(p.size()), x(p.size()), y(p.size());
         for (std::size_t i = 0; i < p.size(); ++i) {
-            const Request r = unpack_request(b.view[i]);
-            p[i] = r.painting, l[i] = r.level, x[i] = r.x, y[i] = r.y;
+            const TileKey r = unpack_request(b.view[i]);
+            p[i] = r.painting, l[i] = r.level, x[i] = r.tx, y[i] = r.ty;
         }
         return nb::make_tuple(to_numpy(std::move(p)), to_numpy(std::move(l)),
                               to_numpy(std::move(x)), to_numpy(std::move(y)));

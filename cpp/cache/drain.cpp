@@ -16,7 +16,7 @@ DrainResult drain(TileLoader& loader, VirtualTexture& vt, std::size_t max_tiles)
     out.arrived.reserve(results.size());
     std::exception_ptr error;
     for (LoadedTile& r : results) {
-        out.arrived.push_back(request_of(r.key));
+        out.arrived.push_back(pack_request(r.key));
         if (r.buffer < 0) {
             out.failed.emplace_back(r.key, std::move(r.error));
             continue;

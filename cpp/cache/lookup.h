@@ -10,7 +10,7 @@ public:
     explicit VirtualTextureLookup(const VirtualTexture& vt) : vt_(vt) {}
     // One page-table read (VirtualTexture::lookup takes its shared lock).
     std::uint32_t resident_level(std::uint64_t request) const override {
-        return vt_.lookup(tile_key_of(request)).level();
+        return vt_.lookup(unpack_request(request)).level();
     }
 
 private:

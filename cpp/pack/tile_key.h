@@ -1,5 +1,5 @@
-// One tile of the virtual texture (painting p, mip level l, tile x, y) and its two 64-bit
-// encodings, on purpose, with the one conversion between them:
+// One tile of the virtual texture (painting p, mip level l, tile x, y), TileKey, and its two
+// 64-bit encodings, on purpose:
 //   request key: p << 37 | l << 32 | morton(x, y); seed 000's B widened, hashed by the
 //     feedback and processing stages (Morton order keeps neighbouring tiles in nearby keys);
 //   TileKey::packed: p << 48 | l << 40 | y << 20 | x; the runtime's total order for the
@@ -48,19 +48,30 @@ constexpr std::uint32_t morton2_x(std::uint32_t m) {
 }
 constexpr std::uint32_t morton2_y(std::uint32_t m) { return morton2_x(m >> 1); }
 
-struct Request {
-    std::uint32_t painting, level, x, y;
-    friend bool operator==(const Request&, const Request&) = default;
+// A tile of the virtual texture: painting, level, tile column and row.
+struct TileKey {
+    std::uint32_t painting = 0, level = 0, tx = 0, ty = 0;
+    // The cache key, 16 | 8 | 20 | 20 bits: a total order and a hash key in one word.
+    constexpr std::uint64_t packed() const {
+        return (std::uint64_t(painting) << 48) | (std::uint64_t(level) << 40) |
+               (std::uint64_t(ty) << 20) | std::uint64_t(tx);
+    }
+    static constexpr TileKey unpack(std::uint64_t k) {
+        return {std::uint32_t(k >> 48), std::uint32_t((k >> 40) & 0xFF),
+                std::uint32_t(k & 0xFFFFF), std::uint32_t((k >> 20) & 0xFFFFF)};
+    }
+    friend bool operator==(const TileKey&, const TileKey&) = default;
 };
 
+// The request key.
 constexpr std::uint64_t pack_request(std::uint32_t painting, std::uint32_t level, std::uint32_t x,
                                      std::uint32_t y) {
     return (std::uint64_t(painting) << 37) | (std::uint64_t(level & 31u) << 32) | morton2(x, y);
 }
-constexpr std::uint64_t pack_request(const Request& r) {
-    return pack_request(r.painting, r.level, r.x, r.y);
+constexpr std::uint64_t pack_request(const TileKey& k) {
+    return pack_request(k.painting, k.level, k.tx, k.ty);
 }
-constexpr Request unpack_request(std::uint64_t key) {
+constexpr TileKey unpack_request(std::uint64_t key) {
     const auto m = static_cast<std::uint32_t>(key);
     return {static_cast<std::uint32_t>(key >> 37), static_cast<std::uint32_t>(key >> 32) & 31u,
             morton2_x(m), morton2_y(m)};
@@ -74,32 +85,9 @@ constexpr std::uint32_t request_level(std::uint64_t key) {
 
 // The tile at `level` (>= the request's level) that covers the requested tile.
 constexpr std::uint64_t ancestor_request(std::uint64_t key, std::uint32_t level) {
-    const Request r = unpack_request(key);
-    const std::uint32_t up = level - r.level;
-    return pack_request(r.painting, level, r.x >> up, r.y >> up);
-}
-
-// A tile of the virtual texture: painting, level, tile column and row.
-struct TileKey {
-    std::uint32_t painting = 0, level = 0, tx = 0, ty = 0;
-    // 16 | 8 | 20 | 20 bits: a total order and a hash key in one word.
-    std::uint64_t packed() const {
-        return (std::uint64_t(painting) << 48) | (std::uint64_t(level) << 40) |
-               (std::uint64_t(ty) << 20) | std::uint64_t(tx);
-    }
-    static TileKey unpack(std::uint64_t k) {
-        return {std::uint32_t(k >> 48), std::uint32_t((k >> 40) & 0xFF),
-                std::uint32_t(k & 0xFFFFF), std::uint32_t((k >> 20) & 0xFFFFF)};
-    }
-    friend bool operator==(const TileKey&, const TileKey&) = default;
-};
-
-inline TileKey tile_key_of(std::uint64_t request) {
-    const Request r = unpack_request(request);
-    return TileKey{r.painting, r.level, r.x, r.y};
-}
-inline std::uint64_t request_of(const TileKey& k) {
-    return pack_request(k.painting, k.level, k.tx, k.ty);
+    const TileKey k = unpack_request(key);
+    const std::uint32_t up = level - k.level;
+    return pack_request(k.painting, level, k.tx >> up, k.ty >> up);
 }
 
 }  // namespace gigascroll

@@ -15,18 +15,18 @@ PaintingSet::PaintingSet(std::vector<PaintingGeometry> paintings) : paintings_(s
 }
 
 bool PaintingSet::valid(std::uint64_t key) const {
-    const Request r = unpack_request(key);
+    const TileKey r = unpack_request(key);
     if (r.painting >= paintings_.size()) return false;
     const PaintingGeometry& p = paintings_[r.painting];
-    return r.level < p.levels() && r.x < p.tiles_x(r.level) && r.y < p.tiles_y(r.level);
+    return r.level < p.levels() && r.tx < p.tiles_x(r.level) && r.ty < p.tiles_y(r.level);
 }
 
 void PaintingSet::validate(std::uint64_t key) const {
     if (valid(key)) return;
-    const Request r = unpack_request(key);
+    const TileKey r = unpack_request(key);
     std::ostringstream s;
     s << "request key 0x" << std::hex << key << std::dec << " (painting " << r.painting
-      << ", level " << r.level << ", tile " << r.x << ", " << r.y
+      << ", level " << r.level << ", tile " << r.tx << ", " << r.ty
       << ") names no tile of the " << paintings_.size() << " known paintings";
     throw InvalidArgument(s.str());
 }
@@ -42,13 +42,13 @@ void ResidentSet::erase(std::uint64_t key) { keys_.erase(key); }
 
 bool ResidentSet::contains(std::uint64_t key) const {
     if (!valid(key)) return false;
-    const Request r = unpack_request(key);
+    const TileKey r = unpack_request(key);
     return r.level + 1 == paintings()[r.painting].levels() || keys_.count(key) != 0;
 }
 
 std::uint32_t ResidentSet::resident_level(std::uint64_t request) const {
     validate(request);
-    const Request r = unpack_request(request);
+    const TileKey r = unpack_request(request);
     const std::uint32_t top = paintings()[r.painting].levels() - 1;
     for (std::uint32_t l = r.level; l < top; ++l)
         if (keys_.count(ancestor_request(request, l))) return l;
@@ -62,10 +62,10 @@ TileIndex::TileIndex(std::vector<PaintingGeometry> paintings) : PaintingSet(std:
 
 std::uint64_t TileIndex::index(std::uint64_t key) const {
     validate(key);
-    const Request r = unpack_request(key);
+    const TileKey r = unpack_request(key);
     const PaintingGeometry& p = paintings()[r.painting];
-    return base_[r.painting] + p.level_offset(r.level) + std::uint64_t(r.y) * p.tiles_x(r.level) +
-           r.x;
+    return base_[r.painting] + p.level_offset(r.level) + std::uint64_t(r.ty) * p.tiles_x(r.level) +
+           r.tx;
 }
 
 std::uint64_t TileIndex::key(std::uint64_t index) const {

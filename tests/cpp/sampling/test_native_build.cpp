@@ -13,10 +13,10 @@
 
 #include "common/checksum.h"
 #include "views/exhibition.h"
-#include "feedback_image.h"
 #include "pack/tile_key.h"
 #include "cache/virtual_texture.h"
 #include "sampling/sampler.h"
+#include "support/feedback_image.h"
 
 using namespace gigascroll;
 

@@ -1,19 +1,25 @@
-// Page table, LRU cache and VT sampling against independent references: the brute-force
-// page-table rebuild, a test-built mip chain sampled without indirection, and closed-form
-// texel values at the far end of the widest painting of seed 000 Table 4.
+// Sampling the virtual texture against independent references: a test-built mip chain
+// sampled without indirection (all tiles resident, and fallbacks to ancestors), batched
+// against per-sample arithmetic, interleaved and NaN inputs, and closed-form texel values at
+// the far end of the widest painting of seed 000 Table 4.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <type_traits>
 #include <vector>
 
 #include "common/error.h"
-#include "sampling/mip_texture.h"
 #include "cache/virtual_texture.h"
+#include "pack/geometry.h"
+#include "pack/tile_key.h"
+#include "sampling/mip_texture.h"
 #include "sampling/sampler.h"
+#include "support/all_tiles.h"
 
 using namespace gigascroll;
 
@@ -58,18 +64,6 @@ void cut_tile(const MipTexture::Level& lv, std::uint32_t T, std::uint32_t E, con
         }
 }
 
-std::vector<TileKey> all_tiles(const PackGeometry& layout) {
-    std::vector<TileKey> keys;
-    for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
-        const auto& pt = layout.paintings[p];
-        for (std::uint32_t l = 0; l < pt.levels(); ++l)
-            for (std::uint32_t y = 0; y < pt.tiles_y(l); ++y)
-                for (std::uint32_t x = 0; x < pt.tiles_x(l); ++x) keys.push_back({p, l, x, y});
-    }
-    return keys;
-}
-
-
 // A random painting (make_levels) as the pack would cut it, and a cache to fill with its tiles.
 struct CutPainting {
     CutPainting(std::uint32_t W, std::uint32_t H, std::uint32_t T, std::uint32_t E, std::uint32_t seed)
@@ -107,91 +101,6 @@ struct CutPainting {
 };
 
 }  // namespace
-
-TEST(PackGeometry, TailLevelsOfTheScroll) {
-    // The seed's scroll: Mp = 2048, Np = 64, levels 0..11; levels 7..11 are the tail (21 tiles).
-    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
-    const PaintingGeometry& p = layout.paintings[0];
-    EXPECT_EQ(p.page_table_width(), 2048u);
-    EXPECT_EQ(p.page_table_height(), 64u);
-    EXPECT_EQ(p.levels(), 12u);
-    EXPECT_EQ(p.merged_levels(), 7u);
-    std::uint32_t tail = 0;
-    for (std::uint32_t l = 7; l < 12; ++l) tail += p.tiles_x(l) * p.tiles_y(l);
-    EXPECT_EQ(tail, 21u);
-    EXPECT_EQ(p.tiles_x(11) * p.tiles_y(11), 1u);
-}
-
-TEST(PageTable, IncrementalUpdatesMatchFullRebuild) {
-    // Three paintings of awkward sizes; a small cache so LRU evictions happen constantly.
-    const PackGeometry layout = PackGeometry::make(16, 2, {{500, 90}, {37, 301}, {12, 12}});
-    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
-    VirtualTexture vt(layout, 6, 6, [](const TileKey&, std::uint8_t*) {});
-    const auto keys = all_tiles(layout);
-    std::mt19937 rng(7);
-    for (int step = 0; step < 600; ++step) {
-        const TileKey k = keys[rng() % keys.size()];
-        const auto evicted = vt.insert(k, zero.data());
-        EXPECT_TRUE(vt.is_resident(k));
-        if (evicted) EXPECT_FALSE(vt.is_resident(*evicted));
-        if (step % 25 == 0) ASSERT_TRUE(vt.page_table_matches_rebuild()) << "step " << step;
-    }
-    EXPECT_TRUE(vt.page_table_matches_rebuild());
-    const CacheStats s = vt.stats();
-    EXPECT_EQ(s.resident, 36u);
-    EXPECT_GT(s.evictions, 0u);
-}
-
-TEST(PageTable, LookupIsTheFinestResidentAncestor) {
-    const PackGeometry layout = PackGeometry::make(16, 2, {{300, 200}});
-    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
-    VirtualTexture vt(layout, 8, 8, [](const TileKey&, std::uint8_t*) {});
-    const auto& pt = layout.paintings[0];
-    const std::uint32_t L = pt.levels();
-    // Nothing streamed yet: every entry falls back to the finest pinned level (the first
-    // tail level, or the coarsest level when there is no tail).
-    const std::uint32_t first_pinned = std::min(pt.merged_levels(), L - 1);
-    EXPECT_EQ(vt.lookup({0, 0, 5, 5}).level(), first_pinned);
-    vt.insert({0, 2, 1, 1}, zero.data());
-    vt.insert({0, 0, 5, 5}, zero.data());
-    EXPECT_EQ(vt.lookup({0, 0, 5, 5}).level(), 0u);
-    EXPECT_EQ(vt.lookup({0, 0, 4, 5}).level(), 2u);  // sibling: its level-2 ancestor (1, 1)
-    EXPECT_EQ(vt.lookup({0, 1, 2, 2}).level(), 2u);
-    EXPECT_EQ(vt.lookup({0, 0, 0, 0}).level(), first_pinned);  // not under (2, 1, 1)
-    EXPECT_EQ(vt.lookup({0, 2, 1, 1}).slot(), vt.lookup({0, 0, 4, 5}).slot());
-}
-
-TEST(VirtualTexture, LruEvictsLeastRecentlyUsedAndKeepsPinned) {
-    const PackGeometry layout = PackGeometry::make(16, 2, {{200, 30}});
-    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
-    VirtualTexture vt(layout, 4, 3, [](const TileKey&, std::uint8_t*) {});
-    const std::uint64_t pinned = vt.stats().pinned;
-    const std::uint32_t free_slots = 12 - pinned;
-    ASSERT_GE(free_slots, 3u);
-    for (std::uint32_t i = 0; i < free_slots; ++i) EXPECT_FALSE(vt.insert({0, 0, i, 0}, zero.data()));
-    // Touch tile 0, so tile 1 is the least recently used.
-    EXPECT_TRUE(vt.request({{0, 0, 0, 0}, {0, 0, 9, 0}, {0, 0, 9, 0}}).size() == 1);
-    const auto ev = vt.insert({0, 0, 10, 0}, zero.data());
-    ASSERT_TRUE(ev);
-    EXPECT_EQ(*ev, (TileKey{0, 0, 1, 0}));
-    const CacheStats s = vt.stats();
-    EXPECT_EQ(s.hits, 1u);
-    EXPECT_EQ(s.misses, 2u);
-    EXPECT_EQ(s.evictions, 1u);
-    EXPECT_EQ(s.resident, 12u);
-    const auto& pt = layout.paintings[0];
-    EXPECT_TRUE(vt.is_pinned({0, pt.levels() - 1, 0, 0}));
-}
-
-TEST(VirtualTexture, RejectsTooFewSlotsAndBadKeys) {
-    const PackGeometry layout = PackGeometry::make(128, 4, {{152089, 6083}});
-    EXPECT_THROW(VirtualTexture(layout, 4, 4, [](const TileKey&, std::uint8_t*) {}), InvalidArgument);
-    VirtualTexture vt(layout, 5, 5, [](const TileKey&, std::uint8_t*) {});
-    std::vector<std::uint8_t> zero(layout.tile_bytes(), 0);
-    EXPECT_THROW(vt.insert({0, 0, 1268, 0}, zero.data()), InvalidArgument);
-    EXPECT_THROW(vt.insert({1, 0, 0, 0}, zero.data()), InvalidArgument);
-    EXPECT_THROW(vt.insert({0, 12, 0, 0}, zero.data()), InvalidArgument);
-}
 
 // Samples the VT and the plain mip texture at the same points; returns the max difference.
 static float max_difference(const VirtualTexture& vt, const MipTexture& ref, Filter filter,

@@ -1,0 +1,78 @@
+// parallel_for: every index once, exceptions, real parallelism, nesting and pool reuse.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "common/parallel.h"
+
+using namespace gigascroll;
+
+TEST(ParallelFor, CoversEveryIndexOnce) {
+    std::vector<std::atomic<int>> hits(10007);
+    parallel_for(hits.size(), 13, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) hits[i].fetch_add(1);
+    }, 4);
+    for (auto& h : hits) EXPECT_EQ(h.load(), 1);
+}
+
+TEST(ParallelFor, RethrowsWorkerException) {
+    EXPECT_THROW(parallel_for(1000, 1, [](std::size_t b, std::size_t) {
+        if (b == 517) throw std::runtime_error("boom");
+    }, 2), std::runtime_error);
+}
+
+TEST(ParallelFor, UsesSeveralThreadsAndTheCaller) {
+    // Chunks that wait for each other can only finish if two threads run them at once.
+    std::atomic<int> arrived{0};
+    std::mutex m;
+    std::set<std::thread::id> ids;
+    parallel_for(2, 1, [&](std::size_t, std::size_t) {
+        {
+            std::lock_guard lock(m);
+            ids.insert(std::this_thread::get_id());
+        }
+        arrived.fetch_add(1);
+        while (arrived.load() < 2) std::this_thread::yield();
+    }, 2);
+    EXPECT_EQ(ids.size(), 2u);
+    EXPECT_TRUE(ids.count(std::this_thread::get_id()));
+}
+
+TEST(ParallelFor, NestedAndConcurrentCallsComplete) {
+    // A parallel_for inside a helper and parallel_fors from several threads at once find the
+    // helper pool busy and start their own threads: every index is still covered once.
+    std::vector<std::atomic<int>> hits(64 * 257);
+    auto nested = [&](std::size_t outer) {
+        parallel_for(257, 7, [&](std::size_t b, std::size_t e) {
+            for (std::size_t i = b; i < e; ++i) hits[outer * 257 + i].fetch_add(1);
+        }, 3);
+    };
+    std::vector<std::thread> callers;
+    for (int c = 0; c < 4; ++c)
+        callers.emplace_back([&, c] {
+            parallel_for(16, 1, [&](std::size_t b, std::size_t e) {
+                for (std::size_t o = b; o < e; ++o) nested(c * 16 + o);
+            }, 2);
+        });
+    for (auto& t : callers) t.join();
+    for (auto& h : hits) EXPECT_EQ(h.load(), 1);
+}
+
+TEST(ParallelFor, ManyShortCallsReuseThePool) {
+    // The frame loop's pattern: thousands of small parallel calls in a row.
+    std::uint64_t total = 0;
+    for (int call = 0; call < 2000; ++call) {
+        std::atomic<std::uint64_t> sum{0};
+        parallel_for(100, 10, [&](std::size_t b, std::size_t e) {
+            for (std::size_t i = b; i < e; ++i) sum.fetch_add(i);
+        }, 2);
+        total += sum.load();
+    }
+    EXPECT_EQ(total, 2000u * 4950u);
+}
