@@ -7,7 +7,8 @@ PIP := $(VENV)/bin/pip
 BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
 APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
-  libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev
+  libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
+  liblcms2-dev colord-data iipimage-server lighttpd
 JOBS ?= $(shell nproc)
 
 .PHONY: all deps venv build demo test ctest pytest sanitize bench clean
@@ -31,6 +32,7 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q scikit-build-core nanobind ninja "cmake>=3.26"
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
+	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science
 	touch $@
 
 venv: $(VENV)/.deps-stamp

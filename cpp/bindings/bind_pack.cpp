@@ -13,6 +13,7 @@
 #include "common/error.h"
 #include "pack/ink_landscape.h"
 #include "pack/builder.h"
+#include "pack/colour.h"
 #include "pack/geometry.h"
 #include "pack/page_layout.h"
 #include "pack/geometry.h"
@@ -59,6 +60,21 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> level_pairs(const PaintingG
         out.emplace_back(tiles ? lv.tiles_x : lv.width, tiles ? lv.tiles_y : lv.height);
     }
     return out;
+}
+
+template <typename T>
+nb::ndarray<nb::numpy, std::uint16_t, nb::ndim<3>> icc_apply(
+    const IccTransform& t, nb::ndarray<const T, nb::ndim<3>, nb::c_contig, nb::device::cpu> band,
+    unsigned threads) {
+    require(band.shape(2) == t.channels(),
+            "band must have shape (h, w, " + std::to_string(t.channels()) + ")");
+    const std::size_t h = band.shape(0), w = band.shape(1);
+    FreshArray<std::uint16_t, nb::ndim<3>> out({h, w, 3});
+    {
+        nb::gil_scoped_release release;
+        t.apply(band.data(), h * w, out.data, threads);
+    }
+    return out.array;
 }
 
 void check_tile_out(const TilePack& pack, const TileOut& out) {
@@ -117,6 +133,10 @@ void bind_pack(nb::module_& m) {
         .def_ro("name", &PaintingInfo::name)
         .def_ro("source", &PaintingInfo::source)
         .def_ro("conversion", &PaintingInfo::conversion)
+        .def_prop_ro("colour", [](const PaintingInfo& p) -> nb::object {
+            if (p.colour.empty()) return nb::none();
+            return nb::module_::import_("json").attr("loads")(p.colour); },
+            "colour management at ingest (dict: source profile, intent, transform) or None")
         .def_prop_ro("width", [](const PaintingInfo& p) { return p.geometry.width(); })
         .def_prop_ro("height", [](const PaintingInfo& p) { return p.geometry.height(); })
         .def_prop_ro("levels", [](const PaintingInfo& p) { return p.geometry.levels(); },
@@ -198,10 +218,11 @@ void bind_pack(nb::module_& m) {
             "zstd_level"_a = 3, "threads"_a = 0)
         .def("begin_painting", [](PackBuilder& b, const std::string& name, std::uint32_t width,
                                   std::uint32_t height, const std::string& source,
-                                  const std::string& conversion, std::uint32_t tx, std::uint32_t ty) {
-            b.begin_painting(PaintingSpec{name, source, conversion, width, height, tx, ty}); },
+                                  const std::string& conversion, std::uint32_t tx, std::uint32_t ty,
+                                  const std::string& colour) {
+            b.begin_painting(PaintingSpec{name, source, conversion, width, height, tx, ty, colour}); },
             "name"_a, "width"_a, "height"_a, "source"_a = "", "conversion"_a = "",
-            "table_x"_a = 0, "table_y"_a = 0)
+            "table_x"_a = 0, "table_y"_a = 0, "colour"_a = "")
         .def("add_rows", [](PackBuilder& b, Rows rows) {
             require(rows.shape(2) == 3, "rows must have shape (n, width, 3)");
             nb::gil_scoped_release release;
@@ -214,6 +235,21 @@ void bind_pack(nb::module_& m) {
         .def_prop_ro("rows_done", &PackBuilder::rows_done)
         .def_prop_ro("tiles_written", &PackBuilder::tiles_written)
         .def_prop_ro("bytes_written", &PackBuilder::bytes_written);
+
+    nb::class_<IccTransform>(m, "IccTransform",
+                             "LittleCMS transform of an RGB or grey ICC profile to sRGB, 16 bits.")
+        .def("__init__", [](IccTransform* self, nb::bytes profile, const std::string& intent,
+                            bool bpc) {
+            const auto* p = static_cast<const std::uint8_t*>(profile.data());
+            new (self) IccTransform(std::vector<std::uint8_t>(p, p + profile.size()),
+                                    parse_intent(intent), bpc); },
+            "profile"_a, "intent"_a = "relative", "black_point_compensation"_a = true)
+        .def_prop_ro("channels", &IccTransform::channels)
+        .def("apply", &icc_apply<std::uint16_t>, "band"_a.noconvert(), "threads"_a = 0,
+             "(h, w, channels) uint16 in the profile's space -> (h, w, 3) uint16 sRGB.")
+        .def("apply", &icc_apply<std::uint8_t>, "band"_a.noconvert(), "threads"_a = 0,
+             "(h, w, channels) uint8 in the profile's space -> (h, w, 3) uint16 sRGB.");
+    m.def("lcms_version", &lcms_version, "LittleCMS version the core links.");
 
     m.def("render_ink_landscape", [](std::uint32_t width, std::uint32_t height, std::uint32_t y0,
                                      std::uint32_t rows, std::uint64_t seed, unsigned threads) {

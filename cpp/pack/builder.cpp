@@ -296,7 +296,7 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
     m.table_height = table_height;
     m.page_table_extra = page_table_json;
     for (const auto& p : paintings_) {
-        PaintingInfo info{p.spec.name, p.spec.source, p.spec.conversion, p.geometry};
+        PaintingInfo info{p.spec.name, p.spec.source, p.spec.conversion, p.geometry, p.spec.colour};
         info.geometry.place(p.spec.table_x, p.spec.table_y, p.first_entry);
         m.paintings.push_back(std::move(info));
     }

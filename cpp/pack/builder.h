@@ -33,6 +33,7 @@ struct PaintingSpec {
     std::string conversion;
     std::uint32_t width = 0, height = 0;
     std::uint32_t table_x = 0, table_y = 0;  // offset in the merged page table
+    std::string colour;  // a JSON object (colour management at ingest) or empty for none
 };
 
 class PackBuilder {

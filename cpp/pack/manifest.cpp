@@ -40,6 +40,16 @@ std::string manifest_text(const Manifest& mf) {
         jp["name"] = p.name;
         jp["source"] = p.source;
         jp["conversion"] = p.conversion;
+        if (!p.colour.empty()) {
+            json colour;
+            try {
+                colour = json::parse(p.colour);
+            } catch (const json::exception& e) {
+                throw InvalidArgument("colour of painting '" + p.name + "': " + e.what());
+            }
+            require(colour.is_object(), "colour of painting '" + p.name + "' must be a JSON object");
+            jp["colour"] = std::move(colour);
+        }
         jp["width"] = g.width();
         jp["height"] = g.height();
         jp["uv_scale"] = {g.uv_scale_u(), g.uv_scale_v()};
@@ -103,6 +113,12 @@ Manifest read_manifest(const std::string& path, std::string* text_out) {
             info.name = jp.at("name").get<std::string>();
             info.source = jp.value("source", std::string());
             info.conversion = jp.value("conversion", std::string());
+            if (jp.contains("colour")) {
+                if (!jp.at("colour").is_object())
+                    throw IoError(path + ": colour of painting '" + info.name +
+                                  "' is not a JSON object");
+                info.colour = jp.at("colour").dump();
+            }
             PaintingGeometry g(jp.at("width").get<std::uint32_t>(), jp.at("height").get<std::uint32_t>(),
                                mf.tile_size, mf.border);
             const auto& pt = jp.at("page_table");

@@ -17,6 +17,7 @@ struct PaintingInfo {
     std::string source;      // input file (or "array") the painting came from
     std::string conversion;  // how the input was turned into 8-bit RGB
     PaintingGeometry geometry;
+    std::string colour;  // JSON object text: source profile, intent, transform; empty if absent
 };
 
 struct Manifest {

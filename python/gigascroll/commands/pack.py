@@ -19,6 +19,14 @@ def register(sub) -> None:
                    help="merged page-table packer (default brkga)")
     p.add_argument("--seed", type=int, default=0, help="BRKGA random seed (default 0)")
     p.add_argument("--threads", type=int, default=0, help="worker threads (default: all cores)")
+    p.add_argument("--colour", default="convert", choices=["convert", "keep"],
+                   help="convert: an embedded ICC profile (or EXR chromaticities) is converted "
+                   "to sRGB with LittleCMS; keep: values stored untouched (default convert)")
+    p.add_argument("--intent", default="relative",
+                   help="rendering intent of the conversion: perceptual, relative (colorimetric, "
+                   "the default), saturation or absolute")
+    p.add_argument("--no-bpc", dest="bpc", action="store_false",
+                   help="no black-point compensation (on by default)")
     p.add_argument("--force", action="store_true", help="overwrite an existing pack")
     p.set_defaults(func=run)
 
@@ -30,7 +38,8 @@ def run(args) -> int:
     t0 = time.perf_counter()
     pack = build_pack(args.inputs, args.output, args.tile_size, args.border, args.codec,
                       force=args.force, layout=args.layout, seed=args.seed,
-                      threads=args.threads, progress=True)
+                      threads=args.threads, progress=True, colour=args.colour,
+                      intent=args.intent, black_point_compensation=args.bpc)
     seconds = time.perf_counter() - t0
     mpx = sum(p.width * p.height for p in pack.paintings) / 1e6
     print(pack_summary(pack))

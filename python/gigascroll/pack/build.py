@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import _core
 from .._core import TilePack, painting_geometry
+from .colour import plan_colour
 from .images import ImageSource, open_image
 
 __all__ = ["build_pack", "plan_layout", "MANIFEST"]
@@ -100,11 +101,14 @@ def _prepare_output(out: Path, force: bool) -> None:
 def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = "raw", *,
                force: bool = False, names: Sequence[str] | None = None, layout: str = "brkga",
                seed: int = 0, threads: int = 0, zstd_level: int = 3, progress: bool = False,
-               band_rows: int = 0) -> TilePack:
+               band_rows: int = 0, colour: str = "convert", intent: str = "relative",
+               black_point_compensation: bool = True) -> TilePack:
     """Builds a tile pack at `out` from one image or a list of images (file paths or numpy
     arrays, one painting each) and returns it opened. The build goes into a temporary sibling
     directory renamed into place at the end, so a failed or interrupted build leaves nothing
-    that opens as a pack."""
+    that opens as a pack. Colours (see .colour): `colour="convert"` turns an embedded ICC
+    profile (or EXR chromaticities) into sRGB with the rendering `intent`; "keep" stores the
+    values untouched; either way the manifest records what was done."""
     if isinstance(inputs, (str, os.PathLike, np.ndarray)):
         inputs = [inputs]
     inputs = list(inputs)
@@ -119,6 +123,9 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     if names is not None and len(names) != len(inputs):
         raise ValueError("names must have one entry per input")
     out = Path(out)
+    colour_options = {"mode": colour, "intent": intent,
+                      "black_point_compensation": black_point_compensation}
+    plan_colour("build_pack", 3, **colour_options)  # unknown mode / intent: now
     _prepare_output(out, force)
 
     sources: list[ImageSource] = []
@@ -128,7 +135,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         for i, image in enumerate(inputs):
             name = names[i] if names else (None if not isinstance(image, np.ndarray) else
                                            f"painting{i}" if len(inputs) > 1 else "painting")
-            sources.append(open_image(image, name, band_rows))
+            sources.append(open_image(image, name, band_rows, colour_options))
         used = set()
         for s in sources:  # unique names
             base, k = s.name, 1
@@ -150,7 +157,8 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                        bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} Mpx [{elapsed}<{remaining},"
                                   " {rate_fmt}]")
         for s, (ox, oy) in zip(sources, offsets):
-            builder.begin_painting(s.name, s.width, s.height, s.source, s.conversion, ox, oy)
+            builder.begin_painting(s.name, s.width, s.height, s.source, s.conversion, ox, oy,
+                                   "" if s.colour is None else json.dumps(s.colour))
             bands = _prefetch(s.bands())
             try:
                 for band in bands:

@@ -10,6 +10,8 @@ from typing import Iterator
 
 import numpy as np
 
+from .colour import plan_colour
+
 __all__ = ["ImageSource", "ArraySource", "FileSource", "open_image", "to_rgb8",
            "describe_conversion"]
 
@@ -85,6 +87,7 @@ class ImageSource:
     height: int
     conversion: str
     band_rows: int
+    colour: dict | None = None  # the manifest's colour record (see .colour), None: not recorded
 
     def bands(self) -> Iterator[np.ndarray]:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -94,7 +97,9 @@ class ImageSource:
 
 
 class ArraySource(ImageSource):
-    def __init__(self, array: np.ndarray, name: str, band_rows: int = 256):
+    """A numpy array: untagged, so its values are assumed sRGB (recorded as such)."""
+
+    def __init__(self, array: np.ndarray, name: str, band_rows: int = 256, colour=None):
         a = np.asarray(array)
         if a.ndim not in (2, 3) or a.shape[0] == 0 or a.shape[1] == 0 or (a.ndim == 3 and a.shape[2] == 0):
             raise ValueError(f"image '{name}' is empty or not an image (shape {a.shape})")
@@ -102,6 +107,8 @@ class ArraySource(ImageSource):
         super().__init__(name, "array", a.shape[1], a.shape[0],
                          describe_conversion(a.dtype, channels), band_rows)
         self._array = a
+        if colour is not None:
+            self.colour = plan_colour(f"image '{name}'", channels, **colour).record
 
     def bands(self) -> Iterator[np.ndarray]:
         for y in range(0, self.height, self.band_rows):
@@ -111,7 +118,8 @@ class ArraySource(ImageSource):
 class FileSource(ImageSource):
     """An image file read through OpenImageIO, in bands aligned to its tile rows if tiled."""
 
-    def __init__(self, path: str | os.PathLike, name: str | None = None, band_rows: int = 0):
+    def __init__(self, path: str | os.PathLike, name: str | None = None, band_rows: int = 0,
+                 colour: dict | None = None):
         import OpenImageIO as oiio
         self._oiio = oiio
         path = Path(path)
@@ -146,6 +154,24 @@ class FileSource(ImageSource):
                          describe_conversion(dtype, spec.nchannels, str(spec.format)), band_rows)
         self._inp = inp
         self._spec = spec
+        self._plan = None
+        if colour is not None:  # colour management (see .colour): profile or chromaticities
+            try:
+                icc = spec.getattribute("ICCProfile")
+                plan = plan_colour(str(path), spec.nchannels,
+                                   None if icc is None else np.asarray(icc, np.uint8).tobytes(),
+                                   spec.getattribute("chromaticities"), **colour)
+            except BaseException:
+                inp.close()
+                raise
+            self.colour = plan.record
+            if plan.transforms:
+                self._plan = plan
+                stored = f"{spec.format} read as {np.dtype(dtype).name}; "
+                rest = describe_conversion(np.uint16, 1 if spec.nchannels <= 2 else 3)
+                self.conversion = stored + plan.step() + "; " + rest
+                if spec.nchannels in (2, 4) or spec.nchannels > 4:
+                    self.conversion += "; extra channels (alpha) dropped"
 
     def bands(self) -> Iterator[np.ndarray]:
         spec = self._spec
@@ -162,7 +188,7 @@ class FileSource(ImageSource):
                 raise OSError(f"{self.source}: corrupt or truncated image near row {y}: "
                               f"{self._inp.geterror() or 'read failed'}")
             data = np.asarray(data).reshape(y1 - y, self.width, self._nch)
-            yield to_rgb8(data)
+            yield to_rgb8(data if self._plan is None else self._plan.apply(data))
 
     def close(self) -> None:
         if self._inp is not None:
@@ -170,12 +196,15 @@ class FileSource(ImageSource):
             self._inp = None
 
 
-def open_image(image, name: str | None = None, band_rows: int = 0) -> ImageSource:
-    """An ImageSource for a numpy array or an image file path."""
+def open_image(image, name: str | None = None, band_rows: int = 0,
+               colour: dict | None = None) -> ImageSource:
+    """An ImageSource for a numpy array or an image file path. `colour`: options of
+    .colour.plan_colour (mode, intent, black_point_compensation) to colour-manage the input
+    and record it; None leaves the values as they are and records nothing."""
     if isinstance(image, ImageSource):
         return image
     if isinstance(image, np.ndarray):
-        return ArraySource(image, name or "painting", band_rows or 256)
+        return ArraySource(image, name or "painting", band_rows or 256, colour)
     if isinstance(image, (str, os.PathLike)):
-        return FileSource(image, name, band_rows)
+        return FileSource(image, name, band_rows, colour)
     raise ValueError(f"cannot read an image from {type(image).__name__}")
