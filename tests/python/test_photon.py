@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import gigascroll as g
+from mitsuba_checks import assert_rays_match_mitsuba
 
 ROOT = Path(__file__).resolve().parents[2]
 REF_SIZE = 64
@@ -50,17 +51,8 @@ def test_cornell_matches_mitsuba_geometry_and_camera(cornell64, rng):
     mi.set_variant("scalar_rgb")
     d = mi.cornell_box()
     d["sensor"]["film"].update(width=REF_SIZE, height=REF_SIZE)
-    mscene = mi.load_dict(d)
-    sensor = mscene.sensors()[0]
     scene, camera = cornell64
-    for u, v in rng.random((200, 2)):
-        ray, _ = sensor.sample_ray(0.0, 0.0, mi.Point2f(u, v), mi.Point2f(0.5, 0.5))
-        assert np.allclose(camera.direction(u * REF_SIZE, v * REF_SIZE), np.array(ray.d), atol=1e-5)
-        si = mscene.ray_intersect(ray)
-        hit = scene.intersect(list(ray.o), list(ray.d))
-        assert (hit is None) == (not si.is_valid())
-        if hit is not None:
-            assert hit[0] == pytest.approx(float(si.t), rel=1e-5)
+    assert_rays_match_mitsuba(mi, mi.load_dict(d), scene, camera, REF_SIZE, rng)
     assert scene.triangle_count == 36 and scene.emitter_count == 2
     # Flux of the light: pi * area * radiance, area 0.46 x 0.38.
     assert scene.emitted_power == pytest.approx(math.pi * 0.46 * 0.38 * np.array([18.387, 13.9873, 6.75357]), rel=1e-5)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import gigascroll as g
+from mitsuba_checks import assert_rays_match_mitsuba
 
 ROOT = Path(__file__).resolve().parents[2]
 SIZE = 48
@@ -56,17 +57,8 @@ def test_room_geometry_and_camera_match_mitsuba(name):
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
     mscene = mi.load_dict(g.room_scene(name).to_mitsuba_dict(resolution=(SIZE, SIZE)))
-    sensor = mscene.sensors()[0]
     scene, camera = g.builtin_scene(name, resolution=(SIZE, SIZE))
-    rng = np.random.default_rng(0)
-    for u, v in rng.random((200, 2)):
-        ray, _ = sensor.sample_ray(0.0, 0.0, mi.Point2f(u, v), mi.Point2f(0.5, 0.5))
-        assert np.allclose(camera.direction(u * SIZE, v * SIZE), np.array(ray.d), atol=1e-5)
-        si = mscene.ray_intersect(ray)
-        hit = scene.intersect(list(ray.o), list(ray.d))
-        assert (hit is None) == (not si.is_valid())
-        if hit is not None:
-            assert hit[0] == pytest.approx(float(si.t), rel=1e-4)
+    assert_rays_match_mitsuba(mi, mscene, scene, camera, SIZE, np.random.default_rng(0), rel=1e-4)
 
 
 def test_rooms_unknown_name():
