@@ -67,7 +67,30 @@ def test_render_command_writes_exr_and_png(tmp_path, gigascroll_cli):
     assert r.returncode == 0 and png.stat().st_size > 0
 
 
+def test_render_command_progressive_is_the_api_render(tmp_path, gigascroll_cli):
+    """--progressive / --passes / --disc reach the renderer: the CLI's image is the API's."""
+    oiio = pytest.importorskip("OpenImageIO")
+    import gigascroll as g
+    out = tmp_path / "p.exr"
+    r = gigascroll_cli("render", "cornell", "-o", out, "--width", 24, "--height", 24,
+                       "--photons", 4000, "--progressive", "--passes", 3, "--seed", 5)
+    assert r.returncode == 0, r.stderr
+    assert "progressive 3 passes" in r.stdout
+    img = oiio.ImageInput.open(str(out))
+    got = img.read_image("float")
+    img.close()
+    scene, cam = g.builtin_scene("cornell", resolution=(24, 24))
+    want = g.render(scene, cam, photons=4000, radius=0.02, progressive=True, passes=3, seed=5)
+    np.testing.assert_array_equal(got, want)
+    sphere = g.render(scene, cam, photons=4000, radius=0.02, progressive=True, passes=3, seed=5,
+                      disc=False)
+    assert not np.array_equal(sphere, want)  # the default (disc) was the one the CLI used
+
+
 @pytest.mark.parametrize("args,match", [
+    (["render", "cornell", "-o", "x.exr", "--progressive", "--passes", "0"], "passes"),
+    (["render", "cornell", "-o", "x.exr", "--progressive", "--spp", "4"], "spp"),
+    (["render", "cornell", "-o", "x.exr", "--progressive", "--time-budget", "nan"], "budget"),
     (["render", "kitchen", "-o", "x.exr"], "invalid choice"),
     (["render", "cornell", "-o", "x.exr", "--radius", "-1"], "radius"),
     (["render", "cornell", "-o", "x.bmpx"], "format"),

@@ -26,12 +26,25 @@ def register(sub) -> None:
     p.add_argument("--gather", choices=["radius", "knn"], default="radius")
     p.add_argument("-k", type=int, default=50, help="photons of the k-nearest gather")
     p.add_argument("--kernel", choices=["box", "cone"], default="box")
-    p.add_argument("--spp", type=int, default=4, help="camera samples per pixel")
+    p.add_argument("--spp", type=int, default=None,
+                   help="camera samples per pixel (default 4; progressive renders take one per pass)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--pipeline", choices=["fused", "two-pass"], default="fused")
     p.add_argument("--cooperative", action="store_true", help="cooperative gather (two-pass pipeline)")
     p.add_argument("--no-indirect", action="store_true", help="direct light only (skips the photon pass)")
     p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    p.add_argument("--progressive", action="store_true",
+                   help="stochastic progressive photon mapping: --passes passes (or fewer within "
+                        "--time-budget), the radius shrinking per pixel; converges to the exact image")
+    p.add_argument("--passes", type=int, default=16, help="progressive passes (default 16)")
+    p.add_argument("--time-budget", type=float, default=None,
+                   help="progressive: stop after this many seconds")
+    disc = p.add_mutually_exclusive_group()
+    disc.add_argument("--disc", dest="disc", action="store_true", default=None,
+                      help="gather over the surface disc (no edge darkening or leaks; default for "
+                           "--progressive)")
+    disc.add_argument("--sphere", dest="disc", action="store_false",
+                      help="gather over the sphere (default for one-shot renders)")
     p.set_defaults(func=run)
 
 
@@ -46,15 +59,20 @@ def run(args) -> int:
     if args.width <= 0 or args.height <= 0:
         raise UserError("--width and --height must be positive")
     radius = args.radius if args.radius is not None else 0.02 * BUILTIN_SCENES[args.scene]
+    spp = args.spp if args.spp is not None else (1 if args.progressive else 4)
     scene, camera = builtin_scene(args.scene, resolution=(args.width, args.height))
     image, st = render(scene, camera, photons=args.photons, radius=radius, grid=args.grid,
-                       gather=args.gather, k=args.k, kernel=args.kernel, spp=args.spp, seed=args.seed,
+                       gather=args.gather, k=args.k, kernel=args.kernel, spp=spp, seed=args.seed,
                        pipeline=args.pipeline, cooperative=args.cooperative,
-                       indirect=not args.no_indirect, threads=args.threads, return_stats=True)
+                       indirect=not args.no_indirect, threads=args.threads, return_stats=True,
+                       progressive=args.progressive, passes=args.passes,
+                       time_budget=args.time_budget, disc=args.disc)
     save_image(out, image)
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
-    print(f"{args.scene}: {scene.triangle_count} triangles, {args.width}x{args.height}, {args.spp} spp, "
+    print(f"{args.scene}: {scene.triangle_count} triangles, {args.width}x{args.height}, {spp} spp, "
           f"radius {radius:g}")
+    if args.progressive:
+        print(f"progressive {st['passes']} passes, mean final radius {st['mean_radius']:g}")
     if st["photon_pass_skipped"]:
         print("photon pass   skipped (no indirect light needed)")
     else:
