@@ -256,7 +256,17 @@ TileLoader::TileLoader(const TilePack& pack, LoaderMode mode, unsigned threads, 
     : pack_(pack), mode_(mode), threads_(threads), tile_bytes_(pack.tile_bytes()) {
     require(threads >= 1 && threads <= 64, "loader threads must be in 1..64");
     require(o.queue_capacity >= 1 && o.pool_tiles >= 1, "queue_capacity and pool_tiles must be positive");
-    require(o.pool_tiles <= (1u << 20), "pool_tiles is unreasonably large");
+    // Bounds checked before anything is allocated, with what the request would cost.
+    constexpr std::size_t kMaxQueue = std::size_t(1) << 24;          // 128 MiB of commands
+    constexpr std::size_t kMaxPoolBytes = std::size_t(8) << 30;      // 8 GiB of tile buffers
+    require(o.queue_capacity <= kMaxQueue,
+            "queue_capacity must be at most 2^24 commands (" + std::to_string(o.queue_capacity) +
+                " would need about " + std::to_string(o.queue_capacity / (1u << 20) * 8) + " MiB)");
+    require(o.pool_tiles <= kMaxPoolBytes / tile_bytes_,
+            "pool_tiles must be at most " + std::to_string(kMaxPoolBytes / tile_bytes_) +
+                " (8 GiB of " + std::to_string(tile_bytes_) + "-byte tiles; " +
+                std::to_string(o.pool_tiles) + " would need " +
+                std::to_string(o.pool_tiles / (1u << 20) * tile_bytes_) + " MiB)");
     if (mode == LoaderMode::LockFree)
         impl_ = std::make_unique<LockFreeLoader>(pack, threads, o);
     else

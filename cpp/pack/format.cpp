@@ -1,8 +1,20 @@
 #include "pack/format.h"
 
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
+
 #include "common/error.h"
 
 namespace gigascroll {
+
+void require_regular_file(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0)
+        throw IoError(path + ": cannot open: " + std::strerror(errno));
+    if (!S_ISREG(st.st_mode)) throw IoError(path + ": not a regular file");
+}
 
 Codec parse_codec(const std::string& name) {
     if (name == "raw") return Codec::Raw;

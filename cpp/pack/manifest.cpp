@@ -1,6 +1,7 @@
 #include "pack/manifest.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -85,8 +86,12 @@ void write_manifest(const std::string& path, const Manifest& m) {
 }
 
 Manifest read_manifest(const std::string& path, std::string* text_out) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0)
+        throw IoError(path + ": missing manifest (not a finished tile pack)");
+    require_regular_file(path);
     std::ifstream in(path);
-    if (!in) throw IoError(path + ": missing manifest (not a finished tile pack)");
+    if (!in) throw IoError(path + ": cannot read the manifest");
     json m;
     try {
         m = json::parse(in);

@@ -70,6 +70,7 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
 
     // Index: map it whole; entries are read-only afterwards.
     const std::string index_path = directory + "/" + kIndexName;
+    require_regular_file(index_path);
     const int ifd = ::open(index_path.c_str(), O_RDONLY | O_CLOEXEC);
     if (ifd < 0) throw IoError(index_path + ": cannot open: " + std::strerror(errno));
     struct Closer {
@@ -101,11 +102,16 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
 
     // Tile data: keep one descriptor for pread.
     const std::string tiles_path = directory + "/" + kTilesName;
-    tiles_fd_ = ::open(tiles_path.c_str(), O_RDONLY | O_CLOEXEC);
     auto fail = [&](const std::string& message) {
         release();  // the destructor does not run when the constructor throws
         throw IoError(message);
     };
+    try {
+        require_regular_file(tiles_path);
+    } catch (const IoError& e) {
+        fail(e.what());
+    }
+    tiles_fd_ = ::open(tiles_path.c_str(), O_RDONLY | O_CLOEXEC);
     if (tiles_fd_ < 0) fail(tiles_path + ": cannot open: " + std::strerror(errno));
     ::fstat(tiles_fd_, &st);
     tiles_size_ = static_cast<std::uint64_t>(st.st_size);

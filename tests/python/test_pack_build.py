@@ -192,6 +192,17 @@ def test_existing_output_needs_force(tmp_path):
     with pytest.raises(OSError, match="not a tile pack"):
         build_pack(img, tmp_path / "other", force=True)
     assert (tmp_path / "other" / "notes.txt").exists()
+    # A source tree that happens to hold a manifest.json is not a pack either: --force keeps it.
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "manifest.json").write_text('{"name": "my-web-app"}')
+    (src / "main.py").write_text("print('hi')")
+    with pytest.raises(OSError, match="not a tile pack"):
+        build_pack(img, src, force=True)
+    assert (src / "main.py").exists() and (src / "manifest.json").exists()
+    (src / "main.py").unlink()  # only a manifest, but not a pack's
+    with pytest.raises(OSError, match="not a tile pack"):
+        build_pack(img, src, force=True)
 
 
 @pytest.mark.parametrize("name,content", [("garbage.png", b"\x89PNG\r\n\x1a\nnot really"),

@@ -2,6 +2,7 @@
 with clear errors, reads check ranges and checksums, and threads may read at once."""
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -102,3 +103,20 @@ def test_concurrent_reads_agree(small_pack):
         tiles = list(ex.map(lambda k: pack.read_tile(*k), keys))
     for k, t in zip(keys, tiles):
         assert np.array_equal(t, pack.read_tile(*k))
+
+
+@pytest.mark.parametrize("name", ["manifest.json", "tiles.bin", "index.bin"])
+def test_a_fifo_in_a_pack_files_place_is_refused_not_waited_on(small_pack, name):
+    # open() of a FIFO blocks until a writer comes: both readers refuse it after a stat.
+    from gigascroll.pack.reader import PurePack
+    path, _ = small_pack
+    (path / name).unlink()
+    os.mkfifo(path / name)
+    with pytest.raises(OSError, match="not a regular file"):
+        TilePack(path)
+    with pytest.raises(OSError, match="not a regular file"):
+        PurePack(path)
+    (path / name).unlink()
+    (path / name).mkdir()
+    with pytest.raises(OSError, match="not a regular file"):
+        TilePack(path)

@@ -365,3 +365,13 @@ def test_strided_inputs_read_as_their_contiguous_copies(pack, vt_full, rng):
     fortran = np.asfortranarray(rows)
     assert not fortran.flags.c_contiguous
     assert x.request(fortran) == y.request(rows)
+
+
+def test_loader_sizes_are_bounded_before_allocation(small_pack):
+    # Huge queue or pool sizes are refused with the memory they would need, not allocated.
+    pack = gigascroll.TilePack(small_pack[0])
+    for kwargs, what in (({"queue_capacity": 2 ** 61}, "queue_capacity"),
+                         ({"pool_tiles": 2 ** 40}, "pool_tiles")):
+        with pytest.raises(ValueError, match=what) as e:
+            TileLoader(pack, **kwargs)
+        assert "MiB" in str(e.value)

@@ -87,12 +87,29 @@ def _fsync_dir(path: Path) -> None:
         os.close(fd)
 
 
+# The files a pack directory holds: --force replaces a directory only if it holds nothing else
+# and its manifest says it is a pack (a source tree with a manifest.json is not one).
+PACK_FILES = frozenset({MANIFEST, "tiles.bin", "index.bin"})
+
+
+def _is_pack_dir(path: Path) -> bool:
+    names = {p.name for p in path.iterdir()}
+    manifest = path / MANIFEST
+    if not names <= PACK_FILES or not manifest.is_file() or manifest.is_symlink():
+        return False
+    try:
+        m = json.loads(manifest.read_text())
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+        return False
+    return isinstance(m, dict) and m.get("format") == "gigascroll-pack"
+
+
 def _prepare_output(out: Path, force: bool) -> None:
     if out.exists() or out.is_symlink():
         if not force:
             raise OSError(f"{out}: already exists (use --force / force=True to overwrite)")
         if out.is_dir() and not out.is_symlink():
-            if any(out.iterdir()) and not (out / MANIFEST).exists():
+            if any(out.iterdir()) and not _is_pack_dir(out):
                 raise OSError(f"{out}: exists and is not a tile pack; refusing to overwrite it")
         else:
             raise OSError(f"{out}: exists and is not a directory; refusing to overwrite it")

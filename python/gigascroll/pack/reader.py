@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import struct
 from dataclasses import dataclass
 from functools import lru_cache
@@ -108,6 +109,18 @@ class PurePainting:
         return sum(nx * ny for nx, ny in self.level_tiles)
 
 
+def _require_regular_file(path: Path) -> None:
+    """A FIFO or device in a pack file's place would block open() or read() forever."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        if path.name == "manifest.json":
+            raise OSError(f"{path}: missing manifest (not a finished tile pack)") from None
+        raise OSError(f"{path}: cannot open: no such file") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise OSError(f"{path}: not a regular file")
+
+
 class PurePack:
     """A tile pack opened for reading without the core. read_tile returns a
     (tile_size, tile_size, 3) uint8 array like gigascroll.TilePack.read_tile."""
@@ -116,6 +129,8 @@ class PurePack:
         self.path = str(path)
         d = Path(path)
         mpath = d / "manifest.json"
+        for f in (mpath, d / "index.bin", d / "tiles.bin"):
+            _require_regular_file(f)
         try:
             text = mpath.read_text()
         except FileNotFoundError:
