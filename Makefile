@@ -8,8 +8,13 @@ BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
 APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
-  liblcms2-dev colord-data iipimage-server lighttpd
+  liblcms2-dev colord-data iipimage-server lighttpd ccache
 JOBS ?= $(shell nproc)
+# Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
+# the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.
+export CMAKE_CXX_COMPILER_LAUNCHER := $(shell command -v ccache 2>/dev/null)
+export CMAKE_C_COMPILER_LAUNCHER := $(CMAKE_CXX_COMPILER_LAUNCHER)
+export CCACHE_BASEDIR := $(CURDIR)
 
 .PHONY: all deps venv build demo test ctest pytest sanitize bench clean
 
