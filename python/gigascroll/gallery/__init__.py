@@ -2,6 +2,7 @@
 
 from .gallery import LIGHTING_MODES, PAINTING_REFLECTANCE, Gallery, painting_albedo
 from .room import PaintingSlot, RoomSpec, Surface
+from .rooms import ROOM_NAMES, builtin_room
 
 __all__ = ["Gallery", "LIGHTING_MODES", "PAINTING_REFLECTANCE", "PaintingSlot", "RoomSpec", "Surface",
-           "painting_albedo"]
+           "painting_albedo", "ROOM_NAMES", "builtin_room"]
