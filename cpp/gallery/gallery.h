@@ -68,7 +68,7 @@ struct LightingSettings {
 
 struct BakeSettings {
     double spacing = 0;      // lattice spacing in metres; 0 = scene diagonal / 200
-    int light_samples = 64;  // emitter samples per lattice point
+    int light_samples = 32;  // emitter samples per lattice point
     std::uint64_t max_points = 1ull << 25;  // a bound on memory (32 B per point)
     unsigned threads = 0;
 };

@@ -177,3 +177,39 @@ def test_bad_render_arguments(lit):
         gal.light(vt, radius=-1.0)
     with pytest.raises(ValueError, match="spacing too fine"):
         gal.bake(spacing=1e-5)
+
+
+def test_render_cli_renders_a_room_still(tmp_path, red_pack, gigascroll_cli):
+    import OpenImageIO as oiio
+
+    out = tmp_path / "still.exr"
+    r = gigascroll_cli("render", "--room", "scroll", "--pack", red_pack.path, "--width", 48, "--height", 32,
+                       "--photons", 20000, "--lighting", "full", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert "lighting full" in r.stdout and out.exists()
+    img = oiio.ImageBuf(str(out))
+    pixels = np.asarray(img.get_pixels(oiio.FLOAT))
+    assert pixels.shape == (32, 48, 3) and np.isfinite(pixels).all() and pixels.max() > 0
+
+
+def test_python_render_accepts_a_gallery(red_pack):
+    gal = Gallery.from_room(box_room(), red_pack)
+    cam = gal.camera((24, 16))
+    image, stats = g.render(gal, cam, photons=20000, lighting="baked", return_stats=True)
+    assert image.shape == (16, 24, 3) and np.isfinite(image).all()
+    assert stats["bake_points"] > 0 and gal.baked
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--room", "scroll"], "needs --pack"),
+    (["--room", "nowhere.glb", "--pack", "PACK"], "no such room file"),
+    (["--room", "scroll", "--pack", "PACK", "--camera", "1,2,3"], "6 or 7"),
+    (["--room", "scroll", "--pack", "PACK", "--camera", "0,0,0,0,0,0"], "must differ"),
+    (["--room", "scroll", "--pack", "missing.pack"], "cannot open pack"),
+    (["cornell", "--room", "scroll", "--pack", "PACK"], "not both"),
+])
+def test_render_cli_bad_room_input(tmp_path, red_pack, gigascroll_cli, args, message):
+    args = [str(red_pack.path) if a == "PACK" else a for a in args]
+    r = gigascroll_cli("render", *args, "-o", tmp_path / "x.png", cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr, r.stderr
+    assert not (tmp_path / "x.png").exists()

@@ -161,7 +161,7 @@ class Gallery(_core._Gallery):
         self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads))
         return self.stats
 
-    def bake(self, spacing: float | None = None, light_samples: int = 64, threads: int = 0) -> dict:
+    def bake(self, spacing: float | None = None, light_samples: int = 32, threads: int = 0) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
         point with `light_samples` emitter samples plus the photon gather. Returns `stats`."""
@@ -199,6 +199,44 @@ class Gallery(_core._Gallery):
             raise ValueError(f"out must be a writeable C-contiguous float32 array of shape {shape}")
         d = self._render_display(camera, vt, lighting, out, bool(hits), int(threads))
         return (out, dict(d)) if hits else out
+
+    def stream(self, camera: Camera, vt, rounds: int = 3) -> int:
+        """Makes the tiles this view asks for resident: the feedback pass at the camera's full
+        resolution, then each missing tile read from the pack and inserted (synchronously, for
+        stills; the frame loop streams asynchronously). Repeats while new tiles are missing
+        (at most `rounds` times). Returns the number of tiles inserted."""
+        from .._core import NO_REQUEST, unpack_requests
+
+        inserted = 0
+        for _ in range(int(rounds)):
+            keys = self.render_view(camera, width=camera.width, height=camera.height)["keys"]
+            keys = np.unique(keys[keys != NO_REQUEST])
+            missing = vt.request(keys) if len(keys) else keys
+            if len(missing) == 0:
+                break
+            for p, l, x, y in zip(*unpack_requests(missing)):
+                vt.insert((int(p), int(l), int(x), int(y)), self.pack.read_tile(int(p), int(l), int(x), int(y)))
+                inserted += 1
+        return inserted
+
+    def still(self, camera: Camera, lighting: str = "baked", vt=None, slots: int | None = None,
+              **light_options) -> np.ndarray:
+        """A still frame: a virtual texture sized for the view (`slots` x `slots` tiles, default
+        from the view's requests), the view's tiles streamed in (`stream`), lighting as needed,
+        then `render_display`. light_options go to `light` when it has not run."""
+        from .. import runtime
+
+        if vt is None:
+            from .._core import NO_REQUEST
+
+            keys = self.render_view(camera, width=camera.width, height=camera.height)["keys"]
+            wanted = len(np.unique(keys[keys != NO_REQUEST]))
+            side = slots or min(64, max(8, math.ceil(math.sqrt(2 * wanted + 64 * max(1, len(self.slot_paintings))))))
+            vt = runtime.VirtualTexture(self.pack, (side, side))
+        self.stream(camera, vt)
+        if lighting != "unlit" and not self.lit:
+            self.light(vt, **light_options)
+        return self.render_display(camera, vt, lighting=lighting)
 
     def camera(self, resolution=(256, 256), fov: float = 60.0, eye=None, target=None) -> Camera:
         """A camera at the room's suggested eye and target (or the given ones), y up."""
