@@ -213,3 +213,22 @@ def test_render_cli_bad_room_input(tmp_path, red_pack, gigascroll_cli, args, mes
     r = gigascroll_cli("render", *args, "-o", tmp_path / "x.png", cwd=tmp_path)
     assert r.returncode == 2 and message in r.stderr, r.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_stream_makes_the_views_tiles_resident(tmp_path):
+    """Close to a fine painting the view asks for level-0 tiles that are not pinned; stream()
+    inserts exactly the missing ones, after which the feedback's requests all hit."""
+    from gallery_checks import gradient_pack
+
+    pack = gradient_pack(tmp_path / "g.pack", size=(1024, 512))
+    gal = Gallery.from_room(box_room(painting="gradient"), pack)
+    vt = g.VirtualTexture(pack, (24, 24))
+    cam = g.Camera([0, 1.5, -1.5], [0, 1.5, -2], [0, 1, 0], 50, resolution=(96, 64))
+    keys = gal.render_view(cam, width=96, height=64)["keys"]
+    wanted = np.unique(keys[keys != g.NO_REQUEST])
+    before = vt.stats()["resident"]
+    missing = len(vt.request(wanted))
+    assert missing > 0
+    assert gal.stream(cam, vt) == missing
+    assert vt.stats()["resident"] == before + missing
+    assert len(vt.request(wanted)) == 0
