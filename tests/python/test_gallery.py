@@ -232,3 +232,17 @@ def test_stream_makes_the_views_tiles_resident(tmp_path):
     assert gal.stream(cam, vt) == missing
     assert vt.stats()["resident"] == before + missing
     assert len(vt.request(wanted)) == 0
+
+
+def test_render_cli_renders_the_example_room_file(tmp_path, gigascroll_cli):
+    from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
+
+    images = [np.full((h // 10, w // 10, 3), c, np.uint8)
+              for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]
+    pack = g.build_pack(images, tmp_path / "ex.pack", tile_size=32, border=2, names=list(EXAMPLE_PAINTINGS))
+    room = write_example_room(tmp_path / "room.glb", pack)
+    out = tmp_path / "still.png"
+    r = gigascroll_cli("render", "--room", room, "--pack", tmp_path / "ex.pack", "--width", 40, "--height", 30,
+                       "--photons", 20000, "--lighting", "unlit", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert "2 paintings" in r.stdout and out.exists()

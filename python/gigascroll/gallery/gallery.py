@@ -244,10 +244,19 @@ class Gallery(_core._Gallery):
         eye = eye if eye is not None else (spec.camera_eye if spec and spec.camera_eye else None)
         target = target if target is not None else (spec.camera_target if spec and spec.camera_target else None)
         if eye is None or target is None:
+            # No suggestion: from the middle of the room at eye height (1.6 m, or 55% of a
+            # lower room) toward the first painting, else along -z.
             lo, hi = (np.array(b, np.float64) for b in self.bounds)
             c = (lo + hi) / 2
-            eye = eye if eye is not None else (c[0], lo[1] + 0.6 * (hi[1] - lo[1]), c[2] + 0.45 * (hi[2] - lo[2]))
-            target = target if target is not None else tuple(c)
+            c[1] = lo[1] + min(1.6, 0.55 * (hi[1] - lo[1]))
+            eye = eye if eye is not None else tuple(c)
+            if target is None:
+                if spec and spec.paintings:
+                    s0 = spec.paintings[0]
+                    target = tuple(np.array(s0.origin, float) + 0.5 * s0.width_m * np.array(s0.u_axis, float)
+                                   + 0.5 * s0.height_m * np.array(s0.v_axis, float))
+                else:
+                    target = tuple(np.array(eye, float) + np.array([0.0, 0.0, -1.0]))
         return Camera(list(_vec3(eye, "eye")), list(_vec3(target, "target")), [0, 1, 0], float(fov),
                       resolution=(int(resolution[0]), int(resolution[1])))
 
