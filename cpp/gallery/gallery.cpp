@@ -426,6 +426,8 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 if (hits.slot) hits.slot[px] = slot;
                 if (!found) {
                     out_row[3 * x] = out_row[3 * x + 1] = out_row[3 * x + 2] = 0;
+                    if (hits.irradiance)
+                        hits.irradiance[3 * px] = hits.irradiance[3 * px + 1] = hits.irradiance[3 * px + 2] = 0;
                     if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
                     if (hits.lod) hits.lod[px] = kNaN;
                     continue;
@@ -437,6 +439,9 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                     case Lighting::Full: E = irradiance_full(hit); break;
                 }
                 const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
+                if (hits.irradiance)
+                    hits.irradiance[3 * px] = E.x, hits.irradiance[3 * px + 1] = E.y,
+                    hits.irradiance[3 * px + 2] = E.z;
                 if (slot < 0) {
                     const Vec3f L = scene_.albedo(hit.tri) * E * kInvPi + Le;
                     out_row[3 * x] = L.x, out_row[3 * x + 1] = L.y, out_row[3 * x + 2] = L.z;

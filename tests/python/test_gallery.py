@@ -120,6 +120,10 @@ def test_display_level_follows_the_feedback_lambda(lit):
     on = hits["slot"] == 0
     assert np.allclose(hits["lod"][on], fb["lod"][on], atol=1e-3)
     assert np.allclose(hits["uv"][on], fb["uv"][on], atol=1e-6)
+    # radiance = albedo x E / pi (+ emission, none on the painting): E reproduces the pixel.
+    rgb, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
+    albedo = painting_albedo(np.array(RED, np.uint8))
+    assert np.allclose(rgb[on], albedo * hits["irradiance"][on] / math.pi, rtol=2e-2)
 
 
 def direct_irradiance_brute(p, n, light_c=(0, 2.999, 0), half=0.5, radiance=5.0, m=200):

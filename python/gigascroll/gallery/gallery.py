@@ -181,8 +181,10 @@ class Gallery(_core._Gallery):
         (H, W, 3) float32 linear radiance (written into `out` when given). A painting's albedo
         is the VT's trilinear sample at the pixel's lambda; lighting "baked" and "full" light()
         (and bake()) with their defaults first if that has not been done. hits=True returns
-        (rgb, dict) with per-pixel 'position' (H, W, 3) float32, 'slot' (H, W) int32 (-1 off
-        paintings), 'uv' (H, W, 2) float64 and 'lod' (H, W) float32 (NaN off paintings)."""
+        (rgb, dict) with per-pixel 'position' (H, W, 3) float32 (NaN where nothing is hit),
+        'slot' (H, W) int32 (-1 off paintings), 'uv' (H, W, 2) float64 and 'lod' (H, W) float32
+        (NaN off paintings), and 'irradiance' (H, W, 3) float32, the E of radiance = albedo x
+        E / pi + emission (view-independent: another eye seeing the same point can reuse it)."""
         if lighting not in LIGHTING_MODES:
             raise ValueError(f"lighting must be one of {LIGHTING_MODES}, got {lighting!r}")
         if not isinstance(camera, Camera):
