@@ -327,12 +327,12 @@ Vec3f Gallery::irradiance_baked(const Hit& hit) const {
 }
 
 void Gallery::bake(const BakeSettings& s) {
-    require_lit();
     require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
     require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
             "Gallery.bake: light_samples must be in [1, 65536]");
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
+    require_lit();
     const double spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
     const std::size_t tris = tri_v0_.size();
     std::vector<std::uint32_t> n(tris);
@@ -395,7 +395,7 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
     check_texture(vt);
     std::shared_lock lock(mutex_);
     if (lighting != Lighting::Unlit) require_lit();
-    require(lighting != Lighting::Baked || baked(), "Gallery: call bake() before lighting 'baked'");
+    require(lighting != Lighting::Baked || !bake_offset_.empty(), "Gallery: call bake() before lighting 'baked'");
     const std::uint32_t W = camera.width, H = camera.height;
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
     const Vec3f origin(camera.position);

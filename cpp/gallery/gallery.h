@@ -121,10 +121,20 @@ public:
     // sqrt(100 A / (pi N)) for the room's area A and N photons (about 100 photons per disc),
     // clamped to [1e-4, 0.05] x the diagonal.
     void light(const VirtualTexture& vt, const LightingSettings& settings);
-    bool lit() const { return renderer_ != nullptr; }
+    bool lit() const {
+        std::shared_lock lock(mutex_);
+        return renderer_ != nullptr;
+    }
     void bake(const BakeSettings& settings);
-    bool baked() const { return !bake_offset_.empty(); }
-    const LightingStats& stats() const { return stats_; }
+    bool baked() const {
+        std::shared_lock lock(mutex_);
+        return !bake_offset_.empty();
+    }
+    // A copy, taken under the lock (light() and bake() may be rewriting it on another thread).
+    LightingStats stats() const {
+        std::shared_lock lock(mutex_);
+        return stats_;
+    }
 
     // One primary ray through each pixel centre: linear RGB radiance (height, width, 3).
     void render_display(const Camera& camera, const VirtualTexture& vt, Lighting lighting,
