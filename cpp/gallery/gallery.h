@@ -154,6 +154,7 @@ private:
     std::vector<PaintingPlacement> placements_;
     std::vector<int> geom_placement_;   // Embree geometry id -> painting slot or -1
     std::vector<int> tri_slot_;         // global triangle -> painting slot or -1
+    std::vector<std::uint32_t> geom_first_tri_;  // Embree geometry id -> its first triangle
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // every kept triangle
     LightingSettings lighting_;
     std::unique_ptr<AlbedoTexture> albedo_;
