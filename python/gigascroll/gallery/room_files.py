@@ -91,7 +91,12 @@ def load_room(path, paintings, name: str | None = None) -> RoomSpec:
     if size > MAX_FILE_BYTES:
         raise ValueError(f"{path}: {size} bytes is too large for a room file")
     reader = {".glb": _gltf_nodes, ".gltf": _gltf_nodes, ".obj": _obj_nodes, ".ply": _ply_nodes}
-    nodes = reader[suffix](path)
+    try:
+        with np.errstate(all="ignore"):  # hostile transforms overflow inside trimesh; checked after
+            nodes = reader[suffix](path)
+    except (TypeError, KeyError, IndexError, AttributeError, OverflowError) as e:
+        # a JSON value of the wrong shape that the checks above did not anticipate
+        raise ValueError(f"{path}: malformed room file: {type(e).__name__}: {e}") from None
     return _room_from_nodes(path, nodes, sizes, name or path.stem)
 
 
@@ -155,6 +160,54 @@ def _check_buffers(header: dict, path: Path):
             raise ValueError(f"{path}: buffer {i} file {uri!r} is too large")
 
 
+_COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+_TYPE_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+
+
+def _check_accessors(header: dict, path: Path):
+    """Every accessor within its buffer view and every view within its buffer, before trimesh
+    allocates anything (a hostile count would otherwise ask for terabytes)."""
+    buffers = _list_of_dicts(header, "buffers", path)
+    views = _list_of_dicts(header, "bufferViews", path)
+
+    def integer(x, what):
+        if isinstance(x, bool) or not isinstance(x, int) or not 0 <= x <= MAX_FILE_BYTES:
+            raise ValueError(f"{path}: glTF {what} must be an integer in [0, {MAX_FILE_BYTES}], "
+                             f"got {x!r}")
+        return x
+
+    for i, v in enumerate(views):
+        b = integer(v.get("buffer", -1), f"bufferViews[{i}].buffer")
+        if b >= len(buffers):
+            raise ValueError(f"{path}: glTF bufferViews[{i}] names a missing buffer")
+        end = integer(v.get("byteOffset", 0), "byteOffset") + integer(v.get("byteLength", -1),
+                                                                        "byteLength")
+        if end > integer(buffers[b].get("byteLength", -1), f"buffers[{b}].byteLength"):
+            raise ValueError(f"{path}: glTF bufferViews[{i}] runs past its buffer")
+    for i, a in enumerate(_list_of_dicts(header, "accessors", path)):
+        ct, kind = a.get("componentType"), a.get("type")
+        size = _COMPONENT_BYTES.get(ct) if isinstance(ct, int) else None
+        width = _TYPE_WIDTH.get(kind) if isinstance(kind, str) else None
+        if size is None or width is None:
+            raise ValueError(f"{path}: glTF accessors[{i}] has a bad componentType or type")
+        nbytes = integer(a.get("count", -1), f"accessors[{i}].count") * size * width
+        if "sparse" in a:
+            raise ValueError(f"{path}: glTF accessors[{i}]: sparse accessors are not supported")
+        if "bufferView" not in a:
+            if nbytes > MAX_FILE_BYTES:
+                raise ValueError(f"{path}: glTF accessors[{i}] is too large")
+            continue
+        view = integer(a["bufferView"], f"accessors[{i}].bufferView")
+        if view >= len(views):
+            raise ValueError(f"{path}: glTF accessors[{i}] names a missing buffer view")
+        stride = views[view].get("byteStride", size * width)
+        integer(stride, f"bufferViews[{view}].byteStride")
+        need = integer(a.get("byteOffset", 0), "byteOffset") + (
+            0 if nbytes == 0 else stride * (nbytes // (size * width) - 1) + size * width)
+        if need > views[view].get("byteLength", 0):
+            raise ValueError(f"{path}: glTF accessors[{i}] runs past its buffer view")
+
+
 def _gltf_material(header: dict, index, path: Path, node: str) -> tuple[tuple, tuple]:
     materials = _list_of_dicts(header, "materials", path)
     if not isinstance(index, int) or not 0 <= index < len(materials):
@@ -192,6 +245,7 @@ def _gltf_nodes(path: Path) -> list[_Node]:
 
     header, binary = _read_gltf(path)
     _check_buffers(header, path)
+    _check_accessors(header, path)
     nodes = _list_of_dicts(header, "nodes", path)
     for key in ("meshes", "materials", "accessors", "bufferViews", "scenes"):
         _list_of_dicts(header, key, path)
@@ -219,7 +273,7 @@ def _gltf_nodes(path: Path) -> list[_Node]:
             resolver = trimesh.resolvers.FilePathResolver(str(path.parent / "x.gltf"))
             scene = trimesh.load(io.BytesIO(text), file_type="gltf", resolver=resolver,
                                  force="scene", process=False)
-    except (OSError, MemoryError):
+    except OSError:
         raise
     except Exception as e:  # trimesh raises anything from KeyError to AssertionError
         raise ValueError(f"{path}: trimesh cannot read it: {type(e).__name__}: {e}") from None
@@ -310,7 +364,7 @@ def _obj_nodes(path: Path) -> list[_Node]:
     try:
         scene = trimesh.load(str(path), file_type="obj", force="scene", process=False,
                              split_objects=True, group_material=True, maintain_order=True)
-    except (OSError, MemoryError):
+    except OSError:
         raise
     except Exception as e:
         raise ValueError(f"{path}: trimesh cannot read it: {type(e).__name__}: {e}") from None
@@ -353,7 +407,7 @@ def _ply_nodes(path: Path) -> list[_Node]:
         columns = {k: np.asarray(table[k]) for k in ("albedo_r", "albedo_g", "albedo_b",
                                                        "emission_r", "emission_g", "emission_b")}
         names = [bytes(np.asarray(n, dtype=np.uint8)).decode("utf-8") for n in table["name"]]
-    except (OSError, MemoryError):
+    except OSError:
         raise
     except Exception as e:
         raise ValueError(f"{path}: trimesh cannot read it as a gigascroll PLY room (face "
