@@ -193,9 +193,10 @@ def _check_accessors(header: dict, path: Path):
         nbytes = integer(a.get("count", -1), f"accessors[{i}].count") * size * width
         if "sparse" in a:
             raise ValueError(f"{path}: glTF accessors[{i}]: sparse accessors are not supported")
-        if "bufferView" not in a:
-            if nbytes > MAX_FILE_BYTES:
-                raise ValueError(f"{path}: glTF accessors[{i}] is too large")
+        if "bufferView" not in a:  # all zeros (sparse is refused): no reason to be large
+            if nbytes > 1 << 20:
+                raise ValueError(f"{path}: glTF accessors[{i}] has no buffer view and "
+                                 f"{a['count']} elements")
             continue
         view = integer(a["bufferView"], f"accessors[{i}].bufferView")
         if view >= len(views):
