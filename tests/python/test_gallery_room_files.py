@@ -122,6 +122,16 @@ def test_vertices_are_numpy_matrix_products(example):
     assert light.emission == pytest.approx((6.0, 5.4, 4.8))
 
 
+def test_camera_from_the_node_hierarchy(example):
+    path, spec = example
+    header, _ = read_gltf(path)
+    m = local_matrix(header["nodes"][0]) @ local_matrix(header["nodes"][9])  # gallery, camera
+    np.testing.assert_allclose(spec.camera_eye, m[:3, 3], atol=1e-12)
+    np.testing.assert_allclose(np.subtract(spec.camera_target, spec.camera_eye), -m[:3, 2],
+                               atol=1e-12)
+    assert spec.name == "room"  # the file's stem: the example's scene has no name
+
+
 def test_placeholders_become_slots(example):
     path, spec = example
     ref = world_meshes(path)
@@ -252,6 +262,17 @@ def test_builtin_rooms_round_trip(tmp_path, suffix, room, count):
     # glTF stores positions as float32: within its rounding of a ~30 m room
     same_room(spec, back, atol=4e-6 if suffix in (".glb", ".gltf") else 1e-12)
     assert [s.name for s in back.surfaces] == [s.name for s in spec.surfaces]
+    if suffix in (".glb", ".gltf"):  # the name and the camera too (OBJ / PLY have neither)
+        assert back.name == spec.name == room
+        np.testing.assert_allclose(back.camera_eye, spec.camera_eye, atol=1e-12)
+        np.testing.assert_allclose(back.camera_target, spec.camera_target, atol=1e-12)
+        # without the target hint the camera still looks the same way (down its -z)
+        header, blob = read_gltf(tmp_path / f"{room}{suffix}")
+        (cam,) = [n for n in header["nodes"] if "camera" in n]
+        m = local_matrix(cam)
+        d = np.subtract(spec.camera_target, spec.camera_eye)
+        np.testing.assert_allclose(-m[:3, 2], d / np.linalg.norm(d), atol=1e-12)
+        np.testing.assert_allclose(m[:3, 1] @ [0, 1, 0] > 0, True)
     assert ROOM_NAMES == ("scroll", "hall")
 
 

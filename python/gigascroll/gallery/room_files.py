@@ -13,6 +13,10 @@ white (albedo 1).
 
 OBJ: one object (`o NAME`) per node, vertices already in world space (OBJ has no transforms);
 its material from the .mtl next to it: Kd -> albedo, Ke -> emission (radiance, no clamping).
+A glTF file's first camera node gives the RoomSpec's camera: eye at the node's world position,
+target from the node's extras {"target": [x, y, z]} or 1 m down its -z; the scene's name (else
+the file's stem) names the room.
+
 PLY (no scene graph, no materials): one file holds the whole room; the face property `surface`
 (int) indexes an element `surface` with float properties albedo_r, albedo_g, albedo_b,
 emission_r, emission_g, emission_b and a list of uchar `name` (UTF-8), one row per node.
@@ -61,6 +65,7 @@ PLANAR_TOLERANCE = 1e-4        # relative to the placeholder's diagonal (float32
 _GLB_MAGIC, _GLB_JSON, _GLB_BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 _TAG = "gigascroll_node"       # extras key that tags each node before trimesh reads the file
 _MATERIAL_TAG = "gigascroll-material-"
+_CAMERA = "gigascroll_camera"  # marks the camera pseudo-node between reader and assembly
 
 
 @dataclass
@@ -97,7 +102,10 @@ def load_room(path, paintings, name: str | None = None) -> RoomSpec:
     except (TypeError, KeyError, IndexError, AttributeError, OverflowError) as e:
         # a JSON value of the wrong shape that the checks above did not anticipate
         raise ValueError(f"{path}: malformed room file: {type(e).__name__}: {e}") from None
-    return _room_from_nodes(path, nodes, sizes, name or path.stem)
+    spec = _room_from_nodes(path, nodes, sizes, path.stem)
+    if name:
+        spec.name = name
+    return spec
 
 
 # --- glTF --------------------------------------------------------------------------------------
@@ -278,7 +286,7 @@ def _gltf_nodes(path: Path) -> list[_Node]:
         raise
     except Exception as e:  # trimesh raises anything from KeyError to AssertionError
         raise ValueError(f"{path}: trimesh cannot read it: {type(e).__name__}: {e}") from None
-    out = []
+    out = [(-1, _gltf_camera(header, path))]
     for frame in scene.graph.nodes_geometry:
         matrix, geometry_name = scene.graph[frame]
         geometry = scene.geometry.get(geometry_name)
@@ -301,7 +309,59 @@ def _gltf_nodes(path: Path) -> list[_Node]:
         if _placeholder_key(node) is None:
             node.albedo, node.emission = _gltf_material(header, material_index, path, node_name)
         out.append((index, node))
-    return [node for _, node in sorted(out, key=lambda item: item[0])]
+    return [node for _, node in sorted(out, key=lambda item: item[0]) if node is not None]
+
+
+def _local_matrix(node: dict) -> np.ndarray:
+    if "matrix" in node:
+        return np.array(node["matrix"], dtype=np.float64).reshape(4, 4).T  # column-major
+    x, y, z, w = node.get("rotation", [0.0, 0.0, 0.0, 1.0])
+    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    m = np.eye(4)
+    m[:3, :3] = rotation * np.asarray(node.get("scale", [1.0, 1.0, 1.0]), dtype=np.float64)
+    m[:3, 3] = node.get("translation", [0.0, 0.0, 0.0])
+    return m
+
+
+def _gltf_camera(header: dict, path: Path):
+    """The first camera node as a _Node without geometry carrying extras eye / target (or
+    None): eye at its world position, target from extras "target" or 1 m down its -z."""
+    nodes = header.get("nodes", [])
+    parent = {}
+    for i, n in enumerate(nodes):
+        for c in n.get("children", []) if isinstance(n.get("children"), list) else []:
+            if isinstance(c, int):
+                parent.setdefault(c, i)
+    for i, n in enumerate(nodes):
+        if "camera" not in n:
+            continue
+        m, j, seen = np.eye(4), i, set()
+        while j is not None and j not in seen and 0 <= j < len(nodes):
+            seen.add(j)
+            m = _local_matrix(nodes[j]) @ m
+            j = parent.get(j)
+        eye = m[:3, 3]
+        extras = n.get("extras") if isinstance(n.get("extras"), dict) else {}
+        target = (np.array(_numbers(extras["target"], 3, path, "camera", "extras.target"))
+                  if "target" in extras else eye - m[:3, 2] / max(np.linalg.norm(m[:3, 2]), 1e-300))
+        if not (np.isfinite(eye).all() and np.isfinite(target).all()):
+            raise ValueError(f"{path}: camera node {n.get('name', i)!r} has a non-finite transform")
+        return _Node("camera", np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
+                     extras={"eye": tuple(map(float, eye)), "target": tuple(map(float, target)),
+                             _CAMERA: True, "scene": _scene_name(header)})
+    return _Node("camera", np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
+                 extras={_CAMERA: True, "scene": _scene_name(header)})
+
+
+def _scene_name(header: dict):
+    scenes = header.get("scenes")
+    index = header.get("scene", 0)
+    if isinstance(scenes, list) and isinstance(index, int) and 0 <= index < len(scenes) \
+            and isinstance(scenes[index], dict) and isinstance(scenes[index].get("name"), str):
+        return scenes[index]["name"]
+    return None
 
 
 def _transformed(path: Path, name: str, matrix, geometry) -> tuple[np.ndarray, np.ndarray]:
@@ -546,7 +606,12 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
     surfaces, slots = [], []
     total = 0
     used_names = set()
+    eye = target = None
     for node in nodes:
+        if node.extras.get(_CAMERA) is True and len(node.triangles) == 0:
+            eye, target = node.extras.get("eye"), node.extras.get("target")
+            name = node.extras.get("scene") or name
+            continue
         total += len(node.triangles)
         if total > MAX_TRIANGLES:
             raise ValueError(f"{path}: more than {MAX_TRIANGLES} triangles")
@@ -572,7 +637,7 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
                                 tuple(emission)))
     if not any(max(s.emission) > 0 for s in surfaces):
         raise ValueError(f"{path}: the room has no light (no node with emission > 0)")
-    return RoomSpec(name, surfaces, slots)
+    return RoomSpec(name, surfaces, slots, camera_eye=eye, camera_target=target)
 
 
 # --- writing -----------------------------------------------------------------------------------
@@ -593,7 +658,14 @@ def save_room(spec: RoomSpec, path) -> Path:
                               vertices=_slot_corners(slot), triangles=_QUAD,
                               extras={"painting": slot.painting,
                                       "up": [-x for x in slot.v_axis]}))
-        write_gltf(nodes, path)
+        if spec.camera_eye is not None and spec.camera_target is not None:
+            nodes.append(dict(name="camera", matrix=_look_at_matrix(spec.camera_eye,
+                                                                    spec.camera_target),
+                              camera={"type": "perspective",
+                                      "perspective": {"yfov": math.radians(60.0),
+                                                      "znear": 0.01}},
+                              extras={"target": [float(x) for x in spec.camera_target]}))
+        write_gltf(nodes, path, scene_name=spec.name)
     elif suffix == ".obj":
         _write_obj(spec, path)
     elif suffix == ".ply":
@@ -606,6 +678,19 @@ def save_room(spec: RoomSpec, path) -> Path:
 _QUAD = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
 
 
+def _look_at_matrix(eye, target) -> np.ndarray:
+    """A glTF camera node's transform: at eye, looking down -z towards target, y up."""
+    eye, target = np.asarray(eye, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    back = eye - target
+    back /= np.linalg.norm(back)
+    up = np.array([0.0, 1.0, 0.0]) if abs(back[1]) < 0.999 else np.array([0.0, 0.0, -1.0])
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, np.cross(back, right), back, eye
+    return m
+
+
 def _slot_corners(slot: PaintingSlot) -> np.ndarray:
     """Top-left, bottom-left, bottom-right, top-right: counter-clockwise seen from v x u."""
     o, u, v = (np.asarray(x, dtype=np.float64) for x in (slot.origin, slot.u_axis, slot.v_axis))
@@ -613,11 +698,13 @@ def _slot_corners(slot: PaintingSlot) -> np.ndarray:
     return np.array([o, o + v, o + u + v, o + u])
 
 
-def write_gltf(nodes: list[dict], path, roots: list[int] | None = None) -> Path:
+def write_gltf(nodes: list[dict], path, roots: list[int] | None = None,
+               scene_name: str | None = None) -> Path:
     """Write nodes as a glTF 2.0 file (.glb, or .gltf with the buffer embedded as a data URI).
     Each node: name, optional vertices (n, 3) + triangles (m, 3) with albedo / emission (or
     extras marking a placeholder), optional matrix (4 x 4, row-major numpy convention) or
-    translation / rotation (xyzw) / scale, optional children (node indices), optional extras.
+    translation / rotation (xyzw) / scale, optional children (node indices), optional extras,
+    optional camera (a glTF camera object; the camera looks down its node's -z).
     `roots`: the scene's root nodes (default: nodes nobody lists as a child)."""
     path = Path(path)
     blob = bytearray()
@@ -646,6 +733,9 @@ def write_gltf(nodes: list[dict], path, roots: list[int] | None = None) -> Path:
             children_of_someone.update(out["children"])
         if node.get("extras"):
             out["extras"] = node["extras"]
+        if node.get("camera"):
+            header.setdefault("cameras", []).append(node["camera"])
+            out["camera"] = len(header["cameras"]) - 1
         if node.get("vertices") is not None:
             v = np.ascontiguousarray(node["vertices"], dtype=np.float32)
             t = np.ascontiguousarray(node["triangles"], dtype=np.uint32)
@@ -683,6 +773,8 @@ def write_gltf(nodes: list[dict], path, roots: list[int] | None = None) -> Path:
     if roots is None:
         roots = [i for i in range(len(nodes)) if i not in children_of_someone]
     header["scenes"] = [{"nodes": list(roots)}]
+    if scene_name:
+        header["scenes"][0]["name"] = scene_name
     if uses_strength:
         header["extensionsUsed"] = ["KHR_materials_emissive_strength"]
     blob.extend(b"\0" * (-len(blob) % 4))
