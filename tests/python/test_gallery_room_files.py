@@ -382,3 +382,26 @@ def test_accepts_a_tile_pack(tmp_path):
                                  triangles=[[0, 1, 2], [0, 2, 3]])]
     (slot,) = load_room(write(tmp_path, nodes), pack).paintings
     assert slot.painting in (0, pack.paintings[0].name)
+
+
+def test_external_buffers(tmp_path):
+    embedded = write_example_room(tmp_path / "e.gltf")
+    header = json.loads(embedded.read_text())
+    blob = base64.b64decode(header["buffers"][0]["uri"].split(",", 1)[1])
+    (tmp_path / "e.bin").write_bytes(blob)
+    header["buffers"][0]["uri"] = "e.bin"
+    (tmp_path / "ext.gltf").write_text(json.dumps(header))
+    same_room(load_room(embedded, EXAMPLE_PAINTINGS), load_room(tmp_path / "ext.gltf",
+                                                                 EXAMPLE_PAINTINGS))
+    for uri in ("missing.bin", "/dev/zero", "."):
+        header["buffers"][0]["uri"] = uri
+        (tmp_path / "bad.gltf").write_text(json.dumps(header))
+        with pytest.raises(OSError, match="bad.gltf.*buffer 0"):
+            load_room(tmp_path / "bad.gltf", EXAMPLE_PAINTINGS)
+
+
+def test_obj_without_its_materials(tmp_path):
+    obj = write_example_room(tmp_path / "room.obj")
+    (tmp_path / "room.mtl").unlink()
+    with pytest.raises(ValueError, match="room.obj: node '\w+' has no material"):
+        load_room(obj, EXAMPLE_PAINTINGS)
