@@ -403,5 +403,5 @@ def test_external_buffers(tmp_path):
 def test_obj_without_its_materials(tmp_path):
     obj = write_example_room(tmp_path / "room.obj")
     (tmp_path / "room.mtl").unlink()
-    with pytest.raises(ValueError, match="room.obj: node '\w+' has no material"):
+    with pytest.raises(ValueError, match=r"room.obj: node '\w+' has no material"):
         load_room(obj, EXAMPLE_PAINTINGS)
