@@ -5,6 +5,7 @@ a clean ValueError / OSError; never another exception."""
 import json
 import math
 import os
+import shutil
 import struct
 import tempfile
 from pathlib import Path
@@ -27,6 +28,10 @@ _DIR = Path(tempfile.mkdtemp(prefix="fuzz-rooms-"))
 _EXAMPLE = {s: write_example_room(_DIR / f"example{s}").read_bytes()
             for s in (".glb", ".gltf", ".obj", ".ply")}
 _MTL = (_DIR / "example.mtl").read_bytes()
+
+
+def teardown_module():
+    shutil.rmtree(_DIR, ignore_errors=True)
 
 floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=64),
                    st.sampled_from([0.0, 1.0, -1.0, 1e-30, 1e30, 1e300]),
