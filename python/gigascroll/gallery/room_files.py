@@ -560,7 +560,13 @@ def _slot(node: _Node, sizes: list[PaintingSize], path: Path) -> PaintingSlot:
             np.linalg.norm(c[0] + c[2] - c[1] - c[3]) > PLANAR_TOLERANCE * scale or \
             abs(np.dot(e1, e2)) > PLANAR_TOLERANCE * scale * scale:
         raise ValueError(f"{what} is not a rectangle")
-    if abs(areas.sum() / 2 - np.linalg.norm(e1) * np.linalg.norm(e2)) > 1e-3 * areas.sum() / 2:
+    # Cover it: the triangles' corners (in c's counter-clockwise order) share one diagonal.
+    corner_of = [int(np.argmin(np.linalg.norm(c - p, axis=1))) for p in v[f.reshape(-1)]]
+    a, b = set(corner_of[:3]), set(corner_of[3:])
+    shared = sorted(a & b)
+    if len(a) != 3 or len(b) != 3 or len(shared) != 2 or shared[1] - shared[0] != 2 or \
+            abs(areas.sum() / 2 - np.linalg.norm(e1) * np.linalg.norm(e2)) > \
+            1e-3 * areas.sum() / 2:
         raise ValueError(f"{what}: its two triangles do not cover the rectangle")
     up = _up_of(node, n, path)
     down = -(up - np.dot(up, n) * n)
