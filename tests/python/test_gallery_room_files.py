@@ -408,3 +408,19 @@ def test_obj_without_its_materials(tmp_path):
     (tmp_path / "room.mtl").unlink()
     with pytest.raises(ValueError, match=r"room.obj: node '\w+' has no material"):
         load_room(obj, EXAMPLE_PAINTINGS)
+
+
+def test_node_trees_only(tmp_path):
+    lamp = base_nodes()[0]
+    chain = [dict(name=f"n{i}", translation=[0.01, 0, 0], children=[i + 1]) for i in range(64)]
+    spec = load_room(write(tmp_path, chain + [lamp]), {"p": 2.0})  # 64 levels deep: fine
+    np.testing.assert_allclose(spec.surfaces[0].vertices[0], [0.64, 3, 0], atol=1e-9)
+    chain = [dict(name=f"n{i}", children=[i + 1]) for i in range(65)]
+    with pytest.raises(ValueError, match="bad.glb: node 65 is nested more than 64"):
+        load_room(write(tmp_path, chain + [lamp]), {"p": 2.0})
+    cycle = [dict(name="a", children=[1]), dict(lamp, children=[0])]
+    with pytest.raises(ValueError, match="bad.glb.*cycle"):
+        load_room(write_gltf(cycle, tmp_path / "bad.glb", roots=[0]), {"p": 2.0})
+    two_parents = [dict(name="a", children=[2]), dict(name="b", children=[2]), lamp]
+    with pytest.raises(ValueError, match="bad.glb: node 2 has two parents"):
+        load_room(write(tmp_path, two_parents), {"p": 2.0})

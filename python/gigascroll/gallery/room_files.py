@@ -57,6 +57,8 @@ ROOM_FILE_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 PAINTING_PREFIX = "painting:"
 MAX_FILE_BYTES = 1 << 30       # 1 GiB: a room, not a city
 MAX_TRIANGLES = 20_000_000
+MAX_NODES = 20_000              # trimesh takes ~1 ms per node
+MAX_NODE_DEPTH = 64            # glTF node nesting (trimesh's graph is quadratic in it)
 MAX_EXTENT_M = 10_000.0        # every vertex within 10 km of the origin
 MIN_PAINTING_M = 1e-3          # a placeholder's sides are at least 1 mm ...
 MAX_RADIANCE = 1e9             # ... and no emitter is brighter than this (W / m^2 / sr)
@@ -217,6 +219,33 @@ def _check_accessors(header: dict, path: Path):
             raise ValueError(f"{path}: glTF accessors[{i}] runs past its buffer view")
 
 
+def _check_node_tree(header: dict, path: Path):
+    """glTF nodes form trees (one parent at most, no cycles); and a bounded depth, since
+    trimesh's scene graph slows down quadratically with it (a hostile file could stall us)."""
+    nodes = _list_of_dicts(header, "nodes", path)
+    if len(nodes) > MAX_NODES:
+        raise ValueError(f"{path}: {len(nodes)} glTF nodes, more than {MAX_NODES}")
+    parent = {}
+    for i, n in enumerate(nodes):
+        children = n.get("children", [])
+        if not isinstance(children, list):
+            raise ValueError(f"{path}: node {i} has non-list children")
+        for c in children:
+            if isinstance(c, bool) or not isinstance(c, int) or not 0 <= c < len(nodes):
+                raise ValueError(f"{path}: node {i} has a child {c!r} that is not a node")
+            if c in parent or c == i:
+                raise ValueError(f"{path}: node {c} has two parents or is its own child "
+                                 f"(glTF nodes form trees)")
+            parent[c] = i
+    for i in range(len(nodes)):
+        depth, j = 0, i
+        while j in parent:
+            j, depth = parent[j], depth + 1
+            if depth > MAX_NODE_DEPTH:
+                raise ValueError(f"{path}: node {i} is nested more than {MAX_NODE_DEPTH} deep "
+                                 f"(or in a cycle)")
+
+
 def _gltf_material(header: dict, index, path: Path, node: str) -> tuple[tuple, tuple]:
     materials = _list_of_dicts(header, "materials", path)
     if not isinstance(index, int) or not 0 <= index < len(materials):
@@ -255,6 +284,7 @@ def _gltf_nodes(path: Path) -> list[_Node]:
     header, binary = _read_gltf(path)
     _check_buffers(header, path)
     _check_accessors(header, path)
+    _check_node_tree(header, path)
     nodes = _list_of_dicts(header, "nodes", path)
     for key in ("meshes", "materials", "accessors", "bufferViews", "scenes"):
         _list_of_dicts(header, key, path)
