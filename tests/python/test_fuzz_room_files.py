@@ -194,3 +194,18 @@ def test_glb_header_lies():
         path = _DIR / "lies.glb"
         path.write_bytes(bytes(bad))
         assert outcome(path) is None
+
+
+@SETTINGS
+@given(children=st.lists(st.lists(st.one_of(st.integers(-1, 7), st.just("x"), st.just(True)),
+                                  max_size=4), min_size=6, max_size=6),
+       roots=st.lists(st.integers(-1, 7), max_size=4))
+def test_random_node_graphs(children, roots):
+    """Any children / roots structure (cycles, shared children, bad indices)."""
+    header = json.loads(_EXAMPLE[".gltf"])
+    for node, kids in zip(header["nodes"], children):
+        node["children"] = kids
+    header["scenes"][0]["nodes"] = roots
+    path = _DIR / "graph.gltf"
+    path.write_text(json.dumps(header))
+    outcome(path)
