@@ -279,3 +279,17 @@ def test_direct_light_matches_the_photon_renderer(name):
                  indirect=False)
     expected = 0.5 * rooms.direct_irradiance(spec, centre, front) / math.pi
     np.testing.assert_allclose(img.mean(axis=(0, 1)), expected, rtol=0.02)
+
+
+def test_lambert_formula_against_the_rectangle_form_factor():
+    """Point under the corner of an a x b rectangle at distance c, planes parallel:
+    F = 1/(2 pi) [A/sqrt(1+A^2) atan(B/sqrt(1+A^2)) + B/sqrt(1+B^2) atan(A/sqrt(1+B^2))],
+    A = a/c, B = b/c; E = pi F for unit radiance (Howell's catalogue, configuration B-3)."""
+    for a, b, c in ((1.0, 1.0, 1.0), (0.3, 2.0, 0.7), (5.0, 0.1, 3.0)):
+        A, B = a / c, b / c
+        f = (A / math.sqrt(1 + A * A) * math.atan(B / math.sqrt(1 + A * A))
+             + B / math.sqrt(1 + B * B) * math.atan(A / math.sqrt(1 + B * B))) / (2 * math.pi)
+        quad = [[0, c, 0], [a, c, 0], [a, c, b], [0, c, b]]  # counter-clockwise from below
+        assert rooms.polygon_irradiance([0, 0, 0], [0, 1, 0], quad) == pytest.approx(
+            math.pi * f, rel=1e-12)
+        assert rooms.polygon_irradiance([0, 0, 0], [0, 1, 0], quad[::-1]) == 0.0  # its back
