@@ -5,6 +5,7 @@
 #include <embree3/rtcore.h>
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "pack/geometry.h"
@@ -21,6 +22,21 @@ struct PaintingPlacement {
     Vec3d origin, u_axis, v_axis;
     double width_m, height_m;
     Vec3d normal() const { return cross(u_axis, v_axis); }
+};
+
+// What the feedback pass needs of a scene: an Embree BVH, the paintings in it and which
+// Embree geometry shows which painting. The feedback pass takes this view rather than a
+// scene class so that any scene holding paintings can feed it: the ExhibitionScene here,
+// and the Gallery (gallery/), whose one BVH of room triangles and painting rectangles lives
+// in the photon Scene. views/ comes before photon/ and gallery/ in the include order, so the
+// view is a plain struct of pointers that the owner keeps alive while the pass runs.
+struct PaintingSceneView {
+    RTCScene handle = nullptr;
+    std::span<const PaintingPlacement> paintings;
+    std::span<const int> geom_placement;  // placement index per Embree geometry id, -1 = none
+    int placement_of(unsigned geom_id) const {
+        return geom_id < geom_placement.size() ? geom_placement[geom_id] : -1;
+    }
 };
 
 class ExhibitionScene {
@@ -50,6 +66,8 @@ public:
         return geom_id < geom_placement_.size() ? geom_placement_[geom_id] : -1;
     }
     std::size_t box_count() const { return boxes_; }
+    // The scene as the feedback pass sees it (valid while the scene lives).
+    PaintingSceneView view() const { return {scene_, paintings_, geom_placement_}; }
 
 private:
     unsigned add_quads(const std::vector<Vec3d>& vertices, std::size_t quads);
