@@ -11,4 +11,5 @@ void bind_loading(nanobind::module_& m);   // tile loader, loading strategies
 void bind_cache(nanobind::module_& m);     // physical cache and page table, lookup, drain
 void bind_sampling(nanobind::module_& m);  // VT sampling, mip texture, display pass
 void bind_photon(nanobind::module_& m);    // photon scene, photon maps, renderer
+void bind_gallery(nanobind::module_& m);   // the gallery: room, paintings, lighting, display
 }  // namespace gigascroll::bindings

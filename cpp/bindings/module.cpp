@@ -10,4 +10,5 @@ NB_MODULE(_core, m) {
     bind_cache(m);
     bind_sampling(m);
     bind_photon(m);
+    bind_gallery(m);
 }

@@ -54,7 +54,7 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
                     Hit hit;
                     if (!scene.intersect(o, d, hit)) break;
                     if (bounce > 0) part.push_back({hit.p, power, hit.n});
-                    const Vec3f albedo = scene.albedo(hit.tri);
+                    const Vec3f albedo = scene.albedo_at(hit.tri, hit.p);
                     const float survive = max_component(albedo);
                     if (!(rng.uniform() < survive)) break;  // Russian roulette by albedo
                     power = power * (albedo / survive);

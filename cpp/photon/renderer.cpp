@@ -80,11 +80,17 @@ Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs
     if (!(reflects && map_ && map_->size() > 0)) ++c.gathers_skipped;
     if (!reflects || !s_.direct || scene_.emitter_count() == 0) return L;
 
+    return L + albedo * kInvPi * direct_irradiance(hit, s_.light_samples, c, pass);
+}
+
+Vec3f Renderer::direct_irradiance(const Hit& hit, int samples, ShadeCounters& c,
+                                  std::uint32_t pass) const {
+    if (scene_.emitter_count() == 0 || samples <= 0) return {0, 0, 0};
     const float eps = scene_.epsilon();
     Vec3f E{0, 0, 0};
     // Keyed by position, not pixel: both stereo eyes draw the same samples at one point.
     Rng rng(s_.seed, stream_id(StreamKind::Light, pass), scene_.position_key(hit.p));
-    for (int i = 0; i < s_.light_samples; ++i) {
+    for (int i = 0; i < samples; ++i) {
         const float ut = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         const LightSample ls = scene_.sample_emitter(ut, u1, u2);
         const Vec3f w = ls.p - hit.p;
@@ -101,7 +107,7 @@ Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs
         // cos_x cos_l / d^2 with both cosines still scaled by d.
         E += ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
     }
-    return L + albedo * (kInvPi / float(s_.light_samples)) * E;
+    return E * (1.0f / float(samples));
 }
 
 Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const {

@@ -83,6 +83,10 @@ public:
     // `pass` selects the progressive pass's light samples (0 for one-shot renders).
     Vec3f emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs_gather,
                              std::uint32_t pass = 0) const;
+    // Direct irradiance at a hit point (W / m^2 per channel) from `samples` emitter samples
+    // with shadow rays, seeded by position; the part of emitted_and_direct() before the albedo.
+    Vec3f direct_irradiance(const Hit& hit, int samples, ShadeCounters& c,
+                            std::uint32_t pass = 0) const;
 
     const RenderStats& photon_stats() const { return photon_stats_; }  // photon pass only
     const PhotonMap* photon_map() const { return map_.get(); }

@@ -28,6 +28,16 @@ struct LightSample {
     std::uint32_t tri = 0;
 };
 
+// An albedo that varies over some triangles (a painting's texture): the photon tracer asks
+// it through Scene::albedo_at() at each bounce. Not owned by the scene.
+class AlbedoTexture {
+public:
+    virtual ~AlbedoTexture() = default;
+    // The albedo at point p of triangle tri, or `constant` (the triangle's own) where the
+    // texture does not cover tri.
+    virtual Vec3f albedo(std::uint32_t tri, Vec3f p, Vec3f constant) const = 0;
+};
+
 class Scene {
 public:
     Scene();
@@ -55,6 +65,17 @@ public:
     std::size_t triangle_count() const { return normal_.size(); }
     std::size_t emitter_count() const { return emitters_.size(); }
     Vec3f albedo(std::uint32_t tri) const { return albedo_[tri]; }
+    // The albedo at a point: the texture's where one is set (set_albedo_texture), else albedo().
+    Vec3f albedo_at(std::uint32_t tri, Vec3f p) const {
+        return texture_ ? texture_->albedo(tri, p, albedo_[tri]) : albedo_[tri];
+    }
+    // Not thread-safe against tracing; the texture must outlive its use (nullptr removes it).
+    void set_albedo_texture(const AlbedoTexture* texture) { texture_ = texture; }
+    // The Embree BVH, for passes that cast their own rays into the same scene (the feedback
+    // pass of a Gallery), and the number of Embree geometries (one per non-empty add_mesh,
+    // ids 0, 1, ... in call order).
+    RTCScene handle() const { return scene_; }
+    std::uint32_t geometry_count() const { return std::uint32_t(geom_offset_.size()); }
     Vec3f emission(std::uint32_t tri) const { return emission_[tri]; }
     Vec3f normal(std::uint32_t tri) const { return normal_[tri]; }
     Vec3f emitted_power() const { return power_; }   // sum of pi * area * radiance
@@ -84,6 +105,7 @@ private:
     bool reflects_ = false;
     Vec3f lo_{INFINITY, INFINITY, INFINITY}, hi_{-INFINITY, -INFINITY, -INFINITY};
     float eps_ = 1e-4f;
+    const AlbedoTexture* texture_ = nullptr;
 };
 
 }  // namespace gigascroll

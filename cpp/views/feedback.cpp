@@ -172,12 +172,18 @@ void render_view(const ExhibitionScene& scene, const Camera& camera,
                      const FeedbackOptions& options, std::uint64_t* keys, float* lod,
                      double* uv) {
     require(scene.committed(), "commit() the exhibition scene before the feedback pass");
+    render_view(scene.view(), camera, options, keys, lod, uv);
+}
+
+void render_view(const PaintingSceneView& scene, const Camera& camera,
+                 const FeedbackOptions& options, std::uint64_t* keys, float* lod, double* uv) {
+    require(scene.handle != nullptr, "render_view: the scene has no BVH");
     require(std::isfinite(options.lod_bias), "lod_bias must be finite");
     const std::uint32_t fw = feedback_width(camera, options), fh = feedback_height(camera, options);
     require(fw <= camera.width && fh <= camera.height,
             "feedback resolution must not exceed the display resolution");
     const double sx = double(camera.width) / fw, sy = double(camera.height) / fh;
-    const RTCScene handle = scene.handle();
+    const RTCScene handle = scene.handle;
     const bool biased = options.lod_bias != 0;
     require(options.display_step >= 1, "display_step must be >= 1");
     const std::uint32_t ds = options.display_step, dw = (fw + ds - 1) / ds;
@@ -190,8 +196,8 @@ void render_view(const ExhibitionScene& scene, const Camera& camera,
     std::fill(column_sx.begin() + fw, column_sx.end(), column_sx[fw - 1]);
     for (std::uint32_t j = 0; j < fh; ++j) row_sy[j] = camera.screen_y((j + 0.5) * sy);
     std::vector<PlaneFrame> planes;
-    planes.reserve(scene.paintings().size());
-    for (const auto& p : scene.paintings()) planes.emplace_back(p, camera);
+    planes.reserve(scene.paintings.size());
+    for (const auto& p : scene.paintings) planes.emplace_back(p, camera);
     const float org_x = float(camera.position.x), org_y = float(camera.position.y),
                 org_z = float(camera.position.z);
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();

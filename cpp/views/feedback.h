@@ -39,6 +39,10 @@ std::uint32_t mip_level(double lambda, std::uint32_t levels);
 void render_view(const ExhibitionScene& scene, const Camera& camera,
                      const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr,
                      double* uv = nullptr);
+// The same on any scene holding paintings (a committed BVH), e.g. a Gallery's.
+void render_view(const PaintingSceneView& scene, const Camera& camera,
+                 const FeedbackOptions& options, std::uint64_t* keys, float* lod = nullptr,
+                 double* uv = nullptr);
 
 // Samples of an axis of n pixels on the display grid of step `step`: ceil(n / step).
 inline std::uint32_t display_extent(std::uint32_t n, std::uint32_t step) {

@@ -29,6 +29,8 @@ from .frame_loop import LOADING_STRATEGIES, FrameLoop
 from .photon import (BUILTIN_SCENES, ROOMS, PhotonMap, RoomScene, Scene, StereoCamera,
                      builtin_scene, default_radius, relmse, render, render_stereo, room_scene,
                      save_image, trace_photons)
+# the gallery: room and paintings in one scene, lit by the photon map
+from .gallery import Gallery, PaintingSlot, RoomSpec, Surface
 
 __version__ = "0.1.0"
 
@@ -54,4 +56,6 @@ __all__ = [
     # photon
     "Scene", "StereoCamera", "PhotonMap", "RoomScene", "room_scene", "ROOMS", "builtin_scene", "BUILTIN_SCENES",
     "default_radius", "render", "render_stereo", "trace_photons", "save_image", "relmse",
+    # gallery
+    "Gallery", "RoomSpec", "Surface", "PaintingSlot",
 ]

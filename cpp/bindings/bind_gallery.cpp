@@ -1,0 +1,150 @@
+// gallery/: the one scene of room and paintings, its lighting and its display pass.
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
+#include <nanobind/stl/vector.h>
+
+#include "bindings/arrays.h"
+#include "bindings/bindings.h"
+#include "common/error.h"
+#include "gallery/gallery.h"
+#include "pack/reader.h"
+#include "views/feedback.h"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace gigascroll::bindings {
+namespace {
+
+using FloatArray = nb::ndarray<const float, nb::c_contig, nb::device::cpu>;
+using IndexArray = nb::ndarray<const std::int64_t, nb::c_contig, nb::device::cpu>;
+using ImageOut = nb::ndarray<float, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+
+Vec3d vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+Vec3f vec3f(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
+
+}  // namespace
+
+void bind_gallery(nb::module_& m) {
+    nb::class_<Gallery>(m, "_Gallery",
+        "The room and its paintings in one Embree scene (see gigascroll.Gallery).")
+        .def(nb::init<>())
+        .def("_add_surface", [](Gallery& g, const FloatArray& v, const IndexArray& t,
+                                std::array<float, 3> albedo, std::array<float, 3> emission) {
+            require(v.ndim() == 2 && v.shape(1) == 3, "Gallery: vertices must have shape (N, 3)");
+            require(t.ndim() == 2 && t.shape(1) == 3, "Gallery: triangles must have shape (M, 3)");
+            return g.add_surface(v.data(), v.shape(0), t.data(), t.shape(0), vec3f(albedo), vec3f(emission));
+        }, "vertices"_a, "triangles"_a, "albedo"_a, "emission"_a)
+        .def("_add_painting", [](Gallery& g, const TilePack& pack, std::int64_t painting,
+                                 std::array<double, 3> origin, std::array<double, 3> u_axis,
+                                 std::array<double, 3> v_axis, double width_m, double height_m) {
+            const PackGeometry layout = pack.geometry();
+            require(painting >= 0 && std::size_t(painting) < layout.paintings.size(),
+                    "Gallery: painting index " + std::to_string(painting) + " is not in the pack");
+            return g.add_painting(std::uint32_t(painting), layout.paintings[painting], vec3(origin),
+                                  vec3(u_axis), vec3(v_axis), width_m, height_m);
+        }, "pack"_a, "painting"_a, "origin"_a, "u_axis"_a, "v_axis"_a, "width_m"_a, "height_m"_a)
+        .def("_commit", [](Gallery& g) {
+            nb::gil_scoped_release release;
+            g.commit();
+        })
+        .def_prop_ro("committed", &Gallery::committed)
+        .def_prop_ro("lit", &Gallery::lit)
+        .def_prop_ro("baked", &Gallery::baked)
+        .def_prop_ro("triangle_count", [](const Gallery& g) { return g.scene().triangle_count(); })
+        .def_prop_ro("emitter_count", [](const Gallery& g) { return g.scene().emitter_count(); })
+        .def_prop_ro("painting_count", [](const Gallery& g) { return g.paintings().size(); })
+        .def_prop_ro("bounds", [](const Gallery& g) {
+            const Vec3f a = g.scene().bounds_min(), b = g.scene().bounds_max();
+            return std::make_tuple(std::array<float, 3>{a.x, a.y, a.z}, std::array<float, 3>{b.x, b.y, b.z});
+        })
+        .def("_light", [](Gallery& g, const VirtualTexture& vt, std::uint64_t photons, float radius,
+                          int light_samples, std::uint64_t seed, unsigned threads) {
+            LightingSettings s{photons, radius, light_samples, seed, threads};
+            nb::gil_scoped_release release;
+            g.light(vt, s);
+        }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a)
+        .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads) {
+            BakeSettings s;
+            s.spacing = spacing, s.light_samples = light_samples, s.threads = threads;
+            nb::gil_scoped_release release;
+            g.bake(s);
+        }, "spacing"_a, "light_samples"_a, "threads"_a)
+        .def_prop_ro("stats", [](const Gallery& g) {
+            const LightingStats& s = g.stats();
+            nb::dict d;
+            d["photon_seconds"] = s.photon_seconds;
+            d["build_seconds"] = s.build_seconds;
+            d["bake_seconds"] = s.bake_seconds;
+            d["photons_stored"] = s.photons_stored;
+            d["bake_points"] = s.bake_points;
+            d["radius"] = s.radius;
+            d["spacing"] = s.spacing;
+            d["albedo_levels"] = s.albedo_levels;
+            return d;
+        }, "Timings and sizes of the last light() and bake().")
+        .def("_render_display", [](const Gallery& g, const Camera& camera, const VirtualTexture& vt,
+                                   const std::string& lighting, ImageOut out, bool hits, unsigned threads) {
+            const Lighting l = parse_lighting(lighting);
+            const std::size_t W = camera.width, H = camera.height;
+            require(out.shape(0) == H && out.shape(1) == W && out.shape(2) == 3,
+                    "render_display: out must have shape (" + std::to_string(H) + ", " +
+                        std::to_string(W) + ", 3) float32");
+            nb::dict d;
+            DisplayHits h;
+            if (hits) {
+                FreshArray<float> position({H, W, 3});
+                FreshArray<std::int32_t> slot({H, W});
+                FreshArray<double> uv({H, W, 2});
+                FreshArray<float> lod({H, W});
+                h = {position.data, slot.data, uv.data, lod.data};
+                d["position"] = position.array;
+                d["slot"] = slot.array;
+                d["uv"] = uv.array;
+                d["lod"] = lod.array;
+            }
+            {
+                nb::gil_scoped_release release;
+                g.render_display(camera, vt, l, out.data(), h, threads);
+            }
+            return d;
+        }, "camera"_a, "vt"_a, "lighting"_a, "out"_a, "hits"_a, "threads"_a)
+        .def("render_view", [](const Gallery& g, const Camera& camera, std::int64_t width,
+                               std::int64_t height, double lod_bias, unsigned threads,
+                               std::int64_t display_step) {
+            require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
+                    "view resolution out of range");
+            require(display_step >= 1 && display_step < (1 << 16), "display_step must be >= 1");
+            FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads,
+                              std::uint32_t(display_step)};
+            const std::size_t w = feedback_width(camera, o), h = feedback_height(camera, o);
+            const std::size_t dw = display_extent(std::uint32_t(w), o.display_step),
+                              dh = display_extent(std::uint32_t(h), o.display_step);
+            FreshArray<std::uint64_t> keys({h, w});
+            FreshArray<float> lod({dh, dw});
+            FreshArray<double> uv({dh, dw, 2});
+            const PaintingSceneView view = g.feedback_view();
+            {
+                nb::gil_scoped_release release;
+                render_view(view, camera, o, keys.data, lod.data, uv.data);
+            }
+            nb::dict d;
+            d["keys"] = keys.array;
+            d["display_step"] = display_step;
+            d["lod"] = lod.array;
+            d["uv"] = uv.array;
+            return d;
+        }, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
+           "display_step"_a = 1,
+           "The feedback pass on the gallery's scene (same outputs as gigascroll.render_view).")
+        .def("intersect", [](const Gallery& g, std::array<float, 3> o, std::array<float, 3> d) -> nb::object {
+            require(g.committed(), "Gallery.intersect: commit first");
+            Hit h;
+            if (!g.scene().intersect(vec3f(o), vec3f(d), h)) return nb::none();
+            return nb::make_tuple(h.t, std::array<float, 3>{h.p.x, h.p.y, h.p.z}, h.tri, g.slot_of(h.tri));
+        }, "o"_a, "d"_a, "Nearest hit (t, point, triangle, painting slot or -1) along o + t d, or None.");
+}
+
+}  // namespace gigascroll::bindings

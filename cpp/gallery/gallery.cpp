@@ -1,0 +1,455 @@
+#include "gallery/gallery.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+
+#include "common/error.h"
+#include "common/parallel.h"
+#include "pack/tile_key.h"
+#include "sampling/sampler.h"
+#include "views/feedback.h"
+
+namespace gigascroll {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+constexpr float kInvPi = float(1.0 / M_PI);
+
+// A painting's albedo where photons bounce off it, read once per lighting through the virtual
+// texture at the painting's finest pinned level: the pinned tail (cache/page_table.h) is
+// resident whatever the camera has streamed, so the photon map does not depend on the view
+// history, and its texels (a few centimetres on a metre-sized painting) are already finer than
+// the gather radius, which blurs anything finer away. Bilinear between the level's texels.
+class PaintingAlbedo final : public AlbedoTexture {
+public:
+    struct Image {
+        std::uint32_t width = 0, height = 0, level = 0;
+        std::vector<Vec3f> texels;
+    };
+    PaintingAlbedo(const std::vector<PaintingPlacement>& placements, const std::vector<int>& tri_slot,
+                   const VirtualTexture& vt)
+        : placements_(placements), tri_slot_(tri_slot) {
+        for (const PaintingPlacement& p : placements) {
+            const PaintingGeometry& g = p.tiles;
+            std::uint32_t level = g.levels() - 1;
+            for (std::uint32_t l = 0; l < g.levels(); ++l)
+                if (vt.is_pinned(TileKey{p.painting, l, 0, 0})) {
+                    level = l;
+                    break;
+                }
+            // A bound on memory for packs whose tail starts fine (a pinned level of a
+            // megatexel is more than the gather can use).
+            while (level + 1 < g.levels() &&
+                   std::uint64_t(g.level_width(level)) * g.level_height(level) > (1u << 20))
+                ++level;
+            Image im;
+            im.level = level;
+            im.width = g.level_width(level), im.height = g.level_height(level);
+            const std::size_t n = std::size_t(im.width) * im.height;
+            std::vector<double> u(n), v(n);
+            for (std::uint32_t y = 0; y < im.height; ++y)
+                for (std::uint32_t x = 0; x < im.width; ++x) {
+                    u[y * std::size_t(im.width) + x] = (x + 0.5) / im.width;
+                    v[y * std::size_t(im.width) + x] = (y + 0.5) / im.height;
+                }
+            std::vector<float> rgb(3 * n);
+            SampleRequest r;
+            r.painting = p.painting;
+            r.u = u.data(), r.v = v.data();
+            r.lod_scalar = float(level);
+            r.count = n;
+            r.filter = Filter::Bilinear;
+            r.out = rgb.data();
+            sample_serial(vt, r);
+            im.texels.resize(n);
+            for (std::size_t i = 0; i < n; ++i)
+                im.texels[i] = Vec3f(srgb_to_linear(rgb[3 * i] / 255.0f),
+                                     srgb_to_linear(rgb[3 * i + 1] / 255.0f),
+                                     srgb_to_linear(rgb[3 * i + 2] / 255.0f)) *
+                               kPaintingReflectance;
+            images_.push_back(std::move(im));
+        }
+    }
+
+    Vec3f albedo(std::uint32_t tri, Vec3f p, Vec3f constant) const override {
+        const int s = tri < tri_slot_.size() ? tri_slot_[tri] : -1;
+        if (s < 0) return constant;
+        const PaintingPlacement& pl = placements_[s];
+        const Image& im = images_[s];
+        const Vec3d rel = Vec3d(p) - pl.origin;
+        const double x = std::clamp(dot(rel, pl.u_axis) / pl.width_m, 0.0, 1.0) * im.width - 0.5;
+        const double y = std::clamp(dot(rel, pl.v_axis) / pl.height_m, 0.0, 1.0) * im.height - 0.5;
+        const double fx0 = std::floor(x), fy0 = std::floor(y);
+        const float fx = float(x - fx0), fy = float(y - fy0);
+        auto at = [&](double xi, double yi) {
+            const auto cx = std::uint32_t(std::clamp(xi, 0.0, double(im.width - 1)));
+            const auto cy = std::uint32_t(std::clamp(yi, 0.0, double(im.height - 1)));
+            return im.texels[std::size_t(cy) * im.width + cx];
+        };
+        return (at(fx0, fy0) * (1 - fx) + at(fx0 + 1, fy0) * fx) * (1 - fy) +
+               (at(fx0, fy0 + 1) * (1 - fx) + at(fx0 + 1, fy0 + 1) * fx) * fy;
+    }
+
+    const std::vector<Image>& images() const { return images_; }
+
+private:
+    const std::vector<PaintingPlacement>& placements_;
+    const std::vector<int>& tri_slot_;
+    std::vector<Image> images_;
+};
+
+// Lattice point (i, j), i + j <= n, of a triangle with n segments per edge.
+inline std::uint64_t lattice_index(std::uint32_t i, std::uint32_t j, std::uint32_t n) {
+    return std::uint64_t(i) * (n + 1) - std::uint64_t(i) * (i - 1) / 2 + j;
+}
+inline std::uint64_t lattice_points(std::uint32_t n) { return std::uint64_t(n + 1) * (n + 2) / 2; }
+
+}  // namespace
+
+Lighting parse_lighting(const std::string& name) {
+    if (name == "unlit") return Lighting::Unlit;
+    if (name == "baked") return Lighting::Baked;
+    if (name == "full") return Lighting::Full;
+    throw InvalidArgument("lighting must be 'baked', 'full' or 'unlit', not '" + name + "'");
+}
+
+std::size_t Gallery::add_surface(const float* vertices, std::size_t nv, const std::int64_t* triangles,
+                                 std::size_t nt, Vec3f albedo, Vec3f emission) {
+    require(!committed(), "Gallery: already committed");
+    require(is_finite(albedo) && albedo.x >= 0 && albedo.y >= 0 && albedo.z >= 0 && albedo.x < 1 &&
+                albedo.y < 1 && albedo.z < 1,
+            "Gallery: a surface's albedo must be in [0, 1) per channel");
+    const float al[3] = {albedo.x, albedo.y, albedo.z};
+    const std::size_t before = scene_.geometry_count();
+    const std::size_t kept = scene_.add_mesh(vertices, nv, triangles, nt, al, false, emission);
+    if (kept == 0) return 0;
+    // The same degeneracy test as Scene::add_mesh, so our copy lists the triangles it kept.
+    auto vert = [&](std::int64_t i) {
+        return Vec3f(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
+    };
+    for (std::size_t t = 0; t < nt; ++t) {
+        const Vec3f a = vert(triangles[3 * t]), b = vert(triangles[3 * t + 1]),
+                    c = vert(triangles[3 * t + 2]);
+        const float len = length(cross(b - a, c - a));
+        if (!(len > 0.0f) || !std::isfinite(len)) continue;
+        tri_v0_.push_back(a), tri_e1_.push_back(b - a), tri_e2_.push_back(c - a);
+        tri_slot_.push_back(-1);
+    }
+    GS_CHECK(tri_v0_.size() == scene_.triangle_count());
+    GS_CHECK(scene_.geometry_count() == before + 1);
+    geom_placement_.resize(scene_.geometry_count(), -1);
+    return kept;
+}
+
+std::size_t Gallery::add_painting(std::uint32_t painting, const PaintingGeometry& tiles, Vec3d origin,
+                                  Vec3d u_axis, Vec3d v_axis, double width_m, double height_m) {
+    require(!committed(), "Gallery: already committed");
+    require(painting < kMaxPaintings, "Gallery: painting id out of range");
+    require(tiles.fits_request_key(), "Gallery: painting too large: more than 65536 tiles per axis");
+    require(is_finite(origin) && is_finite(u_axis) && is_finite(v_axis),
+            "Gallery: a painting placement has a non-finite coordinate");
+    require(std::isfinite(width_m) && std::isfinite(height_m) && width_m > 0 && height_m > 0,
+            "Gallery: painting size must be positive and finite");
+    require(std::abs(length(u_axis) - 1) < 1e-6 && std::abs(length(v_axis) - 1) < 1e-6 &&
+                std::abs(dot(u_axis, v_axis)) < 1e-6,
+            "Gallery: painting u_axis and v_axis must be orthonormal");
+    const Vec3d a = origin, b = origin + width_m * u_axis, c = b + height_m * v_axis,
+                d = origin + height_m * v_axis;
+    const float vertices[12] = {float(a.x), float(a.y), float(a.z), float(b.x), float(b.y), float(b.z),
+                                float(c.x), float(c.y), float(c.z), float(d.x), float(d.y), float(d.z)};
+    const std::int64_t triangles[6] = {0, 1, 2, 0, 2, 3};
+    // The scene's own albedo of a painting is a placeholder that only says "it reflects": the
+    // photon tracer reads PaintingAlbedo and the display pass the virtual texture.
+    const std::size_t slot = placements_.size();
+    const std::size_t kept = add_surface(vertices, 4, triangles, 2, Vec3f(0.5f, 0.5f, 0.5f), {0, 0, 0});
+    require(kept == 2, "Gallery: a painting rectangle is too small to be represented in float");
+    tri_slot_[tri_slot_.size() - 1] = tri_slot_[tri_slot_.size() - 2] = int(slot);
+    geom_placement_.back() = int(slot);
+    placements_.push_back({painting, tiles, origin, u_axis, v_axis, width_m, height_m});
+    return slot;
+}
+
+void Gallery::commit() {
+    require(!committed(), "Gallery: already committed");
+    require(scene_.triangle_count() > 0, "Gallery: the room is empty");
+    scene_.commit();
+}
+
+PaintingSceneView Gallery::feedback_view() const {
+    require(committed(), "Gallery: commit() before the feedback pass");
+    return {scene_.handle(), placements_, geom_placement_};
+}
+
+void Gallery::check_texture(const VirtualTexture& vt) const {
+    const auto& layout = vt.layout().paintings;
+    for (const PaintingPlacement& p : placements_) {
+        require(p.painting < layout.size(),
+                "Gallery: painting " + std::to_string(p.painting) + " is not in the virtual texture's pack");
+        const PaintingGeometry& g = layout[p.painting];
+        require(g.width() == p.tiles.width() && g.height() == p.tiles.height() &&
+                    g.levels() == p.tiles.levels() && g.payload() == p.tiles.payload(),
+                "Gallery: the virtual texture's painting " + std::to_string(p.painting) +
+                    " is not the one the gallery was built from");
+    }
+}
+
+void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
+    require(committed(), "Gallery: commit() before light()");
+    require(scene_.emitter_count() > 0, "Gallery: the room has no light (no surface emits)");
+    require(s.photons > 0 && s.photons <= (1ull << 32), "Gallery: photons must be in [1, 2^32]");
+    require(std::isfinite(s.radius) && s.radius >= 0, "Gallery: radius must be finite and >= 0");
+    require(s.light_samples >= 1 && s.light_samples <= 1 << 16, "Gallery: light_samples must be in [1, 65536]");
+    check_texture(vt);
+    std::unique_lock lock(mutex_);
+    lighting_ = s;
+    float radius = s.radius;
+    const float diag = scene_.diagonal();
+    if (radius == 0) {
+        double area = 0;
+        for (std::size_t t = 0; t < tri_v0_.size(); ++t)
+            area += 0.5 * double(length(cross(tri_e1_[t], tri_e2_[t])));
+        radius = float(std::sqrt(100.0 * area / (M_PI * double(s.photons))));
+        radius = std::clamp(radius, 1e-4f * diag, 0.05f * diag);
+    }
+    renderer_.reset();
+    bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
+    scene_.set_albedo_texture(nullptr);
+    auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt);
+    stats_ = {};
+    for (const auto& im : albedo->images()) stats_.albedo_levels.push_back(im.level);
+    scene_.set_albedo_texture(albedo.get());
+    albedo_ = std::move(albedo);
+    RenderSettings rs;
+    rs.photons = s.photons;
+    rs.gather.radius = radius;
+    rs.light_samples = s.light_samples;
+    rs.seed = s.seed;
+    rs.threads = s.threads;
+    renderer_ = std::make_unique<Renderer>(scene_, rs);
+    stats_.photon_seconds = renderer_->photon_stats().photon_seconds;
+    stats_.build_seconds = renderer_->photon_stats().build_seconds;
+    stats_.photons_stored = renderer_->photon_stats().photons_stored;
+    stats_.radius = radius;
+}
+
+void Gallery::require_lit() const {
+    require(renderer_ != nullptr, "Gallery: call light() before rendering with lighting");
+}
+
+Vec3f Gallery::irradiance_full(const Hit& hit) const {
+    ShadeCounters c;
+    KnnHeap heap;
+    Vec3f E = renderer_->direct_irradiance(hit, lighting_.light_samples, c);
+    const PhotonMap* map = renderer_->photon_map();
+    if (map && map->size() > 0) E += renderer_->indirect_density(hit.p, hit.n, heap);
+    return E;
+}
+
+Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
+    const Vec3f d = p - tri_v0_[tri], e1 = tri_e1_[tri], e2 = tri_e2_[tri];
+    const double d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
+    const double d20 = dot(d, e1), d21 = dot(d, e2);
+    const double denom = d00 * d11 - d01 * d01;
+    double b1 = denom > 0 ? (d11 * d20 - d01 * d21) / denom : 0;
+    double b2 = denom > 0 ? (d00 * d21 - d01 * d20) / denom : 0;
+    b1 = std::clamp(b1, 0.0, 1.0), b2 = std::clamp(b2, 0.0, 1.0);
+    if (b1 + b2 > 1) {
+        const double s = b1 + b2;
+        b1 /= s, b2 /= s;
+    }
+    return {float(b1), float(b2), 0};
+}
+
+Vec3f Gallery::irradiance_baked(const Hit& hit) const {
+    const std::uint32_t t = hit.tri, n = bake_n_[t];
+    const Vec3f b = barycentric(t, hit.p);
+    const std::vector<Vec3f>& side = hit.front ? bake_front_ : bake_back_;
+    const Vec3f* E = side.data() + bake_offset_[t];
+    const float x = b.x * float(n), y = b.y * float(n);  // x + y <= n
+    const std::uint32_t i = std::min(std::uint32_t(x), n - 1);
+    const std::uint32_t j = std::min(std::uint32_t(y), n - 1 - i);
+    float fx = std::max(x - float(i), 0.0f), fy = std::max(y - float(j), 0.0f);
+    if (fx + fy <= 1.0f || i + j + 2 > n) {
+        // The lower sub-triangle (i, j), (i+1, j), (i, j+1); on the far edge (no upper one)
+        // rounding can put the point just past it: scale back onto the edge.
+        if (fx + fy > 1.0f) {
+            const float s = 1.0f / (fx + fy);
+            fx *= s, fy *= s;
+        }
+        return E[lattice_index(i, j, n)] * (1 - fx - fy) + E[lattice_index(i + 1, j, n)] * fx +
+               E[lattice_index(i, j + 1, n)] * fy;
+    }
+    // The upper sub-triangle (i+1, j+1), (i, j+1), (i+1, j).
+    return E[lattice_index(i + 1, j + 1, n)] * (fx + fy - 1) + E[lattice_index(i, j + 1, n)] * (1 - fx) +
+           E[lattice_index(i + 1, j, n)] * (1 - fy);
+}
+
+void Gallery::bake(const BakeSettings& s) {
+    require_lit();
+    require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
+    require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
+            "Gallery.bake: light_samples must be in [1, 65536]");
+    const auto t0 = Clock::now();
+    std::unique_lock lock(mutex_);
+    const double spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
+    const std::size_t tris = tri_v0_.size();
+    std::vector<std::uint32_t> n(tris);
+    std::vector<std::uint64_t> offset(tris + 1, 0);
+    for (std::size_t t = 0; t < tris; ++t) {
+        const double l = std::max({double(length(tri_e1_[t])), double(length(tri_e2_[t])),
+                                   double(length(tri_e2_[t] - tri_e1_[t]))});
+        const double segments = std::ceil(l / spacing);
+        require(segments < 65536, "Gallery.bake: spacing too fine for the room (more than 65535 "
+                                  "lattice segments along a triangle edge)");
+        n[t] = std::max(1u, std::uint32_t(segments));
+        offset[t + 1] = offset[t] + lattice_points(n[t]);
+        require(offset[t + 1] <= s.max_points,
+                "Gallery.bake: spacing too fine: more than " + std::to_string(s.max_points) +
+                    " lattice points");
+    }
+    const std::uint64_t total = offset[tris];
+    std::vector<Vec3f> front(total), back(total);
+    const PhotonMap* map = renderer_->photon_map();
+    const bool gather = map && map->size() > 0;
+    parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
+        ShadeCounters c;
+        KnnHeap heap;
+        for (std::size_t t = tb; t < te; ++t) {
+            const std::uint32_t nt = n[t];
+            const Vec3f N = scene_.normal(std::uint32_t(t));
+            const bool reflects = max_component(scene_.albedo(std::uint32_t(t))) > 0;
+            for (std::uint32_t i = 0; i <= nt; ++i)
+                for (std::uint32_t j = 0; i + j <= nt; ++j) {
+                    const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
+                    if (!reflects) continue;  // black either way
+                    Hit h;
+                    h.tri = std::uint32_t(t);
+                    h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) +
+                          tri_e2_[t] * (float(j) / float(nt));
+                    for (int side = 0; side < 2; ++side) {
+                        h.front = side == 0;
+                        h.n = h.front ? N : -N;
+                        Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
+                        if (gather) E += renderer_->indirect_density(h.p, h.n, heap);
+                        (h.front ? front : back)[k] = E;
+                    }
+                }
+        }
+    }, s.threads ? s.threads : lighting_.threads);
+    bake_n_ = std::move(n);
+    offset.pop_back();
+    bake_offset_ = std::move(offset);
+    bake_front_ = std::move(front), bake_back_ = std::move(back);
+    stats_.bake_seconds = seconds_since(t0);
+    stats_.bake_points = total;
+    stats_.spacing = spacing;
+}
+
+void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lighting lighting,
+                             float* rgb, const DisplayHits& hits, unsigned threads) const {
+    require(committed(), "Gallery: commit() before rendering");
+    require(rgb != nullptr, "Gallery.render_display: no output");
+    check_texture(vt);
+    std::shared_lock lock(mutex_);
+    if (lighting != Lighting::Unlit) require_lit();
+    require(lighting != Lighting::Baked || baked(), "Gallery: call bake() before lighting 'baked'");
+    const std::uint32_t W = camera.width, H = camera.height;
+    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+    const Vec3f origin(camera.position);
+    parallel_for(H, 4, [&](std::size_t row_begin, std::size_t row_end) {
+        // Painting pixels of a row wait for one VT call per run of the same painting.
+        struct Pending {
+            std::uint32_t x;
+            int slot;
+            Vec3f scale, add;  // radiance = albedo * scale + add
+        };
+        std::vector<Pending> pending;
+        std::vector<double> uv;
+        std::vector<float> lods, texels;
+        for (std::size_t y = row_begin; y < row_end; ++y) {
+            pending.clear(), uv.clear(), lods.clear();
+            float* out_row = rgb + y * std::size_t(W) * 3;
+            for (std::uint32_t x = 0; x < W; ++x) {
+                const std::size_t px = y * std::size_t(W) + x;
+                const Vec3d dd = camera.direction(x + 0.5, y + 0.5);
+                Hit hit;
+                const bool found = scene_.intersect(origin, Vec3f(normalize(dd)), hit);
+                int slot = found ? tri_slot_[hit.tri] : -1;
+                if (hits.position) {
+                    const Vec3f p = found ? hit.p : Vec3f(kNaN, kNaN, kNaN);
+                    hits.position[3 * px] = p.x, hits.position[3 * px + 1] = p.y,
+                    hits.position[3 * px + 2] = p.z;
+                }
+                if (hits.slot) hits.slot[px] = slot;
+                if (!found) {
+                    out_row[3 * x] = out_row[3 * x + 1] = out_row[3 * x + 2] = 0;
+                    if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
+                    if (hits.lod) hits.lod[px] = kNaN;
+                    continue;
+                }
+                Vec3f E;
+                switch (lighting) {
+                    case Lighting::Unlit: E = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
+                    case Lighting::Baked: E = irradiance_baked(hit); break;
+                    case Lighting::Full: E = irradiance_full(hit); break;
+                }
+                const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
+                if (slot < 0) {
+                    const Vec3f L = scene_.albedo(hit.tri) * E * kInvPi + Le;
+                    out_row[3 * x] = L.x, out_row[3 * x + 1] = L.y, out_row[3 * x + 2] = L.z;
+                    if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
+                    if (hits.lod) hits.lod[px] = kNaN;
+                    continue;
+                }
+                // The painting coordinates in double from the plane (a 12 m scroll of 150k
+                // texels needs more than float), the level from the ray differentials as in
+                // the feedback pass.
+                const PaintingPlacement& pl = placements_[slot];
+                const Vec3d n = pl.normal();
+                const double t = dot(pl.origin - camera.position, n) / dot(dd, n);
+                const Vec3d rel = camera.position + t * dd - pl.origin;
+                const double u = std::clamp(dot(rel, pl.u_axis) / pl.width_m, 0.0, 1.0);
+                const double v = std::clamp(dot(rel, pl.v_axis) / pl.height_m, 0.0, 1.0);
+                double lambda = std::log2(texel_footprint(pl, camera, dd, t));
+                if (!std::isfinite(lambda)) lambda = 0;
+                uv.push_back(u), uv.push_back(v);
+                lods.push_back(float(lambda));
+                pending.push_back({x, slot, E * kInvPi, Le});
+                if (hits.uv) hits.uv[2 * px] = u, hits.uv[2 * px + 1] = v;
+                if (hits.lod) hits.lod[px] = float(lambda);
+            }
+            texels.resize(3 * pending.size());
+            for (std::size_t k0 = 0; k0 < pending.size();) {
+                std::size_t k1 = k0 + 1;
+                while (k1 < pending.size() && pending[k1].slot == pending[k0].slot) ++k1;
+                SampleRequest r;
+                r.painting = placements_[pending[k0].slot].painting;
+                r.u = uv.data() + 2 * k0, r.v = r.u + 1, r.uv_stride = 2;
+                r.lod = lods.data() + k0;
+                r.count = k1 - k0;
+                r.filter = Filter::Trilinear;
+                r.out = texels.data() + 3 * k0;
+                sample_serial(vt, r);
+                k0 = k1;
+            }
+            for (std::size_t k = 0; k < pending.size(); ++k) {
+                const Pending& q = pending[k];
+                const Vec3f albedo = Vec3f(srgb_to_linear(texels[3 * k] / 255.0f),
+                                           srgb_to_linear(texels[3 * k + 1] / 255.0f),
+                                           srgb_to_linear(texels[3 * k + 2] / 255.0f)) *
+                                     kPaintingReflectance;
+                const Vec3f L = albedo * q.scale + q.add;
+                out_row[3 * q.x] = L.x, out_row[3 * q.x + 1] = L.y, out_row[3 * q.x + 2] = L.z;
+            }
+        }
+    }, threads ? threads : lighting_.threads);
+}
+
+}  // namespace gigascroll

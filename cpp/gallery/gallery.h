@@ -1,0 +1,159 @@
+// The gallery: one room in which the paintings of a pack, streamed through the virtual
+// texture, are lit by the room's light (seed 000's paintings and streaming, seed 001's light).
+//
+// One scene, one BVH. Room surfaces (Lambertian triangle meshes with albedo and emission) and
+// painting rectangles are all triangles of one photon `Scene` (photon/scene.h), whose Embree
+// BVH serves every ray: the feedback pass (views/feedback.h, through the PaintingSceneView
+// this class hands it), the display pass, photon tracing and shadow rays. The shared scene
+// lives in photon/ rather than views/ because it is the photon Scene that already holds the
+// per-triangle albedo, emission and emitter distribution; views/ comes earlier in the include
+// order, so the feedback pass takes a plain view (BVH handle, placements, geometry -> placement
+// table) instead of a scene class, and the ExhibitionScene is one more provider of that view.
+//
+// Light on the paintings (issue 13 §2):
+//  - light(): the photon pass (photon/photon_tracer.h) over the whole room. A painting's albedo
+//    at a photon's bounce comes from the virtual texture at the painting's finest pinned level
+//    (see PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor.
+//  - Display radiance = albedo x E / pi + emission. A painting's albedo is the VT's trilinear
+//    sample at the pixel's level of detail (kPaintingReflectance x the linearised sRGB texel);
+//    E is direct light (emitter sampling, shadow rays) plus the photon gather (seed 001 eq. 1).
+//  - bake(): E does not depend on the eye, so it is computed once per lighting on a lattice per
+//    triangle and side (spacing in metres: a triangle whose longest edge is l gets
+//    n = ceil(l / spacing) segments per edge, (n + 1)(n + 2) / 2 points) and interpolated
+//    linearly at display time. lighting "full" computes E at every pixel: the oracle.
+//
+// Per-pixel hits for reprojection (the stereo walk's right-eye reuse): render_display fills,
+// per pixel, the hit position (world, float, NaN where the ray escapes), the painting slot
+// (-1 off paintings), the painting uv in [0, 1] and the level of detail lambda (NaN off
+// paintings). A right-eye pixel that sees the same position can reuse the left eye's E (E is
+// view-independent; the albedo is re-sampled at the right eye's lambda).
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <shared_mutex>
+#include <string>
+#include <vector>
+
+#include "cache/virtual_texture.h"
+#include "pack/geometry.h"
+#include "photon/renderer.h"
+#include "photon/scene.h"
+#include "views/camera.h"
+#include "views/exhibition.h"
+
+namespace gigascroll {
+
+// What a display pixel's irradiance comes from: none (the albedo itself: "unlit"), the baked
+// lattice, or direct light and the photon gather at the pixel ("full").
+enum class Lighting { Unlit, Baked, Full };
+// "unlit" / "baked" / "full"; InvalidArgument otherwise.
+Lighting parse_lighting(const std::string& name);
+
+// A painting reflects this fraction of its linearised sRGB colour: varnished paint and gesso
+// reflect at most about 90%, and an albedo below 1 keeps the light transport finite.
+constexpr float kPaintingReflectance = 0.9f;
+
+// The linear value of an sRGB-encoded component in [0, 1] (IEC 61966-2-1).
+inline float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+struct LightingSettings {
+    std::uint64_t photons = 1u << 19;  // emitted photons
+    float radius = 0;                  // gather radius in metres; 0 = auto (see light())
+    int light_samples = 16;            // emitter samples per pixel in lighting "full"
+    std::uint64_t seed = 0;
+    unsigned threads = 0;              // 0 = all cores
+};
+
+struct BakeSettings {
+    double spacing = 0;      // lattice spacing in metres; 0 = scene diagonal / 200
+    int light_samples = 64;  // emitter samples per lattice point
+    std::uint64_t max_points = 1ull << 25;  // a bound on memory (32 B per point)
+    unsigned threads = 0;
+};
+
+struct LightingStats {
+    double photon_seconds = 0, build_seconds = 0, bake_seconds = 0;
+    std::uint64_t photons_stored = 0, bake_points = 0;
+    float radius = 0;
+    double spacing = 0;
+    std::vector<std::uint32_t> albedo_levels;  // per painting slot: the level photons read
+};
+
+// Optional per-pixel outputs of render_display, each nullptr or width x height entries of
+// the given size, row-major.
+struct DisplayHits {
+    float* position = nullptr;     // 3 per pixel
+    std::int32_t* slot = nullptr;  // 1 per pixel
+    double* uv = nullptr;          // 2 per pixel
+    float* lod = nullptr;          // 1 per pixel
+};
+
+class Gallery {
+public:
+    Gallery() = default;
+    Gallery(const Gallery&) = delete;
+    Gallery& operator=(const Gallery&) = delete;
+
+    // A room surface: vertices nv x 3, triangles nt x 3; albedo in [0, 1), emission >= 0.
+    // Returns the triangles kept (degenerate ones are dropped).
+    std::size_t add_surface(const float* vertices, std::size_t nv, const std::int64_t* triangles,
+                            std::size_t nt, Vec3f albedo, Vec3f emission);
+    // A painting rectangle (see PaintingPlacement): `painting` is its id in the pack, `tiles`
+    // its pyramid. u_axis, v_axis orthonormal; the painting faces u x v. Returns the slot.
+    std::size_t add_painting(std::uint32_t painting, const PaintingGeometry& tiles, Vec3d origin,
+                             Vec3d u_axis, Vec3d v_axis, double width_m, double height_m);
+    void commit();
+    bool committed() const { return scene_.committed(); }
+
+    const Scene& scene() const { return scene_; }
+    const std::vector<PaintingPlacement>& paintings() const { return placements_; }
+    // The scene as the feedback pass takes it (views/feedback.h render_view).
+    PaintingSceneView feedback_view() const;
+    // Painting slot of a global triangle, -1 for room surfaces.
+    int slot_of(std::uint32_t tri) const { return tri_slot_[tri]; }
+
+    // The photon pass and photon map (replaces any previous lighting and bake). The VT must
+    // hold the pack the paintings were added from. radius 0 picks
+    // sqrt(100 A / (pi N)) for the room's area A and N photons (about 100 photons per disc),
+    // clamped to [1e-4, 0.05] x the diagonal.
+    void light(const VirtualTexture& vt, const LightingSettings& settings);
+    bool lit() const { return renderer_ != nullptr; }
+    void bake(const BakeSettings& settings);
+    bool baked() const { return !bake_offset_.empty(); }
+    const LightingStats& stats() const { return stats_; }
+
+    // One primary ray through each pixel centre: linear RGB radiance (height, width, 3).
+    void render_display(const Camera& camera, const VirtualTexture& vt, Lighting lighting,
+                        float* rgb, const DisplayHits& hits = {}, unsigned threads = 0) const;
+
+    // Irradiance at a surface point on the side normal `n` faces (|n| = 1, toward the
+    // viewer), as lighting "full" / "baked" compute it. For tests and reprojection.
+    Vec3f irradiance_full(const Hit& hit) const;
+    Vec3f irradiance_baked(const Hit& hit) const;
+
+private:
+    void require_lit() const;
+    void check_texture(const VirtualTexture& vt) const;
+    Vec3f barycentric(std::uint32_t tri, Vec3f p) const;  // (b1, b2, 0) on tri's lattice
+
+    Scene scene_;
+    std::vector<PaintingPlacement> placements_;
+    std::vector<int> geom_placement_;   // Embree geometry id -> painting slot or -1
+    std::vector<int> tri_slot_;         // global triangle -> painting slot or -1
+    std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // every kept triangle
+    LightingSettings lighting_;
+    std::unique_ptr<AlbedoTexture> albedo_;
+    std::unique_ptr<Renderer> renderer_;
+    // Bake: triangle t's lattice has bake_n_[t] segments and its points start at
+    // bake_offset_[t]; front and back side irradiance per point.
+    std::vector<std::uint32_t> bake_n_;
+    std::vector<std::uint64_t> bake_offset_;
+    std::vector<Vec3f> bake_front_, bake_back_;
+    LightingStats stats_;
+    // light() and bake() replace what render_display reads: they exclude it.
+    mutable std::shared_mutex mutex_;
+};
+
+}  // namespace gigascroll

@@ -1,0 +1,285 @@
+"""`Gallery`: a `RoomSpec` and the paintings of a pack in the core's one Embree scene.
+
+    pack = gigascroll.TilePack("paintings.pack")
+    gallery = Gallery.from_room(spec, pack)         # bind the painting slots, build the BVH
+    vt = gigascroll.VirtualTexture(pack)
+    gallery.light(vt)                               # photon pass (both cores, GIL released)
+    gallery.bake()                                  # irradiance lattice, once per lighting
+    rgb = gallery.render_display(camera, vt, lighting="baked")   # (H, W, 3) linear radiance
+
+`render_view(camera, ...)` is the feedback pass on the same scene (request keys, lambda, uv per
+pixel, as `gigascroll.render_view`). `render_display(..., hits=True)` also returns, per pixel,
+the hit position, painting slot, painting uv and lambda: what a stereo pass needs to reproject
+one eye's pixels into the other (irradiance is view-independent; see cpp/gallery/gallery.h).
+Lighting modes: "baked" (irradiance interpolated from the lattice of `bake`), "full" (direct
+light and photon gather at every pixel: the accurate mode), "unlit" (albedo and emission only).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .. import _core
+from .._core import Camera, TilePack
+from .room import PaintingSlot, RoomSpec, Surface
+
+__all__ = ["Gallery", "LIGHTING_MODES", "PAINTING_REFLECTANCE", "painting_albedo"]
+
+LIGHTING_MODES = ("baked", "full", "unlit")
+# A painting reflects this fraction of its linearised sRGB colour (cpp/gallery/gallery.h).
+PAINTING_REFLECTANCE = 0.9
+
+
+def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    c = np.asarray(c, np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def painting_albedo(rgb8: np.ndarray) -> np.ndarray:
+    """The albedo the gallery gives a painting's sRGB8 texels (float32, same shape)."""
+    return (PAINTING_REFLECTANCE * _srgb_to_linear(np.asarray(rgb8) / 255.0)).astype(np.float32)
+
+
+def _vec3(value, what: str) -> tuple[float, float, float]:
+    try:
+        a = np.asarray(value, np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be 3 numbers, got {value!r}") from None
+    if a.shape != (3,):
+        raise ValueError(f"{what} must be 3 numbers, got {value!r}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} is not finite: {tuple(a)}")
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def _check_surface(s: Surface) -> tuple[np.ndarray, np.ndarray, tuple, tuple]:
+    if not isinstance(s, Surface):
+        raise ValueError(f"a room surface must be a Surface, got {type(s).__name__}")
+    v = np.asarray(s.vertices, np.float64)
+    if v.ndim != 2 or v.shape[1] != 3 or len(v) == 0:
+        raise ValueError(f"surface {s.name!r}: vertices must have shape (n, 3), got {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"surface {s.name!r}: a vertex is not finite (NaN or Inf)")
+    if np.abs(v).max() > 1e15:
+        raise ValueError(f"surface {s.name!r}: coordinates beyond 1e15 m")
+    t = np.asarray(s.triangles)
+    if t.ndim != 2 or t.shape[1] != 3 or len(t) == 0 or not np.issubdtype(t.dtype, np.integer):
+        raise ValueError(f"surface {s.name!r}: triangles must be integers of shape (m, 3)")
+    if t.min() < 0 or t.max() >= len(v):
+        raise ValueError(f"surface {s.name!r}: a triangle indexes a vertex outside [0, {len(v)})")
+    albedo = _vec3(s.albedo, f"surface {s.name!r}: albedo")
+    if min(albedo) < 0 or max(albedo) >= 1:
+        raise ValueError(f"surface {s.name!r}: albedo must be in [0, 1) per channel, got {albedo} "
+                         "(a surface reflecting all light makes the light transport diverge)")
+    emission = _vec3(s.emission, f"surface {s.name!r}: emission")
+    if min(emission) < 0:
+        raise ValueError(f"surface {s.name!r}: emission must be >= 0, got {emission}")
+    return v, t.astype(np.int64), albedo, emission
+
+
+def _painting_index(pack: TilePack, which) -> int:
+    names = [p.name for p in pack.paintings]
+    if isinstance(which, (bool, np.bool_)):
+        raise ValueError(f"painting must be a name or an index, got {which!r}")
+    if isinstance(which, (int, np.integer)):
+        if not 0 <= int(which) < len(names):
+            raise ValueError(f"painting index {int(which)} is not in the pack ({len(names)} paintings)")
+        return int(which)
+    if isinstance(which, str):
+        if which not in names:
+            raise ValueError(f"painting {which!r} is not in the pack (it holds {names})")
+        return names.index(which)
+    raise ValueError(f"painting must be a name or an index, got {which!r}")
+
+
+def _check_slot(slot: PaintingSlot) -> tuple:
+    if not isinstance(slot, PaintingSlot):
+        raise ValueError(f"a painting slot must be a PaintingSlot, got {type(slot).__name__}")
+    origin = _vec3(slot.origin, f"painting slot {slot.name!r}: origin")
+    u = np.array(_vec3(slot.u_axis, f"painting slot {slot.name!r}: u_axis"))
+    v = np.array(_vec3(slot.v_axis, f"painting slot {slot.name!r}: v_axis"))
+    for what, x in (("width_m", slot.width_m), ("height_m", slot.height_m)):
+        if isinstance(x, bool) or not isinstance(x, (int, float, np.floating, np.integer)) \
+                or not math.isfinite(x) or x <= 0:
+            raise ValueError(f"painting slot {slot.name!r}: {what} must be a positive finite number, got {x!r}")
+    if abs(np.linalg.norm(u) - 1) > 1e-6 or abs(np.linalg.norm(v) - 1) > 1e-6 or abs(u @ v) > 1e-6:
+        raise ValueError(f"painting slot {slot.name!r}: u_axis and v_axis must be orthonormal")
+    return origin, tuple(u), tuple(v), float(slot.width_m), float(slot.height_m)
+
+
+class Gallery(_core._Gallery):
+    """A room (`RoomSpec`) with its painting slots bound to the paintings of a pack, as one
+    Embree scene. Build it with :meth:`from_room`."""
+
+    def __init__(self):
+        super().__init__()
+        self.spec: RoomSpec | None = None
+        self.pack: TilePack | None = None
+        self.slot_paintings: list[int] = []
+
+    @classmethod
+    def from_room(cls, spec: RoomSpec, pack) -> "Gallery":
+        """The gallery of `spec` with each painting slot bound (by name or index) to a painting
+        of `pack` (an open TilePack or its path). ValueError for a painting not in the pack,
+        a room with no light, an albedo outside [0, 1), NaN coordinates, bad slot axes."""
+        if not isinstance(spec, RoomSpec):
+            raise ValueError(f"from_room takes a RoomSpec, got {type(spec).__name__}")
+        if isinstance(pack, (str, os.PathLike)):
+            pack = TilePack(Path(pack))
+        if not isinstance(pack, TilePack):
+            raise ValueError(f"pack must be a TilePack or a path, got {type(pack).__name__}")
+        surfaces = [_check_surface(s) for s in spec.surfaces]
+        if not any(max(e) > 0 for *_, e in surfaces):
+            raise ValueError(f"room {spec.name!r} has no light: no surface has emission > 0")
+        slots = [(_painting_index(pack, s.painting), _check_slot(s)) for s in spec.paintings]
+        g = cls()
+        for v, t, albedo, emission in surfaces:
+            g._add_surface(np.ascontiguousarray(v, np.float32), np.ascontiguousarray(t), albedo, emission)
+        for index, (origin, u, v, w, h) in slots:
+            g._add_painting(pack, index, origin, u, v, w, h)
+        g._commit()
+        g.spec, g.pack, g.slot_paintings = spec, pack, [i for i, _ in slots]
+        return g
+
+    # lighting ---------------------------------------------------------------------------------
+
+    def light(self, vt, photons: int = 1 << 19, radius: float | None = None, light_samples: int = 16,
+              seed: int = 0, threads: int = 0) -> dict:
+        """The photon pass over the whole room and its photon map (replaces any previous
+        lighting and bake). `radius` None: about 100 photons per gather disc. Returns `stats`."""
+        for name, value in (("photons", photons), ("light_samples", light_samples), ("seed", seed),
+                            ("threads", threads)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
+        r = 0.0 if radius is None else float(radius)
+        if not math.isfinite(r) or r < 0 or (radius is not None and r == 0):
+            raise ValueError(f"radius must be positive and finite, got {radius!r}")
+        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads))
+        return self.stats
+
+    def bake(self, spacing: float | None = None, light_samples: int = 64, threads: int = 0) -> dict:
+        """Bakes irradiance once for the current lighting: a lattice on every triangle, both
+        sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
+        point with `light_samples` emitter samples plus the photon gather. Returns `stats`."""
+        s = 0.0 if spacing is None else float(spacing)
+        if not math.isfinite(s) or s < 0 or (spacing is not None and s == 0):
+            raise ValueError(f"spacing must be positive and finite, got {spacing!r}")
+        if isinstance(light_samples, bool) or not isinstance(light_samples, (int, np.integer)):
+            raise ValueError(f"light_samples must be an integer, got {light_samples!r}")
+        self._bake(s, int(light_samples), int(threads))
+        return self.stats
+
+    # rendering --------------------------------------------------------------------------------
+
+    def render_display(self, camera: Camera, vt, lighting: str = "baked", out: np.ndarray | None = None,
+                       hits: bool = False, threads: int = 0):
+        """The display pass at the camera's full resolution, one primary ray per pixel centre:
+        (H, W, 3) float32 linear radiance (written into `out` when given). A painting's albedo
+        is the VT's trilinear sample at the pixel's lambda; lighting "baked" and "full" light()
+        (and bake()) with their defaults first if that has not been done. hits=True returns
+        (rgb, dict) with per-pixel 'position' (H, W, 3) float32, 'slot' (H, W) int32 (-1 off
+        paintings), 'uv' (H, W, 2) float64 and 'lod' (H, W) float32 (NaN off paintings)."""
+        if lighting not in LIGHTING_MODES:
+            raise ValueError(f"lighting must be one of {LIGHTING_MODES}, got {lighting!r}")
+        if not isinstance(camera, Camera):
+            raise ValueError(f"camera must be a gigascroll.Camera, got {type(camera).__name__}")
+        if lighting != "unlit" and not self.lit:
+            self.light(vt)
+        if lighting == "baked" and not self.baked:
+            self.bake()
+        shape = (camera.height, camera.width, 3)
+        if out is None:
+            out = np.empty(shape, np.float32)
+        elif not (isinstance(out, np.ndarray) and out.dtype == np.float32 and out.shape == shape
+                  and out.flags.c_contiguous and out.flags.writeable):
+            raise ValueError(f"out must be a writeable C-contiguous float32 array of shape {shape}")
+        d = self._render_display(camera, vt, lighting, out, bool(hits), int(threads))
+        return (out, dict(d)) if hits else out
+
+    def camera(self, resolution=(256, 256), fov: float = 60.0, eye=None, target=None) -> Camera:
+        """A camera at the room's suggested eye and target (or the given ones), y up."""
+        spec = self.spec
+        eye = eye if eye is not None else (spec.camera_eye if spec and spec.camera_eye else None)
+        target = target if target is not None else (spec.camera_target if spec and spec.camera_target else None)
+        if eye is None or target is None:
+            lo, hi = (np.array(b, np.float64) for b in self.bounds)
+            c = (lo + hi) / 2
+            eye = eye if eye is not None else (c[0], lo[1] + 0.6 * (hi[1] - lo[1]), c[2] + 0.45 * (hi[2] - lo[2]))
+            target = target if target is not None else tuple(c)
+        return Camera(list(_vec3(eye, "eye")), list(_vec3(target, "target")), [0, 1, 0], float(fov),
+                      resolution=(int(resolution[0]), int(resolution[1])))
+
+    # the same room for Mitsuba 3 --------------------------------------------------------------
+
+    def mitsuba_level(self, slot: int, max_width: int = 2048) -> int:
+        """The mip level of a slot's painting written to Mitsuba: the finest whose width is at
+        most max_width texels."""
+        p = self.pack.paintings[self.slot_paintings[slot]]
+        for level, (w, _) in enumerate(p.level_sizes):
+            if w <= max_width:
+                return level
+        return p.levels - 1
+
+    def to_mitsuba_dict(self, camera: Camera, levels: dict | int | None = None, max_depth: int = -1,
+                        integrator: dict | None = None) -> dict:
+        """The same room for `mitsuba.load_dict`: each surface a mesh with a twosided diffuse
+        BSDF (and an area emitter where it emits, one-sided along its winding normal like
+        ours), each painting a two-triangle mesh with its uv and a bilinear `bitmap` texture of
+        one mip level read from the pack (`levels`: one level for all, {slot: level}, or None
+        for `mitsuba_level`), converted to albedo exactly as the gallery converts texels; the
+        sensor is our camera (perspective, fov_axis 'y', box filter)."""
+        import mitsuba as mi
+
+        if mi.variant() is None:
+            mi.set_variant("scalar_rgb")
+        from ..pack import read_level
+
+        def mesh(name, v, f, uv=None, bsdf=None, emitter=None):
+            props = mi.Properties()
+            props["bsdf"] = mi.load_dict(bsdf)
+            if emitter is not None:
+                props["emitter"] = mi.load_dict(emitter)
+            m = mi.Mesh(name, len(v), len(f), props=props, has_vertex_texcoords=uv is not None)
+            p = mi.traverse(m)
+            p["vertex_positions"] = np.asarray(v, np.float32).ravel()
+            p["faces"] = np.asarray(f, np.uint32).ravel()
+            if uv is not None:
+                p["vertex_texcoords"] = np.asarray(uv, np.float32).ravel()
+            p.update()
+            return m
+
+        eye = np.array(camera.position)
+        d = {"type": "scene",
+             "integrator": integrator or {"type": "path", "max_depth": int(max_depth)},
+             "sensor": {"type": "perspective", "fov_axis": "y", "fov": float(camera.fov),
+                        "to_world": mi.ScalarTransform4f().look_at(
+                            origin=eye.tolist(), target=(eye + np.array(camera.forward)).tolist(),
+                            up=list(camera.up)),
+                        "film": {"type": "hdrfilm", "width": int(camera.width), "height": int(camera.height),
+                                 "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+                        "sampler": {"type": "independent"}}}
+        for i, s in enumerate(self.spec.surfaces):
+            v, t, albedo, emission = _check_surface(s)
+            bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(albedo)}}}
+            emitter = ({"type": "area", "radiance": {"type": "rgb", "value": list(emission)}}
+                       if max(emission) > 0 else None)
+            d[f"surface{i:03d}"] = mesh(f"surface{i:03d}", v, t, bsdf=bsdf, emitter=emitter)
+        for i, slot in enumerate(self.spec.paintings):
+            origin, u, v, w, h = _check_slot(slot)
+            o, u, v = np.array(origin), np.array(u), np.array(v)
+            level = (levels.get(i) if isinstance(levels, dict) else levels)
+            if level is None:
+                level = self.mitsuba_level(i)
+            image = painting_albedo(read_level(self.pack, self.slot_paintings[i], int(level)))
+            tex = {"type": "bitmap", "bitmap": mi.Bitmap(np.ascontiguousarray(image)), "raw": True,
+                   "filter_type": "bilinear", "wrap_mode": "clamp"}
+            verts = [o, o + w * u, o + w * u + h * v, o + h * v]
+            d[f"painting{i:03d}"] = mesh(f"painting{i:03d}", verts, [(0, 1, 2), (0, 2, 3)],
+                                         uv=[(0, 0), (1, 0), (1, 1), (0, 1)],
+                                         bsdf={"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": tex}})
+        return d
+
