@@ -24,26 +24,11 @@ double seconds_since(Clock::time_point t0) {
 constexpr unsigned kNoHit = RTC_INVALID_GEOMETRY_ID;
 constexpr std::uint64_t kUnclaimed = ~std::uint64_t(0);
 
-// sRGB-encoded 0..255 to linear [0, 1]: the exact curve at the 256 codes, linear between
-// them (the filtered value is not an integer).
-struct SrgbDecoder {
-    SrgbDecoder() {
-        for (int i = 0; i < 257; ++i) {
-            const double c = std::min(i, 255) / 255.0;
-            table[i] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
-        }
-    }
-    float operator()(float v) const {
-        v = std::clamp(v, 0.0f, 255.0f);
-        const int i = int(v);
-        const float f = v - float(i);
-        return table[i] + f * (table[i + 1] - table[i]);
-    }
-    std::array<float, 257> table;
-};
-const SrgbDecoder& srgb_decoder() {
-    static const SrgbDecoder d;
-    return d;
+// sRGB-encoded 0..255 to linear [0, 1] (IEC 61966-2-1), the Gallery's formula in the same
+// float operations, so both display passes give the same bits.
+inline float srgb_decode(float v) {
+    const float c = v / 255.0f;
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
 // Casts the primary rays of rows [row_begin, row_end) in 16-ray packets along each row; a
@@ -145,7 +130,8 @@ void DisplayPass::trace(const PaintingSceneView& scene, const Camera& eye, GBuff
 }
 
 void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& vt,
-                         const Camera& eye, GBuffer& g, const DisplayOptions& o, EyeStats& st) {
+                         const Camera& eye, GBuffer& g, const std::int32_t* reused,
+                         const DisplayOptions& o, EyeStats& st) {
     const auto t0 = Clock::now();
     const std::uint32_t w = g.width;
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -165,13 +151,24 @@ void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& v
                 const int pl = scene.placement_of(g.geom[i]);
                 if (pl < 0) continue;
                 const PaintingPlacement& pp = scene.paintings[std::size_t(pl)];
-                const Vec3d p(g.p[i]), rel = p - pp.origin;
+                // A traced pixel: the plane point of its centre's ray in double (a 12 m scroll
+                // of 150k texels needs more than float); a reused one: the left eye's point,
+                // seen from this eye.
+                Vec3d dd;
+                double t;
+                if (reused && reused[i] >= 0) {
+                    const Vec3d to_p = Vec3d(g.p[i]) - eye.position;
+                    t = dot(to_p, eye.forward);
+                    if (!(t > 0)) continue;
+                    dd = to_p / t;
+                } else {
+                    dd = eye.direction(x + 0.5, row + 0.5);
+                    t = dot(pp.origin - eye.position, pp.normal()) / dot(dd, pp.normal());
+                }
+                const Vec3d rel = eye.position + t * dd - pp.origin;
                 const double u = std::clamp(dot(rel, pp.u_axis) / pp.width_m, 0.0, 1.0);
                 const double v = std::clamp(dot(rel, pp.v_axis) / pp.height_m, 0.0, 1.0);
-                const Vec3d to_p = p - eye.position;
-                const double depth = dot(to_p, eye.forward);
-                if (!(depth > 0)) continue;
-                const double rho = texel_footprint(pp, eye, to_p / depth, depth);
+                const double rho = texel_footprint(pp, eye, dd, t);
                 g.placement[i] = pl;
                 g.uv[2 * i] = u, g.uv[2 * i + 1] = v;
                 g.lod[i] = float(std::log2(rho)) + o.lod_bias;
@@ -211,8 +208,7 @@ void DisplayPass::shade(const DisplayLighting& lighting, const GBuffer& g,
                         const DisplayOptions& o, float* rgb, EyeStats& st) {
     const auto t0 = Clock::now();
     const std::size_t n = std::size_t(g.width) * g.height;
-    const SrgbDecoder& decode = srgb_decoder();
-    constexpr float kInvPi = 1.0f / SurfaceLight::kPiF;
+    constexpr float kInvPi = float(1.0 / 3.14159265358979323846);  // as the Gallery's
     parallel_for(n, 4096, [&](std::size_t b, std::size_t e) {
         SurfaceLight sl;
         for (std::size_t i = b; i < e; ++i) {
@@ -222,13 +218,18 @@ void DisplayPass::shade(const DisplayLighting& lighting, const GBuffer& g,
                 continue;
             }
             lighting.light(g.geom[i], g.prim[i], g.p[i], g.n[i], sl);
-            Vec3f albedo = sl.albedo;
+            // The Gallery's order of operations, so both passes agree to the bit.
+            Vec3f L;
             if (g.placement[i] >= 0) {
                 const float* a = &g.albedo[3 * i];
-                albedo = o.srgb_albedo ? Vec3f{decode(a[0]), decode(a[1]), decode(a[2])}
-                                       : Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f);
+                const Vec3f albedo =
+                    (o.srgb_albedo ? Vec3f{srgb_decode(a[0]), srgb_decode(a[1]), srgb_decode(a[2])}
+                                   : Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f)) *
+                    o.painting_reflectance;
+                L = albedo * (sl.irradiance * kInvPi) + sl.emission;
+            } else {
+                L = sl.albedo * sl.irradiance * kInvPi + sl.emission;
             }
-            const Vec3f L = albedo * sl.irradiance * kInvPi + sl.emission;
             out[0] = L.x, out[1] = L.y, out[2] = L.z;
         }
     }, o.threads);
@@ -314,7 +315,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
     trace(scene, eye, g, nullptr, o.threads, st);
-    sample(scene, vt, eye, g, o, st);
+    sample(scene, vt, eye, g, nullptr, o, st);
     shade(lighting, g, o, rgb, st);
     sources_.clear();
 }
@@ -343,7 +344,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         sources_.clear();
         trace(scene, right, g, nullptr, o.threads, st);
     }
-    sample(scene, vt, right, g, o, st);
+    sample(scene, vt, right, g, use_reuse ? sources_.data() : nullptr, o, st);
     shade(lighting, g, o, right_rgb, st);
 }
 

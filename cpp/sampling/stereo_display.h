@@ -34,7 +34,7 @@ struct SurfaceLight {
     Vec3f albedo{0.5f, 0.5f, 0.5f};
     Vec3f irradiance{kPiF, kPiF, kPiF};
     Vec3f emission{0.0f, 0.0f, 0.0f};
-    static constexpr float kPiF = 3.14159265358979f;
+    static constexpr float kPiF = float(3.14159265358979323846);
 };
 
 // The scene's lighting as the display pass asks it, per hit: Embree geometry and primitive,
@@ -61,6 +61,8 @@ private:
 struct DisplayOptions {
     // Painting texels are sRGB-encoded; true decodes the filtered value to a linear albedo.
     bool srgb_albedo = true;
+    // A painting's albedo = this x its (decoded) texel (the Gallery's kPaintingReflectance).
+    float painting_reflectance = 1.0f;
     // A claimed right pixel whose depth exceeds an 8-neighbour's claimed depth by more than
     // this fraction is traced instead (see the header comment).
     float edge_depth_ratio = 0.05f;
@@ -112,8 +114,9 @@ private:
     };
     void trace(const PaintingSceneView& scene, const Camera& eye, GBuffer& g,
                const std::uint8_t* skip, unsigned threads, EyeStats& st);
+    // reused: per pixel the reused left pixel or -1 (nullptr: every pixel traced).
     void sample(const PaintingSceneView& scene, const VirtualTexture& vt, const Camera& eye,
-                GBuffer& g, const DisplayOptions& o, EyeStats& st);
+                GBuffer& g, const std::int32_t* reused, const DisplayOptions& o, EyeStats& st);
     void shade(const DisplayLighting& lighting, const GBuffer& g, const DisplayOptions& o,
                float* rgb, EyeStats& st);
     void reuse(const Camera& right, const DisplayOptions& o, EyeStats& st);

@@ -28,7 +28,7 @@ from .. import views as v
 from ..views.exhibition import Headset
 from .room import RoomSpec
 
-__all__ = ["FrameSource", "ExhibitionSource", "GalleryWalk", "WALK_STAGES", "DISPLAY_PARTS",
+__all__ = ["FrameSource", "ExhibitionSource", "GallerySource", "walk_path", "stops_of", "GalleryWalk", "WALK_STAGES", "DISPLAY_PARTS",
            "compose_frame", "tone_map", "lens_in_view", "parent_keys"]
 
 # The loop's stages in order (seed 000 Table 5's columns, as frame_loop.STAGES) and the parts
@@ -104,6 +104,53 @@ class ExhibitionSource(FrameSource):
 
     def primary_rays(self, camera, threads=0):
         return _core.cast_primary_rays(self.scene, camera, threads)
+
+
+class GallerySource(FrameSource):
+    """The lit gallery (issue 13's `Gallery`): one Embree scene for the feedback pass and the
+    display pass, irradiance baked once (lighting "baked") or computed per pixel ("full")."""
+
+    lit = True
+
+    def __init__(self, room: RoomSpec, pack, lighting: str = "baked", photons: int = 1 << 18,
+                 spacing: float | None = None, bake_samples: int = 32, threads: int = 0,
+                 exposure: float | None = None):
+        from .gallery import Gallery
+        from .rooms import GALLERY_LUX, lux_to_irradiance
+        if lighting not in ("baked", "full", "unlit"):
+            raise ValueError(f"lighting must be baked, full or unlit, got {lighting!r}")
+        check_room_paintings(room, pack)
+        self.gallery = Gallery.from_room(room, pack)
+        self.lighting = lighting
+        self.name = f"{room.name} ({lighting})"
+        self.tiles = [v.PaintingGeometry(p.width, p.height, pack.tile_size, pack.border)
+                      for p in pack.paintings]
+        self.light_stats = {}
+        t0 = time.perf_counter()
+        if lighting != "unlit":
+            # The photons read the paintings' pinned coarse levels: any VT of the pack will do.
+            self.gallery.light(runtime.VirtualTexture(pack, (30, 30)), photons=photons,
+                               threads=threads)
+            if lighting == "baked":
+                self.gallery.bake(spacing=spacing, light_samples=bake_samples, threads=threads)
+            self.light_stats = dict(self.gallery.stats)
+        self.light_seconds = time.perf_counter() - t0
+        # A white painting under the gallery's target illuminance displays as 1.
+        self.exposure = (1.0 if lighting == "unlit" else
+                         exposure or math.pi / lux_to_irradiance(GALLERY_LUX))
+
+    def feedback(self, camera, width, height, threads=0):
+        return self.gallery.render_view(camera, width, height, threads=threads)["keys"]
+
+    def display(self, dpass, vt, camera, threads=0):
+        return _core._gallery_display(dpass, self.gallery, vt, camera, self.lighting, threads)
+
+    def display_stereo(self, dpass, vt, left, right, reuse, threads=0):
+        return _core._gallery_display_stereo(dpass, self.gallery, vt, left, right,
+                                             self.lighting, reuse, threads=threads)
+
+    def primary_rays(self, camera, threads=0):
+        return _core._gallery_primary_rays(self.gallery, camera, threads)
 
 
 def painting_index(pack, painting) -> int:
