@@ -105,6 +105,32 @@ private:
     std::vector<Image> images_;
 };
 
+// Photons on the wall behind a painting, in the gap between them: light trapped there is real
+// but never seen, and a gather on the painting's face (its sphere reaches `depth` = the gather
+// radius off the plane, far more than a 1 mm gap) would count it as light on the painting: the
+// classic leak. A photon is dropped when it lies over or under a painting's rectangle, off its
+// plane by less than `depth`, on a surface whose normal points back at the painting (the
+// wall it hangs on, seen from the gap). Either side counts, so the rule does not depend on
+// which way u x v points. The painting's own photons (on its plane) stay.
+void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<PaintingPlacement>& paintings,
+                         float depth) {
+    if (paintings.empty()) return;
+    auto hidden = [&](const Photon& ph) {
+        for (const PaintingPlacement& p : paintings) {
+            const Vec3d n = p.normal(), rel = Vec3d(ph.p) - p.origin;
+            const double h = dot(rel, n);
+            // On the plane within float rounding of a point at this distance from the origin.
+            const double on_plane = 1e-5 * (length(rel) + p.width_m + p.height_m);
+            if (!(std::abs(h) > on_plane && std::abs(h) < double(depth))) continue;
+            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
+            const double u = dot(rel, p.u_axis), v = dot(rel, p.v_axis);
+            if (u >= 0 && u <= p.width_m && v >= 0 && v <= p.height_m) return true;
+        }
+        return false;
+    };
+    photons.erase(std::remove_if(photons.begin(), photons.end(), hidden), photons.end());
+}
+
 // Lattice point (i, j), i + j <= n, of a triangle with n segments per edge.
 inline std::uint64_t lattice_index(std::uint32_t i, std::uint32_t j, std::uint32_t n) {
     return std::uint64_t(i) * (n + 1) - std::uint64_t(i) * (i - 1) / 2 + j;
@@ -219,6 +245,7 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
         radius = std::clamp(radius, 1e-4f * diag, 0.05f * diag);
     }
     renderer_.reset();
+    map_.reset();
     bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
     scene_.set_albedo_texture(nullptr);
     auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt);
@@ -226,16 +253,25 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     for (const auto& im : albedo->images()) stats_.albedo_levels.push_back(im.level);
     scene_.set_albedo_texture(albedo.get());
     albedo_ = std::move(albedo);
+    // The renderer does direct light only; the photon map is the gallery's own, so that the
+    // photons in the gap behind each painting can be dropped first (drop_hidden_photons).
     RenderSettings rs;
     rs.photons = s.photons;
     rs.gather.radius = radius;
     rs.light_samples = s.light_samples;
     rs.seed = s.seed;
     rs.threads = s.threads;
+    rs.indirect = false;
     renderer_ = std::make_unique<Renderer>(scene_, rs);
-    stats_.photon_seconds = renderer_->photon_stats().photon_seconds;
-    stats_.build_seconds = renderer_->photon_stats().build_seconds;
-    stats_.photons_stored = renderer_->photon_stats().photons_stored;
+    auto t0 = Clock::now();
+    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, s.threads);
+    stats_.photon_seconds = seconds_since(t0);
+    t0 = Clock::now();
+    drop_hidden_photons(photons, placements_, radius);
+    gather_.radius = radius;
+    map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
+    stats_.build_seconds = seconds_since(t0);
+    stats_.photons_stored = photons.size();
     stats_.radius = radius;
 }
 
@@ -247,8 +283,7 @@ Vec3f Gallery::irradiance_full(const Hit& hit) const {
     ShadeCounters c;
     KnnHeap heap;
     Vec3f E = renderer_->direct_irradiance(hit, lighting_.light_samples, c);
-    const PhotonMap* map = renderer_->photon_map();
-    if (map && map->size() > 0) E += renderer_->indirect_density(hit.p, hit.n, heap);
+    if (map_) E += map_->gather(hit.p, hit.n, gather_, heap);
     return E;
 }
 
@@ -316,8 +351,6 @@ void Gallery::bake(const BakeSettings& s) {
     }
     const std::uint64_t total = offset[tris];
     std::vector<Vec3f> front(total), back(total);
-    const PhotonMap* map = renderer_->photon_map();
-    const bool gather = map && map->size() > 0;
     parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
         ShadeCounters c;
         KnnHeap heap;
@@ -337,7 +370,7 @@ void Gallery::bake(const BakeSettings& s) {
                         h.front = side == 0;
                         h.n = h.front ? N : -N;
                         Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
-                        if (gather) E += renderer_->indirect_density(h.p, h.n, heap);
+                        if (map_) E += map_->gather(h.p, h.n, gather_, heap);
                         (h.front ? front : back)[k] = E;
                     }
                 }

@@ -148,7 +148,9 @@ private:
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // every kept triangle
     LightingSettings lighting_;
     std::unique_ptr<AlbedoTexture> albedo_;
-    std::unique_ptr<Renderer> renderer_;
+    std::unique_ptr<Renderer> renderer_;  // direct light (emitter sampling, shadow rays)
+    std::unique_ptr<PhotonMap> map_;      // indirect light: the hash grid of photon/
+    GatherSettings gather_;
     // Bake: triangle t's lattice has bake_n_[t] segments and its points start at
     // bake_offset_[t]; front and back side irradiance per point.
     std::vector<std::uint32_t> bake_n_;

@@ -29,8 +29,10 @@ class Surface:
 class PaintingSlot:
     """A rectangle that shows a painting of the pack. Texel (0, 0) is at `origin`; image x runs
     along the unit vector `u_axis` for `width_m` metres, image y (downwards in the image) along
-    the unit vector `v_axis` for `height_m` metres; the painting faces u x v. `painting` names the
-    painting of the pack by name (str) or index (int)."""
+    the unit vector `v_axis` for `height_m` metres. Seen unmirrored (image x to the viewer's
+    right, image y down), u x v points away from the viewer, into the wall; the painting is
+    two-sided, so only its plane matters to the gallery. `painting` names the painting of the
+    pack by name (str) or index (int)."""
 
     painting: str | int
     origin: tuple[float, float, float]
