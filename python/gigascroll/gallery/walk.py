@@ -309,17 +309,21 @@ class GalleryWalk:
         return tuple(lens_in_view(cam, np.array(mag.position), right,
                                   v.MAGNIFIER.lens_size / 2) for cam, _, _ in views[:2])
 
-    def run(self, progress: bool = False, on_frame=None) -> dict:
+    def open_state(self, loader) -> "_LoopState":
+        """The loop's run-time state (virtual textures, processors, display passes) around a
+        started TileLoader: what run() and an interactive viewer step frames with."""
         pack, src = self.pack, self.source
         vt = runtime.VirtualTexture(pack, self.slots)
-        lookup = _core.VirtualTextureLookup(vt)
-        proc = v.make_processor("hash", src.tiles, self.threads)
-        truth = v.BasicProcessor()
-        direct = v.DirectLoading(self.per_frame)
-        levels = np.array([t.levels for t in src.tiles], np.int64)
-        oracle_vt = runtime.VirtualTexture(pack, self.oracle_slots) if self.oracle else None
-        dpass, mpass = _core.DisplayPass(), _core.DisplayPass()
-        opass, ompass = _core.DisplayPass(), _core.DisplayPass()
+        return _LoopState(
+            vt=vt, lookup=_core.VirtualTextureLookup(vt),
+            proc=v.make_processor("hash", src.tiles, self.threads), truth=v.BasicProcessor(),
+            direct=v.DirectLoading(self.per_frame),
+            levels=np.array([t.levels for t in src.tiles], np.int64), loader=loader,
+            oracle_vt=runtime.VirtualTexture(pack, self.oracle_slots) if self.oracle else None,
+            passes=[_core.DisplayPass() for _ in range(4)])
+
+    def run(self, progress: bool = False, on_frame=None) -> dict:
+        src = self.source
         period = 1.0 / self.path.fps
         self.records = []
         bar = None
@@ -327,11 +331,11 @@ class GalleryWalk:
             from tqdm import tqdm
             bar = tqdm(total=len(self.path), unit="frame", desc=f"walk {src.name}")
         try:
-            with runtime.TileLoader(pack, mode="lockfree", threads=1) as loader:
+            with runtime.TileLoader(self.pack, mode="lockfree", threads=1) as loader:
+                state = self.open_state(loader)
                 start = time.perf_counter()
                 for frame in range(len(self.path)):
-                    rec, images = self._frame(frame, vt, lookup, proc, truth, direct, levels,
-                                              loader, oracle_vt, dpass, mpass, opass, ompass)
+                    rec, images = self.step(frame, state)
                     rec["time_s"] = time.perf_counter() - start
                     self.records.append(rec)
                     if on_frame is not None:
@@ -347,12 +351,20 @@ class GalleryWalk:
                 bar.close()
         return self.summary()
 
-    def _frame(self, frame, vt, lookup, proc, truth, direct, levels, loader, oracle_vt,
-               dpass, mpass, opass, ompass):
+    def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None):
+        """One frame: (record, (left, right, magnifier or None, lenses)). views: the frame's
+        (camera, feedback w, feedback h) list (default: the path's frame); moving: whether the
+        pose changes after this frame (default: from the path)."""
+        vt, lookup, proc, truth = state.vt, state.lookup, state.proc, state.truth
+        direct, levels, loader, oracle_vt = state.direct, state.levels, state.loader, state.oracle_vt
+        dpass, mpass, opass, ompass = state.passes
         src, thr = self.source, self.threads
         t = {}
         t0 = time.perf_counter()
-        views = self.cameras(frame)
+        if views is None:
+            views = self.cameras(frame)
+        if moving is None:
+            moving = frame + 1 < len(self.path) and _pose_changes(self.path, frame)
         buffers = [src.feedback(cam, fw, fh, thr) for cam, fw, fh in views]
         t["feedback"] = time.perf_counter() - t0
 
@@ -413,7 +425,7 @@ class GalleryWalk:
             "reused_share": rs["reused"] / max(1, rs["pixels"]),
             "total_ms": 1e3 * sum(t.values()), "requests": n_requests, "hit_rate": hit_rate,
             "issued": int(issue.size), "loaded": int(arrived.size),
-            "moving": frame + 1 < len(self.path) and _pose_changes(self.path, frame),
+            "moving": bool(moving),
             "magnifier": mag is not None,
         }
         if oracle_vt is not None:
@@ -463,6 +475,19 @@ class GalleryWalk:
             out["error_mean"] = statistics.mean(x["error"] for x in r)
             out["error_final"] = r[-1]["error"]
         return out
+
+
+@dataclass
+class _LoopState:
+    vt: object
+    lookup: object
+    proc: object
+    truth: object
+    direct: object
+    levels: np.ndarray
+    loader: object
+    oracle_vt: object
+    passes: list
 
 
 def stops_of(records: list) -> list[dict]:
