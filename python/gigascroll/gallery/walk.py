@@ -248,7 +248,7 @@ def compose_frame(left: np.ndarray, right: np.ndarray, magnifier: np.ndarray | N
                 _paste_disc(img, magnifier, lens[0], lens[1])
             if inset:
                 h, w = img.shape[:2]
-                s = max(8, min(h, w) // 3)
+                s = min(h, w, max(8, min(h, w) // 3))  # a third of the eye, at least 8 px
                 idx = (np.arange(s) * magnifier.shape[0] // s)
                 img[h - s:, w - s:] = magnifier[idx][:, idx]
                 img[h - s:h - s + 1, w - s:] = 0
