@@ -101,7 +101,9 @@ void bind_gallery(nb::module_& m) {
                 FreshArray<std::int32_t> slot({H, W});
                 FreshArray<double> uv({H, W, 2});
                 FreshArray<float> lod({H, W});
-                h = {position.data, slot.data, uv.data, lod.data};
+                FreshArray<float> irradiance({H, W, 3});
+                h = {position.data, slot.data, uv.data, lod.data, irradiance.data};
+                d["irradiance"] = irradiance.array;
                 d["position"] = position.array;
                 d["slot"] = slot.array;
                 d["uv"] = uv.array;

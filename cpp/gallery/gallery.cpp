@@ -351,29 +351,32 @@ void Gallery::bake(const BakeSettings& s) {
     }
     const std::uint64_t total = offset[tris];
     std::vector<Vec3f> front(total), back(total);
-    parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
+    // Work items are lattice rows (triangle t, row i): a room is a few large triangles, so
+    // splitting by triangle would leave one core with a whole wall.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;
+    for (std::size_t t = 0; t < tris; ++t)
+        for (std::uint32_t i = 0; i <= n[t]; ++i) rows.emplace_back(std::uint32_t(t), i);
+    parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
-        for (std::size_t t = tb; t < te; ++t) {
+        for (std::size_t r = rb; r < re; ++r) {
+            const auto [t, i] = rows[r];
             const std::uint32_t nt = n[t];
-            const Vec3f N = scene_.normal(std::uint32_t(t));
-            const bool reflects = max_component(scene_.albedo(std::uint32_t(t))) > 0;
-            for (std::uint32_t i = 0; i <= nt; ++i)
-                for (std::uint32_t j = 0; i + j <= nt; ++j) {
-                    const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
-                    if (!reflects) continue;  // black either way
-                    Hit h;
-                    h.tri = std::uint32_t(t);
-                    h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) +
-                          tri_e2_[t] * (float(j) / float(nt));
-                    for (int side = 0; side < 2; ++side) {
-                        h.front = side == 0;
-                        h.n = h.front ? N : -N;
-                        Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
-                        if (map_) E += map_->gather(h.p, h.n, gather_, heap);
-                        (h.front ? front : back)[k] = E;
-                    }
+            const Vec3f N = scene_.normal(t);
+            if (!(max_component(scene_.albedo(t)) > 0)) continue;  // black either way
+            for (std::uint32_t j = 0; i + j <= nt; ++j) {
+                const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
+                Hit h;
+                h.tri = t;
+                h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
+                for (int side = 0; side < 2; ++side) {
+                    h.front = side == 0;
+                    h.n = h.front ? N : -N;
+                    Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
+                    if (map_) E += map_->gather(h.p, h.n, gather_, heap);
+                    (h.front ? front : back)[k] = E;
                 }
+            }
         }
     }, s.threads ? s.threads : lighting_.threads);
     bake_n_ = std::move(n);
@@ -423,6 +426,8 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 if (hits.slot) hits.slot[px] = slot;
                 if (!found) {
                     out_row[3 * x] = out_row[3 * x + 1] = out_row[3 * x + 2] = 0;
+                    if (hits.irradiance)
+                        hits.irradiance[3 * px] = hits.irradiance[3 * px + 1] = hits.irradiance[3 * px + 2] = 0;
                     if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
                     if (hits.lod) hits.lod[px] = kNaN;
                     continue;
@@ -434,6 +439,9 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                     case Lighting::Full: E = irradiance_full(hit); break;
                 }
                 const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
+                if (hits.irradiance)
+                    hits.irradiance[3 * px] = E.x, hits.irradiance[3 * px + 1] = E.y,
+                    hits.irradiance[3 * px + 2] = E.z;
                 if (slot < 0) {
                     const Vec3f L = scene_.albedo(hit.tri) * E * kInvPi + Le;
                     out_row[3 * x] = L.x, out_row[3 * x + 1] = L.y, out_row[3 * x + 2] = L.z;

@@ -25,8 +25,9 @@
 // Per-pixel hits for reprojection (the stereo walk's right-eye reuse): render_display fills,
 // per pixel, the hit position (world, float, NaN where the ray escapes), the painting slot
 // (-1 off paintings), the painting uv in [0, 1] and the level of detail lambda (NaN off
-// paintings). A right-eye pixel that sees the same position can reuse the left eye's E (E is
-// view-independent; the albedo is re-sampled at the right eye's lambda).
+// paintings) and the irradiance E used there. A right-eye pixel that sees the same position can
+// reuse the left eye's E (E is view-independent; the albedo is re-sampled at the right eye's
+// lambda): radiance = albedo x E / pi + emission.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -68,7 +69,7 @@ struct LightingSettings {
 
 struct BakeSettings {
     double spacing = 0;      // lattice spacing in metres; 0 = scene diagonal / 200
-    int light_samples = 64;  // emitter samples per lattice point
+    int light_samples = 32;  // emitter samples per lattice point
     std::uint64_t max_points = 1ull << 25;  // a bound on memory (32 B per point)
     unsigned threads = 0;
 };
@@ -88,6 +89,7 @@ struct DisplayHits {
     std::int32_t* slot = nullptr;  // 1 per pixel
     double* uv = nullptr;          // 2 per pixel
     float* lod = nullptr;          // 1 per pixel
+    float* irradiance = nullptr;   // 3 per pixel: E (W / m^2; pi in "unlit"), 0 where nothing is hit
 };
 
 class Gallery {

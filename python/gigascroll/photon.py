@@ -267,8 +267,11 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
            passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
-           snapshots: Sequence[int] = (), disc: bool | None = None):
+           snapshots: Sequence[int] = (), disc: bool | None = None, lighting: str = "baked"):
     """Render linear radiance, float32 (H, W, 3).
+
+    `scene` may be a `gigascroll.Gallery`: its still (`Gallery.still`) with `lighting`
+    "baked", "full" or "unlit" (photons, radius, seed and threads go to its photon pass).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
     in the photon map (grid 'hash' or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
@@ -290,6 +293,12 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
     in stats['snapshots'] as (passes, seconds, image).
     """
+    from .gallery import Gallery
+
+    if isinstance(scene, Gallery):  # a gallery still (Gallery.still)
+        image = scene.still(camera, lighting=lighting, photons=photons, seed=seed, threads=threads,
+                            **({} if radius is None else {"radius": radius}))
+        return (image, dict(scene.stats)) if return_stats else image
     if disc is None:  # where the options allow it; otherwise their own error message comes first
         disc = bool(progressive) and kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,

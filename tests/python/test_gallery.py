@@ -120,6 +120,10 @@ def test_display_level_follows_the_feedback_lambda(lit):
     on = hits["slot"] == 0
     assert np.allclose(hits["lod"][on], fb["lod"][on], atol=1e-3)
     assert np.allclose(hits["uv"][on], fb["uv"][on], atol=1e-6)
+    # radiance = albedo x E / pi (+ emission, none on the painting): E reproduces the pixel.
+    rgb, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
+    albedo = painting_albedo(np.array(RED, np.uint8))
+    assert np.allclose(rgb[on], albedo * hits["irradiance"][on] / math.pi, rtol=2e-2)
 
 
 def direct_irradiance_brute(p, n, light_c=(0, 2.999, 0), half=0.5, radiance=5.0, m=200):
@@ -177,3 +181,72 @@ def test_bad_render_arguments(lit):
         gal.light(vt, radius=-1.0)
     with pytest.raises(ValueError, match="spacing too fine"):
         gal.bake(spacing=1e-5)
+
+
+def test_render_cli_renders_a_room_still(tmp_path, red_pack, gigascroll_cli):
+    import OpenImageIO as oiio
+
+    out = tmp_path / "still.exr"
+    r = gigascroll_cli("render", "--room", "scroll", "--pack", red_pack.path, "--width", 48, "--height", 32,
+                       "--photons", 20000, "--lighting", "full", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert "lighting full" in r.stdout and out.exists()
+    img = oiio.ImageBuf(str(out))
+    pixels = np.asarray(img.get_pixels(oiio.FLOAT))
+    assert pixels.shape == (32, 48, 3) and np.isfinite(pixels).all() and pixels.max() > 0
+
+
+def test_python_render_accepts_a_gallery(red_pack):
+    gal = Gallery.from_room(box_room(), red_pack)
+    cam = gal.camera((24, 16))
+    image, stats = g.render(gal, cam, photons=20000, lighting="baked", return_stats=True)
+    assert image.shape == (16, 24, 3) and np.isfinite(image).all()
+    assert stats["bake_points"] > 0 and gal.baked
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--room", "scroll"], "needs --pack"),
+    (["--room", "nowhere.glb", "--pack", "PACK"], "no such room file"),
+    (["--room", "scroll", "--pack", "PACK", "--camera", "1,2,3"], "6 or 7"),
+    (["--room", "scroll", "--pack", "PACK", "--camera", "0,0,0,0,0,0"], "must differ"),
+    (["--room", "scroll", "--pack", "missing.pack"], "cannot open pack"),
+    (["cornell", "--room", "scroll", "--pack", "PACK"], "not both"),
+])
+def test_render_cli_bad_room_input(tmp_path, red_pack, gigascroll_cli, args, message):
+    args = [str(red_pack.path) if a == "PACK" else a for a in args]
+    r = gigascroll_cli("render", *args, "-o", tmp_path / "x.png", cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr, r.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_stream_makes_the_views_tiles_resident(tmp_path):
+    """Close to a fine painting the view asks for level-0 tiles that are not pinned; stream()
+    inserts exactly the missing ones, after which the feedback's requests all hit."""
+    from gallery_checks import gradient_pack
+
+    pack = gradient_pack(tmp_path / "g.pack", size=(1024, 512))
+    gal = Gallery.from_room(box_room(painting="gradient"), pack)
+    vt = g.VirtualTexture(pack, (24, 24))
+    cam = g.Camera([0, 1.5, -1.5], [0, 1.5, -2], [0, 1, 0], 50, resolution=(96, 64))
+    keys = gal.render_view(cam, width=96, height=64)["keys"]
+    wanted = np.unique(keys[keys != g.NO_REQUEST])
+    before = vt.stats()["resident"]
+    missing = len(vt.request(wanted))
+    assert missing > 0
+    assert gal.stream(cam, vt) == missing
+    assert vt.stats()["resident"] == before + missing
+    assert len(vt.request(wanted)) == 0
+
+
+def test_render_cli_renders_the_example_room_file(tmp_path, gigascroll_cli):
+    from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
+
+    images = [np.full((h // 10, w // 10, 3), c, np.uint8)
+              for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]
+    pack = g.build_pack(images, tmp_path / "ex.pack", tile_size=32, border=2, names=list(EXAMPLE_PAINTINGS))
+    room = write_example_room(tmp_path / "room.glb", pack)
+    out = tmp_path / "still.png"
+    r = gigascroll_cli("render", "--room", room, "--pack", tmp_path / "ex.pack", "--width", 40, "--height", 30,
+                       "--photons", 20000, "--lighting", "unlit", "-o", out)
+    assert r.returncode == 0, r.stderr
+    assert "2 paintings" in r.stdout and out.exists()

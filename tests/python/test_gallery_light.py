@@ -117,3 +117,57 @@ def test_painting_at_grazing_angles_stays_finite_and_coloured(pack):
                 assert on.sum() > 0
                 assert np.isfinite(hits["lod"][on]).all() and hits["lod"][on].max() > 2
                 assert np.allclose(rgb[on], expected, rtol=0.02)
+
+
+def _rotation(yaw_deg, pitch_deg):
+    a, b = math.radians(yaw_deg), math.radians(pitch_deg)
+    ry = np.array([[math.cos(a), 0, math.sin(a)], [0, 1, 0], [-math.sin(a), 0, math.cos(a)]])
+    rx = np.array([[1, 0, 0], [0, math.cos(b), -math.sin(b)], [0, math.sin(b), math.cos(b)]])
+    return ry @ rx
+
+
+def test_grazing_light_on_an_oblique_painting_matches_quadrature(pack):
+    """A painting on an oblique plane lit by a panel almost in its plane (incidence ~84-88
+    degrees): full and baked lighting against a midpoint quadrature of the panel's irradiance.
+    Black walls, so only the direct light counts."""
+    R = _rotation(37, 12)
+    u, v = R @ np.array([1.0, 0, 0]), R @ np.array([0, -1.0, 0])
+    n = np.cross(v, u)  # the painting's viewed side (u x v points away from the viewer)
+    origin = np.array([0.0, 1.5, 0.0]) - 0.5 * u - 0.25 * v
+    # The panel: 0.4 m square, 2 m along the plane and 0.1 m off it, facing back at the painting.
+    centre = np.array([0.0, 1.5, 0.0]) + 2.0 * u + 0.1 * n
+    pa, pb = 0.2 * v, 0.2 * n  # half-edges; panel normal = -u side
+    if np.dot(np.cross(pa, pb), -u) < 0:
+        pa = -pa
+    verts = np.array([centre - pa - pb, centre + pa - pb, centre + pa + pb, centre - pa + pb])
+    surfaces = [Surface("light", verts, np.array([[0, 1, 2], [0, 2, 3]]), (0.0, 0.0, 0.0), (2000.0, 2000.0, 2000.0))]
+    for name, (c, a, b) in {"floor": ((0, 0, 0), (0, 0, 4), (4, 0, 0)), "ceiling": ((0, 4, 0), (4, 0, 0), (0, 0, 4))}.items():
+        qv, qt = quad(c, a, b)
+        surfaces.append(Surface(name, qv, qt, (0.0, 0.0, 0.0)))
+    slot = PaintingSlot("grey", origin=tuple(origin), u_axis=tuple(u), v_axis=tuple(v), width_m=1.0, height_m=0.5)
+    gal = Gallery.from_room(RoomSpec("grazing", surfaces, [slot]), pack)
+    vt = g.VirtualTexture(pack)
+    gal.light(vt, photons=20_000, light_samples=4096)
+    gal.bake(spacing=0.1, light_samples=4096)
+    eye = np.array([0.0, 1.5, 0.0]) + 1.5 * n
+    cam = g.Camera(list(eye), [0, 1.5, 0], [0, 1, 0], 30, resolution=(16, 16))
+    rho = albedo_of(pack, "grey")
+    m = 120
+    s = (np.arange(m) + 0.5) / m * 2 - 1
+    A, B = np.meshgrid(s, s)
+    pts = centre + A[..., None] * pa + B[..., None] * pb
+    ln = np.cross(pa, pb) / np.linalg.norm(np.cross(pa, pb))
+    dA = 4 * np.linalg.norm(pa) * np.linalg.norm(pb) / m ** 2
+    for lighting in ("full", "baked"):
+        rgb, hits = gal.render_display(cam, vt, lighting=lighting, hits=True)
+        on = np.argwhere(hits["slot"] == 0)
+        assert len(on) > 40
+        for y, x in on[:: len(on) // 12]:
+            p = hits["position"][y, x].astype(float)
+            L = pts - p
+            d2 = (L ** 2).sum(-1)
+            cos_x = np.clip(L @ n, 0, None) / np.sqrt(d2)
+            cos_l = np.clip(-(L @ ln), 0, None) / np.sqrt(d2)
+            E = 2000.0 * (cos_x * cos_l / d2).sum() * dA
+            assert rho * E / math.pi > 0.02  # a lit point, not a trivially dark one
+            assert rgb[y, x, 0] == pytest.approx(rho * E / math.pi, rel=0.04), (lighting, y, x)

@@ -1,5 +1,6 @@
 """`gigascroll render SCENE -o out.exr`: render a built-in scene with the photon mapper and
-print the time of each pass."""
+print the time of each pass. `gigascroll render --room scroll|hall|FILE --pack PACK -o still.exr`
+renders a still of a gallery room with the pack's paintings (lighting baked or full)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,15 @@ def register(sub) -> None:
 
     p = sub.add_parser("render", help="render a built-in scene with the photon mapper",
                        description="Render a built-in scene (photon mapping on Embree) to EXR or PNG.")
-    p.add_argument("scene", choices=sorted(BUILTIN_SCENES), help="built-in scene")
+    p.add_argument("scene", nargs="?", choices=sorted(BUILTIN_SCENES),
+                   help="built-in scene (or --room for a gallery room)")
+    p.add_argument("--room", help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply)")
+    p.add_argument("--pack", help="tile pack whose paintings hang in --room")
+    p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
+                   help="--room: eye and target in metres and the vertical field of view in degrees "
+                        "(default: the room's suggested view, 60 degrees)")
+    p.add_argument("--lighting", choices=["baked", "full", "unlit"], default="baked",
+                   help="--room: irradiance baked once per lighting (default), per pixel (full), or none")
     p.add_argument("-o", "--output", required=True, help="output image (.exr, .hdr: linear; .png, .jpg: sRGB)")
     p.add_argument("--width", type=int, default=256)
     p.add_argument("--height", type=int, default=256)
@@ -48,6 +57,74 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _camera_numbers(text: str) -> list[float]:
+    import math
+
+    try:
+        values = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise UserError(f"--camera wants EX,EY,EZ,TX,TY,TZ[,FOV] numbers, got {text!r}") from None
+    if len(values) not in (6, 7) or not all(math.isfinite(v) for v in values):
+        raise UserError(f"--camera wants 6 or 7 finite numbers, got {text!r}")
+    if len(values) == 7 and not 0 < values[6] < 180:
+        raise UserError(f"--camera: the field of view must be in (0, 180) degrees, got {values[6]:g}")
+    if values[:3] == values[3:6]:
+        raise UserError("--camera: eye and target must differ")
+    return values
+
+
+def run_room(args, out: Path) -> int:
+    import time
+
+    from .. import TilePack
+    from ..gallery import Gallery, builtin_room
+    from ..gallery.rooms import ROOM_NAMES
+    from ..photon import save_image
+
+    if args.scene:
+        raise UserError("give either a built-in SCENE or --room, not both")
+    if not args.pack:
+        raise UserError("--room needs --pack PACK")
+    try:
+        pack = TilePack(args.pack)
+    except Exception as e:  # a missing or corrupt pack
+        raise UserError(f"cannot open pack {args.pack}: {e}") from None
+    try:
+        if args.room in ROOM_NAMES:
+            spec = builtin_room(args.room, pack)
+        else:
+            from ..gallery.room_files import load_room
+
+            spec = load_room(args.room, pack)
+        gallery = Gallery.from_room(spec, pack)
+    except (OSError, ValueError) as e:
+        raise UserError(f"room {args.room}: {e}") from None
+    cam = _camera_numbers(args.camera) if args.camera else None
+    camera = gallery.camera((args.width, args.height), fov=cam[6] if cam and len(cam) == 7 else 60.0,
+                            eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
+    t0 = time.perf_counter()
+    try:
+        image = gallery.still(camera, lighting=args.lighting, photons=args.photons, seed=args.seed,
+                              threads=args.threads, **({} if args.radius is None else {"radius": args.radius}))
+    except ValueError as e:
+        raise UserError(str(e)) from None
+    total = time.perf_counter() - t0
+    save_image(out, image)
+    st = gallery.stats
+    ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
+    print(f"room {spec.name}: {gallery.triangle_count} triangles, {gallery.painting_count} paintings, "
+          f"{args.width}x{args.height}, lighting {args.lighting}")
+    if gallery.lit:
+        print(f"photons   {ms(st['photon_seconds'])}  ({args.photons} emitted, {st['photons_stored']} stored, "
+              f"radius {st['radius']:.4g} m)")
+        print(f"grid      {ms(st['build_seconds'])}  (build)")
+    if gallery.baked:
+        print(f"bake      {ms(st['bake_seconds'])}  ({st['bake_points']} points, spacing {st['spacing']:.3g} m)")
+    print(f"total     {ms(total)}")
+    print(f"wrote {out}")
+    return 0
+
+
 def run(args) -> int:
     from ..photon import BUILTIN_SCENES, builtin_scene, render, save_image
 
@@ -56,8 +133,14 @@ def run(args) -> int:
         raise UserError(f"unsupported output format {out.suffix!r}; use one of {', '.join(FORMATS)}")
     if not out.parent.is_dir():
         raise UserError(f"output directory does not exist: {out.parent}")
-    if args.width <= 0 or args.height <= 0:
-        raise UserError("--width and --height must be positive")
+    if args.width <= 0 or args.height <= 0 or args.width > 16384 or args.height > 16384:
+        raise UserError("--width and --height must be in [1, 16384]")
+    if args.photons <= 0:
+        raise UserError("--photons must be positive")
+    if args.room:
+        return run_room(args, out)
+    if args.scene is None:
+        raise UserError("give a built-in SCENE or --room ROOM --pack PACK")
     radius = args.radius if args.radius is not None else 0.02 * BUILTIN_SCENES[args.scene]
     spp = args.spp if args.spp is not None else (1 if args.progressive else 4)
     scene, camera = builtin_scene(args.scene, resolution=(args.width, args.height))

@@ -161,7 +161,7 @@ class Gallery(_core._Gallery):
         self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads))
         return self.stats
 
-    def bake(self, spacing: float | None = None, light_samples: int = 64, threads: int = 0) -> dict:
+    def bake(self, spacing: float | None = None, light_samples: int = 32, threads: int = 0) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
         point with `light_samples` emitter samples plus the photon gather. Returns `stats`."""
@@ -181,8 +181,10 @@ class Gallery(_core._Gallery):
         (H, W, 3) float32 linear radiance (written into `out` when given). A painting's albedo
         is the VT's trilinear sample at the pixel's lambda; lighting "baked" and "full" light()
         (and bake()) with their defaults first if that has not been done. hits=True returns
-        (rgb, dict) with per-pixel 'position' (H, W, 3) float32, 'slot' (H, W) int32 (-1 off
-        paintings), 'uv' (H, W, 2) float64 and 'lod' (H, W) float32 (NaN off paintings)."""
+        (rgb, dict) with per-pixel 'position' (H, W, 3) float32 (NaN where nothing is hit),
+        'slot' (H, W) int32 (-1 off paintings), 'uv' (H, W, 2) float64 and 'lod' (H, W) float32
+        (NaN off paintings), and 'irradiance' (H, W, 3) float32, the E of radiance = albedo x
+        E / pi + emission (view-independent: another eye seeing the same point can reuse it)."""
         if lighting not in LIGHTING_MODES:
             raise ValueError(f"lighting must be one of {LIGHTING_MODES}, got {lighting!r}")
         if not isinstance(camera, Camera):
@@ -200,16 +202,63 @@ class Gallery(_core._Gallery):
         d = self._render_display(camera, vt, lighting, out, bool(hits), int(threads))
         return (out, dict(d)) if hits else out
 
+    def stream(self, camera: Camera, vt, rounds: int = 3) -> int:
+        """Makes the tiles this view asks for resident: the feedback pass at the camera's full
+        resolution, then each missing tile read from the pack and inserted (synchronously, for
+        stills; the frame loop streams asynchronously). Repeats while new tiles are missing
+        (at most `rounds` times). Returns the number of tiles inserted."""
+        from .._core import NO_REQUEST, unpack_requests
+
+        inserted = 0
+        for _ in range(int(rounds)):
+            keys = self.render_view(camera, width=camera.width, height=camera.height)["keys"]
+            keys = np.unique(keys[keys != NO_REQUEST])
+            missing = vt.request(keys) if len(keys) else keys
+            if len(missing) == 0:
+                break
+            for p, l, x, y in zip(*unpack_requests(missing)):
+                vt.insert((int(p), int(l), int(x), int(y)), self.pack.read_tile(int(p), int(l), int(x), int(y)))
+                inserted += 1
+        return inserted
+
+    def still(self, camera: Camera, lighting: str = "baked", vt=None, slots: int | None = None,
+              **light_options) -> np.ndarray:
+        """A still frame: a virtual texture sized for the view (`slots` x `slots` tiles, default
+        from the view's requests), the view's tiles streamed in (`stream`), lighting as needed,
+        then `render_display`. light_options go to `light` when it has not run."""
+        from .. import runtime
+
+        if vt is None:
+            from .._core import NO_REQUEST
+
+            keys = self.render_view(camera, width=camera.width, height=camera.height)["keys"]
+            wanted = len(np.unique(keys[keys != NO_REQUEST]))
+            side = slots or min(64, max(8, math.ceil(math.sqrt(2 * wanted + 64 * max(1, len(self.slot_paintings))))))
+            vt = runtime.VirtualTexture(self.pack, (side, side))
+        self.stream(camera, vt)
+        if lighting != "unlit" and not self.lit:
+            self.light(vt, **light_options)
+        return self.render_display(camera, vt, lighting=lighting)
+
     def camera(self, resolution=(256, 256), fov: float = 60.0, eye=None, target=None) -> Camera:
         """A camera at the room's suggested eye and target (or the given ones), y up."""
         spec = self.spec
         eye = eye if eye is not None else (spec.camera_eye if spec and spec.camera_eye else None)
         target = target if target is not None else (spec.camera_target if spec and spec.camera_target else None)
         if eye is None or target is None:
+            # No suggestion: from the middle of the room at eye height (1.6 m, or 55% of a
+            # lower room) toward the first painting, else along -z.
             lo, hi = (np.array(b, np.float64) for b in self.bounds)
             c = (lo + hi) / 2
-            eye = eye if eye is not None else (c[0], lo[1] + 0.6 * (hi[1] - lo[1]), c[2] + 0.45 * (hi[2] - lo[2]))
-            target = target if target is not None else tuple(c)
+            c[1] = lo[1] + min(1.6, 0.55 * (hi[1] - lo[1]))
+            eye = eye if eye is not None else tuple(c)
+            if target is None:
+                if spec and spec.paintings:
+                    s0 = spec.paintings[0]
+                    target = tuple(np.array(s0.origin, float) + 0.5 * s0.width_m * np.array(s0.u_axis, float)
+                                   + 0.5 * s0.height_m * np.array(s0.v_axis, float))
+                else:
+                    target = tuple(np.array(eye, float) + np.array([0.0, 0.0, -1.0]))
         return Camera(list(_vec3(eye, "eye")), list(_vec3(target, "target")), [0, 1, 0], float(fov),
                       resolution=(int(resolution[0]), int(resolution[1])))
 

@@ -1,0 +1,108 @@
+// The gallery's one scene: geometry ids map to painting slots for the feedback pass, photons
+// read a painting's colour at the pinned level, and the baked lattice reproduces the full
+// irradiance at its points.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "cache/virtual_texture.h"
+#include "common/error.h"
+#include "gallery/gallery.h"
+#include "pack/geometry.h"
+
+using namespace gigascroll;
+
+namespace {
+
+// A 2 m floor quad at y = 0 facing up, a 0.5 m light at y = 2 facing down, and one painting
+// (uniform sRGB colour (200, 40, 20)) standing at z = -0.5.
+struct Room {
+    PackGeometry layout = PackGeometry::make(16, 2, {{64, 32}});
+    VirtualTexture vt{layout, 8, 8, [](const TileKey&, std::uint8_t* out) {
+                          for (std::size_t i = 0; i < 16 * 16; ++i)
+                              out[3 * i] = 200, out[3 * i + 1] = 40, out[3 * i + 2] = 20;
+                      }};
+    Gallery gallery;
+    Room() {
+        const float floor[12] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
+        const float light[12] = {-0.25f, 2, -0.25f, 0.25f, 2, -0.25f, 0.25f, 2, 0.25f, -0.25f, 2, 0.25f};
+        const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
+        gallery.add_surface(floor, 4, quad, 2, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
+        gallery.add_surface(light, 4, quad, 2, {0, 0, 0}, {10, 10, 10});
+        gallery.add_painting(0, layout.paintings[0], {-0.5, 1.0, -0.5}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.5);
+        gallery.commit();
+    }
+};
+
+}  // namespace
+
+TEST(Gallery, FeedbackViewMapsGeometriesToSlots) {
+    Room room;
+    const PaintingSceneView view = room.gallery.feedback_view();
+    EXPECT_EQ(view.handle, room.gallery.scene().handle());
+    ASSERT_EQ(view.paintings.size(), 1u);
+    EXPECT_EQ(view.placement_of(0), -1);  // floor
+    EXPECT_EQ(view.placement_of(1), -1);  // light
+    EXPECT_EQ(view.placement_of(2), 0);   // the painting
+    EXPECT_EQ(view.placement_of(99), -1);
+    EXPECT_EQ(room.gallery.slot_of(4), 0);
+    EXPECT_EQ(room.gallery.slot_of(5), 0);
+    EXPECT_EQ(room.gallery.slot_of(0), -1);
+}
+
+TEST(Gallery, PhotonsReadThePaintingsColourAtThePinnedLevel) {
+    Room room;
+    room.gallery.light(room.vt, {});
+    const Scene& scene = room.gallery.scene();
+    const float expected[3] = {kPaintingReflectance * srgb_to_linear(200 / 255.0f),
+                               kPaintingReflectance * srgb_to_linear(40 / 255.0f),
+                               kPaintingReflectance * srgb_to_linear(20 / 255.0f)};
+    const Vec3f a = scene.albedo_at(4, Vec3f(-0.2f, 0.8f, -0.5f));
+    EXPECT_NEAR(a.x, expected[0], 1e-4);
+    EXPECT_NEAR(a.y, expected[1], 1e-4);
+    EXPECT_NEAR(a.z, expected[2], 1e-4);
+    // Room surfaces keep their own albedo.
+    EXPECT_EQ(scene.albedo_at(0, Vec3f(0, 0, 0)).x, 0.5f);
+    const std::uint32_t level = room.gallery.stats().albedo_levels.at(0);
+    EXPECT_TRUE(room.vt.is_pinned({0, level, 0, 0}));
+    EXPECT_TRUE(level == 0 || !room.vt.is_pinned({0, level - 1, 0, 0}));
+}
+
+TEST(Gallery, BakedIrradianceEqualsFullAtLatticeCorners) {
+    Room room;
+    LightingSettings ls;
+    ls.photons = 20000;
+    room.gallery.light(room.vt, ls);
+    BakeSettings bs;
+    bs.spacing = 0.3;
+    bs.light_samples = ls.light_samples;  // the same estimator as lighting "full"
+    room.gallery.bake(bs);
+    for (Vec3f corner : {Vec3f(-1, 0, -1), Vec3f(-1, 0, 1), Vec3f(1, 0, 1)}) {
+        Hit h;
+        h.tri = 0, h.p = corner, h.n = Vec3f(0, 1, 0), h.front = true;
+        const Vec3f full = room.gallery.irradiance_full(h), baked = room.gallery.irradiance_baked(h);
+        EXPECT_GT(full.x, 0);
+        EXPECT_NEAR(baked.x, full.x, 1e-4f * full.x);
+        EXPECT_NEAR(baked.z, full.z, 1e-4f * full.z);
+    }
+    // The floor's back side sees no light.
+    Hit back;
+    back.tri = 0, back.p = Vec3f(0.1f, 0, 0.2f), back.n = Vec3f(0, -1, 0), back.front = false;
+    EXPECT_EQ(room.gallery.irradiance_baked(back).x, 0.0f);
+}
+
+TEST(Gallery, RefusesBadInput) {
+    Room room;
+    EXPECT_THROW(room.gallery.commit(), InvalidArgument);
+    Gallery dark;
+    const float floor[12] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
+    const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
+    EXPECT_THROW(dark.add_surface(floor, 4, quad, 2, {1.0f, 0.5f, 0.5f}, {0, 0, 0}), InvalidArgument);
+    dark.add_surface(floor, 4, quad, 2, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
+    dark.commit();
+    EXPECT_THROW(dark.light(room.vt, {}), InvalidArgument);  // no light
+    EXPECT_THROW(dark.bake({}), InvalidArgument);             // not lit
+    EXPECT_THROW(parse_lighting("sunny"), InvalidArgument);
+}

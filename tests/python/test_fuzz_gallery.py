@@ -1,0 +1,120 @@
+"""Fuzz cases for Gallery.from_room and render_display: hostile rooms give ValueError, any
+camera gives finite non-negative radiance, and concurrent relighting cannot tear a frame."""
+
+import math
+import threading
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import gigascroll as g
+from gigascroll.gallery import Gallery, PaintingSlot, RoomSpec, Surface
+
+from gallery_checks import box_room, uniform_pack
+
+FUZZ = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=64),
+                   st.floats(-10, 10), st.sampled_from([0.0, -0.0, 1.0, 0.999999, 1e-30, 1e30]))
+
+
+@pytest.fixture(scope="module")
+def pack(tmp_path_factory):
+    return uniform_pack(tmp_path_factory.mktemp("fuzzgal") / "p.pack", {"red": (230, 30, 20)}, size=(64, 32),
+                        tile_size=16)
+
+
+@pytest.fixture(scope="module")
+def lit(pack):
+    gal = Gallery.from_room(box_room(), pack)
+    vt = g.VirtualTexture(pack)
+    gal.light(vt, photons=5000)
+    gal.bake(spacing=0.5, light_samples=2)
+    return gal, vt
+
+
+@FUZZ
+@given(vertices=st.lists(st.tuples(floats, floats, floats), min_size=1, max_size=6),
+       triangles=st.lists(st.tuples(*[st.integers(-2, 8)] * 3), min_size=1, max_size=4),
+       albedo=st.tuples(floats, floats, floats), emission=st.tuples(floats, floats, floats),
+       painting=st.one_of(st.integers(-3, 3), st.text(max_size=5), st.none(), st.floats(), st.booleans()),
+       axis=st.tuples(floats, floats, floats), size=floats)
+def test_from_room_refuses_or_builds(pack, vertices, triangles, albedo, emission, painting, axis, size):
+    spec = box_room()
+    spec.surfaces.append(Surface("fuzz", np.array(vertices, float), np.array(triangles), albedo, emission))
+    spec.paintings.append(PaintingSlot(painting, origin=(0, 1, 0), u_axis=axis, v_axis=(0, 1, 0),
+                                       width_m=size, height_m=1.0))
+    try:
+        gal = Gallery.from_room(spec, pack)
+    except ValueError:
+        return
+    assert gal.committed and gal.painting_count == 2
+
+
+@FUZZ
+@given(eye=st.tuples(*[st.floats(-5, 5)] * 3), target=st.tuples(*[st.floats(-5, 5)] * 3),
+       fov=st.floats(1, 170), w=st.integers(1, 12), h=st.integers(1, 12),
+       lighting=st.sampled_from(["unlit", "baked", "full"]))
+def test_any_camera_gives_finite_radiance(lit, eye, target, fov, w, h, lighting):
+    gal, vt = lit
+    if np.linalg.norm(np.subtract(eye, target)) < 1e-3:
+        return
+    try:
+        cam = g.Camera(list(eye), list(target), [0, 1, 0], fov, resolution=(w, h))
+    except ValueError:
+        return  # looking straight up or down: the camera refuses the degenerate frame
+    rgb, hits = gal.render_display(cam, vt, lighting=lighting, hits=True)
+    assert rgb.shape == (h, w, 3) and np.isfinite(rgb).all() and (rgb >= 0).all()
+    on = hits["slot"] >= 0
+    assert ((hits["uv"][on] >= 0) & (hits["uv"][on] <= 1)).all()
+    fb = gal.render_view(cam, width=w, height=h)
+    assert fb["keys"].shape == (h, w)
+
+
+def test_hostile_render_arguments(lit, pack):
+    gal, vt = lit
+    cam = gal.camera((4, 4))
+    for bad in (None, "camera", 3):
+        with pytest.raises((ValueError, TypeError)):
+            gal.render_display(bad, vt)
+    with pytest.raises((ValueError, TypeError)):
+        gal.render_display(cam, None)
+    from pathlib import Path
+    other = uniform_pack(Path(pack.path).parent / "other.pack", {"a": (1, 2, 3)}, size=(40, 40), tile_size=16)
+    with pytest.raises(ValueError, match="not the one|not in"):
+        gal.render_display(cam, g.VirtualTexture(other), lighting="unlit")
+    for out in (np.zeros((4, 4, 3), np.float32)[:, ::-1], np.zeros((4, 4, 3), np.float32).T,
+                np.zeros((4, 4), np.float32)):
+        with pytest.raises(ValueError):
+            gal.render_display(cam, vt, out=out)
+    for kw in ({"photons": -1}, {"photons": 1.5}, {"light_samples": 0}, {"radius": math.inf}):
+        with pytest.raises(ValueError):
+            gal.light(vt, **kw)
+
+
+def test_relighting_while_rendering_from_another_thread(pack):
+    """light() and bake() exclude render_display: frames rendered meanwhile are whole frames of
+    one lighting or the other, never a crash or NaN."""
+    gal = Gallery.from_room(box_room(), pack)
+    vt = g.VirtualTexture(pack)
+    gal.light(vt, photons=5000)
+    gal.bake(spacing=0.5, light_samples=2)
+    cam = gal.camera((16, 12))
+    errors, frames = [], []
+
+    def render():
+        try:
+            for _ in range(20):
+                frames.append(gal.render_display(cam, vt, lighting="baked"))
+        except ValueError as e:  # between light() and bake() there is no bake: a clear error
+            errors.append(e)
+
+    t = threading.Thread(target=render)
+    t.start()
+    for seed in range(3):
+        gal.light(vt, photons=5000, seed=seed)
+        gal.bake(spacing=0.5, light_samples=2)
+    t.join()
+    assert all("bake" in str(e) for e in errors)
+    assert all(np.isfinite(f).all() for f in frames)
