@@ -95,6 +95,7 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h) {
     const std::size_t n = std::size_t(w) * h;
     geom.resize(n), prim.resize(n), p.resize(n);
     this->n.resize(n), uv.resize(2 * n), lod.resize(n), placement.resize(n), albedo.resize(3 * n);
+    light.resize(n), copied.resize(n);
 }
 
 void DisplayPass::trace(const PaintingSceneView& scene, const Camera& eye, GBuffer& g,
@@ -130,8 +131,8 @@ void DisplayPass::trace(const PaintingSceneView& scene, const Camera& eye, GBuff
 }
 
 void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& vt,
-                         const Camera& eye, GBuffer& g, const std::int32_t* reused,
-                         const DisplayOptions& o, EyeStats& st) {
+                         const Camera& eye, GBuffer& g, const GBuffer* source,
+                         const std::int32_t* reused, const DisplayOptions& o, EyeStats& st) {
     const auto t0 = Clock::now();
     const std::uint32_t w = g.width;
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -146,6 +147,7 @@ void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& v
                 const std::size_t i = row * w + x;
                 g.placement[i] = -1;
                 g.lod[i] = kNaN;
+                g.copied[i] = 0;
                 if (g.geom[i] == kNoHit) continue;
                 ++hit_count;
                 const int pl = scene.placement_of(g.geom[i]);
@@ -174,12 +176,24 @@ void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& v
                 g.lod[i] = float(std::log2(rho)) + o.lod_bias;
                 if (!std::isfinite(g.lod[i])) g.lod[i] = 0.0f;
                 ++count;
+                // A reused point whose level here is the left eye's to within the tolerance
+                // keeps the left eye's sample (the trilinear blend would move by less than
+                // that fraction of the two levels' difference).
+                if (source && reused && reused[i] >= 0) {
+                    const std::size_t s = std::size_t(reused[i]);
+                    if (source->placement[s] == pl &&
+                        std::abs(source->lod[s] - g.lod[i]) <= o.reuse_lod_tolerance) {
+                        std::copy_n(&source->albedo[3 * s], 3, &g.albedo[3 * i]);
+                        g.copied[i] = 1;
+                    }
+                }
             }
-            // Runs of one painting sampled in one call.
+            // Runs of one painting sampled in one call (copied samples end a run).
             for (std::uint32_t j0 = 0; j0 < w;) {
-                const int pl = g.placement[row * w + j0];
+                const std::size_t i0 = row * w + j0;
+                const int pl = g.copied[i0] ? -1 : g.placement[i0];
                 std::uint32_t j1 = j0 + 1;
-                while (j1 < w && g.placement[row * w + j1] == pl) ++j1;
+                while (j1 < w && !g.copied[row * w + j1] && g.placement[row * w + j1] == pl) ++j1;
                 if (pl >= 0) {
                     const std::size_t i = row * w + j0;
                     SampleRequest r;
@@ -204,8 +218,9 @@ void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& v
     st.vt_seconds = seconds_since(t0);
 }
 
-void DisplayPass::shade(const DisplayLighting& lighting, const GBuffer& g,
-                        const DisplayOptions& o, float* rgb, EyeStats& st) {
+void DisplayPass::shade(const DisplayLighting& lighting, GBuffer& g, const GBuffer* source,
+                        const std::int32_t* reused, const DisplayOptions& o, float* rgb,
+                        EyeStats& st) {
     const auto t0 = Clock::now();
     const std::size_t n = std::size_t(g.width) * g.height;
     constexpr float kInvPi = float(1.0 / 3.14159265358979323846);  // as the Gallery's
@@ -217,7 +232,14 @@ void DisplayPass::shade(const DisplayLighting& lighting, const GBuffer& g,
                 out[0] = out[1] = out[2] = 0.0f;
                 continue;
             }
-            lighting.light(g.geom[i], g.prim[i], g.p[i], g.n[i], sl);
+            // A reused point's light is the left eye's: irradiance, albedo and emission do
+            // not depend on the eye (Lambertian surfaces, same side).
+            if (source && reused && reused[i] >= 0) {
+                sl = source->light[std::size_t(reused[i])];
+            } else {
+                lighting.light(g.geom[i], g.prim[i], g.p[i], g.n[i], sl);
+            }
+            g.light[i] = sl;
             // The Gallery's order of operations, so both passes agree to the bit.
             Vec3f L;
             if (g.placement[i] >= 0) {
@@ -315,8 +337,8 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
     trace(scene, eye, g, nullptr, o.threads, st);
-    sample(scene, vt, eye, g, nullptr, o, st);
-    shade(lighting, g, o, rgb, st);
+    sample(scene, vt, eye, g, nullptr, nullptr, o, st);
+    shade(lighting, g, nullptr, nullptr, o, rgb, st);
     sources_.clear();
 }
 
@@ -344,8 +366,9 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         sources_.clear();
         trace(scene, right, g, nullptr, o.threads, st);
     }
-    sample(scene, vt, right, g, use_reuse ? sources_.data() : nullptr, o, st);
-    shade(lighting, g, o, right_rgb, st);
+    const std::int32_t* reused = use_reuse ? sources_.data() : nullptr;
+    sample(scene, vt, right, g, &g_[0], reused, o, st);
+    shade(lighting, g, &g_[0], reused, o, right_rgb, st);
 }
 
 std::vector<float> DisplayPass::hit_points(int eye) const {

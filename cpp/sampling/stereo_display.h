@@ -8,9 +8,10 @@
 // an atomic compare-and-swap on (depth, left pixel); the nearest claim wins. Claimed pixels
 // on a depth edge of the claimed buffer are released again (a far sample must not show through
 // a near surface that no left sample happened to land on), and the right eye traces only the
-// pixels left unclaimed. A claimed pixel keeps the left hit's point and is then shaded like a
-// traced one, with the right eye's level of detail: Lambertian radiance is view-independent,
-// so the reused pixel is what the right eye computes for that point.
+// pixels left unclaimed. A claimed pixel keeps the left hit's point and its light (irradiance,
+// albedo, emission: view-independent on Lambertian surfaces) and takes its texture sample at
+// the right eye's level of detail (the left eye's sample when the levels agree to within
+// reuse_lod_tolerance), so the reused pixel is what the right eye computes for that point.
 //
 // The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
 // is not reentrant.
@@ -66,6 +67,9 @@ struct DisplayOptions {
     // A claimed right pixel whose depth exceeds an 8-neighbour's claimed depth by more than
     // this fraction is traced instead (see the header comment).
     float edge_depth_ratio = 0.05f;
+    // A reused right pixel keeps the left eye's texture sample when its level of detail
+    // differs from the left eye's by at most this (0: always re-sample at the right eye's).
+    float reuse_lod_tolerance = 1.0f / 1024.0f;
     // Added to every pixel's level of detail (negative: sharper).
     float lod_bias = 0.0f;
     unsigned threads = 0;  // 0 = all cores
@@ -110,15 +114,19 @@ private:
         std::vector<float> lod;
         std::vector<int> placement;        // -1: not a painting
         std::vector<float> albedo;         // 3 per pixel, 0..255 as sampled (paintings)
+        std::vector<SurfaceLight> light;   // what the lighting gave (reused by the right eye)
+        std::vector<std::uint8_t> copied;  // albedo copied from the left eye
         void resize(std::uint32_t w, std::uint32_t h);
     };
     void trace(const PaintingSceneView& scene, const Camera& eye, GBuffer& g,
                const std::uint8_t* skip, unsigned threads, EyeStats& st);
-    // reused: per pixel the reused left pixel or -1 (nullptr: every pixel traced).
+    // reused: per pixel the reused pixel of `source` (the left eye's buffer) or -1
+    // (nullptr: every pixel traced).
     void sample(const PaintingSceneView& scene, const VirtualTexture& vt, const Camera& eye,
-                GBuffer& g, const std::int32_t* reused, const DisplayOptions& o, EyeStats& st);
-    void shade(const DisplayLighting& lighting, const GBuffer& g, const DisplayOptions& o,
-               float* rgb, EyeStats& st);
+                GBuffer& g, const GBuffer* source, const std::int32_t* reused,
+                const DisplayOptions& o, EyeStats& st);
+    void shade(const DisplayLighting& lighting, GBuffer& g, const GBuffer* source,
+               const std::int32_t* reused, const DisplayOptions& o, float* rgb, EyeStats& st);
     void reuse(const Camera& right, const DisplayOptions& o, EyeStats& st);
 
     GBuffer g_[2];
