@@ -8,7 +8,8 @@ BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
 APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
-  liblcms2-dev colord-data iipimage-server lighttpd ccache
+  liblcms2-dev colord-data iipimage-server lighttpd ccache \
+  xvfb xdotool libgl1-mesa-dri libglx-mesa0
 JOBS ?= $(shell nproc)
 # Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
 # the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.
@@ -38,6 +39,7 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	$(PIP) install -q scikit-build-core nanobind ninja "cmake>=3.26"
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
 	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science
+	$(PIP) install -q imageio-ffmpeg pyglet
 	touch $@
 
 venv: $(VENV)/.deps-stamp

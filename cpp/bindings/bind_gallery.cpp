@@ -8,8 +8,10 @@
 #include "bindings/arrays.h"
 #include "bindings/bindings.h"
 #include "common/error.h"
+#include "gallery/display_lighting.h"
 #include "gallery/gallery.h"
 #include "pack/reader.h"
+#include "sampling/stereo_display.h"
 #include "views/feedback.h"
 
 namespace nb = nanobind;
@@ -147,6 +149,46 @@ void bind_gallery(nb::module_& m) {
             if (!g.scene().intersect(vec3f(o), vec3f(d), h)) return nb::none();
             return nb::make_tuple(h.t, std::array<float, 3>{h.p.x, h.p.y, h.p.z}, h.tri, g.slot_of(h.tri));
         }, "o"_a, "d"_a, "Nearest hit (t, point, triangle, painting slot or -1) along o + t d, or None.");
+
+    // The full-resolution display pass (sampling/stereo_display.h) on the gallery's scene and
+    // light, one eye or a stereo pair with the right eye reusing the left eye's hits.
+    m.def("_gallery_display", [](DisplayPass& d, const Gallery& g, const VirtualTexture& vt,
+                                 const Camera& eye, const std::string& lighting, unsigned threads) {
+        FreshArray<float, nb::ndim<3>> out({eye.height, eye.width, 3});
+        {
+            nb::gil_scoped_release release;
+            const GalleryLighting light(g, parse_lighting(lighting));
+            d.render(g.feedback_view(), light, vt, eye, GalleryLighting::options(threads), out.data);
+        }
+        return out.array;
+    }, "display"_a, "gallery"_a, "vt"_a, "eye"_a, "lighting"_a, "threads"_a = 0);
+    m.def("_gallery_display_stereo", [](DisplayPass& d, const Gallery& g, const VirtualTexture& vt,
+                                        const Camera& left, const Camera& right,
+                                        const std::string& lighting, bool reuse,
+                                        float edge_depth_ratio, unsigned threads) {
+        FreshArray<float, nb::ndim<3>> l({left.height, left.width, 3});
+        FreshArray<float, nb::ndim<3>> r({right.height, right.width, 3});
+        require(std::isfinite(edge_depth_ratio) && edge_depth_ratio >= 0,
+                "display: edge_depth_ratio must be finite and >= 0");
+        {
+            nb::gil_scoped_release release;
+            const GalleryLighting light(g, parse_lighting(lighting));
+            DisplayOptions o = GalleryLighting::options(threads);
+            o.edge_depth_ratio = edge_depth_ratio;
+            d.render_stereo(g.feedback_view(), light, vt, left, right, reuse, o, l.data, r.data);
+        }
+        return nb::make_tuple(l.array, r.array);
+    }, "display"_a, "gallery"_a, "vt"_a, "left"_a, "right"_a, "lighting"_a, "reuse"_a = true,
+       "edge_depth_ratio"_a = 0.05f, "threads"_a = 0);
+    m.def("_gallery_primary_rays", [](const Gallery& g, const Camera& eye, unsigned threads) {
+        std::uint64_t hits = 0;
+        double s;
+        {
+            nb::gil_scoped_release release;
+            s = cast_primary_rays(g.feedback_view().handle, eye, threads, &hits);
+        }
+        return nb::make_tuple(s, hits);
+    }, "gallery"_a, "eye"_a, "threads"_a = 0);
 }
 
 }  // namespace gigascroll::bindings

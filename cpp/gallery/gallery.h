@@ -144,6 +144,9 @@ public:
     // viewer), as lighting "full" / "baked" compute it. For tests and reprojection.
     Vec3f irradiance_full(const Hit& hit) const;
     Vec3f irradiance_baked(const Hit& hit) const;
+    // Held by a display pass that calls the irradiance functions itself (gallery/display_lighting.h):
+    // light() and bake() wait for it.
+    std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock(mutex_); }
 
 private:
     void require_lit() const;

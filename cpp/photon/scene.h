@@ -76,6 +76,9 @@ public:
     // ids 0, 1, ... in call order).
     RTCScene handle() const { return scene_; }
     std::uint32_t geometry_count() const { return std::uint32_t(geom_offset_.size()); }
+    // The global triangle index of Embree primitive prim of geometry geom (as intersect() sets
+    // Hit::tri), for passes that cast their own rays.
+    std::uint32_t triangle_of(unsigned geom, unsigned prim) const { return geom_offset_[geom] + prim; }
     Vec3f emission(std::uint32_t tri) const { return emission_[tri]; }
     Vec3f normal(std::uint32_t tri) const { return normal_[tri]; }
     Vec3f emitted_power() const { return power_; }   // sum of pi * area * radiance

@@ -12,14 +12,15 @@ BENCHMARKS = {
     "views": "tile determination: the four request-processing methods against scale",
     "photon": "seed 001 Tables 1-5 and run time against error",
     "gallery": "gallery rooms: photon pass, bake, stills, error against Mitsuba 3",
+    "walk": "the gallery walk: display vs bare rays, stereo reuse, fps per eye size, latency",
 }
 
 
 def register(sub) -> None:
-    from ..benchmarks import export, gallery, loader, pack, photon, queues, views
+    from ..benchmarks import export, gallery, loader, pack, photon, queues, views, walk
 
     modules = {"pack": pack, "export": export, "queues": queues, "loader": loader, "views": views,
-               "photon": photon, "gallery": gallery}
+               "photon": photon, "gallery": gallery, "walk": walk}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True

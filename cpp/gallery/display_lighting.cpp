@@ -1,0 +1,44 @@
+#include "gallery/display_lighting.h"
+
+#include <cmath>
+
+#include "common/error.h"
+
+namespace gigascroll {
+
+GalleryLighting::GalleryLighting(const Gallery& gallery, Lighting lighting)
+    : gallery_(gallery), lighting_(lighting), lock_(gallery.read_lock()) {
+    require(gallery.committed(), "Gallery: commit() before rendering");
+    require(lighting == Lighting::Unlit || gallery.lit(),
+            "Gallery: call light() before rendering with lighting");
+    require(lighting != Lighting::Baked || gallery.baked(),
+            "Gallery: call bake() before lighting 'baked'");
+}
+
+void GalleryLighting::light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const {
+    const Scene& scene = gallery_.scene();
+    Hit hit;
+    hit.p = p;
+    hit.tri = scene.triangle_of(geom, prim);
+    // The scene's own normal turned toward the eye, as Scene::intersect sets it.
+    const Vec3f winding = scene.normal(hit.tri);
+    hit.front = dot(winding, n) > 0;  // n faces the eye
+    hit.n = hit.front ? winding : -winding;
+    switch (lighting_) {
+        case Lighting::Unlit: out.irradiance = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
+        case Lighting::Baked: out.irradiance = gallery_.irradiance_baked(hit); break;
+        case Lighting::Full: out.irradiance = gallery_.irradiance_full(hit); break;
+    }
+    out.albedo = scene.albedo(hit.tri);
+    out.emission = hit.front ? scene.emission(hit.tri) : Vec3f(0, 0, 0);
+}
+
+DisplayOptions GalleryLighting::options(unsigned threads) {
+    DisplayOptions o;
+    o.srgb_albedo = true;
+    o.painting_reflectance = kPaintingReflectance;
+    o.threads = threads;
+    return o;
+}
+
+}  // namespace gigascroll

@@ -1,0 +1,27 @@
+// The Gallery's light as the full-resolution display pass asks it (sampling/stereo_display.h):
+// per hit, the room surface's albedo and emission and the irradiance there, baked or full,
+// exactly as Gallery::render_display computes them. Holds the gallery's read lock while it
+// lives, so light() and bake() cannot change what a frame reads.
+#pragma once
+#include <shared_mutex>
+
+#include "gallery/gallery.h"
+#include "sampling/stereo_display.h"
+
+namespace gigascroll {
+
+class GalleryLighting final : public DisplayLighting {
+public:
+    // InvalidArgument when the lighting needs light() or bake() that has not been done.
+    GalleryLighting(const Gallery& gallery, Lighting lighting);
+    void light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const override;
+    // The display options that match the gallery's display (painting reflectance, sRGB).
+    static DisplayOptions options(unsigned threads = 0);
+
+private:
+    const Gallery& gallery_;
+    Lighting lighting_;
+    std::shared_lock<std::shared_mutex> lock_;
+};
+
+}  // namespace gigascroll

@@ -1,0 +1,145 @@
+// The display pass at full resolution, for one eye or both (issue 14): one primary ray per
+// pixel through the scene's BVH, the painting's albedo sampled through the virtual texture at
+// the pixel's level of detail (trilinear), times the irradiance the scene supplies (baked or
+// constant), plus emission; room surfaces the same with their own albedo.
+//
+// Stereo reuse (seed 001 §3.3, applied to display): every left-eye hit that faces the right
+// eye is projected into the right image (Camera::project, eqs. 3-5) and claims that pixel with
+// an atomic compare-and-swap on (depth, left pixel); the nearest claim wins. Claimed pixels
+// on a depth edge of the claimed buffer are released again (a far sample must not show through
+// a near surface that no left sample happened to land on), and the right eye traces only the
+// pixels left unclaimed. A claimed pixel keeps the left hit's point and its light (irradiance,
+// albedo, emission: view-independent on Lambertian surfaces) and takes its texture sample at
+// the right eye's level of detail (the left eye's sample when the levels agree to within
+// reuse_lod_tolerance), so the reused pixel is what the right eye computes for that point.
+//
+// The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
+// is not reentrant.
+#pragma once
+#include <embree3/rtcore.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "cache/virtual_texture.h"
+#include "common/vec3.h"
+#include "views/camera.h"
+#include "views/exhibition.h"
+
+namespace gigascroll {
+
+// What a surface point contributes beyond the painting's texture: the albedo of a surface
+// that is not a painting (ignored on paintings, whose albedo is the texture), the irradiance
+// arriving there (W / m^2 per channel) and the emitted radiance.
+struct SurfaceLight {
+    Vec3f albedo{0.5f, 0.5f, 0.5f};
+    Vec3f irradiance{kPiF, kPiF, kPiF};
+    Vec3f emission{0.0f, 0.0f, 0.0f};
+    static constexpr float kPiF = float(3.14159265358979323846);
+};
+
+// The scene's lighting as the display pass asks it, per hit: Embree geometry and primitive,
+// the point and the unit normal facing the viewer. Must be safe to call from many threads.
+class DisplayLighting {
+public:
+    virtual ~DisplayLighting() = default;
+    virtual void light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const = 0;
+};
+
+// Today's unlit views: radiance = albedo (irradiance pi), grey occluders.
+class UnlitLighting final : public DisplayLighting {
+public:
+    explicit UnlitLighting(Vec3f occluder_albedo = {0.5f, 0.5f, 0.5f}) : albedo_(occluder_albedo) {}
+    void light(unsigned, unsigned, Vec3f, Vec3f, SurfaceLight& out) const override {
+        out = SurfaceLight{};
+        out.albedo = albedo_;
+    }
+
+private:
+    Vec3f albedo_;
+};
+
+struct DisplayOptions {
+    // Painting texels are sRGB-encoded; true decodes the filtered value to a linear albedo.
+    bool srgb_albedo = true;
+    // A painting's albedo = this x its (decoded) texel (the Gallery's kPaintingReflectance).
+    float painting_reflectance = 1.0f;
+    // A claimed right pixel whose depth exceeds an 8-neighbour's claimed depth by more than
+    // this fraction is traced instead (see the header comment).
+    float edge_depth_ratio = 0.05f;
+    // A reused right pixel keeps the left eye's texture sample when its level of detail
+    // differs from the left eye's by at most this (0: always re-sample at the right eye's).
+    float reuse_lod_tolerance = 1.0f / 1024.0f;
+    // Added to every pixel's level of detail (negative: sharper).
+    float lod_bias = 0.0f;
+    unsigned threads = 0;  // 0 = all cores
+};
+
+// Per-eye times and counts of the last render().
+struct EyeStats {
+    double rays_seconds = 0;     // primary rays (the right eye: only the unclaimed pixels)
+    double reuse_seconds = 0;    // right eye: projection, claims and edge release
+    double vt_seconds = 0;       // uv, level of detail and virtual-texture sampling
+    double shade_seconds = 0;    // lighting and the final colour
+    std::uint64_t pixels = 0, hits = 0, traced = 0, reused = 0, painting_pixels = 0;
+    double total_seconds() const { return rays_seconds + reuse_seconds + vt_seconds + shade_seconds; }
+};
+
+class DisplayPass {
+public:
+    // One eye into rgb (height x width x 3 linear floats; 0 where no surface is hit).
+    void render(const PaintingSceneView& scene, const DisplayLighting& lighting,
+                const VirtualTexture& vt, const Camera& eye, const DisplayOptions& options,
+                float* rgb);
+    // Both eyes (same resolution); reuse = false traces the right eye in full (the baseline).
+    void render_stereo(const PaintingSceneView& scene, const DisplayLighting& lighting,
+                       const VirtualTexture& vt, const Camera& left, const Camera& right,
+                       bool reuse, const DisplayOptions& options, float* left_rgb, float* right_rgb);
+
+    const EyeStats& left_stats() const { return stats_[0]; }
+    const EyeStats& right_stats() const { return stats_[1]; }
+    // After render_stereo with reuse: per right pixel, the left pixel whose hit it reuses
+    // (-1: traced), and the hit points of either eye (x, y, z per pixel; NaN where no hit).
+    const std::vector<std::int32_t>& reuse_sources() const { return sources_; }
+    std::vector<float> hit_points(int eye) const;
+    // Per pixel of either eye: the level of detail sampled (NaN off paintings).
+    std::vector<float> lods(int eye) const;
+
+private:
+    struct GBuffer {
+        std::uint32_t width = 0, height = 0;
+        std::vector<unsigned> geom, prim;  // RTC_INVALID_GEOMETRY_ID: no hit
+        std::vector<Vec3f> p, n;           // n faces the eye
+        std::vector<double> uv;            // 2 per pixel (paintings)
+        std::vector<float> lod;
+        std::vector<int> placement;        // -1: not a painting
+        std::vector<float> albedo;         // 3 per pixel, 0..255 as sampled (paintings)
+        std::vector<SurfaceLight> light;   // what the lighting gave (reused by the right eye)
+        std::vector<std::uint8_t> copied;  // albedo copied from the left eye
+        void resize(std::uint32_t w, std::uint32_t h);
+    };
+    void trace(const PaintingSceneView& scene, const Camera& eye, GBuffer& g,
+               const std::uint8_t* skip, unsigned threads, EyeStats& st);
+    // reused: per pixel the reused pixel of `source` (the left eye's buffer) or -1
+    // (nullptr: every pixel traced).
+    void sample(const PaintingSceneView& scene, const VirtualTexture& vt, const Camera& eye,
+                GBuffer& g, const GBuffer* source, const std::int32_t* reused,
+                const DisplayOptions& o, EyeStats& st);
+    void shade(const DisplayLighting& lighting, GBuffer& g, const GBuffer* source,
+               const std::int32_t* reused, const DisplayOptions& o, float* rgb, EyeStats& st);
+    void reuse(const Camera& right, const DisplayOptions& o, EyeStats& st);
+
+    GBuffer g_[2];
+    EyeStats stats_[2];
+    std::vector<std::uint64_t> claims_;
+    std::vector<std::uint8_t> claimed_;
+    std::vector<std::int32_t> sources_;
+};
+
+// The baseline of the display's cost: the same primary rays (16-ray packets along rows, as
+// the pass casts them) with nothing done at the hits. Returns the seconds taken; *hits gets
+// the number of rays that hit.
+double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads = 0,
+                         std::uint64_t* hits = nullptr);
+
+}  // namespace gigascroll

@@ -1,0 +1,147 @@
+"""`gigascroll bench walk`: the gallery walk's goals (issue 14 §5), measured in one run.
+
+- display cost per pixel against a bare Embree primary-ray cast of the same pixels (same
+  cameras, alternated, median of --repeats);
+- the right eye with reuse against the left eye, over poses of the scroll walk;
+- the whole loop's frame rate at 1800 x 1920 per eye, and at smaller sizes down to the largest
+  per-eye resolution whose mean frame time fits 90 Hz;
+- display latency after each stop and the streamed frames' error against their oracle.
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def add_arguments(p) -> None:
+    p.add_argument("--pack", default=None,
+                   help="tile pack (default: build/demo/painting.pack, else the built-in painting)")
+    p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--frames", type=int, default=12, help="loop frames per resolution")
+    p.add_argument("--photons", type=int, default=1 << 17)
+    p.add_argument("--out", default="bench/walk/results.json")
+    p.add_argument("--threads", type=int, default=0)
+
+
+def _pack(arg):
+    from ..commands.gallery import builtin_pack
+    from ..pack import TilePack
+    if arg:
+        return TilePack(Path(arg))
+    demo = Path("build/demo/painting.pack")
+    return TilePack(demo) if (demo / "manifest.json").is_file() else builtin_pack()
+
+
+def run(args) -> int:
+    from .. import runtime
+    from .. import views as v
+    from .._core import DisplayPass
+    from ..gallery import builtin_room
+    from ..gallery.walk import GallerySource, GalleryWalk, walk_path
+    from ..views.exhibition import Headset
+
+    pack = _pack(args.pack)
+    room = builtin_room("scroll", pack)
+    t0 = time.perf_counter()
+    src = GallerySource(room, pack, "baked", photons=args.photons, threads=args.threads)
+    print(f"scroll room lit and baked in {time.perf_counter() - t0:.1f} s")
+    path = walk_path(room, seconds=4.0)
+    thr = args.threads
+    results = {"pack": str(pack.path), "machine": "2 cores, shared", "date": time.strftime("%Y-%m-%d")}
+
+    # A VT warmed with the walk's tiles (the cost of the display, not of missing tiles).
+    vt = runtime.VirtualTexture(pack, (40, 40))
+    poses = list(range(0, len(path), max(1, len(path) // 6)))
+
+    def eyes(frame, w, h):
+        views = v.frame_cameras(path, frame, headset=Headset(width=w, height=h), magnifier=None)
+        return views[0][0], views[1][0]
+
+    # 1. display vs bare primary rays, per pixel, at 900 x 960 (and the headset size).
+    rows = []
+    for w, h in ((450, 480), (900, 960), (1800, 1920)):
+        d = DisplayPass()
+        disp, bare = [], []
+        for frame in poses[:3]:
+            left, _ = eyes(frame, w, h)
+            src.display(d, vt, left, thr)  # warm
+            for _ in range(args.repeats):
+                t = time.perf_counter()
+                src.display(d, vt, left, thr)
+                disp.append(time.perf_counter() - t)
+                bare.append(src.primary_rays(left, thr)[0])
+        px = w * h
+        row = {"eye": f"{w}x{h}", "display_ns_per_pixel": 1e9 * statistics.median(disp) / px,
+               "bare_rays_ns_per_pixel": 1e9 * statistics.median(bare) / px}
+        row["ratio"] = row["display_ns_per_pixel"] / row["bare_rays_ns_per_pixel"]
+        parts = d.left_stats
+        row["split_ms"] = {k: 1e3 * parts[f"{k}_seconds"] for k in ("rays", "vt", "shade")}
+        rows.append(row)
+        print(f"display {w}x{h}: {row['display_ns_per_pixel']:.1f} ns/px, bare rays "
+              f"{row['bare_rays_ns_per_pixel']:.1f} ns/px, ratio {row['ratio']:.2f} "
+              f"(rays/vt/shade ms {row['split_ms']})")
+    results["display_vs_rays"] = rows
+
+    # 2. right eye with reuse vs the left eye, along the walk.
+    w, h = 900, 960
+    d = DisplayPass()
+    ratios, shares, lefts, rights, no_reuse = [], [], [], [], []
+    for frame in poses:
+        left, right = eyes(frame, w, h)
+        src.display_stereo(d, vt, left, right, True, thr)
+        for _ in range(max(1, args.repeats // 2)):
+            src.display_stereo(d, vt, left, right, True, thr)
+            ls, rs = d.left_stats, d.right_stats
+            lefts.append(ls["total_seconds"])
+            rights.append(rs["total_seconds"])
+            shares.append(rs["reused"] / rs["pixels"])
+            src.display_stereo(d, vt, left, right, False, thr)
+            no_reuse.append(d.right_stats["total_seconds"])
+    results["right_vs_left"] = {
+        "eye": f"{w}x{h}", "left_ms": 1e3 * statistics.median(lefts),
+        "right_ms": 1e3 * statistics.median(rights),
+        "right_without_reuse_ms": 1e3 * statistics.median(no_reuse),
+        "ratio": statistics.median(rights) / statistics.median(lefts),
+        "reused_share": statistics.mean(shares)}
+    print(f"right eye with reuse / left eye: {results['right_vs_left']['ratio']:.2f} "
+          f"({100 * results['right_vs_left']['reused_share']:.0f} % reused)")
+
+    # 3. the whole loop's frame rate per eye size (magnifier on, oracle off).
+    fps_rows = []
+    sizes = [(1800, 1920), (900, 960), (450, 480), (225, 240), (112, 120)]
+    short = v.CameraPath(path.position[:args.frames], path.forward[:args.frames],
+                         path.up[:args.frames], path.magnifier_target[:args.frames],
+                         path.magnifier_normal[:args.frames], path.fps)
+    for w, h in sizes:
+        walk = GalleryWalk(src, pack, short, eye=(w, h), oracle=False, threads=thr)
+        s = walk.run()
+        rec = walk.records[1:] or walk.records  # the first frame pays for warming up
+        mean_ms = statistics.mean(r["total_ms"] for r in rec)
+        fps_rows.append({"eye": f"{w}x{h}", "frame_ms": mean_ms, "fps": 1e3 / mean_ms,
+                         "display_ms": statistics.mean(r["display_ms"] for r in rec),
+                         "feedback_ms": statistics.mean(r["feedback_ms"] for r in rec)})
+        print(f"loop {w}x{h}: {mean_ms:.1f} ms/frame = {1e3 / mean_ms:.1f} fps "
+              f"(display {fps_rows[-1]['display_ms']:.1f} ms, feedback "
+              f"{fps_rows[-1]['feedback_ms']:.1f} ms)")
+    results["loop_fps"] = fps_rows
+    holding = [r for r in fps_rows if r["frame_ms"] <= 1e3 / 90]
+    results["largest_eye_at_90hz"] = holding[0]["eye"] if holding else None
+
+    # 4. display latency after stops and convergence to the oracle (the loads of each frame
+    # drained when they arrive: a real loop, not waiting).
+    walk = GalleryWalk(src, pack, walk_path(room, seconds=2.0), eye=(225, 240), threads=thr)
+    s = walk.run()
+    results["stops"] = s["stops"]
+    results["error_final"] = s["error_final"]
+    print(f"stops: {s['stops']}; last frame's error vs oracle {s['error_final']}")
+
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=1))
+    print(f"wrote {out}")
+    return 0

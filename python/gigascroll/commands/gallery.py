@@ -1,0 +1,147 @@
+"""`gigascroll gallery [PACK] [--room ...] [--path ...] [--eye WxH] ... --out DIR`: walk
+through the lit gallery and write the frames, the video, the report and the results."""
+
+from __future__ import annotations
+
+import re
+import time
+from pathlib import Path
+
+from ..errors import UserError
+
+BUILTIN_PAINTING = (30000, 1200)  # the built-in ink landscape used when no pack is given
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "gallery", help="walk through the lit gallery: frames, video and report",
+        description="Runs the gallery frame loop along a camera path: feedback, hash request "
+        "processing, capped direct loading from the lock-free loader, the page-table update and "
+        "the display pass at full per-eye resolution (right eye reusing the left eye's hits), "
+        "lit by the photon map. Writes PNG frames (eyes side by side, magnifier inset), an "
+        "H.264 MP4 of the walk (side-by-side stereo), report.md with plots and results.json.")
+    p.add_argument("packs", nargs="*", metavar="PACK",
+                   help="tile pack (default: the built-in painting, synthesized and packed once "
+                        "into build/gallery-painting.pack)")
+    p.add_argument("--room", default="scroll", help="scroll, hall, or a room file (glTF/OBJ/PLY)")
+    p.add_argument("--path", default="walk",
+                   help="walk (along the painting, with stops and a close look) or a camera path JSON")
+    p.add_argument("--eye", default="1800x1920", help="per-eye resolution WxH (default the headset's)")
+    p.add_argument("--no-magnifier", action="store_true", help="no magnifier")
+    p.add_argument("--lighting", choices=["baked", "full"], default="baked",
+                   help="baked irradiance (default) or direct light and gather per pixel")
+    p.add_argument("--seconds", type=float, default=6.0, help="length of the default walk")
+    p.add_argument("--out", default="build/gallery", help="output directory (default build/gallery)")
+    p.add_argument("--exr", action="store_true", help="also write each saved frame as linear EXR")
+    p.add_argument("--png-every", type=int, default=None,
+                   help="keep every n-th frame as PNG (default: about 40 over the walk)")
+    p.add_argument("--no-video", action="store_true", help="skip the MP4")
+    p.add_argument("--no-oracle", action="store_true", help="skip the per-frame oracle comparison")
+    p.add_argument("--no-reuse", action="store_true", help="trace the right eye in full")
+    p.add_argument("--photons", type=int, default=1 << 18, help="photons for the lighting")
+    p.add_argument("--pace", action="store_true", help="sleep to the path's frame rate")
+    p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    p.set_defaults(func=run)
+
+
+def parse_eye(text: str) -> tuple[int, int]:
+    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
+    if not m:
+        raise UserError(f"--eye must be WIDTHxHEIGHT, e.g. 1800x1920, got {text!r}")
+    w, h = int(m.group(1)), int(m.group(2))
+    if not (16 <= w <= 16384 and 16 <= h <= 16384):
+        raise UserError(f"--eye must be between 16x16 and 16384x16384 pixels, got {w}x{h}")
+    return w, h
+
+
+def load_room(room: str, pack):
+    from ..gallery import ROOM_NAMES, builtin_room
+    if room in ROOM_NAMES:
+        return builtin_room(room, pack)
+    path = Path(room)
+    if not path.is_file():
+        raise UserError(f"--room must be {', '.join(ROOM_NAMES)} or a room file; {room!r} is "
+                        "neither")
+    from ..gallery.room_files import load_room as load_file
+    return load_file(path, pack)
+
+
+def load_path(path: str, room, seconds: float):
+    from .. import views as v
+    from ..gallery.walk import walk_path
+    if path == "walk":
+        return walk_path(room, seconds)
+    p = Path(path)
+    if not p.is_file():
+        raise UserError(f"--path must be 'walk' or a camera path JSON file; {path!r} is neither")
+    return v.CameraPath.load(p)
+
+
+def builtin_pack(work: Path = Path("build")):
+    """The built-in ink landscape at BUILTIN_PAINTING, synthesized and packed once."""
+    from ..pack import TilePack, build_pack, synth_painting
+    pack_dir = work / "gallery-painting.pack"
+    if (pack_dir / "manifest.json").is_file():
+        return TilePack(pack_dir)
+    work.mkdir(parents=True, exist_ok=True)
+    tif = work / "gallery-painting.tif"
+    synth_painting(tif, *BUILTIN_PAINTING, progress=True)
+    pack = build_pack(tif, pack_dir, force=True, progress=True)
+    tif.unlink(missing_ok=True)
+    return pack
+
+
+def run(args) -> int:
+    from ..gallery.record import prepare_output, record_walk
+    from ..gallery.walk import GallerySource, GalleryWalk
+    from ..pack import TilePack
+
+    eye = parse_eye(args.eye)
+    if not (args.seconds > 0 and args.seconds <= 3600):
+        raise UserError(f"--seconds must be in (0, 3600], got {args.seconds}")
+    if args.png_every is not None and args.png_every < 1:
+        raise UserError("--png-every must be >= 1")
+    if args.photons < 1:
+        raise UserError("--photons must be >= 1")
+    if len(args.packs) > 1:
+        raise UserError("give one pack (a pack holds several paintings: gigascroll pack a.tif "
+                        "b.tif -o gallery.pack)")
+    out = Path(args.out)
+    tmp = prepare_output(out)  # fails early on an unwritable --out
+    try:
+        if args.packs:
+            p = Path(args.packs[0])
+            if not (p / "manifest.json").is_file():
+                raise UserError(f"{p} is not a tile pack (no manifest.json)")
+            pack = TilePack(p)
+        else:
+            pack = builtin_pack()
+        room = load_room(args.room, pack)
+        path = load_path(args.path, room, args.seconds)
+        t0 = time.perf_counter()
+        source = GallerySource(room, pack, args.lighting, photons=args.photons,
+                               threads=args.threads)
+        print(f"{source.name}: lit in {time.perf_counter() - t0:.1f} s "
+              f"({source.light_stats.get('photons_stored', 0)} photons stored)")
+        walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
+                           reuse=not args.no_reuse, oracle=not args.no_oracle, pace=args.pace,
+                           threads=args.threads)
+        settings = {"room": args.room, "path": args.path, "eye": f"{eye[0]}x{eye[1]}",
+                    "magnifier": not args.no_magnifier, "lighting": args.lighting,
+                    "seconds": args.seconds, "reuse": not args.no_reuse,
+                    "photons": args.photons, "frames": len(path)}
+        results = record_walk(walk, out, exr=args.exr, png_every=args.png_every,
+                              video=not args.no_video, progress=True, settings=settings, tmp=tmp)
+    except BaseException:
+        import shutil
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    s = results["summary"]
+    print(f"{s['frames']} frames at {eye[0]}x{eye[1]} per eye: {s['fps']:.2f} fps; display "
+          f"{s['display_ms']:.1f} ms/frame (left {s['left_display_ms']:.1f}, right "
+          f"{s['right_display_ms']:.1f} reusing {100 * s['reused_share']:.0f} %); hit rate "
+          f"{s['hit_rate']:.3f}" + (f"; error vs oracle {s['error_mean']:.3g} mean, "
+                                    f"{s['error_final']:.3g} last" if "error_mean" in s else ""))
+    print(f"wrote {out}/ (report.md, results.json, frames/"
+          f"{', walk.mp4' if not args.no_video else ''})")
+    return 0

@@ -1,0 +1,246 @@
+"""`gigascroll view PACK [--room ...]`: a desktop window onto the live gallery loop.
+
+Keys: W / S walk forward and back, A / D step left and right, arrow keys (or a mouse drag)
+turn, R / F up and down, M toggles the magnifier, P saves the window's frame (--screenshot),
+Esc quits. An overlay shows the frame rate and the stage times; the eyes' resolution adapts
+so the window stays responsive (each frame's display is upscaled to the window)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+from ..errors import UserError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("view", help="a window onto the live gallery loop",
+                       description=__doc__.split("\n\n", 1)[1].replace("\n", " "))
+    p.add_argument("pack", help="tile pack")
+    p.add_argument("--room", default="scroll", help="scroll, hall, or a room file")
+    p.add_argument("--lighting", choices=["baked", "full", "unlit"], default="baked")
+    p.add_argument("--window", default="1200x640", help="window size WxH (both eyes side by side)")
+    p.add_argument("--eye", default=None,
+                   help="initial per-eye resolution WxH (default: half the window's width)")
+    p.add_argument("--target-fps", type=float, default=20.0,
+                   help="the resolution adapts to hold this frame rate (default 20)")
+    p.add_argument("--photons", type=int, default=1 << 17)
+    p.add_argument("--per-frame", type=int, default=16, help="tiles loaded per frame at most")
+    p.add_argument("--screenshot", default="view-{n}.png",
+                   help="file pattern P writes the window's frame to ({n}: a counter)")
+    p.add_argument("--quit-after", type=float, default=None, help="close after this many seconds")
+    p.add_argument("--threads", type=int, default=0)
+    p.set_defaults(func=run)
+
+
+def _size(text: str, what: str) -> tuple[int, int]:
+    from .gallery import parse_eye
+    try:
+        return parse_eye(text)
+    except UserError:
+        raise UserError(f"{what} must be WIDTHxHEIGHT with sides 16..16384, got {text!r}") from None
+
+
+def run(args) -> int:
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
+            and not os.environ.get("WAYLAND_DISPLAY"):
+        raise UserError("no display to open a window on (DISPLAY is not set); "
+                        "use `gigascroll gallery` to write the walk to files")
+    win_w, win_h = _size(args.window, "--window")
+    eye = _size(args.eye, "--eye") if args.eye else (win_w // 2, win_h)
+    if not (args.target_fps > 0 and math.isfinite(args.target_fps)):
+        raise UserError("--target-fps must be positive")
+    from ..pack import TilePack
+    from .gallery import load_room
+    p = Path(args.pack)
+    if not (p / "manifest.json").is_file():
+        raise UserError(f"{p} is not a tile pack (no manifest.json)")
+    pack = TilePack(p)
+    room = load_room(args.room, pack)
+    try:
+        import pyglet
+        pyglet.options["shadow_window"] = False
+        window = pyglet.window.Window(win_w, win_h, caption="gigascroll view", resizable=True,
+                                      vsync=False)
+    except Exception as e:  # noqa: BLE001 (pyglet raises several kinds for "no display")
+        raise UserError(f"cannot open a window: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
+    return Viewer(window, pack, room, args, eye).run()
+
+
+class Viewer:
+    """The window, the pose, and the live loop stepping one frame per redraw."""
+
+    def __init__(self, window, pack, room, args, eye):
+        import numpy as np
+
+        from .. import runtime
+        from .. import views as v
+        from ..gallery.walk import GallerySource, GalleryWalk, walk_path
+        self.np, self.v, self.window, self.args = np, v, window, args
+        self.source = GallerySource(room, pack, args.lighting, photons=args.photons,
+                                    threads=args.threads)
+        path = walk_path(room, seconds=0.05)
+        if args.per_frame < 1:
+            raise UserError("--per-frame must be >= 1")
+        self.walk = GalleryWalk(self.source, pack, path, eye=eye, oracle=False,
+                                per_frame=args.per_frame, threads=args.threads)
+        self.loader = runtime.TileLoader(pack, mode="lockfree", threads=1)
+        self.state = self.walk.open_state(self.loader)
+        self.position = np.array(path.position[0])
+        self.yaw = math.atan2(path.forward[0][0], path.forward[0][2])
+        self.pitch = 0.0
+        self.focus = 0.40  # magnifier distance ahead (its target on the painting)
+        self.magnifier = True
+        self.eye = list(eye)
+        self.base = tuple(eye)
+        self.scale = 1.0
+        self.frame = 0
+        self.keys = pyglet_key_state(window)
+        self.last = None
+        self.texture = None
+        self.shots = 0
+        self.want_shot = False
+        self.start = time.perf_counter()
+        self.record = None
+        self.fps = 0.0
+        import pyglet
+        self.label = pyglet.text.Label("", x=8, y=window.height - 8, anchor_y="top",
+                                       font_size=10, color=(255, 255, 160, 255), multiline=True,
+                                       width=max(200, window.width - 16))
+        window.push_handlers(on_draw=self.on_draw, on_key_press=self.on_key_press,
+                             on_mouse_drag=self.on_mouse_drag, on_close=self.on_close)
+
+    # --- pose --------------------------------------------------------------------------------
+    def forward(self):
+        cp = math.cos(self.pitch)
+        return self.np.array([math.sin(self.yaw) * cp, math.sin(self.pitch),
+                              math.cos(self.yaw) * cp])
+
+    def views(self):
+        np, v = self.np, self.v
+        from ..views.exhibition import Headset
+        w, h = (max(16, int(self.base[0] * self.scale)), max(16, int(self.base[1] * self.scale)))
+        self.eye = [w, h]
+        f = self.forward()
+        path = v.CameraPath(self.position[None], f[None], np.array([[0.0, 1.0, 0.0]]),
+                            (self.position + self.focus * f)[None] if self.magnifier else None,
+                            (-f)[None] if self.magnifier else None)
+        # The magnifier's resolution adapts with the eyes' (its feedback stays at its display's).
+        mag = dataclasses.replace(v.MAGNIFIER, resolution=max(32, int(v.MAGNIFIER.resolution * self.scale)))
+        return v.frame_cameras(path, 0, headset=Headset(width=w, height=h),
+                               magnifier=mag if self.magnifier else None)
+
+    def move(self, dt: float) -> bool:
+        from pyglet.window import key
+        k = self.keys
+        f = self.forward()
+        flat = self.np.array([f[0], 0.0, f[2]])
+        flat /= max(1e-9, self.np.linalg.norm(flat))
+        right = self.np.cross(flat, [0.0, 1.0, 0.0])
+        step = 0.6 * dt
+        d = self.np.zeros(3)
+        d += step * flat * (k[key.W] - k[key.S])
+        d += step * right * (k[key.D] - k[key.A])
+        d[1] += step * (k[key.R] - k[key.F])
+        turn = 1.2 * dt
+        yaw = turn * (k[key.RIGHT] - k[key.LEFT])
+        pitch = turn * (k[key.UP] - k[key.DOWN])
+        self.position = self.position + d
+        self.yaw += yaw
+        self.pitch = max(-1.4, min(1.4, self.pitch + pitch))
+        return bool(d.any() or yaw or pitch)
+
+    # --- events ------------------------------------------------------------------------------
+    def on_key_press(self, symbol, modifiers):
+        from pyglet.window import key
+        if symbol == key.ESCAPE:
+            self.on_close()
+            return True
+        if symbol == key.M:
+            self.magnifier = not self.magnifier
+        if symbol == key.P:
+            self.want_shot = True  # saved right after the next frame is drawn
+        return None
+
+    def on_mouse_drag(self, x, y, dx, dy, buttons, modifiers):
+        self.yaw += 0.005 * dx
+        self.pitch = max(-1.4, min(1.4, self.pitch + 0.005 * dy))
+
+    def on_close(self):
+        self.window.close()
+        import pyglet
+        pyglet.app.exit()
+        return True
+
+    def screenshot(self):
+        import pyglet
+        name = self.args.screenshot.format(n=self.shots)
+        self.shots += 1
+        pyglet.image.get_buffer_manager().get_color_buffer().save(name)
+        print(f"screenshot: {name}", flush=True)
+
+    def tick(self, dt):
+        """One frame of the loop; the resolution adapts toward the target frame rate."""
+        np = self.np
+        moved = self.move(dt if dt < 0.5 else 0.5)
+        t0 = time.perf_counter()
+        rec, (left, right, mag, lenses) = self.walk.step(self.frame, self.state,
+                                                         views=self.views(), moving=moved)
+        from ..gallery.walk import compose_frame, tone_map
+        rgb = tone_map(compose_frame(left, right, mag, lenses), self.source.exposure)
+        frame_s = time.perf_counter() - t0
+        self.fps = 0.8 * self.fps + 0.2 / max(frame_s, 1e-6) if self.frame else 1 / frame_s
+        target = 1.0 / self.args.target_fps
+        if frame_s > 1.2 * target:
+            self.scale = max(0.1, self.scale * 0.85)
+        elif frame_s < 0.6 * target:
+            self.scale = min(1.0, self.scale * 1.1)
+        self.record = rec
+        self.frame += 1
+        import pyglet
+        h, w = rgb.shape[:2]
+        img = pyglet.image.ImageData(w, h, "RGB", np.ascontiguousarray(rgb[::-1]).tobytes())
+        self.texture = img.get_texture()
+        self.window.invalid = True
+
+    def on_draw(self):
+        self.window.clear()
+        if self.texture is not None:
+            self.texture.blit(0, 0, width=self.window.width, height=self.window.height)
+        r = self.record
+        if r:
+            self.label.text = (
+                f"{self.fps:5.1f} fps  eye {self.eye[0]}x{self.eye[1]}  hit {r['hit_rate']:.2f}"
+                f"  magnifier {'on' if self.magnifier else 'off'} (M)\n"
+                + "  ".join(f"{k} {r[k + '_ms']:.1f}" for k in
+                            ("feedback", "processing", "issue", "drain", "update"))
+                + "\ndisplay " + "  ".join(f"{p} {r['display_' + p + '_ms']:.1f}" for p in
+                                           ("rays", "reuse", "vt", "shade")) + " ms")
+            self.label.y = self.window.height - 8
+            self.label.draw()
+        if self.want_shot and self.texture is not None:
+            self.want_shot = False
+            self.screenshot()
+
+    def run(self) -> int:
+        import pyglet
+        pyglet.clock.schedule(self.tick)
+        if self.args.quit_after is not None:
+            pyglet.clock.schedule_once(lambda dt: self.on_close(), self.args.quit_after)
+        try:
+            pyglet.app.run()
+        finally:
+            self.loader.close()
+        print(f"view: {self.frame} frames, last eye {self.eye[0]}x{self.eye[1]}", flush=True)
+        return 0
+
+
+def pyglet_key_state(window):
+    from pyglet.window import key
+    state = key.KeyStateHandler()
+    window.push_handlers(state)
+    return state

@@ -1,0 +1,210 @@
+"""The full-resolution display pass and its stereo reuse (gigascroll._core.DisplayPass),
+checked against numpy: painting coordinates and the level of detail recomputed from the
+geometry, the texture sampled through the runtime's own sampler, sRGB decoded by formula."""
+
+import numpy as np
+import pytest
+
+from gigascroll import _core
+from gigascroll import views as v
+from gigascroll.runtime import VirtualTexture
+
+
+def srgb_to_linear(c):
+    c = np.clip(c / 255.0, 0, 1)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def eyes(path_x=0.3, distance=0.25, w=96, h=104, height=1.5):
+    """A small stereo pair 63 mm apart facing the wall painting at (path_x, height)."""
+    hs = v.HEADSET
+    out = []
+    for side in (-1, 1):
+        out.append(v.Camera((path_x + side * hs.ipd / 2, height, -distance), (0.0, 0.0, 1.0),
+                            (0.0, 1.0, 0.0), hs.tan_half_x, hs.tan_half_x * h / w, w, h))
+    return out
+
+
+def texel_ref(placement, cam, p, spec):
+    """Painting coordinates of point p and the level of detail the eye `cam` sees it at:
+    finite differences of the texel position along the camera's pixel axes (the OpenGL
+    definition: the larger of the two footprints)."""
+    origin = np.array(placement["origin"])
+    ua, va = np.array(placement["u_axis"]), np.array(placement["v_axis"])
+    n = np.cross(ua, va)
+    pos, fwd = np.array(cam.position), np.array(cam.forward)
+    right, up = np.array(cam.right), np.array(cam.up)
+    w, h = cam.resolution
+
+    def texel(px, py):
+        d = fwd + ((2 * px / w - 1) * cam.tan_half_x)[..., None] * right + \
+            ((1 - 2 * py / h) * cam.tan_half_y)[..., None] * up
+        t = np.dot(origin - pos, n) / (d @ n)
+        q = pos + t[..., None] * d - origin
+        return np.stack([q @ ua / spec.width_m * spec.width, q @ va / spec.height_m * spec.height], -1)
+
+    rel = p - pos
+    depth = rel @ fwd
+    px = ((rel @ right) / depth / cam.tan_half_x + 1) * w / 2
+    py = (1 - (rel @ up) / depth / cam.tan_half_y) * h / 2
+    e = 1e-3
+    dx = (texel(px + e, py) - texel(px - e, py)) / (2 * e)
+    dy = (texel(px, py + e) - texel(px, py - e)) / (2 * e)
+    rho = np.maximum(np.linalg.norm(dx, axis=-1), np.linalg.norm(dy, axis=-1))
+    q = p - origin
+    return q @ ua / spec.width_m, q @ va / spec.height_m, np.log2(rho)
+
+
+@pytest.fixture(scope="module")
+def setup(small_scroll, small_scroll_pack):
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    # Every tile the views read, resident: levels 0-3 around the view (then the comparison
+    # does not depend on what is streamed).
+    pack = small_scroll_pack
+    p = pack.paintings[0]
+    for level in range(4):
+        nx, ny = p.level_tiles[level]
+        x0 = int(0.25 / small_scroll.specs[0].width_m * nx)
+        x1 = int(np.ceil(0.45 / small_scroll.specs[0].width_m * nx))
+        for tx in range(max(0, x0 - 1), min(nx, x1 + 1)):
+            for ty in range(ny):
+                if level == 0 and not (ny // 2 - 4 <= ty <= ny // 2 + 4):
+                    continue
+                vt.insert((0, level, tx, ty), pack.read_tile(0, level, tx, ty))
+    return small_scroll, vt
+
+
+def test_reused_pixel_is_what_the_right_eye_computes_there(setup):
+    ex, vt = setup
+    left, right = eyes()
+    d = _core.DisplayPass()
+    img_l, img_r = d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, reuse=True)
+    st = d.right_stats
+    src = d.reuse_sources()
+    reused = np.flatnonzero(src >= 0)
+    assert st["reused"] == reused.size > 0.6 * st["pixels"]
+    assert st["traced"] + st["reused"] == st["pixels"]  # the right eye traced only the rest
+    pts = d.hit_points(0).reshape(-1, 3)[src[reused]]
+    on_painting = np.abs(pts[:, 2]) < 1e-4   # the painting's plane z = 0; the wall is behind
+    assert on_painting.sum() > 100
+    spec = ex.specs[0]
+    u, vv, lod = texel_ref(ex.placements[0], right, pts[on_painting].astype(np.float64), spec)
+    assert np.allclose(d.lods(1)[reused[on_painting]], lod, atol=2e-3)
+    ref, _ = vt.sample(0, np.clip(u, 0, 1), np.clip(vv, 0, 1),
+                       lod=np.asarray(d.lods(1)[reused[on_painting]], np.float32),
+                       filter="trilinear")
+    got = img_r.reshape(-1, 3)[reused[on_painting]]
+    assert np.allclose(got, srgb_to_linear(ref), atol=2e-3)
+    # Pixels off the painting show the grey wall in both eyes.
+    wall = img_r.reshape(-1, 3)[reused[~on_painting]]
+    assert np.allclose(wall, 0.5)
+
+
+def test_left_eye_matches_the_feedback_pass_at_full_resolution(setup):
+    ex, vt = setup
+    left, _ = eyes()
+    w, h = left.resolution
+    img = _core.DisplayPass().render(ex.scene, _core.UnlitLighting(), vt, left)
+    d = v.render_view(ex.scene, left, w, h)
+    sees = d["keys"] != v.NO_REQUEST
+    ref, _ = vt.sample(0, d["uv"][..., 0][sees], d["uv"][..., 1][sees],
+                       lod=d["lod"][sees].astype(np.float32), filter="trilinear")
+    assert sees.sum() > 1000
+    assert np.allclose(img[sees], srgb_to_linear(ref), atol=3e-3)
+
+
+def test_reuse_matches_a_fully_traced_right_eye_with_an_occluder(small_scroll_pack):
+    """A pillar in front of the painting: no reused pixel may show a point that the right
+    eye cannot see (the traced right eye's hit at that pixel is on the same surface)."""
+    spec = v.PaintingSpec("small", 12000, 1600, 12000 * 12 / 152089, 1600 * 12 / 152089)
+    scene = v.ExhibitionScene()
+    scene.add_painting(0, spec.tiles(), (0.0, 1.5 + spec.height_m / 2, 0.0), (1.0, 0.0, 0.0),
+                       (0.0, -1.0, 0.0), spec.width_m, spec.height_m)
+    scene.add_box((-2.0, 0.0, 0.005), (3.0, 3.0, 0.2))
+    scene.add_box((0.29, 1.0, -0.12), (0.31, 2.0, -0.10))   # the pillar, 2 cm wide
+    scene.commit()
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(w=120, h=128)
+    a, b = _core.DisplayPass(), _core.DisplayPass()
+    _, reused_img = a.render_stereo(scene, _core.UnlitLighting(), vt, left, right, reuse=True)
+    _, traced_img = b.render_stereo(scene, _core.UnlitLighting(), vt, left, right, reuse=False)
+    src = a.reuse_sources()
+    reused = src >= 0
+    p_reused = a.hit_points(1).reshape(-1, 3)[reused]
+    p_traced = b.hit_points(1).reshape(-1, 3)[reused]
+    eye = np.array(right.position)
+    d_r = np.linalg.norm(p_reused - eye, axis=1)
+    d_t = np.linalg.norm(p_traced - eye, axis=1)
+    # Same surface: depths within a few percent (a pixel's extent), never pillar vs wall.
+    assert np.all(np.abs(d_r - d_t) / d_t < 0.03)
+    assert reused.mean() > 0.5
+    # Images agree up to the half-pixel offset of the reused points.
+    assert np.abs(reused_img - traced_img).mean() < 0.02
+
+
+def test_display_bad_input(setup):
+    ex, vt = setup
+    left, right = eyes()
+    d = _core.DisplayPass()
+    other = v.Camera((0.3, 1.5, -0.25), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), 1.0, 1.0, 50, 50)
+    with pytest.raises(ValueError, match="same resolution"):
+        d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, other)
+    with pytest.raises(ValueError, match="edge_depth_ratio"):
+        d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, edge_depth_ratio=float("nan"))
+    with pytest.raises(ValueError, match="lod_bias"):
+        d.render(ex.scene, _core.UnlitLighting(), vt, left, lod_bias=float("inf"))
+    with pytest.raises(ValueError, match="albedo"):
+        _core.UnlitLighting((2.0, 0.0, 0.0))
+    s, hits = _core.cast_primary_rays(ex.scene, left)
+    assert hits == left.resolution[0] * left.resolution[1] and s >= 0
+
+
+@pytest.fixture(scope="module")
+def lit_gallery(small_scroll_pack):
+    from gigascroll.gallery import builtin_room
+    from gigascroll.gallery.walk import GallerySource
+    room = builtin_room("scroll", small_scroll_pack)
+    return GallerySource(room, small_scroll_pack, "baked", photons=20_000, spacing=0.25,
+                         bake_samples=4), room
+
+
+def test_gallery_display_pass_equals_the_gallerys_own(lit_gallery, small_scroll_pack):
+    """The stereo pass's left eye against Gallery.render_display (one ray per pixel, the
+    gallery's own shading code): the same pixels up to the hit point's float rounding."""
+    src, room = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    cam = v.Camera((4.0, 1.5, -0.6), (4.3, 1.4, 0.0), (0.0, 1.0, 0.0), 70.0, resolution=(80, 64))
+    ours = src.display(_core.DisplayPass(), vt, cam)
+    theirs = src.gallery.render_display(cam, vt, lighting="baked")
+    assert ours.shape == theirs.shape and ours.max() > 0
+    close = np.isclose(ours, theirs, rtol=1e-3, atol=1e-6).all(axis=2)
+    assert close.mean() > 0.99   # silhouette pixels may hit the other side of an edge
+
+
+def test_gallery_right_eye_reuse_is_view_independent(lit_gallery, small_scroll_pack):
+    """Baked Lambertian radiance: a reused right pixel equals the gallery's own display of a
+    ray from the right eye through that point."""
+    src, room = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    _, img_r = src.display_stereo(d, vt, left, right, True)
+    src_idx = d.reuse_sources()
+    reused = np.flatnonzero(src_idx >= 0)
+    assert reused.size > 0.5 * src_idx.size
+    pts = d.hit_points(0).reshape(-1, 3)[src_idx[reused]]
+    # The gallery's own display of a one-pixel camera looking along the right eye's axis
+    # straight at each point, from the right eye's depth. The painting's plane is parallel to
+    # the image plane, so the footprint (the level) is the right eye's at every pixel; the
+    # irradiance depends on the point alone.
+    pick = reused[:: max(1, reused.size // 40)]
+    pts = d.hit_points(0).reshape(-1, 3)[src_idx[pick]]
+    w, h = right.resolution
+    fwd = np.array(right.forward)
+    for i, p in zip(pick, pts):
+        p = np.asarray(p, np.float64)
+        depth = (p - np.array(right.position)) @ fwd
+        one = v.Camera(tuple(p - depth * fwd), tuple(fwd), (0.0, 1.0, 0.0), right.tan_half_x / w,
+                       right.tan_half_y / h, 1, 1)
+        ref = src.gallery.render_display(one, vt, lighting="baked")[0, 0]
+        assert np.allclose(img_r.reshape(-1, 3)[i], ref, rtol=2e-3, atol=1e-6), (i, p)
