@@ -262,7 +262,7 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
 
 
 def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float | None = None,
-           grid: str = "hash", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
+           grid: str = "adaptive", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
            kernel: str = "box", light_samples: int = 1, pipeline: str = "fused",
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
@@ -271,9 +271,10 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     """Render linear radiance, float32 (H, W, 3).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
-    in the photon map (grid 'hash' or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
+    in the photon map (grid 'adaptive': cells sized from the photon density and culled against the
+    gather sphere, the fastest; 'hash': seed 001's grid; or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
     heap of k; kernel 'box' or 'cone'). pipeline 'fused' or 'two-pass'; cooperative=True (two-pass,
-    hash grid, radius gather) streams each photon once through a block of hit points in one cell.
+    grid='hash', radius gather) streams each photon once through a block of hit points in one cell.
     The same seed gives the same image for any thread count. return_stats=True also returns a
     dict of pass times (seconds) and counts.
 
@@ -316,7 +317,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
 
 
 def render_stereo(scene: Scene, eyes: StereoCamera, reuse: bool = True, photons: int = 1 << 18,
-                  radius: float | None = None, grid: str = "hash", gather: str = "radius", k: int = 50,
+                  radius: float | None = None, grid: str = "adaptive", gather: str = "radius", k: int = 50,
                   spp: int = 1, seed: int = 0, kernel: str = "box", light_samples: int = 1,
                   direct: bool = True, indirect: bool = True, threads: int = 0):
     """Render both eyes: (left, right, stats). With reuse=True the left eye writes the colour of

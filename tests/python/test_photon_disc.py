@@ -58,7 +58,7 @@ def test_surface_disc_removes_edge_and_leak_bias(region_bias):
 
 def test_disc_rejects_incompatible_options():
     scene, cam = g.builtin_scene("cornell", resolution=(8, 8))
-    for kw in (dict(gather="knn"), dict(kernel="cone"), dict(pipeline="two-pass", cooperative=True)):
+    for kw in (dict(gather="knn"), dict(kernel="cone"), dict(pipeline="two-pass", cooperative=True, grid="hash")):
         with pytest.raises(ValueError, match="disc"):
             g.render(scene, cam, photons=1000, radius=0.05, disc=True, **kw)
 

@@ -132,13 +132,13 @@ def _tables(name: str, args) -> dict:
                                   stored=st["photons_stored"], seed=SEED_TABLE1[(side, r)]))
         res["table2"].append(dict(side=side, r=r, heap_ms=hg, noheap_ms=nh, seed=SEED_TABLE2.get((side, r))))
         # Table 3: fused against two-pass (trace + gather, photon pass excluded).
-        fused, _ = pipeline_ms(side, r, pipeline="fused")
-        two, _ = pipeline_ms(side, r, pipeline="two-pass")
+        fused, _ = pipeline_ms(side, r, grid="hash", pipeline="fused")
+        two, _ = pipeline_ms(side, r, grid="hash", pipeline="two-pass")
         bar.update(2)
         res["table3"].append(dict(side=side, r=r, fused_ms=fused, two_pass_ms=two))
         # Table 4: per-pixel against cooperative gather (both two-pass; gather pass only).
-        per, _ = gather_ms(side, r, pipeline="two-pass")
-        coop, _ = gather_ms(side, r, pipeline="two-pass", cooperative=True)
+        per, _ = gather_ms(side, r, grid="hash", pipeline="two-pass")
+        coop, _ = gather_ms(side, r, grid="hash", pipeline="two-pass", cooperative=True)
         bar.update(2)
         res["table4"].append(dict(side=side, r=r, per_pixel_ms=per, cooperative_ms=coop))
     bar.close()
@@ -148,7 +148,8 @@ def _tables(name: str, args) -> dict:
     for r in (0.05, 0.1, 0.15):
         def stereo(reuse):
             def once():
-                _, _, st = P.render_stereo(scene, eyes, reuse=reuse, photons=side5 * side5, radius=r * sc, seed=1)
+                _, _, st = P.render_stereo(scene, eyes, reuse=reuse, photons=side5 * side5, radius=r * sc, seed=1,
+                                           grid="hash")
                 return {"t": st["left"]["gather_seconds"] + st["right"]["gather_seconds"],
                         "share": st["reused_share"]}
             return _median_time(once, args.repeat, "t")
