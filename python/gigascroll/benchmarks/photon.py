@@ -201,38 +201,62 @@ def _print_tables(name: str, res: dict, args) -> None:
               f"{e['separate_ms'] / e['reuse_ms']:.2f}x | {100 * e['reused_share']:.0f}% | {_fmt_seed(e['seed'])} |")
 
 
+BENCH_PHOTON_SCENES = ("cornell", "office")  # bench_photon's scene index
+BENCH_PHOTON_RADII = (0.02, 0.05, 0.1, 0.2)  # times the scene's scale
+BENCH_PHOTON_ARGS = ("--benchmark_filter=-BM_AdaptiveCells", "--benchmark_repetitions=3",
+                     "--benchmark_enable_random_interleaving=true", "--benchmark_report_aggregates_only=true")
+
+
 def _nanoflann(quick: bool) -> dict | None:
-    """Runs the C++ Google Benchmark bench_photon (hash grid vs nanoflann vs our kd-tree)."""
+    """Runs the C++ Google Benchmark bench_photon: our adaptive grid, seed 001's hash grid,
+    nanoflann and our kd-tree on the same photons and queries, repeated 3 times with the runs
+    interleaved at random (the machine is shared); reports the median CPU time per query set."""
     root = Path(__file__).resolve().parents[3]
     exes = sorted(root.glob("build/cp3*/bench_photon"))
     if not exes:
         print("\n(bench_photon not built: skipping the nanoflann comparison)")
         return None
-    filt = "side:128" if quick else "."
-    r = subprocess.run([str(exes[0]), "--benchmark_format=json", f"--benchmark_filter={filt}"],
-                       capture_output=True, text=True)
+    args = list(BENCH_PHOTON_ARGS)
+    if quick:
+        args = ["--benchmark_filter=^BM_(Adaptive|HashGrid|Nanoflann|KdTree)/scene:0/side:128/"]
+    cmd = [str(exes[0]), "--benchmark_format=json", *args]
+    print("\n$ " + " ".join(["bench_photon", *cmd[1:]]))
+    r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         print(f"\nbench_photon failed: {r.stderr.strip()[:500]}")
         return None
-    data = json.loads(r.stdout)
+    return _print_bench_photon(json.loads(r.stdout))
+
+
+def _print_bench_photon(data: dict) -> dict:
     rows: dict = {}
     for b in data["benchmarks"]:
-        name, *params = b["name"].split("/")
-        kv = dict(p.split(":") for p in params if ":" in p)
-        if "side" not in kv or "r_index" not in kv:
+        if b.get("run_type") == "aggregate" and b.get("aggregate_name") != "median":
             continue
-        key = (int(kv["side"]), [0.02, 0.05, 0.1, 0.2][int(kv["r_index"])])
-        rows.setdefault(key, {})[name.replace("BM_", "")] = b["real_time"]
-        rows[key]["found"] = b.get("found/query", 0)
-        rows[key]["stored"] = b.get("photons", 0)
-    print("\nRadius search, Cornell photons, 128x128 first-hit queries (C++ bench_photon, ms per query set)")
-    print("| photons | stored | r | found/query | hash grid | nanoflann | our kd-tree | nanoflann/hash |")
-    print("|---|---|---|---|---|---|---|---|")
-    for (side, rad), v in sorted(rows.items()):
-        if {"HashGrid", "Nanoflann", "KdTree"} <= v.keys():
-            print(f"| {side}^2 | {int(v['stored'])} | {rad:g} | {v['found']:.0f} | {v['HashGrid']:.2f} | "
-                  f"{v['Nanoflann']:.2f} | {v['KdTree']:.2f} | {v['Nanoflann'] / v['HashGrid']:.2f}x |")
-    return {f"{s}/{r}": v for (s, r), v in rows.items()}
+        name, *params = b.get("run_name", b["name"]).split("/")
+        kv = dict(p.split(":") for p in params if ":" in p)
+        if not {"scene", "side", "r_index"} <= kv.keys() or "quarter_cells" in kv:
+            continue
+        scene = BENCH_PHOTON_SCENES[int(kv["scene"])]
+        key = (scene, int(kv["side"]), BENCH_PHOTON_RADII[int(kv["r_index"])])
+        row = rows.setdefault(key, {})
+        row[name.replace("BM_", "")] = b["cpu_time"]
+        if name == "BM_Adaptive":
+            row["found"] = b.get("found/query", 0)
+            row["stored"] = b.get("photons", 0)
+            row["cells_per_radius"] = b.get("cells_per_radius", 0)
+    print("\nRadius search, 128x128 first-hit queries (C++ bench_photon, median CPU ms per query set; "
+          "radii x scene scale: cornell 1, office 4)")
+    print("| scene | photons | stored | r | found/query | cells/r | adaptive (ours) | seed hash grid | nanoflann | "
+          "our kd-tree | nanoflann/adaptive | kd-tree/adaptive | seed grid/adaptive |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (scene, side, rad), v in sorted(rows.items(), key=lambda kv: (BENCH_PHOTON_SCENES.index(kv[0][0]),) + kv[0][1:]):
+        if {"Adaptive", "HashGrid", "Nanoflann", "KdTree"} <= v.keys():
+            a = v["Adaptive"]
+            print(f"| {scene} | {side}^2 | {int(v['stored'])} | {rad:g} | {v['found']:.0f} | {v['cells_per_radius']:g} | "
+                  f"{a:.2f} | {v['HashGrid']:.2f} | {v['Nanoflann']:.2f} | {v['KdTree']:.2f} | "
+                  f"{v['Nanoflann'] / a:.2f}x | {v['KdTree'] / a:.2f}x | {v['HashGrid'] / a:.2f}x |")
+    return {f"{sc}/{s}/{r}": v for (sc, s, r), v in rows.items()}
 
 
 ERROR_SCENES = ("cornell", "room_lit", "room_indirect", "room_partition")
