@@ -282,8 +282,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     tangent plane only, the disc clipped per octant by rays to where walls stand or the surface
     ends, and divided by the clipped area (removes the darkening at edges and corners, the leak
     along a floor under a thin partition and a wall's light on a painting in front of it; costs
-    24 rays per gather where another surface is within r). Default (None): on for progressive
-    rendering, whose bias would otherwise dominate at many passes, off for one-shot renders.
+    24 rays per gather where another surface is within r). Default (None): on wherever the options
+    allow it (box kernel, radius gather, not cooperative), for one-shot and progressive renders.
 
     progressive=True: stochastic progressive photon mapping (consistent: converges to the exact
     image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
@@ -292,7 +292,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     in stats['snapshots'] as (passes, seconds, image).
     """
     if disc is None:  # where the options allow it; otherwise their own error message comes first
-        disc = bool(progressive) and kernel == "box" and gather == "radius" and not cooperative
+        disc = kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
                   cooperative, direct, indirect, threads, hash_mode, disc)
     if not progressive:

@@ -234,7 +234,7 @@ def test_hash_grid_dense_and_hashed_render_the_same(cornell64):
 
 def test_pipelines_and_cooperative_gather_agree(cornell64):
     scene, cam = cornell64
-    kw = dict(photons=40_000, radius=0.05, spp=2)
+    kw = dict(photons=40_000, radius=0.05, spp=2, disc=False)  # the cooperative gather is a sphere's
     fused = g.render(scene, cam, **kw)
     two = g.render(scene, cam, pipeline="two-pass", **kw)
     coop = g.render(scene, cam, pipeline="two-pass", cooperative=True, grid="hash", **kw)

@@ -109,14 +109,17 @@ def _tables(name: str, args) -> dict:
     configs = [(s, r) for (s, r) in SEED_TABLE1 if s in sides]
     bar = tqdm(total=len(configs) * 2 + len(configs) * 4, desc=f"{name} tables", unit="config")
 
+    # The seed's tables gather over the sphere (disc=False), as seed 001 does.
     def gather_ms(side, r, repeat=args.repeat, **kw):
         def once():
-            return P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True, **kw)[1]
+            return P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True,
+                            disc=False, **kw)[1]
         return _median_time(once, repeat, "gather_seconds")
 
     def pipeline_ms(side, r, **kw):
         def once():
-            st = P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True, **kw)[1]
+            st = P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True,
+                          disc=False, **kw)[1]
             return {"t": st["trace_seconds"] + st["gather_seconds"]}
         return _median_time(once, args.repeat, "t")
 
@@ -333,13 +336,16 @@ def _error_study(name: str, args, out: Path) -> dict:
     P.render(scene, cam, photons=1000, radius=r0)  # warm-up
     one_shot = []
     photon_counts = [1 << 14, 1 << 16, 1 << 18] if args.quick else [1 << 14, 1 << 16, 1 << 18, 1 << 20]
-    configs = [(n, r, spp) for n in photon_counts for r in (0.5 * r0, r0) for spp in (4, 16, 64)]
-    for n, r, spp in tqdm(configs, desc=f"{name}: one-shot", unit="run"):
+    # One-shot with the sphere and with the surface disc (the default), configurations interleaved.
+    configs = [(n, r, spp, disc) for n in photon_counts for r in (0.5 * r0, r0) for spp in (4, 16, 64)
+               for disc in (False, True)]
+    for n, r, spp, disc in tqdm(configs, desc=f"{name}: one-shot", unit="run"):
         t0 = time.perf_counter()
-        img = P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7)
-        one_shot.append(dict(photons=n, radius=r, spp=spp, seconds=time.perf_counter() - t0,
+        img = P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7, disc=disc)
+        one_shot.append(dict(photons=n, radius=r, spp=spp, disc=disc, seconds=time.perf_counter() - t0,
                              relmse=P.relmse(img, ref)))
-    curves["one-shot (Pareto front)"] = _pareto(one_shot)
+    curves["one-shot (Pareto front)"] = _pareto([p for p in one_shot if not p["disc"]])
+    curves["one-shot disc (Pareto front)"] = _pareto([p for p in one_shot if p["disc"]])
     # Progressive: 4 photons per pixel and pass from 4x the default radius (a sweep at 32x32
     # found it ahead of 1 per pixel and of 2^15 per pass), for as long as Mitsuba's longest run
     # plus half; the curve is the image after each power-of-two pass count.

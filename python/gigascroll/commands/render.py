@@ -42,10 +42,10 @@ def register(sub) -> None:
                    help="progressive: stop after this many seconds")
     disc = p.add_mutually_exclusive_group()
     disc.add_argument("--disc", dest="disc", action="store_true", default=None,
-                      help="gather over the surface disc (no edge darkening or leaks; default for "
-                           "--progressive)")
+                      help="gather over the surface disc (no edge darkening or leaks; the default "
+                           "for box radius gathers)")
     disc.add_argument("--sphere", dest="disc", action="store_false",
-                      help="gather over the sphere (default for one-shot renders)")
+                      help="gather over the sphere (seed 001's estimator)")
     p.set_defaults(func=run)
 
 
