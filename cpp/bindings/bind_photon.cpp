@@ -104,7 +104,7 @@ nb::dict stats_dict(const RenderStats& st) {
 }
 
 #define RENDER_ARGS                                                                                   \
-    "photons"_a, "radius"_a, "grid"_a = "hash", "gather"_a = "radius", "k"_a = 50, "kernel"_a = "box", \
+    "photons"_a, "radius"_a, "grid"_a = "adaptive", "gather"_a = "radius", "k"_a = 50, "kernel"_a = "box", \
         "spp"_a = 1, "light_samples"_a = 1, "seed"_a = 0, "pipeline"_a = "fused", "cooperative"_a = false, \
         "direct"_a = true, "indirect"_a = true, "threads"_a = 0, "hash_mode"_a = "auto", "disc"_a = false
 
@@ -170,7 +170,7 @@ void bind_photon(nb::module_& m) {
     }, "scene"_a, "count"_a, "seed"_a = 0, "threads"_a = 0);
 
     nb::class_<PhotonMap>(m, "PhotonMap",
-                          "A photon map over positions (N, 3) float32: grid='hash' (seed 001) or 'kdtree' (Jensen).")
+                          "A photon map over positions (N, 3) float32: grid='adaptive' (density-sized cells culled against the sphere), 'hash' (seed 001) or 'kdtree' (Jensen).")
         .def("__init__", [](PhotonMap* pm, const FloatArray& positions, float radius, const std::string& grid,
                             const std::string& mode) {
             std::vector<Photon> ph = photons_from(positions);

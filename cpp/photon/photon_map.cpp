@@ -9,7 +9,8 @@ namespace gigascroll {
 GridKind parse_grid_kind(const std::string& s) {
     if (s == "hash") return GridKind::Hash;
     if (s == "kdtree") return GridKind::KdTree;
-    throw InvalidArgument("grid must be 'hash' or 'kdtree', not '" + s + "'");
+    if (s == "adaptive") return GridKind::Adaptive;
+    throw InvalidArgument("grid must be 'adaptive', 'hash' or 'kdtree', not '" + s + "'");
 }
 
 HashGrid::Mode parse_hash_mode(const std::string& s) {
@@ -27,12 +28,13 @@ bool parse_gather_is_knn(const std::string& s) {
 PhotonMap::PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind, HashGrid::Mode mode) {
     require(std::isfinite(radius) && radius > 0.0f, "PhotonMap: radius must be positive and finite");
     if (kind == GridKind::Hash) grid_ = std::make_unique<HashGrid>(photons, radius, mode);
+    else if (kind == GridKind::Adaptive) adaptive_ = std::make_unique<AdaptiveGrid>(photons, radius);
     else kd_ = std::make_unique<KdTree>(photons);
 }
 
 std::vector<std::uint64_t> PhotonMap::query_radius(Vec3f q, float r) const {
     require(std::isfinite(r) && r > 0.0f, "PhotonMap.query_radius: radius must be positive");
-    require(!grid_ || r <= grid_->radius(), "PhotonMap.query_radius: radius exceeds the grid's cell size");
+    require(kd_ || r <= build_radius(), "PhotonMap.query_radius: radius exceeds the grid's radius");
     std::vector<std::uint64_t> out;
     const Photon* base = photons().data();
     float r2 = r * r;
@@ -44,7 +46,7 @@ std::vector<std::uint64_t> PhotonMap::query_radius(Vec3f q, float r) const {
 std::vector<std::uint64_t> PhotonMap::query_knn(Vec3f q, int k, float r) const {
     require(k > 0, "PhotonMap.query_knn: k must be positive");
     require(std::isfinite(r) && r > 0.0f, "PhotonMap.query_knn: radius must be positive");
-    require(!grid_ || r <= grid_->radius(), "PhotonMap.query_knn: radius exceeds the grid's cell size");
+    require(kd_ || r <= build_radius(), "PhotonMap.query_knn: radius exceeds the grid's radius");
     std::vector<std::pair<float, std::uint64_t>> h;
     const Photon* base = photons().data();
     float r2 = r * r;

@@ -1,10 +1,12 @@
-// A photon map: the stored photons behind one of the two search structures, with the
-// gathers of gather.h dispatched on the settings.
+// A photon map: the stored photons behind one of the search structures (the adaptive grid,
+// the renders' default; seed 001's hash grid; Jensen's kd-tree), with the gathers of gather.h
+// dispatched on the settings.
 #pragma once
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "photon/adaptive_grid.h"
 #include "photon/gather.h"
 #include "photon/hash_grid.h"
 #include "photon/kd_tree.h"
@@ -12,8 +14,8 @@
 
 namespace gigascroll {
 
-enum class GridKind { Hash, KdTree };
-// "hash" / "kdtree"; InvalidArgument otherwise.
+enum class GridKind { Hash, KdTree, Adaptive };
+// "hash" / "kdtree" / "adaptive"; InvalidArgument otherwise.
 GridKind parse_grid_kind(const std::string& name);
 // "auto" / "dense" / "hashed"; InvalidArgument otherwise.
 HashGrid::Mode parse_hash_mode(const std::string& name);
@@ -33,14 +35,22 @@ public:
     PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind,
               HashGrid::Mode mode = HashGrid::Mode::Auto);
 
-    std::size_t size() const { return grid_ ? grid_->size() : kd_->size(); }
+    std::size_t size() const { return photons().size(); }
+    // The structure in use: exactly one of these is not null.
     const HashGrid* grid() const { return grid_.get(); }
     const KdTree* kdtree() const { return kd_.get(); }
+    const AdaptiveGrid* adaptive() const { return adaptive_.get(); }
 
     // Flux density at x on a surface with normal n (see gather.h).
     Vec3f gather(Vec3f x, Vec3f n, const GatherSettings& s, KnnHeap& heap) const {
+        const float box_norm = 1.0f / (float(M_PI) * s.radius * s.radius);
+        if (adaptive_) {
+            if (!s.knn && s.kernel == Kernel::Box) return adaptive_->sum_box(x, n, s.radius * s.radius) * box_norm;
+            return s.knn ? gather_knn(*adaptive_, x, n, s.radius, s.k, s.kernel, heap)
+                         : gather_radius(*adaptive_, x, n, s.radius, s.kernel);
+        }
         if (grid_ && !s.knn && s.kernel == Kernel::Box)  // the hot path, vectorised
-            return grid_->sum_box(x, n, s.radius * s.radius) * (1.0f / (float(M_PI) * s.radius * s.radius));
+            return grid_->sum_box(x, n, s.radius * s.radius) * box_norm;
         if (grid_) return s.knn ? gather_knn(*grid_, x, n, s.radius, s.k, s.kernel, heap)
                                 : gather_radius(*grid_, x, n, s.radius, s.kernel);
         return s.knn ? gather_knn(*kd_, x, n, s.radius, s.k, s.kernel, heap)
@@ -49,6 +59,7 @@ public:
 
     // The surface-disc gather (surface_disc.h) at x, radius at most the grid's.
     DiscEstimate gather_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) const {
+        if (adaptive_) return gigascroll::gather_surface_disc(scene, *adaptive_, x, n, r);
         return grid_ ? gigascroll::gather_surface_disc(scene, *grid_, x, n, r)
                      : gigascroll::gather_surface_disc(scene, *kd_, x, n, r);
     }
@@ -57,16 +68,22 @@ public:
     std::vector<std::uint64_t> query_radius(Vec3f q, float r) const;
     // The k nearest photons within r, nearest first.
     std::vector<std::uint64_t> query_knn(Vec3f q, int k, float r) const;
-    const std::vector<Photon>& photons() const { return grid_ ? grid_->photons() : kd_->photons(); }
+    const std::vector<Photon>& photons() const {
+        return adaptive_ ? adaptive_->photons() : grid_ ? grid_->photons() : kd_->photons();
+    }
+    // The radius the structure was built for (queries may not exceed it); 0 for the kd-tree.
+    float build_radius() const { return adaptive_ ? adaptive_->radius() : grid_ ? grid_->radius() : 0.0f; }
 
 private:
     template <typename F>
     void each(Vec3f q, float& r2, F&& f) const {
-        if (grid_) grid_->for_each_in_radius(q, r2, f);
+        if (adaptive_) adaptive_->for_each_in_radius(q, r2, f);
+        else if (grid_) grid_->for_each_in_radius(q, r2, f);
         else kd_->for_each_in_radius(q, r2, f);
     }
     std::unique_ptr<HashGrid> grid_;
     std::unique_ptr<KdTree> kd_;
+    std::unique_ptr<AdaptiveGrid> adaptive_;
 };
 
 }  // namespace gigascroll

@@ -7,6 +7,7 @@
 
 #include "common/error.h"
 #include "common/parallel.h"
+#include "photon/adaptive_grid.h"
 #include "photon/hash_grid.h"
 #include "photon/photon_tracer.h"
 #include "photon/rng.h"
@@ -44,9 +45,9 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
     prog.validate();
     require(settings.spp == 1, "render: progressive rendering takes one camera sample per pixel and pass "
                                "(raise passes instead of spp)");
-    require(!settings.gather.knn && settings.gather.kernel == Kernel::Box && settings.grid == GridKind::Hash &&
+    require(!settings.gather.knn && settings.gather.kernel == Kernel::Box && settings.grid != GridKind::KdTree &&
                 settings.pipeline == Pipeline::Fused && !settings.cooperative,
-            "render: progressive rendering uses the hash grid's box radius gather (no knn, cone, kdtree, "
+            "render: progressive rendering uses a grid's box radius gather (no knn, cone, kdtree, "
             "two-pass or cooperative options)");
     const auto t_start = Clock::now();
     // The shading helpers (emission, direct light) without a photon map of their own.
@@ -116,8 +117,9 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
             float r_max = 0;
             for (const PixelState& s : px)
                 if (s.has_point) r_max = std::max(r_max, s.r);
-            if (r_max > 0 && !photons.empty()) {
-                const HashGrid grid(photons, r_max, settings.hash_mode);
+            // One gather pass over either grid; the adaptive grid culls its cells against each
+            // pixel's own (shrinking) radius, seed 001's grid visits the cells of r_max.
+            auto gather_pass = [&](const auto& grid) {
                 stats.render.build_seconds += seconds_since(t0);
                 t0 = Clock::now();
                 const float alpha = prog.alpha;
@@ -153,6 +155,10 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                 }, settings.threads);
                 stats.render.gathers += gathers;
                 stats.render.gather_seconds += seconds_since(t0);
+            };
+            if (r_max > 0 && !photons.empty()) {
+                if (settings.grid == GridKind::Adaptive) gather_pass(AdaptiveGrid(photons, r_max));
+                else gather_pass(HashGrid(photons, r_max, settings.hash_mode));
             }
         }
         ++k;

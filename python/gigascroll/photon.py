@@ -262,7 +262,7 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
 
 
 def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float | None = None,
-           grid: str = "hash", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
+           grid: str = "adaptive", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
            kernel: str = "box", light_samples: int = 1, pipeline: str = "fused",
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
@@ -274,9 +274,10 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     "baked", "full" or "unlit" (photons, radius, seed and threads go to its photon pass).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
-    in the photon map (grid 'hash' or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
+    in the photon map (grid 'adaptive': cells sized from the photon density and culled against the
+    gather sphere, the fastest; 'hash': seed 001's grid; or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
     heap of k; kernel 'box' or 'cone'). pipeline 'fused' or 'two-pass'; cooperative=True (two-pass,
-    hash grid, radius gather) streams each photon once through a block of hit points in one cell.
+    grid='hash', radius gather) streams each photon once through a block of hit points in one cell.
     The same seed gives the same image for any thread count. return_stats=True also returns a
     dict of pass times (seconds) and counts.
 
@@ -284,8 +285,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     tangent plane only, the disc clipped per octant by rays to where walls stand or the surface
     ends, and divided by the clipped area (removes the darkening at edges and corners, the leak
     along a floor under a thin partition and a wall's light on a painting in front of it; costs
-    24 rays per gather where another surface is within r). Default (None): on for progressive
-    rendering, whose bias would otherwise dominate at many passes, off for one-shot renders.
+    24 rays per gather where another surface is within r). Default (None): on wherever the options
+    allow it (box kernel, radius gather, not cooperative), for one-shot and progressive renders.
 
     progressive=True: stochastic progressive photon mapping (consistent: converges to the exact
     image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
@@ -300,7 +301,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
                             **({} if radius is None else {"radius": radius}))
         return (image, dict(scene.stats)) if return_stats else image
     if disc is None:  # where the options allow it; otherwise their own error message comes first
-        disc = bool(progressive) and kernel == "box" and gather == "radius" and not cooperative
+        disc = kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
                   cooperative, direct, indirect, threads, hash_mode, disc)
     if not progressive:
@@ -325,7 +326,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
 
 
 def render_stereo(scene: Scene, eyes: StereoCamera, reuse: bool = True, photons: int = 1 << 18,
-                  radius: float | None = None, grid: str = "hash", gather: str = "radius", k: int = 50,
+                  radius: float | None = None, grid: str = "adaptive", gather: str = "radius", k: int = 50,
                   spp: int = 1, seed: int = 0, kernel: str = "box", light_samples: int = 1,
                   direct: bool = True, indirect: bool = True, threads: int = 0):
     """Render both eyes: (left, right, stats). With reuse=True the left eye writes the colour of

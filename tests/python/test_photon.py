@@ -208,7 +208,7 @@ def test_python_cornell_arrays_equal_builtin(cornell64):
 
 def test_photon_map_queries_match_numpy_brute_force(rng):
     pts = rng.random((30_000, 3), dtype=np.float32) * np.float32([2, 2, 0.5])
-    for grid, mode in (("hash", "dense"), ("hash", "hashed"), ("kdtree", "auto")):
+    for grid, mode in (("hash", "dense"), ("hash", "hashed"), ("kdtree", "auto"), ("adaptive", "auto")):
         pm = g.PhotonMap(pts, 0.08, grid=grid, hash_mode=mode)
         if grid == "hash":
             assert pm.dense == (mode == "dense")
@@ -223,20 +223,22 @@ def test_photon_map_queries_match_numpy_brute_force(rng):
 
 def test_hash_grid_dense_and_hashed_render_the_same(cornell64):
     scene, cam = cornell64
-    a = g.render(scene, cam, photons=40_000, radius=0.05, hash_mode="dense")
-    b = g.render(scene, cam, photons=40_000, radius=0.05, hash_mode="hashed")
+    a = g.render(scene, cam, photons=40_000, radius=0.05, grid="hash", hash_mode="dense")
+    b = g.render(scene, cam, photons=40_000, radius=0.05, grid="hash", hash_mode="hashed")
     c = g.render(scene, cam, photons=40_000, radius=0.05, grid="kdtree")
+    d = g.render(scene, cam, photons=40_000, radius=0.05, grid="adaptive")
     assert np.allclose(a, b, rtol=1e-5, atol=1e-6)
     assert np.allclose(a, c, rtol=1e-5, atol=1e-6)
+    assert np.allclose(a, d, rtol=1e-5, atol=1e-6)
 
 
 def test_pipelines_and_cooperative_gather_agree(cornell64):
     scene, cam = cornell64
-    kw = dict(photons=40_000, radius=0.05, spp=2)
+    kw = dict(photons=40_000, radius=0.05, spp=2, disc=False)  # the cooperative gather is a sphere's
     fused = g.render(scene, cam, **kw)
     two = g.render(scene, cam, pipeline="two-pass", **kw)
-    coop = g.render(scene, cam, pipeline="two-pass", cooperative=True, **kw)
-    cone = g.render(scene, cam, pipeline="two-pass", cooperative=True, kernel="cone", **kw)
+    coop = g.render(scene, cam, pipeline="two-pass", cooperative=True, grid="hash", **kw)
+    cone = g.render(scene, cam, pipeline="two-pass", cooperative=True, grid="hash", kernel="cone", **kw)
     cone_ref = g.render(scene, cam, kernel="cone", **kw)
     assert np.allclose(fused, two, rtol=1e-5, atol=1e-6)
     assert np.allclose(fused, coop, rtol=1e-4, atol=1e-6)
@@ -336,7 +338,8 @@ def test_bad_render_arguments(cornell64):
                       (dict(photons=0), "photons"), (dict(spp=0), "spp"), (dict(grid="octree"), "grid"),
                       (dict(gather="knn", k=0), "k"), (dict(kernel="gauss"), "kernel"),
                       (dict(pipeline="fused", cooperative=True), "two-pass"),
-                      (dict(pipeline="two-pass", cooperative=True, grid="kdtree"), "hash grid")]:
+                      (dict(pipeline="two-pass", cooperative=True, grid="kdtree"), "hash grid"),
+                      (dict(pipeline="two-pass", cooperative=True), "hash grid")]:
         args = dict(photons=1000, radius=0.05) | kw
         with pytest.raises(ValueError, match=match):
             g.render(scene, cam, **args)

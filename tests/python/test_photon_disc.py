@@ -58,7 +58,7 @@ def test_surface_disc_removes_edge_and_leak_bias(region_bias):
 
 def test_disc_rejects_incompatible_options():
     scene, cam = g.builtin_scene("cornell", resolution=(8, 8))
-    for kw in (dict(gather="knn"), dict(kernel="cone"), dict(pipeline="two-pass", cooperative=True)):
+    for kw in (dict(gather="knn"), dict(kernel="cone"), dict(pipeline="two-pass", cooperative=True, grid="hash")):
         with pytest.raises(ValueError, match="disc"):
             g.render(scene, cam, photons=1000, radius=0.05, disc=True, **kw)
 
@@ -70,9 +70,10 @@ def test_disc_pipelines_agree_and_progressive_runs():
     assert np.allclose(a, b, rtol=1e-5, atol=1e-6)
     p = g.render(scene, cam, photons=20_000, progressive=True, passes=4, disc=True)
     assert np.isfinite(p).all() and p.mean() > 0
-    # The disc is progressive rendering's default, and off for one-shot renders.
+    # The disc is the default of progressive and one-shot renders; disc=False is the sphere.
     assert np.array_equal(p, g.render(scene, cam, photons=20_000, progressive=True, passes=4))
-    assert not np.array_equal(a, g.render(scene, cam, photons=20_000, spp=2))
+    assert np.array_equal(a, g.render(scene, cam, photons=20_000, spp=2))
+    assert not np.array_equal(a, g.render(scene, cam, photons=20_000, spp=2, disc=False))
 
 
 def test_disc_with_a_huge_radius_gives_a_finite_image():

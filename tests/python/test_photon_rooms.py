@@ -67,8 +67,9 @@ def test_rooms_unknown_name():
 
 
 # relMSE to Mitsuba at 48 x 48, measured with these settings (deterministic seeds), and the
-# bound asserted (1.5x): one-shot at the default radius, 2^18 photons, 16 spp.
-ONE_SHOT = {"room_lit": (0.0037, 0.0056), "room_indirect": (0.0085, 0.013), "room_partition": (0.0080, 0.012)}
+# bound asserted (1.5x): one-shot at the default radius, 2^18 photons, 16 spp, with the surface
+# disc (the default). With the sphere gather instead: 0.0037, 0.0085, 0.0080.
+ONE_SHOT = {"room_lit": (0.0028, 0.0042), "room_indirect": (0.0070, 0.0105), "room_partition": (0.0076, 0.0114)}
 # Progressive (surface disc, its default), 32 passes of 2^15 photons from twice the default
 # radius. With the sphere gather instead: 0.0024, 0.0052, 0.0037.
 PROGRESSIVE = {"room_lit": (0.0012, 0.0018), "room_indirect": (0.0034, 0.0051), "room_partition": (0.0030, 0.0045)}

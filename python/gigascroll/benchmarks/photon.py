@@ -109,14 +109,17 @@ def _tables(name: str, args) -> dict:
     configs = [(s, r) for (s, r) in SEED_TABLE1 if s in sides]
     bar = tqdm(total=len(configs) * 2 + len(configs) * 4, desc=f"{name} tables", unit="config")
 
+    # The seed's tables gather over the sphere (disc=False), as seed 001 does.
     def gather_ms(side, r, repeat=args.repeat, **kw):
         def once():
-            return P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True, **kw)[1]
+            return P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True,
+                            disc=False, **kw)[1]
         return _median_time(once, repeat, "gather_seconds")
 
     def pipeline_ms(side, r, **kw):
         def once():
-            st = P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True, **kw)[1]
+            st = P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True,
+                          disc=False, **kw)[1]
             return {"t": st["trace_seconds"] + st["gather_seconds"]}
         return _median_time(once, args.repeat, "t")
 
@@ -132,13 +135,13 @@ def _tables(name: str, args) -> dict:
                                   stored=st["photons_stored"], seed=SEED_TABLE1[(side, r)]))
         res["table2"].append(dict(side=side, r=r, heap_ms=hg, noheap_ms=nh, seed=SEED_TABLE2.get((side, r))))
         # Table 3: fused against two-pass (trace + gather, photon pass excluded).
-        fused, _ = pipeline_ms(side, r, pipeline="fused")
-        two, _ = pipeline_ms(side, r, pipeline="two-pass")
+        fused, _ = pipeline_ms(side, r, grid="hash", pipeline="fused")
+        two, _ = pipeline_ms(side, r, grid="hash", pipeline="two-pass")
         bar.update(2)
         res["table3"].append(dict(side=side, r=r, fused_ms=fused, two_pass_ms=two))
         # Table 4: per-pixel against cooperative gather (both two-pass; gather pass only).
-        per, _ = gather_ms(side, r, pipeline="two-pass")
-        coop, _ = gather_ms(side, r, pipeline="two-pass", cooperative=True)
+        per, _ = gather_ms(side, r, grid="hash", pipeline="two-pass")
+        coop, _ = gather_ms(side, r, grid="hash", pipeline="two-pass", cooperative=True)
         bar.update(2)
         res["table4"].append(dict(side=side, r=r, per_pixel_ms=per, cooperative_ms=coop))
     bar.close()
@@ -148,7 +151,8 @@ def _tables(name: str, args) -> dict:
     for r in (0.05, 0.1, 0.15):
         def stereo(reuse):
             def once():
-                _, _, st = P.render_stereo(scene, eyes, reuse=reuse, photons=side5 * side5, radius=r * sc, seed=1)
+                _, _, st = P.render_stereo(scene, eyes, reuse=reuse, photons=side5 * side5, radius=r * sc, seed=1,
+                                           grid="hash")
                 return {"t": st["left"]["gather_seconds"] + st["right"]["gather_seconds"],
                         "share": st["reused_share"]}
             return _median_time(once, args.repeat, "t")
@@ -200,38 +204,62 @@ def _print_tables(name: str, res: dict, args) -> None:
               f"{e['separate_ms'] / e['reuse_ms']:.2f}x | {100 * e['reused_share']:.0f}% | {_fmt_seed(e['seed'])} |")
 
 
+BENCH_PHOTON_SCENES = ("cornell", "office")  # bench_photon's scene index
+BENCH_PHOTON_RADII = (0.02, 0.05, 0.1, 0.2)  # times the scene's scale
+BENCH_PHOTON_ARGS = ("--benchmark_filter=-BM_AdaptiveCells", "--benchmark_repetitions=3",
+                     "--benchmark_enable_random_interleaving=true", "--benchmark_report_aggregates_only=true")
+
+
 def _nanoflann(quick: bool) -> dict | None:
-    """Runs the C++ Google Benchmark bench_photon (hash grid vs nanoflann vs our kd-tree)."""
+    """Runs the C++ Google Benchmark bench_photon: our adaptive grid, seed 001's hash grid,
+    nanoflann and our kd-tree on the same photons and queries, repeated 3 times with the runs
+    interleaved at random (the machine is shared); reports the median CPU time per query set."""
     root = Path(__file__).resolve().parents[3]
     exes = sorted(root.glob("build/cp3*/bench_photon"))
     if not exes:
         print("\n(bench_photon not built: skipping the nanoflann comparison)")
         return None
-    filt = "side:128" if quick else "."
-    r = subprocess.run([str(exes[0]), "--benchmark_format=json", f"--benchmark_filter={filt}"],
-                       capture_output=True, text=True)
+    args = list(BENCH_PHOTON_ARGS)
+    if quick:
+        args = ["--benchmark_filter=^BM_(Adaptive|HashGrid|Nanoflann|KdTree)/scene:0/side:128/"]
+    cmd = [str(exes[0]), "--benchmark_format=json", *args]
+    print("\n$ " + " ".join(["bench_photon", *cmd[1:]]))
+    r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         print(f"\nbench_photon failed: {r.stderr.strip()[:500]}")
         return None
-    data = json.loads(r.stdout)
+    return _print_bench_photon(json.loads(r.stdout))
+
+
+def _print_bench_photon(data: dict) -> dict:
     rows: dict = {}
     for b in data["benchmarks"]:
-        name, *params = b["name"].split("/")
-        kv = dict(p.split(":") for p in params if ":" in p)
-        if "side" not in kv or "r_index" not in kv:
+        if b.get("run_type") == "aggregate" and b.get("aggregate_name") != "median":
             continue
-        key = (int(kv["side"]), [0.02, 0.05, 0.1, 0.2][int(kv["r_index"])])
-        rows.setdefault(key, {})[name.replace("BM_", "")] = b["real_time"]
-        rows[key]["found"] = b.get("found/query", 0)
-        rows[key]["stored"] = b.get("photons", 0)
-    print("\nRadius search, Cornell photons, 128x128 first-hit queries (C++ bench_photon, ms per query set)")
-    print("| photons | stored | r | found/query | hash grid | nanoflann | our kd-tree | nanoflann/hash |")
-    print("|---|---|---|---|---|---|---|---|")
-    for (side, rad), v in sorted(rows.items()):
-        if {"HashGrid", "Nanoflann", "KdTree"} <= v.keys():
-            print(f"| {side}^2 | {int(v['stored'])} | {rad:g} | {v['found']:.0f} | {v['HashGrid']:.2f} | "
-                  f"{v['Nanoflann']:.2f} | {v['KdTree']:.2f} | {v['Nanoflann'] / v['HashGrid']:.2f}x |")
-    return {f"{s}/{r}": v for (s, r), v in rows.items()}
+        name, *params = b.get("run_name", b["name"]).split("/")
+        kv = dict(p.split(":") for p in params if ":" in p)
+        if not {"scene", "side", "r_index"} <= kv.keys() or "quarter_cells" in kv:
+            continue
+        scene = BENCH_PHOTON_SCENES[int(kv["scene"])]
+        key = (scene, int(kv["side"]), BENCH_PHOTON_RADII[int(kv["r_index"])])
+        row = rows.setdefault(key, {})
+        row[name.replace("BM_", "")] = b["cpu_time"]
+        if name == "BM_Adaptive":
+            row["found"] = b.get("found/query", 0)
+            row["stored"] = b.get("photons", 0)
+            row["cells_per_radius"] = b.get("cells_per_radius", 0)
+    print("\nRadius search, 128x128 first-hit queries (C++ bench_photon, median CPU ms per query set; "
+          "radii x scene scale: cornell 1, office 4)")
+    print("| scene | photons | stored | r | found/query | cells/r | adaptive (ours) | seed hash grid | nanoflann | "
+          "our kd-tree | nanoflann/adaptive | kd-tree/adaptive | seed grid/adaptive |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for (scene, side, rad), v in sorted(rows.items(), key=lambda kv: (BENCH_PHOTON_SCENES.index(kv[0][0]),) + kv[0][1:]):
+        if {"Adaptive", "HashGrid", "Nanoflann", "KdTree"} <= v.keys():
+            a = v["Adaptive"]
+            print(f"| {scene} | {side}^2 | {int(v['stored'])} | {rad:g} | {v['found']:.0f} | {v['cells_per_radius']:g} | "
+                  f"{a:.2f} | {v['HashGrid']:.2f} | {v['Nanoflann']:.2f} | {v['KdTree']:.2f} | "
+                  f"{v['Nanoflann'] / a:.2f}x | {v['KdTree'] / a:.2f}x | {v['HashGrid'] / a:.2f}x |")
+    return {f"{sc}/{s}/{r}": v for (sc, s, r), v in rows.items()}
 
 
 ERROR_SCENES = ("cornell", "room_lit", "room_indirect", "room_partition")
@@ -308,13 +336,16 @@ def _error_study(name: str, args, out: Path) -> dict:
     P.render(scene, cam, photons=1000, radius=r0)  # warm-up
     one_shot = []
     photon_counts = [1 << 14, 1 << 16, 1 << 18] if args.quick else [1 << 14, 1 << 16, 1 << 18, 1 << 20]
-    configs = [(n, r, spp) for n in photon_counts for r in (0.5 * r0, r0) for spp in (4, 16, 64)]
-    for n, r, spp in tqdm(configs, desc=f"{name}: one-shot", unit="run"):
+    # One-shot with the sphere and with the surface disc (the default), configurations interleaved.
+    configs = [(n, r, spp, disc) for n in photon_counts for r in (0.5 * r0, r0) for spp in (4, 16, 64)
+               for disc in (False, True)]
+    for n, r, spp, disc in tqdm(configs, desc=f"{name}: one-shot", unit="run"):
         t0 = time.perf_counter()
-        img = P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7)
-        one_shot.append(dict(photons=n, radius=r, spp=spp, seconds=time.perf_counter() - t0,
+        img = P.render(scene, cam, photons=n, radius=r, spp=spp, seed=7, disc=disc)
+        one_shot.append(dict(photons=n, radius=r, spp=spp, disc=disc, seconds=time.perf_counter() - t0,
                              relmse=P.relmse(img, ref)))
-    curves["one-shot (Pareto front)"] = _pareto(one_shot)
+    curves["one-shot (Pareto front)"] = _pareto([p for p in one_shot if not p["disc"]])
+    curves["one-shot disc (Pareto front)"] = _pareto([p for p in one_shot if p["disc"]])
     # Progressive: 4 photons per pixel and pass from 4x the default radius (a sweep at 32x32
     # found it ahead of 1 per pixel and of 2^15 per pass), for as long as Mitsuba's longest run
     # plus half; the curve is the image after each power-of-two pass count.

@@ -31,7 +31,8 @@ def register(sub) -> None:
     p.add_argument("--photons", type=int, default=1 << 18, help="photons emitted (default 2^18)")
     p.add_argument("--radius", type=float, default=None,
                    help="gather radius (default 0.02 x the scene's scale: 0.02 in the Cornell box)")
-    p.add_argument("--grid", choices=["hash", "kdtree"], default="hash")
+    p.add_argument("--grid", choices=["adaptive", "hash", "kdtree"], default="adaptive",
+                   help="photon search structure (default adaptive; hash is seed 001's grid)")
     p.add_argument("--gather", choices=["radius", "knn"], default="radius")
     p.add_argument("-k", type=int, default=50, help="photons of the k-nearest gather")
     p.add_argument("--kernel", choices=["box", "cone"], default="box")
@@ -50,10 +51,10 @@ def register(sub) -> None:
                    help="progressive: stop after this many seconds")
     disc = p.add_mutually_exclusive_group()
     disc.add_argument("--disc", dest="disc", action="store_true", default=None,
-                      help="gather over the surface disc (no edge darkening or leaks; default for "
-                           "--progressive)")
+                      help="gather over the surface disc (no edge darkening or leaks; the default "
+                           "for box radius gathers)")
     disc.add_argument("--sphere", dest="disc", action="store_false",
-                      help="gather over the sphere (default for one-shot renders)")
+                      help="gather over the sphere (seed 001's estimator)")
     p.set_defaults(func=run)
 
 
