@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "common/error.h"
+#include "pack/reader.h"
 
 namespace gigascroll {
 
@@ -44,6 +45,13 @@ VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x
     }
     stats_.pinned = pinned.size();
     for (std::uint32_t s = n; s-- > slot;) free_.push_back(s);  // hand out low slots first
+}
+
+VirtualTexture::VirtualTexture(const TilePack& pack, std::uint32_t slots_x, std::uint32_t slots_y)
+    : VirtualTexture(pack.geometry(), slots_x, slots_y, [&](const TileKey& k, std::uint8_t* out) {
+          pack.read_tile(k.painting, k.level, k.tx, k.ty, out);
+      }) {
+    pack_fingerprint_ = gigascroll::pack_fingerprint(pack);
 }
 
 void VirtualTexture::check_key(const TileKey& k) const {
