@@ -30,7 +30,10 @@ public:
     // Reads one tile (RGB8, tile_size^2 x 3 bytes) for pinning at construction.
     using TileSource = std::function<void(const TileKey&, std::uint8_t*)>;
 
-    // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot.
+    // Largest physical texture: 16 GiB of tile slots.
+    static constexpr std::size_t kMaxCacheBytes = std::size_t(16) << 30;
+    // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot, or their
+    // texels would take more than kMaxCacheBytes.
     VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x, std::uint32_t slots_y,
                    const TileSource& pinned_source);
     // The cache of a pack, pinned tiles read from it; remembers the pack's fingerprint so

@@ -28,11 +28,11 @@ inline bool within_coordinate_bound(Vec3d p) {
 }
 inline bool within_coordinate_bound(Vec3f p) { return within_coordinate_bound(Vec3d(p)); }
 
-// "what must be finite and within +-1e12 (got (x, y, z))" unless p is.
+// "what must be finite (no NaN or Inf) and within +-1e12 (got (x, y, z))" unless p is.
 inline void require_coordinate(Vec3d p, const std::string& what) {
     if (within_coordinate_bound(p)) return;
     char buf[160];
-    std::snprintf(buf, sizeof buf, " must be finite and within +-1e12 (got (%g, %g, %g))", p.x, p.y, p.z);
+    std::snprintf(buf, sizeof buf, " must be finite (no NaN or Inf) and within +-1e12 (got (%g, %g, %g))", p.x, p.y, p.z);
     throw InvalidArgument(what + buf);
 }
 

@@ -140,7 +140,8 @@ class Worker:
     def __init__(self, pack_dir):
         self.pack_dir = pack_dir
         self.proc = None
-        self.counts = {}
+        self.counts = {}    # cases per family
+        self.outcomes = {}  # family -> {"ok" or exception type: cases}
 
     def start(self):
         env = dict(os.environ, PYTHONFAULTHANDLER="1")
@@ -168,6 +169,9 @@ class Worker:
             self.proc = None
             pytest.fail(f"the worker died (exit code {code}) on case {case}:\n{err}")
         out = json.loads(line)
+        per = self.outcomes.setdefault(case["kind"], {})
+        tag = out["outcome"] if out["outcome"] == "ok" else out["type"]
+        per[tag] = per.get(tag, 0) + 1
         if out["outcome"] == "error":
             assert out["type"] in CLEAN, f"{out['type']} on {case}:\n{out['trace']}"
             assert out["message"].strip(), f"empty {out['type']} message on {case}"
@@ -189,6 +193,7 @@ def worker(tmp_path_factory):
     yield w
     w.close()
     print("\nfuzz cases per family (none crashed):", json.dumps(w.counts, sort_keys=True))
+    print("outcomes:", json.dumps(w.outcomes, sort_keys=True))
 
 
 def enc(x):
