@@ -19,7 +19,7 @@
 //
 // Thread safety: the seed's design has one main thread, but Python code may call a loader
 // from several threads. Every public call takes one mutex, so calls from several threads
-// are serialised (an uncontended lock costs ~20 ns, next to microseconds per tile): each
+// are serialised (uncontended in the one-main-thread design, next to microseconds per tile): each
 // tile is delivered exactly once, to one poll(), and close() from any thread is safe.
 #pragma once
 #include <atomic>

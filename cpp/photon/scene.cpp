@@ -35,7 +35,7 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     // Bounded scene extents keep every hit point, and so every secondary ray, in Embree's range.
     for (std::size_t i = 0; i < 3 * nv; ++i)
         require(std::isfinite(vertices[i]) && std::abs(vertices[i]) <= kMaxCoordinate,
-                "Scene.add_mesh: vertex " + std::to_string(i / 3) + " must be finite (no NaN or Inf) and within +-1e12 (got " +
+                "Scene.add_mesh: vertex " + std::to_string(i / 3) + " is not finite (NaN or Inf) or beyond +-1e12 (got " +
                     std::to_string(vertices[i]) + ")");
     const std::size_t na = per_triangle ? nt : 1;
     for (std::size_t i = 0; i < 3 * na; ++i)

@@ -105,6 +105,11 @@ WORKER = textwrap.dedent(r'''
                         g.render(scene(), cam, photons=64, indirect=False)
                     except ValueError:
                         pass
+            elif what == "ink_rows":
+                if n <= 64:  # small: rendered (n = 0 is refused)
+                    _core.render_ink_landscape(n, 64, 0, 1, threads=1)
+                else:  # over 4 GiB: refused before the allocation
+                    _core.render_ink_landscape(min(max(n, 1400), (1 << 32) - 1), 1 << 20, 0, 1 << 20, threads=1)
             elif what == "vt_slots":
                 _core.VirtualTexture(pack(), (n, max(1, n // 7)))
             elif what == "sample_empty":
@@ -269,7 +274,7 @@ def mesh_cases(n):
 
 
 SIZE_TARGETS = ["loader_threads", "loader_queue", "loader_pool", "trace_count", "trace_threads", "render_threads",
-                "render_spp", "render_photons", "resolution", "vt_slots", "sample_empty"]
+                "render_spp", "render_photons", "resolution", "vt_slots", "sample_empty", "ink_rows"]
 
 
 def size_cases(n):
