@@ -45,12 +45,8 @@ void bind_cache(nb::module_& m) {
         "Physical tile cache (LRU, coarse tiles pinned) with its mip-mapped page table and "
         "software VT sampling.")
         .def("__init__", [](VirtualTexture* self, const TilePack& pack, std::pair<std::uint32_t, std::uint32_t> slots) {
-            const PackGeometry layout = pack.geometry();
             nb::gil_scoped_release release;
-            new (self) VirtualTexture(layout, slots.first, slots.second,
-                                      [&](const TileKey& k, std::uint8_t* out) {
-                                          pack.read_tile(k.painting, k.level, k.tx, k.ty, out);
-                                      }); },
+            new (self) VirtualTexture(pack, slots.first, slots.second); },
             "pack"_a, "slots"_a = std::make_pair(30u, 30u))
         .def_prop_ro("slots", [](const VirtualTexture& vt) { return std::make_pair(vt.slots_x(), vt.slots_y()); })
         .def_prop_ro("tile_size", [](const VirtualTexture& vt) { return vt.layout().tile_size; })

@@ -56,16 +56,25 @@ void bind_loading(nb::module_& m) {
                 nb::gil_scoped_release release;
                 l.poll(results, max);
             }
-            nb::list out;
-            for (auto& r : results) {
-                if (r.buffer >= 0) {
-                    out.append(nb::make_tuple(to_tuple(r.key), new_tile(l.tile_size(), l.data(r.buffer))));
-                    l.release(r.buffer);
-                } else {
-                    out.append(nb::make_tuple(to_tuple(r.key), r.error));
+            // Every buffer goes back to the loader, also when a copy fails (MemoryError).
+            std::size_t next = 0;
+            try {
+                nb::list out;
+                for (; next < results.size(); ++next) {
+                    const LoadedTile& r = results[next];
+                    if (r.buffer >= 0) {
+                        out.append(nb::make_tuple(to_tuple(r.key), new_tile(l.tile_size(), l.data(r.buffer))));
+                        l.release(r.buffer);
+                    } else {
+                        out.append(nb::make_tuple(to_tuple(r.key), r.error));
+                    }
                 }
-            }
-            return out; }, "max_tiles"_a)
+                return out;
+            } catch (...) {
+                for (; next < results.size(); ++next)
+                    if (results[next].buffer >= 0) l.release(results[next].buffer);
+                throw;
+            } }, "max_tiles"_a)
         .def("discard", [](TileLoader& l, std::size_t max) {
             std::vector<LoadedTile> results;
             nb::gil_scoped_release release;

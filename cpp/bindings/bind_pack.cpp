@@ -11,6 +11,7 @@
 #include "bindings/bindings.h"
 #include "bindings/arrays.h"
 #include "common/error.h"
+#include "common/limits.h"
 #include "pack/ink_landscape.h"
 #include "pack/builder.h"
 #include "pack/colour.h"
@@ -255,6 +256,9 @@ void bind_pack(nb::module_& m) {
                                      std::uint32_t rows, std::uint64_t seed, unsigned threads) {
         require(std::uint64_t(y0) + rows <= height && rows > 0 && width > 0,
                 "rows [y0, y0 + rows) must be a non-empty range inside the painting");
+        require_threads(threads, "render_ink_landscape");
+        require_memory(double(rows) * width, 3, double(std::size_t(4) << 30),
+                       "render_ink_landscape: " + std::to_string(rows) + " rows of " + std::to_string(width) + " texels");
         FreshArray<std::uint8_t, nb::ndim<3>> out({rows, width, 3});
         {
             nb::gil_scoped_release release;

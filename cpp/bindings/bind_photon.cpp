@@ -141,9 +141,8 @@ void bind_photon(nb::module_& m) {
             return std::make_tuple(std::array<float, 3>{a.x, a.y, a.z}, std::array<float, 3>{b.x, b.y, b.z});
         })
         .def("intersect", [](const Scene& s, std::array<float, 3> o, std::array<float, 3> d) -> nb::object {
-            require(s.committed(), "Scene.intersect: call commit() first");
             Hit h;
-            if (!s.intersect(vec(o), vec(d), h)) return nb::none();
+            if (!s.intersect_checked(vec(o), vec(d), h)) return nb::none();
             return nb::make_tuple(h.t, std::array<float, 3>{h.p.x, h.p.y, h.p.z}, h.tri);
         }, "o"_a, "d"_a, "Nearest hit (t, point, triangle) along o + t d, or None.");
 
@@ -153,12 +152,13 @@ void bind_photon(nb::module_& m) {
         return build_scene(name, scene, width, height, albedo, emission);
     });
 
-    m.def("_trace_photons", [](const Scene& scene, std::uint64_t count, std::uint64_t seed, unsigned threads) {
+    m.def("_trace_photons", [](const Scene& scene, std::uint64_t count, std::uint64_t seed, unsigned threads,
+                               std::uint64_t max_stored) {
         TraceStats st;
         std::vector<Photon> ph;
         {
             nb::gil_scoped_release release;
-            ph = trace_photons(scene, count, seed, threads, &st);
+            ph = trace_photons(scene, count, seed, threads, &st, 0, max_stored);
         }
         nb::dict d;
         d["position"] = photons_field(ph, 0);
@@ -166,8 +166,9 @@ void bind_photon(nb::module_& m) {
         d["normal"] = photons_field(ph, 2);
         d["emitted"] = st.emitted;
         d["emitted_power"] = std::array<float, 3>{st.emitted_power.x, st.emitted_power.y, st.emitted_power.z};
+        d["stored"] = st.stored;
         return d;
-    }, "scene"_a, "count"_a, "seed"_a = 0, "threads"_a = 0);
+    }, "scene"_a, "count"_a, "seed"_a = 0, "threads"_a = 0, "max_stored"_a = kDefaultStoredPhotonBudget);
 
     nb::class_<PhotonMap>(m, "PhotonMap",
                           "A photon map over positions (N, 3) float32: grid='adaptive' (density-sized cells culled against the sphere), 'hash' (seed 001) or 'kdtree' (Jensen).")
@@ -203,6 +204,7 @@ void bind_photon(nb::module_& m) {
                         bool disc) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
                                                pipeline, cooperative, direct, indirect, threads, mode, disc);
+        require_render_size(cam);
         RenderStats st;
         std::vector<float> img;
         {
@@ -264,6 +266,7 @@ void bind_photon(nb::module_& m) {
                                unsigned threads, const std::string& mode, bool disc) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
                                                pipeline, cooperative, direct, indirect, threads, mode, disc);
+        require_render_size(eyes.left, 2 * 12);
         StereoImages out;
         {
             nb::gil_scoped_release release;

@@ -150,6 +150,7 @@ void bind_views(nb::module_& m) {
         FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads,
                           std::uint32_t(display_step)};
         const std::size_t w = feedback_width(camera, o), h = feedback_height(camera, o);
+        require_feedback_size(w, h);
         const std::size_t dw = display_extent(std::uint32_t(w), o.display_step),
                           dh = display_extent(std::uint32_t(h), o.display_step);
         FreshArray<std::uint64_t> keys({h, w});

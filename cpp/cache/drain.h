@@ -19,7 +19,9 @@ struct DrainResult {
 };
 
 // Polls up to max_tiles finished tiles and inserts the loaded ones into vt. Every polled
-// buffer is released, even when an insert throws (the exception is rethrown afterwards).
+// buffer is released and every polled tile is in `arrived`; a tile whose insert fails is
+// reported in `failed` with the reason (the batch goes on). InvalidArgument, before anything
+// is polled, when the loader reads another pack than the one vt was built from.
 DrainResult drain(TileLoader& loader, VirtualTexture& vt, std::size_t max_tiles);
 
 }  // namespace gigascroll

@@ -7,6 +7,8 @@
 #include <unordered_set>
 
 #include "common/error.h"
+#include "common/limits.h"
+#include "pack/reader.h"
 
 namespace gigascroll {
 
@@ -16,6 +18,9 @@ VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x
     require(slots_x >= 1 && slots_y >= 1 && std::uint64_t(slots_x) * slots_y < (1u << 24),
             "slots must be positive and fewer than 2^24 in total");
     const std::uint32_t n = slots_x * slots_y;
+    // Checked before the pinned tiles are listed or anything is allocated.
+    require_memory(double(n), double(layout.tile_bytes()), double(kMaxCacheBytes),
+                   "slots=(" + std::to_string(slots_x) + ", " + std::to_string(slots_y) + ")");
     // Pinned: every tile of the tail levels (which include the coarsest, single-tile level).
     std::vector<TileKey> pinned;
     for (std::uint32_t p = 0; p < layout.paintings.size(); ++p) {
@@ -44,6 +49,13 @@ VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x
     }
     stats_.pinned = pinned.size();
     for (std::uint32_t s = n; s-- > slot;) free_.push_back(s);  // hand out low slots first
+}
+
+VirtualTexture::VirtualTexture(const TilePack& pack, std::uint32_t slots_x, std::uint32_t slots_y)
+    : VirtualTexture(pack.geometry(), slots_x, slots_y, [&](const TileKey& k, std::uint8_t* out) {
+          pack.read_tile(k.painting, k.level, k.tx, k.ty, out);
+      }) {
+    pack_fingerprint_ = gigascroll::pack_fingerprint(pack);
 }
 
 void VirtualTexture::check_key(const TileKey& k) const {

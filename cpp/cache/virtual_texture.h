@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/huge_buffer.h"
+#include "loading/tile_loader.h"
 #include "cache/page_table.h"
 #include "pack/geometry.h"
 
@@ -29,9 +30,18 @@ public:
     // Reads one tile (RGB8, tile_size^2 x 3 bytes) for pinning at construction.
     using TileSource = std::function<void(const TileKey&, std::uint8_t*)>;
 
-    // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot.
+    // Largest physical texture: 16 GiB of tile slots.
+    static constexpr std::size_t kMaxCacheBytes = std::size_t(16) << 30;
+    // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot, or their
+    // texels would take more than kMaxCacheBytes.
     VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x, std::uint32_t slots_y,
                    const TileSource& pinned_source);
+    // The cache of a pack, pinned tiles read from it; remembers the pack's fingerprint so
+    // that tiles of another pack (a loader opened on it) are refused.
+    VirtualTexture(const TilePack& pack, std::uint32_t slots_x, std::uint32_t slots_y);
+
+    // pack_fingerprint() of the pack the cache was built from; 0 when built from a layout.
+    std::uint64_t pack_fingerprint() const { return pack_fingerprint_; }
 
     const PackGeometry& layout() const { return table_.layout(); }
     std::uint32_t slots_x() const { return slots_x_; }
@@ -73,6 +83,7 @@ private:
 
     PageTable table_;
     std::uint32_t slots_x_, slots_y_;
+    std::uint64_t pack_fingerprint_ = 0;
     HugeBuffer texels_;
     std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;  // packed key -> slot
     std::vector<std::uint64_t> key_of_;                        // slot -> packed key

@@ -19,6 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include "common/limits.h"
+
 namespace gigascroll {
 
 // Number of worker threads to use when the caller passes 0.
@@ -111,12 +113,14 @@ private:
 
 }  // namespace detail
 
-// Calls body(begin, end) on chunks of [0, n) from `threads` threads (0 = all cores), the
-// calling thread included. Chunks are handed out dynamically so uneven work balances. The
+// Calls body(begin, end) on chunks of [0, n) from `threads` threads (0 = all cores; more than
+// kMaxThreads is an InvalidArgument), the calling thread included. Chunks are handed out
+// dynamically so uneven work balances. The
 // first exception thrown by any chunk is rethrown on the calling thread after all chunks
 // stopped.
 template <typename Body>
 void parallel_for(std::size_t n, std::size_t chunk, Body&& body, unsigned threads = 0) {
+    require_threads(threads, "parallel work");  // a huge count would try to start that many threads
     if (n == 0) return;
     if (threads == 0) threads = default_threads();
     chunk = std::max<std::size_t>(chunk, 1);

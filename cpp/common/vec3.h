@@ -46,6 +46,7 @@ template <typename T> Vector3<T> vmin(Vector3<T> a, Vector3<T> b) {
 template <typename T> Vector3<T> vmax(Vector3<T> a, Vector3<T> b) {
     return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
+template <typename T> Vector3<T> vabs(Vector3<T> a) { return {std::abs(a.x), std::abs(a.y), std::abs(a.z)}; }
 template <typename T> T max_component(Vector3<T> a) { return std::max(a.x, std::max(a.y, a.z)); }
 template <typename T> T luminance(Vector3<T> a) {
     return T(0.2126) * a.x + T(0.7152) * a.y + T(0.0722) * a.z;

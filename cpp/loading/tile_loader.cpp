@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <filesystem>
 #include <iterator>
 #include <optional>
 #include <thread>
 
+#include "common/checksum.h"
 #include "common/error.h"
 #include "concurrency/locked_queue.h"
 #include "concurrency/mpsc_queue.h"
@@ -242,6 +244,13 @@ private:
 
 }  // namespace
 
+std::uint64_t pack_fingerprint(const TilePack& pack) {
+    std::error_code ec;
+    const std::string dir = std::filesystem::weakly_canonical(pack.directory(), ec).string();
+    const std::string key = (ec ? pack.directory() : dir) + '\0' + pack.manifest_json();
+    return checksum64(key.data(), key.size()) | 1;
+}
+
 LoaderMode parse_loader_mode(const std::string& m) {
     if (m == "lockfree") return LoaderMode::LockFree;
     if (m == "locked") return LoaderMode::Locked;
@@ -253,7 +262,8 @@ const char* loader_mode_name(LoaderMode mode) {
 }
 
 TileLoader::TileLoader(const TilePack& pack, LoaderMode mode, unsigned threads, const LoaderOptions& o)
-    : pack_(pack), mode_(mode), threads_(threads), tile_bytes_(pack.tile_bytes()) {
+    : pack_(pack), mode_(mode), threads_(threads), tile_bytes_(pack.tile_bytes()),
+      fingerprint_(gigascroll::pack_fingerprint(pack)) {
     require(threads >= 1 && threads <= 64, "loader threads must be in 1..64");
     require(o.queue_capacity >= 1 && o.pool_tiles >= 1, "queue_capacity and pool_tiles must be positive");
     // Bounds checked before anything is allocated, with what the request would cost.
@@ -278,6 +288,7 @@ TileLoader::~TileLoader() { close(); }
 std::uint32_t TileLoader::tile_size() const { return pack_.tile_size(); }
 
 void TileLoader::submit(const TileKey* keys, std::size_t n) {
+    std::lock_guard lock(mutex_);
     require(!closed_, "the loader is closed");
     const auto& ps = pack_.paintings();
     for (std::size_t i = 0; i < n; ++i) {
@@ -307,6 +318,7 @@ void TileLoader::flush() {
 }
 
 std::size_t TileLoader::poll(std::vector<LoadedTile>& out, std::size_t max) {
+    std::lock_guard lock(mutex_);
     const std::size_t before = out.size();
     const std::size_t from_leftovers = std::min(max, leftovers_.size());
     for (std::size_t i = 0; i < from_leftovers; ++i) out.push_back(std::move(leftovers_[i]));
@@ -324,18 +336,21 @@ const std::uint8_t* TileLoader::data(std::int32_t b) const {
 
 void TileLoader::release(std::int32_t b) {
     require(b >= 0 && std::size_t(b) * tile_bytes_ < impl_->pool.size(), "invalid tile buffer");
+    std::lock_guard lock(mutex_);
     if (!closed_) impl_->release(b);
 }
 
 void TileLoader::close() {
+    std::lock_guard lock(mutex_);
     if (closed_) return;
-    closed_ = true;
+    closed_.store(true, std::memory_order_release);
     stats_.cancelled = impl_->stop(leftovers_) + (backlog_.size() - backlog_head_);
     backlog_.clear();
     backlog_head_ = 0;
 }
 
 LoaderStats TileLoader::stats() const {
+    std::lock_guard lock(mutex_);
     LoaderStats s = stats_;
     s.backlog = backlog_.size() - backlog_head_;
     return s;

@@ -16,9 +16,16 @@
 // an error result for that tile and the thread carries on. close() stops the threads without
 // waiting for queued commands (they are dropped and counted); tiles that finished before stay
 // pollable, including one a thread could not hand over because the result queue was full.
+//
+// Thread safety: the seed's design has one main thread, but Python code may call a loader
+// from several threads. Every public call takes one mutex, so calls from several threads
+// are serialised (uncontended in the one-main-thread design, next to microseconds per tile): each
+// tile is delivered exactly once, to one poll(), and close() from any thread is safe.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -28,6 +35,11 @@
 namespace gigascroll {
 
 class TilePack;
+
+// Identifies an opened pack (never 0): a hash of its canonical directory and its manifest.
+// Two TilePacks opened on the same directory agree; any other pack differs, even one of the
+// same geometry, so a cache refuses tiles of a loader that reads another pack.
+std::uint64_t pack_fingerprint(const TilePack& pack);
 
 enum class LoaderMode { LockFree, Locked };
 // "lockfree" / "locked"; InvalidArgument otherwise.
@@ -58,10 +70,10 @@ public:
     TileLoader(const TileLoader&) = delete;
     TileLoader& operator=(const TileLoader&) = delete;
 
-    // Main thread. InvalidArgument (nothing queued) if a key is not a tile of the pack.
+    // InvalidArgument (nothing queued) if a key is not a tile of the pack.
     void submit(const TileKey* keys, std::size_t n);
-    // Main thread: appends up to max finished tiles to out. Every result with buffer >= 0 must
-    // be given back with release() once its data() has been used.
+    // Appends up to max finished tiles to out. Every result with buffer >= 0 must be given
+    // back with release() once its data() has been used.
     std::size_t poll(std::vector<LoadedTile>& out, std::size_t max);
     const std::uint8_t* data(std::int32_t buffer) const;
     void release(std::int32_t buffer);
@@ -73,7 +85,9 @@ public:
     unsigned threads() const { return threads_; }
     std::size_t tile_bytes() const { return tile_bytes_; }
     std::uint32_t tile_size() const;
-    bool closed() const { return closed_; }
+    bool closed() const { return closed_.load(std::memory_order_acquire); }
+    const TilePack& pack() const { return pack_; }
+    std::uint64_t pack_fingerprint() const { return fingerprint_; }
 
     struct Impl;  // the transport of one mode (tile_loader.cpp)
 
@@ -84,12 +98,14 @@ private:
     LoaderMode mode_;
     unsigned threads_;
     std::size_t tile_bytes_;
+    std::uint64_t fingerprint_;
     std::unique_ptr<Impl> impl_;
     std::vector<std::uint64_t> backlog_;  // packed keys; [backlog_head_, end) still to queue
     std::size_t backlog_head_ = 0;
     std::vector<LoadedTile> leftovers_;   // collected from the threads at close()
     LoaderStats stats_;
-    bool closed_ = false;
+    std::atomic<bool> closed_{false};
+    mutable std::mutex mutex_;  // serialises the public calls (see the header comment)
 };
 
 }  // namespace gigascroll

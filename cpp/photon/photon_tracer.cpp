@@ -1,8 +1,11 @@
 #include "photon/photon_tracer.h"
 
+#include <atomic>
 #include <cmath>
+#include <string>
 
 #include "common/error.h"
+#include "common/limits.h"
 #include "common/parallel.h"
 #include "photon/rng.h"
 
@@ -18,9 +21,13 @@ Vec3f sample_cosine(Vec3f n, float u1, float u2) {
 }
 
 std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::uint64_t seed,
-                                  unsigned threads, TraceStats* stats, std::uint32_t pass, int max_bounces) {
+                                  unsigned threads, TraceStats* stats, std::uint32_t pass,
+                                  std::uint64_t max_stored) {
     require(scene.committed(), "trace_photons: call Scene.commit() first");
     require(count > 0, "trace_photons: the photon count must be positive");
+    require(count <= kMaxEmittedPhotons, "trace_photons: at most 2^32 photons per pass, got " +
+                                             std::to_string(count) + " (progressive rendering takes more passes)");
+    require_threads(threads, "trace_photons");
     require(pass < kMaxPasses, "trace_photons: pass out of range");
     const std::uint32_t stream = stream_id(StreamKind::Photon, pass);
     TraceStats st;
@@ -35,12 +42,27 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
     const double scale = double(scene.emitter_weight_total()) * M_PI / double(count);
     const float eps = scene.epsilon();
 
+    // Stored photons of all threads, synchronised every kSync stores of one thread.
+    std::atomic<std::uint64_t> stored_total{0};
+    constexpr std::uint64_t kSync = 1024;
+    auto over_budget = [&](std::uint64_t& unsynced) {
+        const std::uint64_t total = stored_total.fetch_add(unsynced, std::memory_order_relaxed) + unsynced;
+        unsynced = 0;
+        if (total <= max_stored) return;
+        throw InvalidArgument(
+            "trace_photons: more than " + std::to_string(max_stored) + " photons stored (" +
+            format_bytes(double(max_stored) * sizeof(Photon)) + ", the memory budget) from " +
+            std::to_string(count) + " emitted: an albedo near 1 makes paths long (a closed room "
+            "of albedo a stores a / (1 - a) photons per emitted photon); emit fewer photons");
+    };
+
     constexpr std::uint64_t kChunk = 4096;
     const std::uint64_t chunks = (count + kChunk - 1) / kChunk;
     std::vector<std::vector<Photon>> parts(chunks);
     parallel_for(chunks, 1, [&](std::size_t cb, std::size_t ce) {
         for (std::size_t c = cb; c < ce; ++c) {
             auto& part = parts[c];
+            std::uint64_t unsynced = 0;
             const std::uint64_t end = std::min<std::uint64_t>(count, (c + 1) * kChunk);
             for (std::uint64_t i = c * kChunk; i < end; ++i) {
                 Rng rng(seed, stream, i);
@@ -50,10 +72,13 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
                 Vec3f power = ls.radiance * float(scale / w);
                 Vec3f o = ls.p + ls.n * eps;
                 Vec3f d = sample_cosine(ls.n, rng.uniform(), rng.uniform());
-                for (int bounce = 0; bounce < max_bounces; ++bounce) {
+                for (bool first = true;; first = false) {
                     Hit hit;
                     if (!scene.intersect(o, d, hit)) break;
-                    if (bounce > 0) part.push_back({hit.p, power, hit.n});
+                    if (!first) {
+                        part.push_back({hit.p, power, hit.n});
+                        if (++unsynced == kSync) over_budget(unsynced);
+                    }
                     const Vec3f albedo = scene.albedo_at(hit.tri, hit.p);
                     const float survive = max_component(albedo);
                     if (!(rng.uniform() < survive)) break;  // Russian roulette by albedo
@@ -62,6 +87,7 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
                     d = sample_cosine(hit.n, rng.uniform(), rng.uniform());
                 }
             }
+            over_budget(unsynced);
         }
     }, threads);
     std::size_t total = 0;

@@ -21,14 +21,22 @@ struct TraceStats {
     Vec3f emitted_power{0, 0, 0};  // total flux of all emitted photons (= the scene's power)
 };
 
+// Photons emitted by one call (one pass): at most 2^32.
+inline constexpr std::uint64_t kMaxEmittedPhotons = std::uint64_t(1) << 32;
+// Default budget of stored photons of one call: 2^26 photons, 2.25 GiB.
+inline constexpr std::uint64_t kDefaultStoredPhotonBudget = std::uint64_t(1) << 26;
+
 // Traces `count` photons on `threads` threads (0 = all cores). Photon i draws its random
 // numbers from (seed, i) alone and the result is concatenated in photon order, so the output
 // is identical for any thread count; `pass` selects an independent photon set of the same
-// seed (progressive rendering traces one per pass). max_bounces caps a path (a safety net: with albedo < 1
-// Russian roulette ends every path with probability one).
+// seed (progressive rendering traces one per pass). Paths end by Russian roulette alone (no
+// bounce cap, so the estimate stays unbiased at any albedo < 1): a photon stores on average
+// a / (1 - a) copies in a closed room of albedo a. Memory is bounded by what is actually
+// stored: past max_stored photons the trace stops with an InvalidArgument naming the memory.
 std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::uint64_t seed,
                                   unsigned threads = 0, TraceStats* stats = nullptr,
-                                  std::uint32_t pass = 0, int max_bounces = 256);
+                                  std::uint32_t pass = 0,
+                                  std::uint64_t max_stored = kDefaultStoredPhotonBudget);
 
 // A cosine-distributed direction around n from two uniforms.
 Vec3f sample_cosine(Vec3f n, float u1, float u2);

@@ -49,6 +49,7 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                 settings.pipeline == Pipeline::Fused && !settings.cooperative,
             "render: progressive rendering uses a grid's box radius gather (no knn, cone, kdtree, "
             "two-pass or cooperative options)");
+    require_render_size(cam, 12 + sizeof(PixelState));
     const auto t_start = Clock::now();
     // The shading helpers (emission, direct light) without a photon map of their own.
     RenderSettings shading = settings;
@@ -91,7 +92,7 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                     const float fx = float(x) + rng.uniform(), fy = float(y) + rng.uniform();
                     Hit hit;
                     s.has_point = false;
-                    if (!scene.intersect(cam.ray_origin(), cam.ray_direction(fx, fy), hit)) continue;
+                    if (!scene.intersect_camera(cam.ray_origin(), cam.ray_direction(fx, fy), hit)) continue;
                     bool unused = false;
                     s.direct += R.emitted_and_direct(hit, c, &unused, pass);
                     const Vec3f albedo = scene.albedo(hit.tri);

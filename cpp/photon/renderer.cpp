@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "common/error.h"
+#include "common/limits.h"
 #include "common/parallel.h"
 #include "photon/rng.h"
 
@@ -28,7 +29,17 @@ Pipeline parse_pipeline(const std::string& s) {
     throw InvalidArgument("pipeline must be 'fused' or 'two-pass', not '" + s + "'");
 }
 
+void require_render_size(const Camera& cam, double bytes_per_pixel) {
+    const double pixels = double(cam.width) * double(cam.height);
+    if (pixels <= double(kMaxRenderPixels)) return;
+    throw InvalidArgument("render: a " + std::to_string(cam.width) + " x " + std::to_string(cam.height) +
+                          " image would need " + format_bytes(pixels * bytes_per_pixel) +
+                          "; at most 2^26 pixels (8192 x 8192) are rendered");
+}
+
 void RenderSettings::validate() const {
+    require(photons <= kMaxEmittedPhotons, "render: at most 2^32 photons per pass, got " + std::to_string(photons));
+    require_threads(threads, "render");
     require(std::isfinite(gather.radius) && gather.radius > 0.0f, "render: radius must be positive and finite");
     require(!indirect || photons > 0, "render: photons must be positive (or switch indirect light off)");
     require(spp >= 1 && spp <= 65536, "render: spp must be in [1, 65536]");
@@ -132,6 +143,7 @@ Vec3f Renderer::indirect_density(Vec3f p, Vec3f n, KnnHeap& heap) const {
 std::vector<float> Renderer::render(const Camera& cam, RenderStats& st) const {
     const auto t0 = Clock::now();
     st = photon_stats_;
+    require_render_size(cam);
     std::vector<float> img(std::size_t(int(cam.width)) * int(cam.height) * 3, 0.0f);
     if (s_.pipeline == Pipeline::Fused) render_fused(cam, img, st);
     else render_two_pass(cam, img, st);
@@ -153,7 +165,7 @@ void Renderer::render_fused(const Camera& cam, std::vector<float>& img, RenderSt
                 for (int s = 0; s < s_.spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                     Hit hit;
-                    if (scene_.intersect(cam.ray_origin(), cam.ray_direction(px, py), hit))
+                    if (scene_.intersect_camera(cam.ray_origin(), cam.ray_direction(px, py), hit))
                         sum += surface_radiance(hit, heap, c);
                     else
                         ++c.gathers_skipped;
@@ -250,7 +262,7 @@ void Renderer::render_two_pass(const Camera& cam, std::vector<float>& img, Rende
                     for (int s = 0; s < s_.spp; ++s) {
                         const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                         Hit hit;
-                        if (!scene_.intersect(cam.ray_origin(), cam.ray_direction(px, py), hit)) {
+                        if (!scene_.intersect_camera(cam.ray_origin(), cam.ray_direction(px, py), hit)) {
                             ++c.gathers_skipped;
                             continue;
                         }

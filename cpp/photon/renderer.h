@@ -47,6 +47,12 @@ struct RenderSettings {
     void validate() const;
 };
 
+// Largest image a render accepts: 2^26 pixels (8192 x 8192; 768 MiB of float RGB, more with
+// the per-pixel state of progressive and stereo renders). InvalidArgument with the memory the
+// camera's resolution would need otherwise.
+inline constexpr std::uint64_t kMaxRenderPixels = std::uint64_t(1) << 26;
+void require_render_size(const Camera& camera, double bytes_per_pixel = 12);
+
 struct RenderStats {
     double photon_seconds = 0;  // photon tracing
     double build_seconds = 0;   // hash grid or kd-tree construction

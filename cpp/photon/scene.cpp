@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/limits.h"
 #include "photon/rng.h"
 
 namespace gigascroll {
@@ -31,9 +32,11 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     require(nv <= 0xffffffffu && nt <= 0xffffffffu, "Scene.add_mesh: mesh too large (2^32 limit)");
     require(is_finite(emission) && emission.x >= 0 && emission.y >= 0 && emission.z >= 0,
             "Scene.add_mesh: emission must be finite and non-negative");
+    // Bounded scene extents keep every hit point, and so every secondary ray, in Embree's range.
     for (std::size_t i = 0; i < 3 * nv; ++i)
-        require(std::isfinite(vertices[i]), "Scene.add_mesh: vertex " + std::to_string(i / 3) +
-                                                " is not finite (NaN or Inf)");
+        require(std::isfinite(vertices[i]) && std::abs(vertices[i]) <= kMaxCoordinate,
+                "Scene.add_mesh: vertex " + std::to_string(i / 3) + " is not finite (NaN or Inf) or beyond +-1e12 (got " +
+                    std::to_string(vertices[i]) + ")");
     const std::size_t na = per_triangle ? nt : 1;
     for (std::size_t i = 0; i < 3 * na; ++i)
         require(std::isfinite(albedo[i]) && albedo[i] >= 0.0f && albedo[i] < 1.0f,
@@ -129,13 +132,43 @@ void Scene::require_committed() const {
     require(committed_, "Scene: call commit() before rendering or tracing");
 }
 
+namespace {
+// Embree aborts the process (its ray.valid() assertion) on a ray with a NaN, infinite or
+// larger than ~1.8e18 component. Rays of the core start at bounded cameras and scenes, so
+// this only fails for a bug or a caller's own ray: a ValueError then, never an abort.
+void require_valid_ray(Vec3f o, Vec3f d, float tfar) {
+    constexpr float kLimit = 1e18f;
+    const bool ok = std::abs(o.x) <= kLimit && std::abs(o.y) <= kLimit && std::abs(o.z) <= kLimit &&
+                    std::abs(d.x) <= kLimit && std::abs(d.y) <= kLimit && std::abs(d.z) <= kLimit &&
+                    max_component(vabs(d)) > 0 && !std::isnan(tfar);
+    if (!ok)
+        throw InvalidArgument("ray origin and direction must be finite and within +-1e18, the direction "
+                              "non-zero (got origin (" + std::to_string(o.x) + ", " + std::to_string(o.y) +
+                              ", " + std::to_string(o.z) + "), direction (" + std::to_string(d.x) + ", " +
+                              std::to_string(d.y) + ", " + std::to_string(d.z) + "))");
+}
+}  // namespace
+
+bool Scene::intersect_checked(Vec3f o, Vec3f d, Hit& hit) const {
+    require_committed();
+    require_coordinate(Vec3d(o), "Scene.intersect: ray origin");
+    require(is_finite(d) && max_component(vabs(d)) > 0 && max_component(vabs(d)) <= 1e12f,
+            "Scene.intersect: ray direction must be finite, non-zero and within +-1e12");
+    return intersect(o, d, hit);
+}
+
 bool Scene::intersect(Vec3f o, Vec3f d, Hit& hit, float tfar) const {
+    return intersect_range(o, d, hit, 0.0f, tfar);
+}
+
+bool Scene::intersect_range(Vec3f o, Vec3f d, Hit& hit, float tnear, float tfar) const {
+    require_valid_ray(o, d, tfar);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh{};
     rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
     rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
-    rh.ray.tnear = 0.0f;
+    rh.ray.tnear = tnear;
     rh.ray.tfar = tfar;
     rh.ray.mask = 0xffffffffu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -152,6 +185,7 @@ bool Scene::intersect(Vec3f o, Vec3f d, Hit& hit, float tfar) const {
 }
 
 bool Scene::occluded(Vec3f o, Vec3f d, float tfar) const {
+    require_valid_ray(o, d, tfar);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay ray{};

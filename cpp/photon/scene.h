@@ -46,7 +46,7 @@ public:
     Scene& operator=(const Scene&) = delete;
 
     // vertices: nv x 3 floats; triangles: nt x 3 indices; albedo: 3 floats, or nt x 3 when
-    // per_triangle. Rejects non-finite vertices, out-of-range indices and albedo outside
+    // per_triangle. Rejects non-finite vertices and those beyond +-1e12 (kMaxCoordinate), out-of-range indices and albedo outside
     // [0, 1). Degenerate (zero-area) triangles are dropped: they can be neither hit nor
     // sampled. Returns the number of triangles kept.
     std::size_t add_mesh(const float* vertices, std::size_t nv, const std::int64_t* triangles,
@@ -56,6 +56,13 @@ public:
 
     // Nearest hit along o + t d for t in (0, tfar); d need not be normalised.
     bool intersect(Vec3f o, Vec3f d, Hit& hit, float tfar = INFINITY) const;
+    // A camera's primary ray: intersect() ignoring hits nearer than epsilon() (a near clip
+    // plane), so a camera standing on a surface, an edge or a vertex sees past the surfaces it
+    // stands on instead of hitting them at t ~ 1e-8 (which rendered black).
+    bool intersect_camera(Vec3f o, Vec3f d, Hit& hit) const { return intersect_range(o, d, hit, eps_, INFINITY); }
+    // intersect() for a caller's own ray (Python's Scene.intersect): InvalidArgument unless
+    // the scene is committed, o is within +-1e12 and d is finite, non-zero and within +-1e12.
+    bool intersect_checked(Vec3f o, Vec3f d, Hit& hit) const;
     // True when something blocks o + t d for t in (0, tfar).
     bool occluded(Vec3f o, Vec3f d, float tfar) const;
 
@@ -94,6 +101,7 @@ public:
     std::uint64_t position_key(Vec3f p) const;
 
 private:
+    bool intersect_range(Vec3f o, Vec3f d, Hit& hit, float tnear, float tfar) const;
     void require_committed() const;
     EmbreeDevice device_;
     RTCScene scene_ = nullptr;

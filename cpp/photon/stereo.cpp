@@ -20,6 +20,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
     require(R.settings().pipeline == Pipeline::Fused, "render_stereo: stereo reuse renders with the fused pipeline");
     const Camera& L = eyes.left;
     const Camera& Rt = eyes.right;
+    require_render_size(L, 2 * 12);
     const int w = int(L.width), h = int(L.height);
     const std::size_t n = std::size_t(w) * std::size_t(h);
     const int spp = R.settings().spp;
@@ -54,7 +55,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
                 for (int s = 0; s < spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                     Hit hit;
-                    if (!scene.intersect(L.ray_origin(), L.ray_direction(px, py), hit)) continue;
+                    if (!scene.intersect_camera(L.ray_origin(), L.ray_direction(px, py), hit)) continue;
                     const Vec3f col = R.surface_radiance(hit, heap, c);
                     sum += col;
                     if (!reuse) continue;
@@ -97,7 +98,7 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
                 for (int s = 0; s < spp; ++s) {
                     const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
                     Hit hit;
-                    if (scene.intersect(Rt.ray_origin(), Rt.ray_direction(px, py), hit))
+                    if (scene.intersect_camera(Rt.ray_origin(), Rt.ray_direction(px, py), hit))
                         sum += R.surface_radiance(hit, heap, c);
                 }
                 const Vec3f v = sum / float(spp);

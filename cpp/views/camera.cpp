@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "common/limits.h"
 
 namespace gigascroll {
 
@@ -10,25 +11,36 @@ Camera::Camera(Vec3d position_, Vec3d forward_, Vec3d up_, double tan_half_x_, d
                std::uint32_t width_, std::uint32_t height_)
     : position(position_), tan_half_x(tan_half_x_), tan_half_y(tan_half_y_), width(width_),
       height(height_) {
-    require(is_finite(position_) && is_finite(forward_) && is_finite(up_),
-            "camera position and orientation must be finite (no NaN)");
+    // Every ray of the core starts at a camera or in a bounded scene: bounding the position
+    // here keeps Embree's ray check (an abort) out of reach.
+    require_coordinate(position_, "camera position");
+    require(is_finite(forward_) && is_finite(up_), "camera forward and up vectors must be finite (no NaN or Inf)");
     require(std::isfinite(tan_half_x_) && std::isfinite(tan_half_y_) && tan_half_x_ > 0 &&
-                tan_half_y_ > 0,
-            "camera field of view must be in (0, 180) degrees");
+                tan_half_y_ > 0 && tan_half_x_ <= kMaxTanHalfFov && tan_half_y_ <= kMaxTanHalfFov,
+            "camera field of view must be in (0, 180) degrees (tan_half_x and tan_half_y in (0, 1e6])");
     require(width_ > 0 && height_ > 0, "camera resolution must be positive");
-    require(length(forward_) > 0, "camera forward vector is zero");
-    forward = normalize(forward_);
-    const Vec3d r = cross(forward, up_);
-    require(length(r) > 1e-9 * length(up_) && length(up_) > 0,
-            "camera up vector is zero or parallel to forward");
+    require(max_component(vabs(forward_)) > 0, "camera forward vector is zero");
+    require(max_component(vabs(up_)) > 0, "camera up vector is zero");
+    // Vectors whose squared length overflows or underflows are rescaled first; the others
+    // are used as given (the same bits as always).
+    const auto tame = [](Vec3d v) {
+        const double l = length(v);
+        return std::isfinite(l) && l > 1e-150 ? v : v / max_component(vabs(v));
+    };
+    const Vec3d up_tamed = tame(up_);
+    forward = normalize(tame(forward_));
+    const Vec3d r = cross(forward, up_tamed);
+    require(length(r) > 1e-9 * length(up_tamed), "camera up vector is parallel to forward");
     right = normalize(r);
     up = cross(right, forward);
 }
 
 Camera Camera::look_at(Vec3d position, Vec3d target, Vec3d up, double fov_y_deg,
                        std::uint32_t width, std::uint32_t height) {
-    require(is_finite(position) && is_finite(target) && is_finite(up),
-            "camera: position, look_at and up must be finite");
+    require_coordinate(position, "camera: position");
+    require_coordinate(target, "camera: look_at");
+    require(is_finite(up), "camera: up must be finite (no NaN or Inf)");
+    require(max_component(vabs(up)) > 0, "camera: up vector is zero");
     require(std::isfinite(fov_y_deg) && fov_y_deg > 0 && fov_y_deg < 180,
             "camera: fov must be in (0, 180) degrees");
     require(width > 0 && height > 0 && width <= 65536 && height <= 65536,
@@ -36,7 +48,9 @@ Camera Camera::look_at(Vec3d position, Vec3d target, Vec3d up, double fov_y_deg,
     // The frame and the tangent in single precision, as the photon renderer's cameras have
     // always been set up: a scene's default camera renders the same image as before the views
     // and the renderer shared this type (ray_direction() is single precision anyway).
-    const Vec3f p(position), t(target), u(up);
+    // An up vector beyond float's comfortable range is rescaled (others keep their bits).
+    const double up_max = max_component(vabs(up));
+    const Vec3f p(position), t(target), u(up_max > 1e-18 && up_max < 1e18 ? up : up / up_max);
     require(length(t - p) > 0.0f, "camera: look_at equals position");
     const Vec3f f = normalize(t - p);
     const Vec3f r = cross(f, u);
@@ -79,13 +93,24 @@ double Camera::fov_y_degrees() const { return 2.0 * std::atan(tan_half_y) * 180.
 Camera Camera::moved(Vec3d offset) const {
     Camera c = *this;
     c.position = position + offset;
+    require_coordinate(c.position, "camera position");
     return c;
 }
 
-StereoCamera::StereoCamera(const Camera& centre, double ipd_)
-    : left(centre.moved(centre.right * (-0.5 * ipd_))),
-      right(centre.moved(centre.right * (0.5 * ipd_))), ipd(ipd_) {
-    require(std::isfinite(ipd_) && ipd_ >= 0.0, "StereoCamera: ipd must be finite and non-negative");
+namespace {
+// Checked before either eye is placed, so no eye is ever out of the coordinate bound.
+double checked_ipd(const Camera& centre, double ipd) {
+    require(std::isfinite(ipd) && ipd >= 0.0, "StereoCamera: ipd must be finite and non-negative");
+    require_coordinate(centre.position + centre.right * (0.5 * ipd),
+                       "StereoCamera: the right eye (camera position + ipd / 2 * right)");
+    require_coordinate(centre.position - centre.right * (0.5 * ipd),
+                       "StereoCamera: the left eye (camera position - ipd / 2 * right)");
+    return ipd;
 }
+}  // namespace
+
+StereoCamera::StereoCamera(const Camera& centre, double ipd_)
+    : left(centre.moved(centre.right * (-0.5 * checked_ipd(centre, ipd_)))),
+      right(centre.moved(centre.right * (0.5 * ipd_))), ipd(ipd_) {}
 
 }  // namespace gigascroll

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/limits.h"
 #include "pack/tile_key.h"
 
 namespace gigascroll {
@@ -27,6 +28,8 @@ void ExhibitionScene::require_open() const {
 }
 
 unsigned ExhibitionScene::add_quads(const std::vector<Vec3d>& vertices, std::size_t quads) {
+    // Bounded extents keep the feedback pass's rays within Embree's range.
+    for (const Vec3d& v : vertices) require_coordinate(v, "exhibition scene: a corner of a painting or box");
     RTCGeometry geom = rtcNewGeometry(device_.handle(), RTC_GEOMETRY_TYPE_QUAD);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size()));

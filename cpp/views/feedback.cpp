@@ -9,6 +9,7 @@
 
 #include "common/divider.h"
 #include "common/error.h"
+#include "common/limits.h"
 #include "common/parallel.h"
 #include "pack/tile_key.h"
 
@@ -201,6 +202,9 @@ void render_view(const PaintingSceneView& scene, const Camera& camera,
     const float org_x = float(camera.position.x), org_y = float(camera.position.y),
                 org_z = float(camera.position.z);
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+    // A near plane of a few float ulps of the position (at least 10 um): a camera standing on
+    // a corner of a box or painting sees past it instead of hitting it at t ~ 0.
+    const float near = std::max(1e-5f, 4e-7f * std::max({std::abs(org_x), std::abs(org_y), std::abs(org_z)}));
 
     parallel_for(fh, 4, [&](std::size_t row_begin, std::size_t row_end) {
         // The fields Embree only reads and that no pixel changes are set once per thread;
@@ -209,7 +213,7 @@ void render_view(const PaintingSceneView& scene, const Camera& camera,
         for (std::uint32_t k = 0; k < 16; ++k) {
             packet.ray.org_x[k] = org_x, packet.ray.org_y[k] = org_y;
             packet.ray.org_z[k] = org_z;
-            packet.ray.tnear[k] = 0.f;
+            packet.ray.tnear[k] = near;
             packet.ray.time[k] = 0.f;
             packet.ray.mask[k] = ~0u;
             packet.ray.id[k] = k;
@@ -317,6 +321,14 @@ void render_view(const PaintingSceneView& scene, const Camera& camera,
             }
         }
     }, options.threads);
+}
+
+void require_feedback_size(std::uint64_t width, std::uint64_t height) {
+    const double pixels = double(width) * double(height);
+    if (pixels <= double(kMaxFeedbackPixels)) return;
+    throw InvalidArgument("render_view: a " + std::to_string(width) + " x " + std::to_string(height) +
+                          " feedback pass would need " + format_bytes(pixels * 28) +
+                          "; at most 2^26 pixels (8192 x 8192)");
 }
 
 }  // namespace gigascroll

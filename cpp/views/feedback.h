@@ -49,6 +49,11 @@ inline std::uint32_t display_extent(std::uint32_t n, std::uint32_t step) {
     return (n + step - 1) / step;
 }
 
+// Largest feedback pass: 2^26 pixels (8192 x 8192; 1.75 GiB of keys, lod and uv). Throws
+// InvalidArgument with the memory a larger one would need.
+inline constexpr std::uint64_t kMaxFeedbackPixels = std::uint64_t(1) << 26;
+void require_feedback_size(std::uint64_t width, std::uint64_t height);
+
 // Resolved feedback resolution for a camera (applies the 1/8 default).
 std::uint32_t feedback_width(const Camera& camera, const FeedbackOptions& options);
 std::uint32_t feedback_height(const Camera& camera, const FeedbackOptions& options);

@@ -3,6 +3,7 @@
 // per-tile errors, and shutdown with commands in flight.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -211,6 +212,67 @@ TEST_P(LoaderTest, RejectsKeysOutsideThePack) {
     EXPECT_EQ(loader.stats().submitted, 0u);
     const TileKey bad_painting = {3, 0, 0, 0};
     EXPECT_THROW(loader.submit(&bad_painting, 1), InvalidArgument);
+}
+
+// Several threads submit, poll, read stats and finally close one loader at the same time
+// (as Python threads may): every tile is delivered exactly once, to one caller, with the
+// bytes a direct read of the pack gives; the backlog counter ends at zero and close() returns.
+// Run under ThreadSanitizer by `make sanitize` (ctest -R SeveralCallers).
+TEST_P(LoaderTest, SeveralCallersGetEveryTileOnceWithTheRightBytes) {
+    const auto [mode, threads] = GetParam();
+    TilePack pack(dir_.string());
+    LoaderOptions o;
+    o.queue_capacity = 8;  // tiny: the backlog is shared by the callers
+    o.pool_tiles = 4;
+    TileLoader loader(pack, mode, threads, o);
+    const auto keys = all_keys(pack);
+    constexpr int kCallers = 4, kCopies = 3;
+    const std::size_t expected = keys.size() * kCopies * kCallers;
+    std::atomic<std::size_t> delivered{0};
+    std::vector<std::vector<std::pair<TileKey, std::string>>> got(kCallers);
+    std::vector<std::thread> callers;
+    for (int c = 0; c < kCallers; ++c)
+        callers.emplace_back([&, c] {
+            for (int copy = 0; copy < kCopies; ++copy)
+                for (std::size_t i = 0; i < keys.size(); i += 7)  // batches of up to 7
+                    loader.submit(keys.data() + i, std::min<std::size_t>(7, keys.size() - i));
+            std::vector<LoadedTile> batch;
+            const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+            while (delivered.load() < expected && std::chrono::steady_clock::now() < deadline) {
+                batch.clear();
+                if (loader.poll(batch, 3) == 0) std::this_thread::yield();
+                for (auto& r : batch) {
+                    ASSERT_GE(r.buffer, 0) << r.error;
+                    got[c].emplace_back(r.key, std::string(reinterpret_cast<const char*>(loader.data(r.buffer)),
+                                                           loader.tile_bytes()));
+                    loader.release(r.buffer);
+                    delivered.fetch_add(1);
+                }
+                (void)loader.stats();
+            }
+        });
+    for (auto& t : callers) t.join();
+    std::thread closer([&] { loader.close(); });  // from another thread than the callers
+    closer.join();
+    EXPECT_TRUE(loader.closed());
+    std::map<std::uint64_t, int> seen;
+    std::vector<std::uint8_t> direct(pack.tile_bytes());
+    std::size_t total = 0;
+    for (const auto& per_caller : got)
+        for (const auto& [key, bytes] : per_caller) {
+            ++seen[key.packed()];
+            ++total;
+            pack.read_tile(key.painting, key.level, key.tx, key.ty, direct.data());
+            ASSERT_EQ(std::memcmp(bytes.data(), direct.data(), direct.size()), 0);
+        }
+    EXPECT_EQ(total, expected);
+    EXPECT_EQ(seen.size(), keys.size());
+    for (const auto& [k, n] : seen) EXPECT_EQ(n, kCopies * kCallers);
+    const LoaderStats s = loader.stats();
+    EXPECT_EQ(s.submitted, expected);
+    EXPECT_EQ(s.loaded, expected);
+    EXPECT_EQ(s.backlog, 0u);
+    EXPECT_EQ(s.cancelled, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, LoaderTest,

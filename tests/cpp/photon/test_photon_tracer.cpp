@@ -1,7 +1,13 @@
-// Photon tracing is deterministic: the same seed gives the same photons for any thread count.
+// Photon tracing is deterministic: the same seed gives the same photons for any thread count;
+// paths end by Russian roulette alone, memory is bounded by a budget of stored photons; rays
+// are checked before they reach Embree.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstddef>
+#include <string>
+
+#include "common/error.h"
 
 #include "photon/photon_tracer.h"
 #include "photon/scene.h"
@@ -23,4 +29,56 @@ TEST(PhotonTracer, SameSeedSamePhotonsForAnyThreadCount) {
         EXPECT_EQ(a[i].power.y, b[i].power.y);
     }
     EXPECT_NE(a.size() == c.size() && a[0].p.x == c[0].p.x, true);
+}
+
+// No bounce cap: in a closed sphere of albedo 0.99 a photon stores rho / (1 - rho) = 99 copies
+// on average (the old cap of 256 bounces stored at most 255 and lost 7.7% of the flux).
+TEST(PhotonTracer, FurnaceAtAlbedo099StoresTheGeometricMean) {
+    Scene scene;
+    build_furnace(scene, 0.99f, 1.0f, 8, 8);
+    scene.commit();
+    const std::uint64_t n = 4000;
+    TraceStats st;
+    const auto ph = trace_photons(scene, n, 3, 2, &st);
+    const double rho = 0.99, mean = n * rho / (1 - rho);
+    const double sigma = std::sqrt(n * rho) / (1 - rho);  // sd of a sum of n geometric counts
+    EXPECT_NEAR(double(ph.size()), mean, 5 * sigma);
+    EXPECT_EQ(st.stored, ph.size());
+}
+
+// Past the stored-photon budget: InvalidArgument naming the memory, for any thread count,
+// and the same photons as always when under it.
+TEST(PhotonTracer, BudgetOfStoredPhotonsIsAnErrorWithTheMemory) {
+    Scene scene;
+    build_furnace(scene, 0.999f, 1.0f, 8, 8);
+    scene.commit();
+    for (unsigned threads : {1u, 2u}) {
+        try {
+            trace_photons(scene, 5000, 1, threads, nullptr, 0, 200000);
+            ADD_FAILURE() << "no error past the budget";
+        } catch (const InvalidArgument& e) {
+            EXPECT_NE(std::string(e.what()).find("MiB, the memory budget"), std::string::npos) << e.what();
+        }
+    }
+    const auto a = trace_photons(scene, 30, 1, 1, nullptr, 0, 200000);
+    const auto b = trace_photons(scene, 30, 1, 2);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_THROW(trace_photons(scene, (std::uint64_t(1) << 32) + 1, 1), InvalidArgument);
+    EXPECT_THROW(trace_photons(scene, 10, 1, 5000), InvalidArgument);
+}
+
+// Every ray is checked before it reaches Embree (which aborts on invalid ones).
+TEST(Scene, InvalidRaysAreInvalidArgumentNotAnAbort) {
+    Scene scene;
+    build_cornell(scene, 16, 16);
+    scene.commit();
+    Hit hit;
+    const float nan = std::nanf(""), inf = INFINITY;
+    EXPECT_THROW(scene.intersect({0, 0, 0}, {nan, 0, 1}, hit), InvalidArgument);
+    EXPECT_THROW(scene.intersect({2e18f, 0, 0}, {0, 0, 1}, hit), InvalidArgument);
+    EXPECT_THROW(scene.occluded({0, 0, 0}, {0, inf, 1}, 1.0f), InvalidArgument);
+    EXPECT_THROW(scene.intersect_checked({0, 0, 0}, {0, 0, 0}, hit), InvalidArgument);
+    EXPECT_THROW(scene.intersect_checked({1e13f, 0, 0}, {0, 0, 1}, hit), InvalidArgument);
+    EXPECT_TRUE(scene.intersect_checked({-0.9f, 0, 0.5f}, {-1, 0, 0}, hit));
+    EXPECT_NEAR(hit.t, 0.1f, 1e-5f);
 }
