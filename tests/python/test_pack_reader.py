@@ -20,7 +20,7 @@ def test_reader_missing_manifest(small_pack):
         TilePack(path.parent / "nowhere")
 
 
-@pytest.mark.parametrize("which", ["tiles.bin", "index.bin"])
+@pytest.mark.parametrize("which", ["tiles-00000.bin", "index.bin"])
 def test_reader_wrong_magic_version_truncation(small_pack, which):
     path, _ = small_pack
     f = path / which
@@ -64,9 +64,9 @@ def test_reader_checksum_mismatch_and_ranges(small_pack):
     pack = TilePack(path)
     offset, length, checksum = pack.locate(0, 0, 1, 1)
     assert length == 16 * 16 * 3
-    data = bytearray((path / "tiles.bin").read_bytes())
+    data = bytearray((path / "tiles-00000.bin").read_bytes())
     data[offset + 100] ^= 0xFF
-    (path / "tiles.bin").write_bytes(data)
+    (path / "tiles-00000.bin").write_bytes(data)
     pack = TilePack(path)
     with pytest.raises(OSError, match="checksum"):
         pack.read_tile(0, 0, 1, 1)
@@ -105,7 +105,7 @@ def test_concurrent_reads_agree(small_pack):
         assert np.array_equal(t, pack.read_tile(*k))
 
 
-@pytest.mark.parametrize("name", ["manifest.json", "tiles.bin", "index.bin"])
+@pytest.mark.parametrize("name", ["manifest.json", "tiles-00000.bin", "index.bin"])
 def test_a_fifo_in_a_pack_files_place_is_refused_not_waited_on(small_pack, name):
     # open() of a FIFO blocks until a writer comes: both readers refuse it after a stat.
     from gigascroll.pack.reader import PurePack
