@@ -28,7 +28,7 @@ bool is_plain_file_name(const std::string& name) {
 
 std::uint64_t tile_checksum(std::uint32_t version, std::uint64_t packed_key, const void* data,
                             std::size_t size) {
-    return version >= 2 ? checksum64(data, size, packed_key) : checksum64(data, size);
+    return version >= 2 ? checksum64(data, size, packed_key ^ kTileSeedSalt) : checksum64(data, size);
 }
 
 void require_regular_file(const std::string& path) {

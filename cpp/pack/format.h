@@ -7,8 +7,9 @@
 //                    row-major over that level's real tile grid, so a lookup is one
 //                    multiply-add.
 // A version-2 entry's checksum is XXH3-64 of the stored bytes seeded with the tile's
-// TileKey::packed() (pack/tile_key.h), so an entry that was swapped with or copied over
-// another tile's fails its check. Version 1 has one tiles.bin, entries {offset, length,
+// TileKey::packed() (pack/tile_key.h) XOR kTileSeedSalt, so an entry that was swapped with or
+// copied over another tile's fails its check (the salt keeps tile (0, 0, 0, 0)'s seed from
+// being 0, which is the unseeded hash). Version 1 has one tiles.bin, entries {offset, length,
 // u32 flags, checksum} and unseeded checksums (it cannot detect swapped entries).
 // All integers are little-endian (the only byte order we build for).
 #pragma once
@@ -55,6 +56,8 @@ struct TileEntry {
 static_assert(sizeof(TileEntry) == 24);
 
 enum class Codec : std::uint32_t { Raw = 0, Zstd = 1 };
+
+inline constexpr std::uint64_t kTileSeedSalt = 0x9E3779B97F4A7C15ull;  // no valid key: level 121
 
 // The tile file of painting `painting` in a version-2 pack: "tiles-00042.bin".
 std::string tile_file_name(std::uint32_t painting);

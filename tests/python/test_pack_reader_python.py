@@ -81,6 +81,21 @@ def _copy(pack, tmp_path):
     (lambda m: m["paintings"][0].update(colour={"mode": "maybe"}), "schema at paintings/0/colour",
      False),
     (lambda m: m["paintings"][0].update(colour=[1]), "schema at paintings/0/colour", True),
+    # Issue 11: values that wrapped 32-bit arithmetic or passed as the wrong type.
+    (lambda m: m.update(border=2 ** 31), "schema at border", True),
+    (lambda m: m["paintings"][0].update(width=2 ** 32 + 131), "schema at paintings/0/width", True),
+    (lambda m: m.update(tile_size=16.0), "schema at tile_size", True),
+    (lambda m: m["paintings"][0]["page_table"].update(x=0.0), "schema at paintings/0/page_table/x",
+     True),
+    (lambda m: m["page_table"].update(width=12), "schema at page_table/width", True),
+    (lambda m: m["page_table"].update(width=2 ** 20, height=2 ** 20), "absurdly large", True),
+    (lambda m: m["paintings"][1]["page_table"].update(x=m["paintings"][0]["page_table"]["x"],
+                                                       y=m["paintings"][0]["page_table"]["y"]),
+     "overlap", True),
+    (lambda m: m["tile_files"].__setitem__(1, "../x.bin"), "schema at tile_files/1", True),
+    (lambda m: m["tile_files"].__setitem__(1, "x.bin\n"), "tile_files", True),
+    (lambda m: m.pop("tile_files"), "schema at", True),
+    (lambda m: m["paintings"][0].update(uv_scale=[0.5, 0.5]), "uv_scale", True),
 ])
 def test_both_readers_refuse_bad_manifests(packs, tmp_path, mutate, message, core_refuses):
     path = _copy(packs["raw"], tmp_path)

@@ -111,8 +111,9 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     if len(inputs) > _core.MAX_PACK_PAINTINGS:
         raise ValueError(f"{len(inputs)} images: a pack holds at most "
                          f"{_core.MAX_PACK_PAINTINGS} paintings (the tile key's 16-bit field)")
-    if not isinstance(workers, (int, np.integer)) or isinstance(workers, bool) or workers < 0:
-        raise ValueError(f"workers must be an integer >= 0, got {workers!r}")
+    if (not isinstance(workers, (int, np.integer)) or isinstance(workers, bool)
+            or not 0 <= workers <= 4096):
+        raise ValueError(f"workers must be an integer in [0, 4096], got {workers!r}")
     if executor not in ("dask", "processes"):
         raise ValueError(f"unknown executor '{executor}' (expected dask or processes)")
     sharded = bool(workers) or scheduler is not None

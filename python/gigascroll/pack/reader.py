@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest", "tile_key",
+           "tile_seed",
            "SCHEMA_PATH"]
 
 SCHEMA_PATH = Path(__file__).with_name("manifest.schema.json")
@@ -36,9 +37,17 @@ MAX_TABLE_SLACK = 16          # merged table area / the smallest area that holds
 _TILE_FILE = __import__("re").compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,254}")
 
 
+TILE_SEED_SALT = 0x9E3779B97F4A7C15
+
+
 def tile_key(p: int, l: int, tx: int, ty: int) -> int:
-    """TileKey::packed(): p << 48 | l << 40 | ty << 20 | tx, the seed of a v2 tile checksum."""
+    """TileKey::packed(): p << 48 | l << 40 | ty << 20 | tx."""
     return (p << 48) | (l << 40) | (ty << 20) | tx
+
+
+def tile_seed(p: int, l: int, tx: int, ty: int) -> int:
+    """The XXH3-64 seed of a version-2 tile's checksum: its key XOR TILE_SEED_SALT."""
+    return tile_key(p, l, tx, ty) ^ TILE_SEED_SALT
 
 
 @lru_cache(maxsize=1)
@@ -377,7 +386,7 @@ class PurePack:
         data = os.pread(self._fds[file], length, offset)
         if len(data) != length:
             raise OSError(f"{self.path}: short read of tile {key}")
-        seed = tile_key(p, l, tx, ty) if self.version >= 2 else 0
+        seed = tile_seed(p, l, tx, ty) if self.version >= 2 else 0
         if xxhash.xxh3_64_intdigest(data, seed=seed) != checksum:
             raise OSError(f"{self.path}: checksum mismatch in tile {key}")
         if self._zstd is not None:

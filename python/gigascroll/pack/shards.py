@@ -196,7 +196,7 @@ def _run_dask(tasks, workers: int, scheduler: str | None, on_done) -> None:
             raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
     else:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=":0", silence_logs=logging.ERROR)
         client = Client(cluster)
     try:
         futures = {client.submit(build_shard, *args, key=f"gigascroll-shard-{i}-{os.getpid()}",
@@ -270,10 +270,11 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
 
     try:
         if tasks:
+            workers = max(1, min(workers, len(tasks)))  # no idle worker processes
             if executor == "processes" and scheduler is None:
-                _run_processes(tasks, max(1, workers), on_done)
+                _run_processes(tasks, workers, on_done)
             else:
-                _run_dask(tasks, max(1, workers), scheduler, on_done)
+                _run_dask(tasks, workers, scheduler, on_done)
     except BaseException as e:
         if bar is not None:
             bar.close()
