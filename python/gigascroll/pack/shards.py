@@ -137,29 +137,39 @@ def build_shard(directory: str, index: int, image, name: str, opts: dict, job: d
         hook(index, name)
     d = Path(directory)
     tiles, idx, rec_path = _shard_paths(d, index)
-    source = open_image(image, name, opts["band_rows"], opts["colour"])
+    # Built in a private directory and renamed in when complete: a task a lost worker left
+    # running (or one the cluster recomputes) never exposes a half-written shard.
+    work = d / f".work-{index:05d}-{os.getpid()}-{threading.get_ident()}"
+    shutil.rmtree(work, ignore_errors=True)
+    work.mkdir()
     try:
-        builder = _core.PackBuilder(d, opts["tile_size"], opts["border"], opts["codec"],
-                                    opts["zstd_level"], opts["threads"], first_painting=index)
-        builder.begin_painting(source.name, source.width, source.height, source.source,
-                               source.conversion, 0, 0,
-                               "" if source.colour is None else json.dumps(source.colour))
-        feed(builder, source)
-        builder.end_painting()
-        builder.finish_shard()
-        del builder
+        source = open_image(image, name, opts["band_rows"], opts["colour"])
+        try:
+            builder = _core.PackBuilder(work, opts["tile_size"], opts["border"], opts["codec"],
+                                        opts["zstd_level"], opts["threads"],
+                                        first_painting=index)
+            builder.begin_painting(source.name, source.width, source.height, source.source,
+                                   source.conversion, 0, 0,
+                                   "" if source.colour is None else json.dumps(source.colour))
+            feed(builder, source)
+            builder.end_painting()
+            builder.finish_shard()
+            del builder
+        finally:
+            source.close()
+        record = {"job": job, "name": source.name, "width": source.width,
+                  "height": source.height, "source": source.source,
+                  "conversion": source.conversion, "colour": source.colour,
+                  "tiles_xxh3": _file_hash(work / tiles.name),
+                  "index_xxh3": _file_hash(work / idx.name)}
+        with open(work / rec_path.name, "w") as f:
+            json.dump(record, f)
+            f.flush()
+            os.fsync(f.fileno())
+        for path in (tiles, idx, rec_path):  # the record last: it marks the shard complete
+            os.rename(work / path.name, path)
     finally:
-        source.close()
-    record = {"job": job, "name": source.name, "width": source.width, "height": source.height,
-              "source": source.source, "conversion": source.conversion,
-              "colour": source.colour, "tiles_xxh3": _file_hash(tiles),
-              "index_xxh3": _file_hash(idx)}
-    tmp = rec_path.with_suffix(".json.tmp")
-    with open(tmp, "w") as f:
-        json.dump(record, f)
-        f.flush()
-        os.fsync(f.fileno())
-    os.rename(tmp, rec_path)
+        shutil.rmtree(work, ignore_errors=True)
     return record
 
 
@@ -202,8 +212,9 @@ def _run_dask(tasks, workers: int, scheduler: str | None, on_done) -> None:
         futures = {client.submit(build_shard, *args, key=f"gigascroll-shard-{i}-{os.getpid()}",
                                  pure=False): i for i, args in tasks}
         try:
-            for fut in as_completed(futures):
-                on_done(futures[fut], fut.result())
+            for fut, record in as_completed(futures, with_results=True):
+                on_done(futures.pop(fut), record)
+                fut.release()  # a lost worker must not make the cluster recompute it
         finally:
             client.cancel(list(futures))
     finally:
