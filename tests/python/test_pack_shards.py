@@ -36,8 +36,8 @@ def cluster():
     fails its task at once (allowed-failures 0) instead of being retried on the other."""
     import dask
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
-        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                      dashboard_address=":0") as c:
+        from gigascroll.pack.shards import local_cluster
+        with local_cluster(2) as c:
             yield c
 
 

@@ -3,8 +3,8 @@ reduced size, synthesized as tiled TIFFs) on 1 and 2 workers of a Dask LocalClus
 a plain process pool (the same shard function under concurrent.futures) as the floor to beat,
 and a single-process build. Every worker uses one thread, so the worker count is the
 parallelism; the scaling ratio is t(1 worker) / t(2 workers). Dask's build time is measured
-on a cluster that is already running (its start-up is reported on its own); the pool's
-includes starting its processes. Every pack is checked to be byte-identical to the
+on a cluster that is already running, its workers having imported gigascroll (start-up
+reported on its own); the pool's includes starting its processes and their imports. Every pack is checked to be byte-identical to the
 single-process one."""
 
 from __future__ import annotations
@@ -37,11 +37,17 @@ def _dir_equal(a: Path, b: Path) -> bool:
         filecmp.cmp(a / n, b / n, shallow=False) for n in names)
 
 
+def _warm() -> None:
+    import gigascroll.pack.shards  # noqa: F401
+
+
 def run(args) -> int:
     from ..pack import build_pack, synth_painting
     from ..views.exhibition import TABLE4_PAINTINGS
     try:
-        from dask.distributed import LocalCluster
+        from dask.distributed import Client
+
+        from ..pack.shards import local_cluster
     except ImportError as e:
         raise UserError(f"dask.distributed is needed ({e}): pip install 'gigascroll[cluster]'")
     if args.scale < 1 or args.repeat < 1 or min(args.workers) < 1:
@@ -66,34 +72,32 @@ def run(args) -> int:
 
     results: dict[str, list[float]] = {}
     ref = work / "single.pack"
-    for r in range(args.repeat):
-        results.setdefault("single process", []).append(timed("single", ref))
-        print(f"[{r + 1}] single process (1 thread): {results['single process'][-1]:.2f} s",
-              flush=True)
-        for n in args.workers:
-            out = work / f"pool-{n}.pack"
-            results.setdefault(f"process pool {n}", []).append(
-                timed("pool", out, workers=n, executor="processes"))
-            assert _dir_equal(ref, out), f"the {n}-process pack differs from the single one"
-            print(f"[{r + 1}] process pool, {n} workers: {results[f'process pool {n}'][-1]:.2f} s",
-                  flush=True)
-    startup = {}
-    for n in args.workers:
-        t = time.perf_counter()
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=":0")
-        startup[n] = time.perf_counter() - t
-        try:
-            for r in range(args.repeat):
-                out = work / f"dask-{n}.pack"
-                results.setdefault(f"dask {n}", []).append(
-                    timed("dask", out, scheduler=cluster.scheduler_address))
-                assert _dir_equal(ref, out), f"the {n}-worker Dask pack differs"
-                print(f"[{r + 1}] dask LocalCluster, {n} workers: "
-                      f"{results[f'dask {n}'][-1]:.2f} s (cluster start-up {startup[n]:.1f} s)",
-                      flush=True)
-        finally:
-            cluster.close()
+    clusters, startup = {}, {}
+    try:
+        for n in args.workers:  # all started first, so the runs below can interleave
+            t = time.perf_counter()
+            clusters[n] = local_cluster(n)
+            with Client(clusters[n]) as client:  # workers import the package, as a cluster would
+                client.run(_warm)
+            startup[n] = time.perf_counter() - t
+        # Configurations interleaved in each repeat: the machine's load drifts.
+        for r in range(args.repeat):
+            configs = [("single process", ref, {})]
+            for n in args.workers:
+                configs.append((f"process pool {n}", work / f"pool-{n}.pack",
+                                {"workers": n, "executor": "processes"}))
+                configs.append((f"dask {n}", work / f"dask-{n}.pack",
+                                {"scheduler": clusters[n].scheduler_address}))
+            for label, out, kw in configs:
+                results.setdefault(label, []).append(timed(label, out, **kw))
+                if out != ref:
+                    assert _dir_equal(ref, out), f"the {label} pack differs from the single one"
+                print(f"[{r + 1}] {label}: {results[label][-1]:.2f} s", flush=True)
+    finally:
+        for c in clusters.values():
+            c.close()
+    print("dask LocalCluster start-up (incl. imports): " +
+          ", ".join(f"{n} workers {t:.1f} s" for n, t in startup.items()))
 
     med = {k: statistics.median(v) for k, v in results.items()}
     print(f"\neight Table 4 paintings / {args.scale} ({mpx:.0f} Mpixel), tile 128, {args.codec}, "

@@ -25,7 +25,7 @@ import numpy as np
 from .. import _core
 from .images import ImageSource, open_image
 
-__all__ = ["build_sharded", "build_shard", "feed", "publish"]
+__all__ = ["build_sharded", "build_shard", "feed", "local_cluster", "publish"]
 
 _CHUNK = 1 << 22
 
@@ -189,13 +189,26 @@ def _completed_shard(directory: Path, index: int, job: dict) -> dict | None:
 
 # ----------------------------------------------------------------------------- executors
 
+def local_cluster(workers: int):
+    """A LocalCluster of `workers` one-thread worker processes for shard builds. Dask's nannies
+    set MALLOC_TRIM_THRESHOLD_=65536 for their workers, which makes glibc return every freed
+    band buffer to the kernel and fault it back in (much system time); the builder frees and
+    reuses buffers of a few MB per band, so its workers keep glibc's default behaviour."""
+    import logging
+    import dask
+    from dask.distributed import LocalCluster
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_":
+                          str(1 << 28)}):
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                            dashboard_address=":0", silence_logs=logging.ERROR)
+
+
 def _run_dask(tasks, workers: int, scheduler: str | None, on_done) -> None:
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, as_completed
     except ImportError:
         raise ValueError("sharded builds on Dask need dask.distributed "
                          "(pip install 'gigascroll[cluster]')") from None
-    import logging
     cluster = None
     if scheduler is not None:
         if not isinstance(scheduler, str) or "://" not in scheduler:
@@ -205,8 +218,7 @@ def _run_dask(tasks, workers: int, scheduler: str | None, on_done) -> None:
         except (OSError, TimeoutError) as e:
             raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
     else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=logging.ERROR)
+        cluster = local_cluster(workers)
         client = Client(cluster)
     try:
         futures = {client.submit(build_shard, *args, key=f"gigascroll-shard-{i}-{os.getpid()}",
