@@ -156,3 +156,18 @@ except ValueError as e:
     assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
     assert not (tmp_path / "b").exists()
     assert json.loads((tmp_path / "a" / "manifest.json").read_text())["version"] == 2
+
+
+def test_cli_pack_on_a_scheduler_and_resume_misuse(images, single, cluster, tmp_path):
+    from gigascroll.cli import main
+    from gigascroll.pack.synth import synth_painting
+    src = tmp_path / "a.tif"
+    synth_painting(src, 300, 80)
+    assert main(["pack", str(src), "-o", str(tmp_path / "p"), "--tile-size", "32", "--border",
+                 "2", "--scheduler", cluster.scheduler_address]) == 0
+    one = TilePack(tmp_path / "p")
+    ref = build_pack(str(src), tmp_path / "ref", tile_size=32, border=2)
+    assert_same_pack(ref, one)
+    assert main(["pack", str(src), "-o", str(tmp_path / "q"), "--resume"]) == 2
+    assert main(["pack", str(src), "-o", str(tmp_path / "q"), "--workers", "-3"]) == 2
+    assert not (tmp_path / "q").exists()
