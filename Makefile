@@ -40,6 +40,8 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
 	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science
 	$(PIP) install -q imageio-ffmpeg pyglet
+
+	$(PIP) install -q "dask[distributed]"
 	touch $@
 
 venv: $(VENV)/.deps-stamp

@@ -19,6 +19,7 @@
 #include "pack/page_layout.h"
 #include "pack/geometry.h"
 #include "pack/tile_key.h"
+#include "pack/manifest.h"
 #include "pack/reader.h"
 
 namespace nb = nanobind;
@@ -165,7 +166,12 @@ void bind_pack(nb::module_& m) {
     nb::class_<TilePack>(m, "TilePack",
                          "A tile pack opened for reading. Thread-safe; reads release the GIL.")
         .def("__init__", [](TilePack* self, const std::filesystem::path& path) {
-            new (self) TilePack(path.string()); }, "path"_a)
+            new (self) TilePack(path.string());
+            for (const std::string& w : self->warnings())
+                if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw nb::python_error();
+            }, "path"_a)
+        .def_prop_ro("version", &TilePack::version, "format version of the pack (1 or 2)")
+        .def_prop_ro("tile_files", &TilePack::tile_files, "the tile files, in TileEntry::file order")
         .def_prop_ro("path", &TilePack::directory)
         .def_prop_ro("paintings", &TilePack::paintings, nb::rv_policy::reference_internal)
         .def_prop_ro("tile_size", &TilePack::tile_size)
@@ -183,7 +189,10 @@ void bind_pack(nb::module_& m) {
                           std::uint32_t ty) {
             const TileLocation loc = p.locate(pi, l, tx, ty);
             return std::make_tuple(loc.offset, loc.length, loc.checksum); },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a, "(offset, length, checksum) in tiles.bin")
+            "painting"_a, "level"_a, "tx"_a, "ty"_a, "(offset, length, checksum) in its tile file")
+        .def("tile_file", [](const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
+                             std::uint32_t ty) { return p.tile_files()[p.locate(pi, l, tx, ty).file]; },
+            "painting"_a, "level"_a, "tx"_a, "ty"_a, "name of the tile file holding the tile")
         .def("read_tile", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
                              std::uint32_t tx, std::uint32_t ty) {
             const std::size_t T = p.tile_size();
@@ -207,16 +216,16 @@ void bind_pack(nb::module_& m) {
                             "Low-level streaming pack writer; use gigascroll.build_pack instead.")
         .def("__init__", [](PackBuilder* self, const std::filesystem::path& dir,
                             std::uint32_t tile_size, std::uint32_t border, const std::string& codec,
-                            int zstd_level, unsigned threads) {
+                            int zstd_level, unsigned threads, std::uint32_t first_painting) {
             PackOptions o;
             o.tile_size = tile_size;
             o.border = border;
             o.codec = parse_codec(codec);
             o.zstd_level = zstd_level;
             o.threads = threads;
-            new (self) PackBuilder(dir.string(), o); },
+            new (self) PackBuilder(dir.string(), o, first_painting); },
             "directory"_a, "tile_size"_a = 128, "border"_a = 4, "codec"_a = "raw",
-            "zstd_level"_a = 3, "threads"_a = 0)
+            "zstd_level"_a = 3, "threads"_a = 0, "first_painting"_a = 0)
         .def("begin_painting", [](PackBuilder& b, const std::string& name, std::uint32_t width,
                                   std::uint32_t height, const std::string& source,
                                   const std::string& conversion, std::uint32_t tx, std::uint32_t ty,
@@ -233,6 +242,27 @@ void bind_pack(nb::module_& m) {
         .def("end_painting", &PackBuilder::end_painting)
         .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
              "page_table_json"_a = "{}")
+        .def("finish_shard", &PackBuilder::finish_shard)
+        .def_static("assemble", [](const std::filesystem::path& dir, std::uint32_t tile_size,
+                                   std::uint32_t border, const std::string& codec,
+                                   const std::vector<std::tuple<std::string, std::uint32_t, std::uint32_t,
+                                                                std::string, std::string, std::uint32_t,
+                                                                std::uint32_t, std::string>>& paintings,
+                                   std::uint32_t table_width, std::uint32_t table_height,
+                                   const std::string& page_table_json) {
+            PackOptions o;
+            o.tile_size = tile_size;
+            o.border = border;
+            o.codec = parse_codec(codec);
+            std::vector<PaintingSpec> specs;
+            for (const auto& [name, w, h, source, conversion, x, y, colour] : paintings)
+                specs.push_back(PaintingSpec{name, source, conversion, w, h, x, y, colour});
+            nb::gil_scoped_release release;
+            PackBuilder::assemble(dir.string(), o, specs, table_width, table_height, page_table_json); },
+            "directory"_a, "tile_size"_a, "border"_a, "codec"_a, "paintings"_a, "table_width"_a,
+            "table_height"_a, "page_table_json"_a = "{}",
+            "Merges shards (paintings: (name, width, height, source, conversion, table_x, table_y, "
+            "colour) each) into a pack: writes index.bin and manifest.json.")
         .def_prop_ro("rows_done", &PackBuilder::rows_done)
         .def_prop_ro("tiles_written", &PackBuilder::tiles_written)
         .def_prop_ro("bytes_written", &PackBuilder::bytes_written);
@@ -296,6 +326,11 @@ void bind_pack(nb::module_& m) {
         return geometry_dict(PaintingGeometry(w, h, tile_size, border)); },
         "width"_a, "height"_a, "tile_size"_a = 128, "border"_a = 4,
         "Mip levels, tile grids, page-table size and UV scale of a painting.");
+
+    m.def("check_manifest", [](const std::string& text) { (void)parse_manifest(text); },
+          "text"_a, "Validates manifest.json text as the core's reader does (ValueError if not).");
+    m.attr("PACK_VERSION") = kPackVersion;
+    m.attr("MAX_PACK_PAINTINGS") = kMaxPackPaintings;
 }
 
 }  // namespace gigascroll::bindings

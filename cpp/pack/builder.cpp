@@ -1,11 +1,13 @@
 #include "pack/builder.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zstd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 
@@ -14,6 +16,7 @@
 #include "common/error.h"
 #include "common/parallel.h"
 #include "pack/manifest.h"
+#include "pack/tile_key.h"
 
 namespace gigascroll {
 namespace {
@@ -30,7 +33,48 @@ void write_fully(int fd, const void* data, std::size_t size, const std::string& 
     }
 }
 
+void write_header(int fd, const char (&magic)[8], std::uint32_t entry_size, std::uint64_t count,
+                  std::uint64_t data_bytes, const std::string& path) {
+    FileHeader h{};
+    std::memcpy(h.magic, magic, 8);
+    h.version = kPackVersion;
+    h.entry_size = entry_size;
+    h.count = count;
+    h.data_bytes = data_bytes;
+    if (::pwrite(fd, &h, sizeof h, 0) != static_cast<ssize_t>(sizeof h))
+        throw IoError(path + ": write failed: " + std::strerror(errno));
+}
+
+struct FdCloser {
+    int fd;
+    ~FdCloser() { ::close(fd); }
+};
+
+// Writes FileHeader + entries to path, fsync'ed.
+void write_index(const std::string& path, const std::vector<const std::vector<TileEntry>*>& parts) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw IoError(path + ": cannot create: " + std::strerror(errno));
+    FdCloser closer{fd};
+    std::uint64_t count = 0;
+    for (const auto* p : parts) count += p->size();
+    FileHeader ih{};
+    std::memcpy(ih.magic, kIndexMagic, 8);
+    ih.version = kPackVersion;
+    ih.entry_size = sizeof(TileEntry);
+    ih.count = count;
+    ih.data_bytes = count * sizeof(TileEntry);
+    write_fully(fd, &ih, sizeof ih, path);
+    for (const auto* p : parts) write_fully(fd, p->data(), p->size() * sizeof(TileEntry), path);
+    if (::fsync(fd) != 0) throw IoError(path + ": fsync failed: " + std::strerror(errno));
+}
+
 }  // namespace
+
+std::string shard_index_name(std::uint32_t painting) {
+    char name[32];
+    std::snprintf(name, sizeof name, "shard-%05u.idx", painting);
+    return name;
+}
 
 struct PackBuilder::TileRows {
     std::uint32_t next_tile_row = 0;
@@ -44,21 +88,26 @@ struct PackBuilder::Painting {
     std::vector<TileEntry> entries;  // all levels, in index order
 };
 
-PackBuilder::PackBuilder(const std::string& directory, const PackOptions& options)
-    : directory_(directory), options_(options) {
+PackBuilder::PackBuilder(const std::string& directory, const PackOptions& options,
+                         std::uint32_t first_painting)
+    : directory_(directory), options_(options), first_painting_(first_painting) {
     check_tile_parameters(options.tile_size, options.border);
     require(options.zstd_level >= 1 && options.zstd_level <= 19, "zstd level must be in [1, 19]");
-    const std::string path = directory + "/" + kTilesName;
-    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw IoError(path + ": cannot create: " + std::strerror(errno));
-    FileHeader h{};
-    std::memcpy(h.magic, kTilesMagic, 8);
-    h.version = kPackVersion;
-    write_all(&h, sizeof h);  // placeholder; rewritten with the totals in finish()
+    require(first_painting < kMaxPackPaintings,
+            "first_painting " + std::to_string(first_painting) + " is past the " +
+                std::to_string(kMaxPackPaintings) + " paintings a pack can hold");
+    struct stat st {};
+    if (::stat(directory.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+        throw IoError(directory + ": not a directory to build a pack in");
 }
 
 PackBuilder::~PackBuilder() {
     if (fd_ >= 0) ::close(fd_);
+}
+
+std::string PackBuilder::tiles_path() const {
+    return directory_ + "/" +
+           tile_file_name(first_painting_ + static_cast<std::uint32_t>(paintings_.size()) - 1);
 }
 
 std::uint32_t PackBuilder::rows_done() const {
@@ -66,12 +115,15 @@ std::uint32_t PackBuilder::rows_done() const {
 }
 
 void PackBuilder::write_all(const void* data, std::size_t size) {
-    write_fully(fd_, data, size, directory_ + "/" + kTilesName);
+    write_fully(fd_, data, size, tiles_path());
 }
 
 void PackBuilder::begin_painting(const PaintingSpec& spec) {
     require(!finished_, "pack already finished");
     require(!open_painting_, "begin_painting: previous painting not ended");
+    require(std::uint64_t(first_painting_) + paintings_.size() < kMaxPackPaintings,
+            "a pack holds at most " + std::to_string(kMaxPackPaintings) +
+                " paintings (the tile key's 16-bit painting field)");
     Painting p;
     p.spec = spec;
     p.geometry = PaintingGeometry(spec.width, spec.height, options_.tile_size, options_.border);
@@ -83,6 +135,12 @@ void PackBuilder::begin_painting(const PaintingSpec& spec) {
     for (std::uint32_t l = 0; l < p.geometry.levels(); ++l)
         rows_[l].entries.assign(p.geometry.tile_count(l), TileEntry{});
     paintings_.push_back(std::move(p));
+    const std::string path = tiles_path();
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw IoError(path + ": cannot create: " + std::strerror(errno));
+    const FileHeader placeholder{};  // rewritten with the totals in end_painting()
+    write_all(&placeholder, sizeof placeholder);
+    file_bytes_ = 0;
     open_painting_ = true;
 }
 
@@ -158,6 +216,9 @@ void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::
     // and compressed in parallel, then appended to tiles.bin in tx order.
     constexpr std::uint32_t kGroup = 64;
     const std::uint32_t n = lv.geo.tiles_x;
+    const auto level = static_cast<std::uint32_t>(&tr - rows_.data());
+    const std::uint32_t painting = first_painting_ + static_cast<std::uint32_t>(paintings_.size()) - 1;
+    const auto key = [&](std::uint32_t tx) { return TileKey{painting, level, tx, ty}.packed(); };
     TileEntry* entries = tr.entries.data() + std::size_t(ty) * n;
     std::vector<std::vector<std::uint8_t>> packed(raw ? 0 : kGroup);
     std::uint64_t sums[kGroup];
@@ -169,7 +230,7 @@ void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::
                 for (std::size_t i = begin; i < end; ++i) {
                     std::uint8_t* out = staging_.data() + i * tile_bytes;
                     cut(static_cast<std::uint32_t>(g0 + i), out);
-                    sums[i] = checksum64(out, tile_bytes);
+                    sums[i] = tile_checksum(kPackVersion, key(g0 + i), out, tile_bytes);
                 }
                 return;
             }
@@ -186,20 +247,22 @@ void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::
                     throw IoError(std::string("zstd compression failed: ") + ZSTD_getErrorName(z));
                 }
                 out.resize(z);
-                sums[i] = checksum64(out.data(), z);
+                sums[i] = tile_checksum(kPackVersion, key(g0 + i), out.data(), z);
             }
             ZSTD_freeCCtx(ctx);
         }, options_.threads);
 
-        std::uint64_t offset = sizeof(FileHeader) + data_bytes_;
+        std::uint64_t offset = sizeof(FileHeader) + file_bytes_;
+        const auto file = static_cast<std::uint16_t>(painting);
         for (std::uint32_t i = 0; i < m; ++i) {
             const auto length = static_cast<std::uint32_t>(raw ? tile_bytes : packed[i].size());
-            entries[g0 + i] = TileEntry{offset, length, kTileStored, sums[i]};
+            entries[g0 + i] = TileEntry{offset, length, kTileStored, file, sums[i]};
             offset += length;
             if (!raw) write_all(packed[i].data(), length);
         }
         if (raw) write_all(staging_.data(), std::size_t(m) * tile_bytes);
-        data_bytes_ = offset - sizeof(FileHeader);
+        data_bytes_ += offset - sizeof(FileHeader) - file_bytes_;
+        file_bytes_ = offset - sizeof(FileHeader);
         tiles_written_ += m;
     }
 }
@@ -217,6 +280,11 @@ void PackBuilder::end_painting() {
     }
     mip_.reset();
     rows_.clear();
+    const std::string path = tiles_path();
+    write_header(fd_, kTilesMagic, 0, p.entries.size(), file_bytes_, path);
+    if (::fsync(fd_) != 0) throw IoError(path + ": fsync failed: " + std::strerror(errno));
+    ::close(fd_);
+    fd_ = -1;
     open_painting_ = false;
 }
 
@@ -225,83 +293,100 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
     require(!finished_, "pack already finished");
     require(!open_painting_, "finish: a painting is still open");
     require(!paintings_.empty(), "finish: the pack has no painting");
-    require(is_pow2(table_width) && is_pow2(table_height),
-            "merged page table must be a power of two in each dimension");
-    for (std::size_t i = 0; i < paintings_.size(); ++i) {
-        const auto& a = paintings_[i];
-        const auto& ga = a.geometry;
-        require(a.spec.table_x % ga.page_table_width() == 0 && a.spec.table_y % ga.page_table_height() == 0,
-                "page table of painting '" + a.spec.name + "' is not aligned to its size");
-        require(std::uint64_t(a.spec.table_x) + ga.page_table_width() <= table_width &&
-                    std::uint64_t(a.spec.table_y) + ga.page_table_height() <= table_height,
-                "page table of painting '" + a.spec.name + "' lies outside the merged table");
-        for (std::size_t j = 0; j < i; ++j) {
-            const auto& b = paintings_[j];
-            const bool apart = a.spec.table_x + ga.page_table_width() <= b.spec.table_x ||
-                               b.spec.table_x + b.geometry.page_table_width() <= a.spec.table_x ||
-                               a.spec.table_y + ga.page_table_height() <= b.spec.table_y ||
-                               b.spec.table_y + b.geometry.page_table_height() <= a.spec.table_y;
-            require(apart, "page tables of '" + a.spec.name + "' and '" + b.spec.name + "' overlap");
-        }
-    }
-    // Fails now (on a malformed page_table_json) rather than after the files are written.
-    {
-        Manifest probe;
-        probe.page_table_extra = page_table_json;
-        (void)manifest_text(probe);
-    }
-
-    // tiles.bin header with the totals, then flush to disk.
-    FileHeader th{};
-    std::memcpy(th.magic, kTilesMagic, 8);
-    th.version = kPackVersion;
-    th.count = tiles_written_;
-    th.data_bytes = data_bytes_;
-    if (::pwrite(fd_, &th, sizeof th, 0) != static_cast<ssize_t>(sizeof th) || ::fsync(fd_) != 0)
-        throw IoError(directory_ + "/" + kTilesName + ": write failed: " + std::strerror(errno));
-    ::close(fd_);
-    fd_ = -1;
-
-    // index.bin
-    std::uint64_t count = 0;
-    for (const auto& p : paintings_) count += p.entries.size();
-    {
-        const std::string path = directory_ + "/" + kIndexName;
-        const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-        if (fd < 0) throw IoError(path + ": cannot create: " + std::strerror(errno));
-        struct Closer {
-            int fd;
-            ~Closer() { ::close(fd); }
-        } closer{fd};
-        FileHeader ih{};
-        std::memcpy(ih.magic, kIndexMagic, 8);
-        ih.version = kPackVersion;
-        ih.entry_size = sizeof(TileEntry);
-        ih.count = count;
-        ih.data_bytes = count * sizeof(TileEntry);
-        write_fully(fd, &ih, sizeof ih, path);
-        for (const auto& p : paintings_)
-            write_fully(fd, p.entries.data(), p.entries.size() * sizeof(TileEntry), path);
-        if (::fsync(fd) != 0) throw IoError(path + ": fsync failed: " + std::strerror(errno));
-    }
-
-    // manifest.json, last.
+    require(first_painting_ == 0, "finish: a shard builder ends with finish_shard()");
     Manifest m;
     m.tile_size = options_.tile_size;
     m.border = options_.border;
     m.codec = options_.codec;
-    m.tile_count = count;
-    m.tiles_bytes = sizeof(FileHeader) + data_bytes_;
+    m.tiles_bytes = 0;
     m.table_width = table_width;
     m.table_height = table_height;
     m.page_table_extra = page_table_json;
-    for (const auto& p : paintings_) {
+    std::vector<const std::vector<TileEntry>*> parts;
+    for (std::size_t i = 0; i < paintings_.size(); ++i) {
+        const Painting& p = paintings_[i];
         PaintingInfo info{p.spec.name, p.spec.source, p.spec.conversion, p.geometry, p.spec.colour};
         info.geometry.place(p.spec.table_x, p.spec.table_y, p.first_entry);
         m.paintings.push_back(std::move(info));
+        m.tile_files.push_back(tile_file_name(static_cast<std::uint32_t>(i)));
+        m.tile_count += p.entries.size();
+        parts.push_back(&p.entries);
     }
-    write_manifest(directory_ + "/" + kManifestName, m);
+    m.tiles_bytes = paintings_.size() * sizeof(FileHeader) + data_bytes_;
+    // Fails now (bad layout, malformed page_table_json) rather than after index.bin is written.
+    (void)manifest_text(m);
+    write_index(directory_ + "/" + kIndexName, parts);
+    write_manifest(directory_ + "/" + kManifestName, m);  // last
     finished_ = true;
+}
+
+void PackBuilder::finish_shard() {
+    require(!finished_, "pack already finished");
+    require(!open_painting_, "finish_shard: a painting is still open");
+    require(!paintings_.empty(), "finish_shard: the shard has no painting");
+    for (std::size_t i = 0; i < paintings_.size(); ++i)
+        write_index(directory_ + "/" + shard_index_name(first_painting_ + static_cast<std::uint32_t>(i)),
+                    {&paintings_[i].entries});
+    finished_ = true;
+}
+
+void PackBuilder::assemble(const std::string& directory, const PackOptions& options,
+                           const std::vector<PaintingSpec>& specs, std::uint32_t table_width,
+                           std::uint32_t table_height, const std::string& page_table_json) {
+    check_tile_parameters(options.tile_size, options.border);
+    require(!specs.empty(), "assemble: no paintings");
+    require(specs.size() <= kMaxPackPaintings,
+            "a pack holds at most " + std::to_string(kMaxPackPaintings) + " paintings");
+    Manifest m;
+    m.tile_size = options.tile_size;
+    m.border = options.border;
+    m.codec = options.codec;
+    m.table_width = table_width;
+    m.table_height = table_height;
+    m.page_table_extra = page_table_json;
+    std::vector<std::vector<TileEntry>> entries(specs.size());
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+        const PaintingSpec& s = specs[i];
+        const auto pi = static_cast<std::uint32_t>(i);
+        PaintingInfo info{s.name, s.source, s.conversion,
+                          PaintingGeometry(s.width, s.height, options.tile_size, options.border),
+                          s.colour};
+        info.geometry.place(s.table_x, s.table_y, m.tile_count);
+        const std::uint64_t n = info.geometry.total_tiles();
+        // The shard's index: exactly n entries, all in this painting's own tile file.
+        const std::string path = directory + "/" + shard_index_name(pi);
+        require_regular_file(path);
+        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd < 0) throw IoError(path + ": cannot open: " + std::strerror(errno));
+        FdCloser closer{fd};
+        struct stat st {};
+        ::fstat(fd, &st);
+        FileHeader h{};
+        if (::pread(fd, &h, sizeof h, 0) != static_cast<ssize_t>(sizeof h) ||
+            std::memcmp(h.magic, kIndexMagic, 8) != 0 || h.version != kPackVersion ||
+            h.entry_size != sizeof(TileEntry) || h.count != n ||
+            std::uint64_t(st.st_size) != sizeof(FileHeader) + n * sizeof(TileEntry))
+            throw IoError(path + ": not the index of a finished shard of painting '" + s.name + "'");
+        entries[i].resize(n);
+        const std::size_t bytes = n * sizeof(TileEntry);
+        if (::pread(fd, entries[i].data(), bytes, sizeof h) != static_cast<ssize_t>(bytes))
+            throw IoError(path + ": short read");
+        for (const TileEntry& e : entries[i])
+            if (e.file != pi || e.flags != kTileStored)
+                throw IoError(path + ": an entry does not belong to painting " + std::to_string(pi));
+        const std::string tiles = directory + "/" + tile_file_name(pi);
+        require_regular_file(tiles);
+        if (::stat(tiles.c_str(), &st) != 0) throw IoError(tiles + ": cannot stat");
+        m.tiles_bytes += std::uint64_t(st.st_size);
+        m.tile_count += n;
+        m.tile_files.push_back(tile_file_name(pi));
+        m.paintings.push_back(std::move(info));
+    }
+    (void)manifest_text(m);  // validate before writing anything
+    std::vector<const std::vector<TileEntry>*> parts;
+    for (const auto& e : entries) parts.push_back(&e);
+    write_index(directory + "/" + kIndexName, parts);
+    write_manifest(directory + "/" + kManifestName, m);
 }
 
 }  // namespace gigascroll

@@ -5,8 +5,14 @@
 //      checksummed and compressed in parallel, then appended to tiles.bin in order, and the
 //      rows no later tile row needs are dropped, so memory grows with the image width, not
 //      its area.
-// The builder writes tiles.bin, index.bin and, in finish(), manifest.json last. The caller
-// builds into a temporary directory and renames it, so an interrupted build never looks done.
+// The builder writes one tile file per painting (tiles-NNNNN.bin, closed and fsync'ed at
+// end_painting), then in finish() index.bin and manifest.json last. The caller builds into a
+// temporary directory and renames it, so an interrupted build never looks done.
+// Shards: a builder whose first_painting is i builds paintings i, i+1, ... of a larger pack
+// and finish_shard() writes their index entries to shard-NNNNN.idx; the tile file and entries
+// are exactly the bytes a whole-pack build writes for those paintings (offsets count from the
+// start of the painting's own file, checksums are seeded with the global tile key), so
+// assemble_pack() merges shards by writing index.bin and the manifest, copying no tile data.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -36,10 +42,15 @@ struct PaintingSpec {
     std::string colour;  // a JSON object (colour management at ingest) or empty for none
 };
 
+// The index file of a shard's painting: "shard-00042.idx" (FileHeader + its TileEntries).
+std::string shard_index_name(std::uint32_t painting);
+
 class PackBuilder {
 public:
-    // Creates directory/tiles.bin (the directory must exist). IoError if it cannot.
-    PackBuilder(const std::string& directory, const PackOptions& options);
+    // Builds into `directory` (it must exist), the first painting being painting
+    // `first_painting` of the pack (InvalidArgument past kMaxPackPaintings).
+    PackBuilder(const std::string& directory, const PackOptions& options,
+                std::uint32_t first_painting = 0);
     ~PackBuilder();
     PackBuilder(const PackBuilder&) = delete;
     PackBuilder& operator=(const PackBuilder&) = delete;
@@ -52,8 +63,17 @@ public:
     // Checks the layout (aligned, inside the table, no overlap), writes index.bin and then
     // manifest.json. `page_table_json` is a JSON object merged into the manifest's
     // "page_table" entry (packer name, fill ratios, ...).
+    // Only for a builder whose first_painting is 0.
     void finish(std::uint32_t table_width, std::uint32_t table_height,
                 const std::string& page_table_json = "{}");
+    // Writes shard-NNNNN.idx of every painting built (fsync'ed); the builder is then done.
+    void finish_shard();
+    // Merges shards in `directory` (one per spec, painting i's shard-i.idx and tile file):
+    // checks each shard's index against the painting's geometry, writes index.bin and
+    // manifest.json (validated first). IoError for a missing or inconsistent shard.
+    static void assemble(const std::string& directory, const PackOptions& options,
+                         const std::vector<PaintingSpec>& paintings, std::uint32_t table_width,
+                         std::uint32_t table_height, const std::string& page_table_json = "{}");
 
     const PackOptions& options() const { return options_; }
     std::uint32_t rows_done() const;  // level-0 rows of the current painting
@@ -67,11 +87,14 @@ private:
     void emit_ready_tiles();
     void emit_tile_row(const MipReducer::Level& lv, TileRows& rows, std::uint32_t ty);
     void write_all(const void* data, std::size_t size);
+    std::string tiles_path() const;
 
     std::string directory_;
     PackOptions options_;
-    int fd_ = -1;
-    std::uint64_t data_bytes_ = 0;
+    std::uint32_t first_painting_ = 0;
+    int fd_ = -1;                     // tile file of the painting being built
+    std::uint64_t file_bytes_ = 0;    // its data bytes so far
+    std::uint64_t data_bytes_ = 0;    // all tile files' data bytes
     std::uint64_t tiles_written_ = 0;
     std::vector<Painting> paintings_;
     std::unique_ptr<MipReducer> mip_;  // mip chain of the painting being built

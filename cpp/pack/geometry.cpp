@@ -12,9 +12,10 @@ namespace gigascroll {
 void check_tile_parameters(std::uint32_t tile_size, std::uint32_t border) {
     require(tile_size >= 2 && tile_size <= 4096,
             "tile_size must be in [2, 4096], got " + std::to_string(tile_size));
-    require(tile_size > 2 * border, "tile_size (" + std::to_string(tile_size) +
-                                        ") must be larger than 2 * border (" +
-                                        std::to_string(2 * border) + ")");
+    // 64-bit: a border of 2^31 must not wrap 2 * border to 0.
+    require(std::uint64_t(tile_size) > 2 * std::uint64_t(border),
+            "tile_size (" + std::to_string(tile_size) + ") must be larger than 2 * border (" +
+                std::to_string(2 * std::uint64_t(border)) + ")");
 }
 
 PaintingGeometry::PaintingGeometry(std::uint32_t width, std::uint32_t height,

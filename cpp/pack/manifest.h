@@ -1,6 +1,7 @@
 // manifest.json, the pack's description (format in format.h): the one writer (the builder's
-// finish()) and the one reader (TilePack, and through it Python), so both apply the same
-// rules. Written last in a build: its presence marks a complete pack.
+// finish()) and the one reader (TilePack, and through it Python), and between them the one
+// validator, so a reader refuses exactly what a builder would refuse to write. Written last in
+// a build: its presence marks a complete pack.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -25,21 +26,37 @@ struct Manifest {
     std::uint32_t tile_size = 0, border = 0;
     Codec codec = Codec::Raw;
     std::uint64_t tile_count = 0;    // index entries over all paintings
-    std::uint64_t tiles_bytes = 0;   // size of tiles.bin
+    std::uint64_t tiles_bytes = 0;   // bytes of all tile files together
     std::uint32_t table_width = 0, table_height = 0;  // merged Mc x Nc
     std::string page_table_extra = "{}";  // a JSON object: packer name, fill ratios, ...
     std::vector<PaintingInfo> paintings;
+    // Version 2: the tile files a TileEntry::file indexes (plain names inside the pack);
+    // version 1: {"tiles.bin"}.
+    std::vector<std::string> tile_files;
 };
 
-// The manifest's JSON text (as written to manifest.json). InvalidArgument if
-// page_table_extra is not a JSON object.
+// The merged table may be at most this many times the smallest power-of-two area that could
+// hold the paintings' tables (a layout that wastes more is a corrupt or hostile manifest:
+// gigabytes of page table for a small painting).
+inline constexpr std::uint64_t kMaxTableSlack = 16;
+
+// Everything a reader relies on, in 64-bit arithmetic: version, tile parameters, 1 to
+// kMaxPackPaintings paintings, each painting's geometry against its size (placed at the
+// running entry total), page tables aligned, inside the merged power-of-two table and
+// pairwise disjoint, the merged table not absurdly larger than the paintings need, the
+// entry total, and (version 2) the tile file names. InvalidArgument naming the field.
+void validate_manifest(const Manifest& m);
+
+// The manifest's JSON text (as written to manifest.json), validated first. InvalidArgument
+// if it is not valid or page_table_extra / a colour is not a JSON object.
 std::string manifest_text(const Manifest& m);
 // Writes and fsyncs path. IoError when it cannot.
 void write_manifest(const std::string& path, const Manifest& m);
-// Parses and checks a manifest: format, version, tile parameters, codec, every painting's
-// geometry against its size, the page-table placements and the tile totals. IoError naming
-// `path` for anything missing, malformed or inconsistent. `text_out` (optional) receives the
-// parsed manifest serialised again.
+// Parses manifest text with exact types (integers must be JSON integers in range, no floats,
+// no wrap-around), then validate_manifest(). InvalidArgument naming the field.
+Manifest parse_manifest(const std::string& text);
+// Reads and parses path: IoError naming `path` for anything missing, malformed or
+// inconsistent. `text_out` (optional) receives the parsed manifest serialised again.
 Manifest read_manifest(const std::string& path, std::string* text_out = nullptr);
 
 }  // namespace gigascroll

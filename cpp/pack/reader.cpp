@@ -6,7 +6,9 @@
 #include <unistd.h>
 #include <zstd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <memory>
@@ -14,6 +16,7 @@
 
 #include "common/checksum.h"
 #include "common/error.h"
+#include "pack/tile_key.h"
 
 namespace gigascroll {
 namespace {
@@ -38,12 +41,13 @@ bool pread_all(int fd, void* out, std::size_t n, std::uint64_t offset) {
     return true;
 }
 
-void check_header(const FileHeader& h, const char (&magic)[8], const std::string& path) {
+void check_header(const FileHeader& h, const char (&magic)[8], std::uint32_t version,
+                  const std::string& path) {
     if (std::memcmp(h.magic, magic, 8) != 0)
         throw IoError(path + ": not a gigascroll pack file (wrong magic)");
-    if (h.version != kPackVersion)
+    if (h.version != version)
         throw IoError(path + ": unsupported pack version " + std::to_string(h.version) +
-                      " (this build reads version " + std::to_string(kPackVersion) + ")");
+                      " (the manifest says version " + std::to_string(version) + ")");
 }
 
 // Thread-local zstd context: no state is shared between loader threads.
@@ -58,8 +62,25 @@ ZSTD_DCtx* thread_dctx() {
 
 }  // namespace
 
+// One tile file: its size, identity and descriptor. Files past the open budget are
+// opened on first use (and checked to be the file validated on open).
+struct TilePack::TileFile {
+    std::string path;
+    std::uint64_t size = 0;
+    dev_t dev = 0;
+    ino_t ino = 0;
+    mutable std::atomic<int> fd{-1};
+};
+
+namespace {
+// Descriptors kept open from construction; a pack of thousands of paintings opens the rest
+// on demand rather than exhausting the process's descriptor limit.
+constexpr std::size_t kOpenFileBudget = 64;
+}  // namespace
+
 TilePack::TilePack(const std::string& directory) : directory_(directory) {
     const Manifest m = read_manifest(directory + "/" + kManifestName, &manifest_json_);
+    version_ = m.version;
     tile_size_ = m.tile_size;
     border_ = m.border;
     codec_ = m.codec;
@@ -67,6 +88,11 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
     table_height_ = m.table_height;
     paintings_ = m.paintings;
     entry_count_ = m.tile_count;
+    tile_files_ = m.tile_files;
+    if (version_ < 2)
+        warnings_.push_back(directory + ": a version-1 pack: its checksums do not name their "
+                            "tiles, so swapped or duplicated index entries cannot be detected "
+                            "(rebuild it to get version 2)");
 
     // Index: map it whole; entries are read-only afterwards.
     const std::string index_path = directory + "/" + kIndexName;
@@ -83,10 +109,12 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
     FileHeader h{};
     if (index_size < sizeof(FileHeader) || !pread_all(ifd, &h, sizeof h, 0))
         throw IoError(index_path + ": truncated index");
-    check_header(h, kIndexMagic, index_path);
+    check_header(h, kIndexMagic, version_, index_path);
+    // 64-bit and division-free: a hostile count cannot wrap count * 24 into a match.
+    const std::uint64_t body = index_size - sizeof(FileHeader);
     if (h.entry_size != sizeof(TileEntry) || h.count != entry_count_ ||
-        h.data_bytes != entry_count_ * sizeof(TileEntry) ||
-        index_size != sizeof(FileHeader) + h.data_bytes) {
+        body % sizeof(TileEntry) != 0 || body / sizeof(TileEntry) != entry_count_ ||
+        h.data_bytes != body) {
         throw IoError(index_path + ": truncated or inconsistent index (" +
                       std::to_string(index_size) + " bytes for " + std::to_string(entry_count_) +
                       " tiles)");
@@ -100,35 +128,69 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
     entries_ = reinterpret_cast<const TileEntry*>(static_cast<const char*>(index_map_) +
                                                   sizeof(FileHeader));
 
-    // Tile data: keep one descriptor for pread.
-    const std::string tiles_path = directory + "/" + kTilesName;
-    auto fail = [&](const std::string& message) {
+    // Tile files: each one's header and size now; keep a descriptor for pread.
+    files_ = std::make_unique<TileFile[]>(tile_files_.size());
+    try {
+        std::uint64_t tiles = 0, bytes = 0;
+        for (std::size_t i = 0; i < tile_files_.size(); ++i) {
+            TileFile& f = files_[i];
+            f.path = directory + "/" + tile_files_[i];
+            require_regular_file(f.path);
+            const int fd = ::open(f.path.c_str(), O_RDONLY | O_CLOEXEC);
+            if (fd < 0) throw IoError(f.path + ": cannot open: " + std::strerror(errno));
+            f.fd.store(fd);
+            ::fstat(fd, &st);
+            f.size = static_cast<std::uint64_t>(st.st_size);
+            f.dev = st.st_dev;
+            f.ino = st.st_ino;
+            FileHeader th{};
+            if (f.size < sizeof(FileHeader) || !pread_all(fd, &th, sizeof th, 0))
+                throw IoError(f.path + ": truncated tile data");
+            check_header(th, kTilesMagic, version_, f.path);
+            if (th.data_bytes != f.size - sizeof(FileHeader) || th.count > entry_count_)
+                throw IoError(f.path + ": truncated tile data (" + std::to_string(f.size) +
+                              " bytes, header promises " +
+                              std::to_string(sizeof(FileHeader) + th.data_bytes) + ")");
+            tiles += th.count;
+            bytes += f.size;
+            if (i >= kOpenFileBudget) {
+                ::close(fd);
+                f.fd.store(-1);
+            }
+        }
+        if (tiles != entry_count_)
+            throw IoError(directory + ": the tile files hold " + std::to_string(tiles) +
+                          " tiles, the manifest " + std::to_string(entry_count_));
+        if ((version_ >= 2 || m.tiles_bytes != 0) && bytes != m.tiles_bytes)
+            throw IoError(directory + ": the tile files hold " + std::to_string(bytes) +
+                          " bytes, the manifest's tiles_bytes says " + std::to_string(m.tiles_bytes));
+    } catch (...) {
         release();  // the destructor does not run when the constructor throws
-        throw IoError(message);
-    };
-    try {
-        require_regular_file(tiles_path);
-    } catch (const IoError& e) {
-        fail(e.what());
+        throw;
     }
-    tiles_fd_ = ::open(tiles_path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (tiles_fd_ < 0) fail(tiles_path + ": cannot open: " + std::strerror(errno));
-    ::fstat(tiles_fd_, &st);
-    tiles_size_ = static_cast<std::uint64_t>(st.st_size);
-    FileHeader th{};
-    if (tiles_size_ < sizeof(FileHeader) || !pread_all(tiles_fd_, &th, sizeof th, 0))
-        fail(tiles_path + ": truncated tile data");
-    try {
-        check_header(th, kTilesMagic, tiles_path);
-    } catch (const IoError& e) {
-        fail(e.what());
-    }
-    if (tiles_size_ != sizeof(FileHeader) + th.data_bytes || th.count != entry_count_)
-        fail(tiles_path + ": truncated tile data (" + std::to_string(tiles_size_) +
-             " bytes, header promises " + std::to_string(sizeof(FileHeader) + th.data_bytes) + ")");
 }
 
 TilePack::~TilePack() { release(); }
+
+int TilePack::file_descriptor(std::uint32_t file) const {
+    TileFile& f = files_[file];
+    int fd = f.fd.load(std::memory_order_acquire);
+    if (fd >= 0) return fd;
+    fd = ::open(f.path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw IoError(f.path + ": cannot open: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || st.st_dev != f.dev || st.st_ino != f.ino ||
+        std::uint64_t(st.st_size) != f.size) {
+        ::close(fd);
+        throw IoError(f.path + ": replaced or resized since the pack was opened");
+    }
+    int expected = -1;
+    if (!f.fd.compare_exchange_strong(expected, fd, std::memory_order_acq_rel)) {
+        ::close(fd);  // another thread opened it first
+        return expected;
+    }
+    return fd;
+}
 
 PackGeometry TilePack::geometry() const {
     PackGeometry g;
@@ -143,17 +205,37 @@ PackGeometry TilePack::geometry() const {
 void TilePack::release() {
     if (index_map_) ::munmap(index_map_, index_map_size_);
     index_map_ = nullptr;
-    if (tiles_fd_ >= 0) ::close(tiles_fd_);
-    tiles_fd_ = -1;
+    if (files_)
+        for (std::size_t i = 0; i < tile_files_.size(); ++i) {
+            const int fd = files_[i].fd.exchange(-1);
+            if (fd >= 0) ::close(fd);
+        }
 }
 
-const TileEntry& TilePack::entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
-                                 std::uint32_t ty) const {
+TileEntry TilePack::entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
+                          std::uint32_t ty) const {
     if (!has_tile(p, l, tx, ty))
         throw InvalidArgument("tile " + key_text(p, l, tx, ty) +
                               " is not stored (padding outside the painting)");
     const PaintingGeometry& g = paintings_[p].geometry;
-    return entries_[g.first_entry() + g.tile_index(l, tx, ty)];
+    TileEntry e;
+    std::memcpy(&e, &entries_[g.first_entry() + g.tile_index(l, tx, ty)], sizeof e);
+    if (e.flags != kTileStored || (version_ < 2 && e.file != 0)) {
+        const std::uint32_t flags = version_ < 2 ? (std::uint32_t(e.file) << 16 | e.flags) : e.flags;
+        char hex[16];
+        std::snprintf(hex, sizeof hex, "0x%x", flags);
+        throw IoError(directory_ + ": index entry of tile " + key_text(p, l, tx, ty) +
+                      " has flags " + hex + " (a finished pack stores only 1 = stored)");
+    }
+    if (e.file >= tile_files_.size())
+        throw IoError(directory_ + ": index entry of tile " + key_text(p, l, tx, ty) +
+                      " names tile file " + std::to_string(e.file) + " of " +
+                      std::to_string(tile_files_.size()));
+    const std::uint64_t size = files_[e.file].size;
+    if (e.offset < sizeof(FileHeader) || e.offset > size || e.length > size - e.offset)
+        throw IoError(directory_ + ": index entry of tile " + key_text(p, l, tx, ty) +
+                      " points outside " + tile_files_[e.file]);
+    return e;
 }
 
 bool TilePack::has_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
@@ -170,39 +252,36 @@ bool TilePack::has_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
     if (tx >= gw || ty >= gh)
         throw InvalidArgument("tile " + key_text(p, l, tx, ty) + " outside the level's " +
                               std::to_string(gw) + " x " + std::to_string(gh) + " page-table grid");
-    if (tx >= g.tiles_x(l) || ty >= g.tiles_y(l)) return false;
-    const TileEntry& e = entries_[g.first_entry() + g.tile_index(l, tx, ty)];
-    return (e.flags & kTileStored) != 0;
+    return tx < g.tiles_x(l) && ty < g.tiles_y(l);
 }
 
 TileLocation TilePack::locate(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
                               std::uint32_t ty) const {
-    const TileEntry& e = entry(p, l, tx, ty);
-    return {e.offset, e.length, e.checksum};
+    const TileEntry e = entry(p, l, tx, ty);
+    return {e.offset, e.length, e.checksum, e.file};
 }
 
 void TilePack::read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty,
                          std::uint8_t* out) const {
     const TileEntry e = entry(p, l, tx, ty);
     const std::size_t bytes = tile_bytes();
-    if (e.offset < sizeof(FileHeader) || e.offset + e.length > tiles_size_)
-        throw IoError(directory_ + ": index entry of tile " + key_text(p, l, tx, ty) +
-                      " points outside tiles.bin");
+    const int fd = file_descriptor(e.file);
+    const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
     if (codec_ == Codec::Raw) {
         if (e.length != bytes)
             throw IoError(directory_ + ": tile " + key_text(p, l, tx, ty) + " has length " +
                           std::to_string(e.length) + ", expected " + std::to_string(bytes));
-        if (!pread_all(tiles_fd_, out, bytes, e.offset))
+        if (!pread_all(fd, out, bytes, e.offset))
             throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
-        if (checksum64(out, bytes) != e.checksum)
+        if (tile_checksum(version_, key, out, bytes) != e.checksum)
             throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
         return;
     }
     thread_local std::vector<std::uint8_t> scratch;
     scratch.resize(e.length);
-    if (!pread_all(tiles_fd_, scratch.data(), e.length, e.offset))
+    if (!pread_all(fd, scratch.data(), e.length, e.offset))
         throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
-    if (checksum64(scratch.data(), e.length) != e.checksum)
+    if (tile_checksum(version_, key, scratch.data(), e.length) != e.checksum)
         throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
     const std::size_t n = ZSTD_decompressDCtx(thread_dctx(), out, bytes, scratch.data(), e.length);
     if (ZSTD_isError(n) || n != bytes)

@@ -1,10 +1,14 @@
-// Read side of a tile pack (format in format.h). Opening parses the manifest, checks the
-// binaries' magic, version and sizes, and maps the index; a lookup is then O(1).
-// Thread safety: after construction the object is immutable; read_tile uses pread on one
-// shared descriptor and per-thread scratch, so loader threads may call it concurrently.
+// Read side of a tile pack (format in format.h), versions 1 and 2. Opening parses and
+// validates the manifest (the builder's own validator), checks every binary's magic, version
+// and size, and maps the index; a lookup is then O(1). A read checks the entry (flags, file,
+// bounds) and its checksum, which in version 2 also names the tile.
+// Thread safety: after construction the object is logically immutable; read_tile uses pread
+// on shared descriptors (opened once, lazily past a budget) and per-thread scratch, so
+// loader threads may call it concurrently.
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,6 +22,7 @@ struct TileLocation {
     std::uint64_t offset;
     std::uint32_t length;
     std::uint64_t checksum;
+    std::uint32_t file = 0;  // index into tile_files()
 };
 
 class TilePack {
@@ -43,21 +48,30 @@ public:
     std::size_t tile_bytes() const { return std::size_t(tile_size_) * tile_size_ * 3; }
     // The manifest as this reader parsed it, serialised again (JSON text).
     const std::string& manifest_json() const { return manifest_json_; }
+    std::uint32_t version() const { return version_; }
+    const std::vector<std::string>& tile_files() const { return tile_files_; }
+    // What a caller should be told about this pack (a version-1 pack cannot detect swapped
+    // or duplicated index entries).
+    const std::vector<std::string>& warnings() const { return warnings_; }
 
     // InvalidArgument when p or l is out of range or (tx, ty) lies outside the level's
-    // power-of-two page-table grid; false for padding tiles inside that grid.
+    // power-of-two page-table grid; false for padding tiles inside that grid (every real
+    // tile of a finished pack is stored: a corrupt entry is reported by read_tile).
     bool has_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;
-    // InvalidArgument for a key that is out of range or not stored.
+    // InvalidArgument for a key that is out of range or not stored; IoError for an entry
+    // whose flags are not "stored" or whose file is not in tile_files().
     TileLocation locate(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;
     // Reads, decompresses and verifies one tile into out[tile_bytes()] (RGB, row-major).
-    // IoError on a short read, a checksum mismatch or a corrupt zstd frame.
+    // IoError on a bad entry, a short read, a checksum mismatch or a corrupt zstd frame.
     void read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty,
                    std::uint8_t* out) const;
 
 private:
+    struct TileFile;
     void release();
-    const TileEntry& entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
-                           std::uint32_t ty) const;
+    // The checked entry of a stored tile (InvalidArgument / IoError as for locate).
+    TileEntry entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;
+    int file_descriptor(std::uint32_t file) const;
 
     std::string directory_;
     std::string manifest_json_;
@@ -65,8 +79,9 @@ private:
     std::uint32_t tile_size_ = 0, border_ = 0;
     Codec codec_ = Codec::Raw;
     std::uint32_t table_width_ = 0, table_height_ = 0;
-    int tiles_fd_ = -1;
-    std::uint64_t tiles_size_ = 0;
+    std::uint32_t version_ = kPackVersion;
+    std::vector<std::string> tile_files_, warnings_;
+    std::unique_ptr<TileFile[]> files_;
     void* index_map_ = nullptr;
     std::size_t index_map_size_ = 0;
     const TileEntry* entries_ = nullptr;

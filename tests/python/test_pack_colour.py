@@ -166,7 +166,7 @@ def test_untagged_is_assumed_srgb_and_untouched(tmp_path):
     assert p.colour["transform"] == "none"
     arr = build_pack(pixels, tmp_path / "a", tile_size=16, border=2)  # arrays too
     assert arr.paintings[0].colour["source_space"] == "assumed sRGB"
-    for f in ("tiles.bin", "index.bin"):  # the same bytes either way
+    for f in ("tiles-00000.bin", "index.bin"):  # the same bytes either way
         assert (tmp_path / "p" / f).read_bytes() == (tmp_path / "a" / f).read_bytes()
 
 
@@ -242,7 +242,7 @@ def test_exr_chromaticities_are_honoured(tmp_path):
     a = build_pack(tmp_path / "709.exr", tmp_path / "a", tile_size=16, border=2)
     build_pack(tmp_path / "plain.exr", tmp_path / "b", tile_size=16, border=2)
     assert a.paintings[0].colour["transform"] == "none"
-    assert (tmp_path / "a/tiles.bin").read_bytes() == (tmp_path / "b/tiles.bin").read_bytes()
+    assert (tmp_path / "a/tiles-00000.bin").read_bytes() == (tmp_path / "b/tiles-00000.bin").read_bytes()
 
 
 def test_manifest_colour_validates_against_schema(tmp_path):

@@ -68,18 +68,34 @@ def _copy(pack, tmp_path):
     return tmp_path / "p"
 
 
-# (mutation, the pure reader's message, whether the core's reader refuses it too: it
-# recomputes the levels from the size and checks structure, not the colour record's fields)
+# (mutation, the pure reader's message, whether the core's reader refuses it too: both apply
+# the same rules, except that only the schema checks the colour record's fields)
 @pytest.mark.parametrize("mutate, message, core_refuses", [
     (lambda m: m.update(codec="lz4"), "schema at codec", True),
-    (lambda m: m.update(version=2), "schema at version", True),
+    (lambda m: m.update(version=3), "unsupported pack version 3", True),
+    (lambda m: m.update(version=1.9), "schema at version", True),
     (lambda m: m["paintings"][0].pop("levels"), "schema at paintings/0", True),
-    (lambda m: m["paintings"][0]["levels"][1].update(width=7), "level 1 of painting", False),
+    (lambda m: m["paintings"][0]["levels"][1].update(width=7), "level 1 of painting", True),
     (lambda m: m.update(tile_count=m["tile_count"] + 1), "tile_count does not match", True),
     (lambda m: m["paintings"][1]["page_table"].update(x=1), "unaligned or outside", True),
     (lambda m: m["paintings"][0].update(colour={"mode": "maybe"}), "schema at paintings/0/colour",
      False),
     (lambda m: m["paintings"][0].update(colour=[1]), "schema at paintings/0/colour", True),
+    # Issue 11: values that wrapped 32-bit arithmetic or passed as the wrong type.
+    (lambda m: m.update(border=2 ** 31), "schema at border", True),
+    (lambda m: m["paintings"][0].update(width=2 ** 32 + 131), "schema at paintings/0/width", True),
+    (lambda m: m.update(tile_size=16.0), "schema at tile_size", True),
+    (lambda m: m["paintings"][0]["page_table"].update(x=0.0), "schema at paintings/0/page_table/x",
+     True),
+    (lambda m: m["page_table"].update(width=12), "schema at page_table/width", True),
+    (lambda m: m["page_table"].update(width=2 ** 20, height=2 ** 20), "absurdly large", True),
+    (lambda m: m["paintings"][1]["page_table"].update(x=m["paintings"][0]["page_table"]["x"],
+                                                       y=m["paintings"][0]["page_table"]["y"]),
+     "overlap", True),
+    (lambda m: m["tile_files"].__setitem__(1, "../x.bin"), "schema at tile_files/1", True),
+    (lambda m: m["tile_files"].__setitem__(1, "x.bin\n"), "tile_files", True),
+    (lambda m: m.pop("tile_files"), "schema at", True),
+    (lambda m: m["paintings"][0].update(uv_scale=[0.5, 0.5]), "uv_scale", True),
 ])
 def test_both_readers_refuse_bad_manifests(packs, tmp_path, mutate, message, core_refuses):
     path = _copy(packs["raw"], tmp_path)
@@ -99,7 +115,7 @@ def test_pure_reader_detects_damage(packs, tmp_path):
     core = TilePack(path)
     offset, length, _ = core.locate(0, 0, 1, 1)
     del core
-    with open(path / "tiles.bin", "r+b") as f:
+    with open(path / "tiles-00000.bin", "r+b") as f:
         f.seek(offset + length // 2)
         byte = f.read(1)
         f.seek(offset + length // 2)

@@ -227,7 +227,7 @@ def test_loader_reports_a_corrupt_tile_and_keeps_going(pack, tmp_path):
     shutil.copytree(pack.path, bad)
     copy = gigascroll.TilePack(bad)
     offset, length, _ = copy.locate(0, 0, 2, 1)
-    with open(bad / "tiles.bin", "r+b") as f:
+    with open(bad / "tiles-00000.bin", "r+b") as f:
         f.seek(offset + length // 2)
         byte = f.read(1)
         f.seek(offset + length // 2)

@@ -101,11 +101,12 @@ def _pack(cache: Path, width: int, height: int, seed: int, codec: str):
 
 
 def _warm(pack) -> None:
-    """Reads tiles.bin once so every measurement runs from the page cache."""
+    """Reads the tile files once so every measurement runs from the page cache."""
     buf = bytearray(8 << 20)
-    with open(Path(pack.path) / "tiles.bin", "rb", buffering=0) as f:
-        while f.readinto(buf):
-            pass
+    for name in pack.tile_files:
+        with open(Path(pack.path) / name, "rb", buffering=0) as f:
+            while f.readinto(buf):
+                pass
 
 
 # ----------------------------------------------------------------------------- requests
@@ -163,8 +164,9 @@ def run_loader(pack, mode: str, threads: int, args, frames: list[np.ndarray]) ->
 
 
 def run_physical(pack, nbytes: int) -> float:
-    """Seconds to read nbytes of tiles.bin sequentially in 1 MiB chunks (wrapping around)."""
-    path = Path(pack.path) / "tiles.bin"
+    """Seconds to read nbytes of the (one painting's) tile file sequentially in 1 MiB chunks
+    (wrapping around)."""
+    path = Path(pack.path) / pack.tile_files[0]
     buf = bytearray(1 << 20)
     fd = os.open(path, os.O_RDONLY)
     try:

@@ -6,6 +6,7 @@ from __future__ import annotations
 # what -> one-line description, in the order `gigascroll bench --help` lists them
 BENCHMARKS = {
     "pack": "tile-pack build throughput and memory against libvips dzsave",
+    "cluster": "sharded pack builds on Dask (1, 2 workers) against a process pool",
     "export": "export to IIIF, Deep Zoom and pyramidal TIFF against libvips",
     "queues": "lock-free queues against peer queues and a mutex queue",
     "loader": "seed 000 Table 1: lock-free vs locked tile loading, and VT sampling cost",
@@ -17,10 +18,11 @@ BENCHMARKS = {
 
 
 def register(sub) -> None:
-    from ..benchmarks import export, gallery, loader, pack, photon, queues, views, walk
+    from ..benchmarks import cluster, export, gallery, loader, pack, photon, queues, views, walk
 
-    modules = {"pack": pack, "export": export, "queues": queues, "loader": loader, "views": views,
-               "photon": photon, "gallery": gallery, "walk": walk}
+    modules = {"pack": pack, "cluster": cluster, "export": export, "queues": queues,
+               "loader": loader, "views": views, "photon": photon, "gallery": gallery,
+               "walk": walk}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True

@@ -28,6 +28,14 @@ def register(sub) -> None:
     p.add_argument("--no-bpc", dest="bpc", action="store_false",
                    help="no black-point compensation (on by default)")
     p.add_argument("--force", action="store_true", help="overwrite an existing pack")
+    p.add_argument("--workers", type=int, default=0,
+                   help="build each painting as a shard on a Dask LocalCluster of this many "
+                   "worker processes (needs the 'cluster' extra; default 0: one process)")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="build the shards on this Dask scheduler's workers (they must see the "
+                   "output directory)")
+    p.add_argument("--resume", action="store_true",
+                   help="reuse the verified shards a failed sharded build left in OUTPUT.shards/")
     p.set_defaults(func=run)
 
 
@@ -35,11 +43,14 @@ def run(args) -> int:
     from ..pack import build_pack, pack_summary
     if args.threads < 0:
         raise ValueError("--threads must be >= 0")
+    if args.workers < 0:
+        raise ValueError("--workers must be >= 0")
     t0 = time.perf_counter()
     pack = build_pack(args.inputs, args.output, args.tile_size, args.border, args.codec,
                       force=args.force, layout=args.layout, seed=args.seed,
                       threads=args.threads, progress=True, colour=args.colour,
-                      intent=args.intent, black_point_compensation=args.bpc)
+                      intent=args.intent, black_point_compensation=args.bpc,
+                      workers=args.workers, scheduler=args.scheduler, resume=args.resume)
     seconds = time.perf_counter() - t0
     mpx = sum(p.width * p.height for p in pack.paintings) / 1e6
     print(pack_summary(pack))

@@ -1,16 +1,22 @@
 """Building tile packs: the merged page-table layout and the streamed build of one pack
 from images (format in README.md and the core's pack/format.h). A build goes into a
-temporary sibling directory renamed into place at the end."""
+temporary sibling directory renamed into place at the end.
+
+A build may also run as shards (build_pack(..., workers=N) or scheduler=ADDRESS): each
+painting is built by a worker of a Dask cluster (or of a plain process pool) into its own
+tile file and shard index, exactly the bytes a single-process build writes for it; the layout
+runs once on the paintings' sizes and a final step writes index.bin and the manifest and
+renames the pack into place. Shards live in `OUT.shards/` until then, so a failed build
+leaves no pack and `resume=True` reuses the shards that were completed and verify."""
 
 from __future__ import annotations
 
 import json
 import os
-import queue
+import re
 import shutil
-import threading
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -18,6 +24,7 @@ from .. import _core
 from .._core import TilePack, painting_geometry
 from .colour import plan_colour
 from .images import ImageSource, open_image
+from .shards import build_sharded, feed, publish
 
 __all__ = ["build_pack", "plan_layout", "MANIFEST"]
 
@@ -38,63 +45,16 @@ def plan_layout(table_sizes: Sequence[tuple[int, int]], method: str = "brkga", s
 
 # ----------------------------------------------------------------------------- building
 
-def _prefetch(it: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
-    """Runs the band reader one band ahead on a helper thread (OpenImageIO releases the GIL
-    while decoding), so reading overlaps the C++ reduction and tile cutting. At most two
-    bands are alive at once (the one being packed and the one being read): peak memory."""
-    q: queue.Queue = queue.Queue()
-    slots = threading.Semaphore(2)
-    stop = threading.Event()
-    done = object()
-
-    def worker():
-        try:
-            while True:
-                while not slots.acquire(timeout=0.1):
-                    if stop.is_set():
-                        return
-                if stop.is_set():
-                    return
-                band = next(it, done)
-                q.put(band)
-                if band is done:
-                    return
-        except BaseException as e:  # handed to the consumer
-            q.put(e)
-
-    t = threading.Thread(target=worker, name="gigascroll-band-reader", daemon=True)
-    t.start()
-    try:
-        while True:
-            item = q.get()
-            if item is done:
-                return
-            if isinstance(item, BaseException):
-                raise item
-            yield item
-            del item
-            slots.release()  # the consumer is done with this band
-    finally:
-        stop.set()
-        t.join()
-
-
-def _fsync_dir(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
 # The files a pack directory holds: --force replaces a directory only if it holds nothing else
 # and its manifest says it is a pack (a source tree with a manifest.json is not one).
 PACK_FILES = frozenset({MANIFEST, "tiles.bin", "index.bin"})
+_TILE_FILE = re.compile(r"tiles-\d{5}\.bin")
 
 
 def _is_pack_dir(path: Path) -> bool:
     names = {p.name for p in path.iterdir()}
     manifest = path / MANIFEST
+    names = {n for n in names if not _TILE_FILE.fullmatch(n)}
     if not names <= PACK_FILES or not manifest.is_file() or manifest.is_symlink():
         return False
     try:
@@ -119,13 +79,22 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                force: bool = False, names: Sequence[str] | None = None, layout: str = "brkga",
                seed: int = 0, threads: int = 0, zstd_level: int = 3, progress: bool = False,
                band_rows: int = 0, colour: str = "convert", intent: str = "relative",
-               black_point_compensation: bool = True) -> TilePack:
+               black_point_compensation: bool = True, workers: int = 0,
+               scheduler: str | None = None, executor: str = "dask", resume: bool = False,
+               shard_hook: Callable[[int, str], None] | None = None) -> TilePack:
     """Builds a tile pack at `out` from one image or a list of images (file paths or numpy
     arrays, one painting each) and returns it opened. The build goes into a temporary sibling
     directory renamed into place at the end, so a failed or interrupted build leaves nothing
     that opens as a pack. Colours (see .colour): `colour="convert"` turns an embedded ICC
     profile (or EXR chromaticities) into sRGB with the rendering `intent`; "keep" stores the
-    values untouched; either way the manifest records what was done."""
+    values untouched; either way the manifest records what was done.
+
+    Sharded builds: `workers=N` builds each painting on one of N workers of a Dask
+    LocalCluster (`scheduler="tcp://HOST:PORT"`: on that cluster's workers, which must see
+    `out`'s directory), or with `executor="processes"` of a plain process pool; the pack is
+    the same bytes as a single-process build. `resume=True` reuses the verified shards a
+    failed sharded build left in `OUT.shards/`. `threads` is per worker there (default 1).
+    `shard_hook(index, name)`, if given, runs on the worker before each painting (tests)."""
     if isinstance(inputs, (str, os.PathLike, np.ndarray)):
         inputs = [inputs]
     inputs = list(inputs)
@@ -139,6 +108,17 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         raise ValueError(f"tile_size ({tile_size}) must be larger than 2 * border ({2 * border})")
     if names is not None and len(names) != len(inputs):
         raise ValueError("names must have one entry per input")
+    if len(inputs) > _core.MAX_PACK_PAINTINGS:
+        raise ValueError(f"{len(inputs)} images: a pack holds at most "
+                         f"{_core.MAX_PACK_PAINTINGS} paintings (the tile key's 16-bit field)")
+    if (not isinstance(workers, (int, np.integer)) or isinstance(workers, bool)
+            or not 0 <= workers <= 4096):
+        raise ValueError(f"workers must be an integer in [0, 4096], got {workers!r}")
+    if executor not in ("dask", "processes"):
+        raise ValueError(f"unknown executor '{executor}' (expected dask or processes)")
+    sharded = bool(workers) or scheduler is not None
+    if resume and not sharded:
+        raise ValueError("resume needs a sharded build (workers or scheduler)")
     out = Path(out)
     colour_options = {"mode": colour, "intent": intent,
                       "black_point_compensation": black_point_compensation}
@@ -162,6 +142,16 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
             used.add(s.name)
         geoms = [painting_geometry(s.width, s.height, tile_size, border) for s in sources]
         table_w, table_h, offsets, info = plan_layout([g["table_size"] for g in geoms], layout, seed)
+        if sharded:
+            for s in sources:  # the workers open their own
+                s.close()
+            opts = {"tile_size": int(tile_size), "border": int(border), "codec": codec,
+                    "zstd_level": int(zstd_level), "threads": int(threads) or 1,
+                    "band_rows": int(band_rows), "colour": colour_options}
+            build_sharded(inputs, sources, offsets, (table_w, table_h), info, out, opts,
+                          workers=int(workers), scheduler=scheduler, executor=executor,
+                          resume=resume, progress=progress, hook=shard_hook)
+            return TilePack(out)
 
         if tmp.exists():
             shutil.rmtree(tmp)
@@ -176,24 +166,14 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         for s, (ox, oy) in zip(sources, offsets):
             builder.begin_painting(s.name, s.width, s.height, s.source, s.conversion, ox, oy,
                                    "" if s.colour is None else json.dumps(s.colour))
-            bands = _prefetch(s.bands())
-            try:
-                for band in bands:
-                    builder.add_rows(band)
-                    if bar is not None:
-                        bar.update(band.shape[0] * band.shape[1] / 1e6)
-            finally:
-                bands.close()  # joins the reader thread before the image is closed
+            feed(builder, s, bar)
             builder.end_painting()
             s.close()
         builder.finish(table_w, table_h, json.dumps(info))
         del builder
         if bar is not None:
             bar.close()
-        if out.exists():
-            shutil.rmtree(out)
-        os.rename(tmp, out)
-        _fsync_dir(out.parent)  # make the rename itself durable
+        publish(tmp, out)
     except BaseException:
         if bar is not None:
             bar.close()

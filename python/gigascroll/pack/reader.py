@@ -1,27 +1,53 @@
 """A pure-Python tile-pack reader (numpy, xxhash, zstandard, jsonschema) for tools that
-cannot load the C++ core. It applies the same checks as the core's reader: the manifest
-against the JSON Schema (manifest.schema.json) and its geometry arithmetic, the binaries'
-magic, version and sizes on open, and the XXH3-64 checksum of every tile read."""
+cannot load the C++ core. It applies the same checks as the core's reader
+(cpp/pack/manifest.cpp, reader.cpp): the manifest against the JSON Schema
+(manifest.schema.json, with exact integer types) and the same arithmetic rules, the binaries'
+magic, version and sizes on open, and on every read the entry's flags, file and bounds and its
+XXH3-64 checksum, which in format version 2 is seeded with the tile's key so that swapped or
+duplicated index entries fail. Version 1 packs are read with a warning."""
 
 from __future__ import annotations
 
+import bisect
 import json
 import os
 import stat
 import struct
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest", "SCHEMA_PATH"]
+__all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest", "tile_key",
+           "tile_seed",
+           "SCHEMA_PATH"]
 
 SCHEMA_PATH = Path(__file__).with_name("manifest.schema.json")
 _HEADER = struct.Struct("<8sIIQQ")  # magic, version, entry size, count, data bytes
 _TILES_MAGIC, _INDEX_MAGIC = b"GSTILES\0", b"GSINDEX\0"
-_ENTRY = np.dtype([("offset", "<u8"), ("length", "<u4"), ("flags", "<u4"), ("checksum", "<u8")])
+# Version 2; in version 1 the (flags, file) pair is one u32 of flags whose high half is 0.
+_ENTRY = np.dtype([("offset", "<u8"), ("length", "<u4"), ("flags", "<u2"), ("file", "<u2"),
+                   ("checksum", "<u8")])
 _STORED = 1
+PACK_VERSION, OLDEST_PACK_VERSION = 2, 1
+MAX_PACK_PAINTINGS = 1 << 16  # the 16-bit painting field of a tile key
+MAX_TABLE_SLACK = 16          # merged table area / the smallest area that holds the tables
+_TILE_FILE = __import__("re").compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,254}")
+
+
+TILE_SEED_SALT = 0x9E3779B97F4A7C15
+
+
+def tile_key(p: int, l: int, tx: int, ty: int) -> int:
+    """TileKey::packed(): p << 48 | l << 40 | ty << 20 | tx."""
+    return (p << 48) | (l << 40) | (ty << 20) | tx
+
+
+def tile_seed(p: int, l: int, tx: int, ty: int) -> int:
+    """The XXH3-64 seed of a version-2 tile's checksum: its key XOR TILE_SEED_SALT."""
+    return tile_key(p, l, tx, ty) ^ TILE_SEED_SALT
 
 
 @lru_cache(maxsize=1)
@@ -45,22 +71,72 @@ def _next_pow2(n: int) -> int:
     return 1 << max(0, (n - 1).bit_length())
 
 
-def validate_manifest(m: dict, where: str = "manifest.json") -> None:
-    """Checks a parsed manifest against the schema and its arithmetic (level sizes, tile grids,
-    running entry totals, page-table sizes and placements). OSError naming `where` if not."""
+@lru_cache(maxsize=1)
+def _validator():
+    """Draft 2020-12 with exact integers: JSON Schema's "integer" accepts 128.0, the core
+    refuses it (and so must we)."""
     import jsonschema
+    base = jsonschema.Draft202012Validator
+    checker = base.TYPE_CHECKER.redefine(
+        "integer", lambda _, v: isinstance(v, int) and not isinstance(v, bool))
+    return jsonschema.validators.extend(base, type_checker=checker)(manifest_schema())
+
+
+def _check_disjoint(m: dict, where: str) -> None:
+    """Page tables pairwise disjoint, by a sweep over x (the core's check_disjoint)."""
+    events = []
+    for i, p in enumerate(m["paintings"]):
+        pt = p["page_table"]
+        events.append((pt["x"], 1, i))
+        events.append((pt["x"] + pt["width"], 0, i))  # closings sort before openings
+    events.sort()
+    ys: list[int] = []       # sorted y0 of the tables crossing the sweep line
+    owner: dict[int, int] = {}
+    for _, opening, i in events:
+        pt = m["paintings"][i]["page_table"]
+        y0, y1 = pt["y"], pt["y"] + pt["height"]
+        if not opening:
+            ys.pop(bisect.bisect_left(ys, y0))
+            del owner[y0]
+            continue
+        k = bisect.bisect_left(ys, y0)
+        clash = None
+        if k < len(ys) and ys[k] < y1:
+            clash = owner[ys[k]]
+        elif k > 0:
+            q = m["paintings"][owner[ys[k - 1]]]["page_table"]
+            if q["y"] + q["height"] > y0:
+                clash = owner[ys[k - 1]]
+        if clash is not None:
+            raise OSError(f"{where}: page tables of paintings[{clash}] "
+                          f"('{m['paintings'][clash]['name']}') and paintings[{i}] "
+                          f"('{m['paintings'][i]['name']}') overlap")
+        ys.insert(k, y0)
+        owner[y0] = i
+
+
+def validate_manifest(m: dict, where: str = "manifest.json") -> None:
+    """Checks a parsed manifest as the core does: the schema with exact integer types, then
+    its arithmetic (level sizes, tile grids, running entry totals, page-table sizes,
+    placements, overlap, the merged table's size, uv scales). OSError naming `where` and the
+    field if not."""
+    import jsonschema
+    if isinstance(m, dict) and isinstance(m.get("version"), int) and \
+            not isinstance(m["version"], bool) and m["version"] not in (1, 2):
+        raise OSError(f"{where}: unsupported pack version {m['version']} (this reader reads 1 to 2)")
     try:
-        jsonschema.validate(m, manifest_schema(), cls=jsonschema.Draft202012Validator)
+        _validator().validate(m)
     except jsonschema.ValidationError as e:
         path = "/".join(str(p) for p in e.absolute_path) or "(top level)"
-        raise OSError(f"{where}: manifest does not match the schema at {path}: {e.message}") from None
+        raise OSError(f"{where}: manifest does not match the schema at {path}: "
+                      f"{e.message[:200]}") from None
     T, b = m["tile_size"], m["border"]
     if T <= 2 * b or m["payload"] != T - 2 * b:
         raise OSError(f"{where}: tile_size {T}, border {b} and payload {m['payload']} disagree")
     P = T - 2 * b
     Mc, Nc = m["page_table"]["width"], m["page_table"]["height"]
-    entries = 0
-    for p in m["paintings"]:
+    entries = area = wmax = hmax = 0
+    for i, p in enumerate(m["paintings"]):
         name = p["name"]
         levels = _expected_levels(p["width"], p["height"], P)
         pt = p["page_table"]
@@ -79,9 +155,24 @@ def validate_manifest(m: dict, where: str = "manifest.json") -> None:
             first += nx * ny
         if p["tile_count"] != first:
             raise OSError(f"{where}: tile_count of painting '{name}' does not match its levels")
+        u, v = p["uv_scale"]
+        eu, ev = p["width"] / (pt["width"] * P), p["height"] / (pt["height"] * P)
+        if not (abs(u - eu) <= 1e-9 * eu and abs(v - ev) <= 1e-9 * ev):
+            raise OSError(f"{where}: field 'paintings[{i}].uv_scale' does not match the "
+                          "painting's size")
         entries += first
+        area += pt["width"] * pt["height"]
+        wmax, hmax = max(wmax, pt["width"]), max(hmax, pt["height"])
     if m["tile_count"] != entries:
         raise OSError(f"{where}: tile_count does not match the paintings")
+    need = max(_next_pow2(area), wmax * hmax)
+    if Mc * Nc > MAX_TABLE_SLACK * need:
+        raise OSError(f"{where}: field 'page_table': the merged {Mc} x {Nc} table is absurdly "
+                      f"large for paintings whose tables need {need} entries")
+    _check_disjoint(m, where)
+    for i, f in enumerate(m.get("tile_files", ())):
+        if not _TILE_FILE.fullmatch(f):  # the schema's pattern lets "name\n" through
+            raise OSError(f"{where}: field 'tile_files[{i}]' is not a plain tile file name")
 
 
 @dataclass(frozen=True)
@@ -127,24 +218,35 @@ class PurePack:
 
     def __init__(self, path: str | os.PathLike):
         self.path = str(path)
+        self._fds: list[int] = []
         d = Path(path)
         mpath = d / "manifest.json"
-        for f in (mpath, d / "index.bin", d / "tiles.bin"):
+        for f in (mpath, d / "index.bin"):
             _require_regular_file(f)
+        if mpath.stat().st_size > 256 << 20:
+            raise OSError(f"{mpath}: manifest too large")
         try:
             text = mpath.read_text()
         except FileNotFoundError:
             raise OSError(f"{mpath}: missing manifest (not a finished tile pack)") from None
+        except UnicodeDecodeError as e:
+            raise OSError(f"{mpath}: corrupt manifest: {e}") from None
         try:
             m = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise OSError(f"{mpath}: corrupt manifest: {e}") from None
+        except (json.JSONDecodeError, RecursionError) as e:
+            raise OSError(f"{mpath}: corrupt manifest: {str(e)[:200]}") from None
         validate_manifest(m, str(mpath))
         self.manifest = m
+        self.version = m["version"]
+        if self.version < 2:
+            warnings.warn(f"{self.path}: a version-1 pack: its checksums do not name their tiles, "
+                          "so swapped or duplicated index entries cannot be detected (rebuild it "
+                          "to get version 2)", UserWarning, stacklevel=2)
         self.tile_size, self.border, self.payload = m["tile_size"], m["border"], m["payload"]
         self.codec = m["codec"]
         self.table_size = (m["page_table"]["width"], m["page_table"]["height"])
         self.tile_count = m["tile_count"]
+        self.tile_files = list(m.get("tile_files", ["tiles.bin"]))
         self.paintings = [PurePainting(
             p["name"], p.get("source", ""), p.get("conversion", ""), p.get("colour"),
             p["width"], p["height"], p["first_entry"],
@@ -155,6 +257,11 @@ class PurePack:
             (p["page_table"]["x"], p["page_table"]["y"])) for p in m["paintings"]]
 
         ipath = d / "index.bin"
+        size = ipath.stat().st_size
+        if size != _HEADER.size + self.tile_count * _ENTRY.itemsize:
+            # Checked before reading: a hostile manifest cannot make us read a huge file.
+            raise OSError(f"{ipath}: truncated or inconsistent index ({size} bytes for "
+                          f"{self.tile_count} tiles)")
         raw = self._read_all(ipath)
         self._check_header(raw, _INDEX_MAGIC, ipath)
         _, _, entry_size, count, data_bytes = _HEADER.unpack_from(raw)
@@ -164,20 +271,33 @@ class PurePack:
                           f"{self.tile_count} tiles)")
         self._entries = np.frombuffer(raw, _ENTRY, count, _HEADER.size)
 
-        tpath = d / "tiles.bin"
-        self._tiles_path = tpath
+        self._sizes: list[int] = []
         try:
-            self._fd = os.open(tpath, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
-        except OSError as e:
-            raise OSError(f"{tpath}: cannot open: {e.strerror}") from None
-        try:
-            self._tiles_size = os.fstat(self._fd).st_size
-            head = os.pread(self._fd, _HEADER.size, 0)
-            self._check_header(head, _TILES_MAGIC, tpath)
-            _, _, _, tcount, tbytes = _HEADER.unpack_from(head)
-            if self._tiles_size != _HEADER.size + tbytes or tcount != self.tile_count:
-                raise OSError(f"{tpath}: truncated tile data ({self._tiles_size} bytes, header "
-                              f"promises {_HEADER.size + tbytes})")
+            tiles = total = 0
+            for name in self.tile_files:
+                tpath = d / name
+                _require_regular_file(tpath)
+                try:
+                    fd = os.open(tpath, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
+                except OSError as e:
+                    raise OSError(f"{tpath}: cannot open: {e.strerror}") from None
+                self._fds.append(fd)
+                fsize = os.fstat(fd).st_size
+                head = os.pread(fd, _HEADER.size, 0)
+                self._check_header(head, _TILES_MAGIC, tpath)
+                _, _, _, tcount, tbytes = _HEADER.unpack_from(head)
+                if fsize != _HEADER.size + tbytes or tcount > self.tile_count:
+                    raise OSError(f"{tpath}: truncated tile data ({fsize} bytes, header "
+                                  f"promises {_HEADER.size + tbytes})")
+                self._sizes.append(fsize)
+                tiles += tcount
+                total += fsize
+            if tiles != self.tile_count:
+                raise OSError(f"{self.path}: the tile files hold {tiles} tiles, the manifest "
+                              f"{self.tile_count}")
+            if (self.version >= 2 or m.get("tiles_bytes", 0)) and total != m["tiles_bytes"]:
+                raise OSError(f"{self.path}: the tile files hold {total} bytes, the manifest's "
+                              f"tiles_bytes says {m['tiles_bytes']}")
         except BaseException:
             self.close()
             raise
@@ -193,20 +313,20 @@ class PurePack:
         except OSError as e:
             raise OSError(f"{path}: cannot open: {e.strerror}") from None
 
-    @staticmethod
-    def _check_header(raw: bytes, magic: bytes, path: Path) -> None:
+    def _check_header(self, raw: bytes, magic: bytes, path: Path) -> None:
         if len(raw) < _HEADER.size:
             raise OSError(f"{path}: truncated file")
         got, version = _HEADER.unpack_from(raw)[:2]
         if got != magic:
             raise OSError(f"{path}: not a gigascroll pack file (wrong magic)")
-        if version != 1:
-            raise OSError(f"{path}: unsupported pack version {version} (this reader reads 1)")
+        if version != self.version:
+            raise OSError(f"{path}: unsupported pack version {version} (the manifest says "
+                          f"version {self.version})")
 
     def close(self) -> None:
-        if getattr(self, "_fd", -1) >= 0:
-            os.close(self._fd)
-            self._fd = -1
+        for fd in getattr(self, "_fds", ()):
+            os.close(fd)
+        self._fds = []
 
     def __enter__(self) -> "PurePack":
         return self
@@ -229,28 +349,45 @@ class PurePack:
                              f"(the level has {nx} x {ny} tiles)")
         return pp.first_entry + pp.level_first[l] + ty * nx + tx
 
-    def locate(self, p: int, l: int, tx: int, ty: int) -> tuple[int, int, int]:
-        """(offset, length, checksum) of a stored tile in tiles.bin."""
+    def _entry(self, p: int, l: int, tx: int, ty: int):
+        """The checked entry: flags exactly "stored", a listed file, inside that file."""
+        key = f"(painting {p}, level {l}, tile {tx}, {ty})"
         e = self._entries[self._entry_index(p, l, tx, ty)]
-        return int(e["offset"]), int(e["length"]), int(e["checksum"])
+        flags, file = int(e["flags"]), int(e["file"])
+        if flags != _STORED or (self.version < 2 and file != 0):
+            shown = (file << 16 | flags) if self.version < 2 else flags
+            raise OSError(f"{self.path}: index entry of tile {key} has flags {shown:#x} (a "
+                          "finished pack stores only 1 = stored)")
+        if file >= len(self.tile_files):
+            raise OSError(f"{self.path}: index entry of tile {key} names tile file {file} of "
+                          f"{len(self.tile_files)}")
+        offset, length, size = int(e["offset"]), int(e["length"]), self._sizes[file]
+        if offset < _HEADER.size or offset + length > size:
+            raise OSError(f"{self.path}: index entry of tile {key} points outside "
+                          f"{self.tile_files[file]}")
+        return key, file, offset, length, int(e["checksum"])
+
+    def locate(self, p: int, l: int, tx: int, ty: int) -> tuple[int, int, int]:
+        """(offset, length, checksum) of a stored tile in its tile file."""
+        _, _, offset, length, checksum = self._entry(p, l, tx, ty)
+        return offset, length, checksum
+
+    def tile_file(self, p: int, l: int, tx: int, ty: int) -> str:
+        """Name of the tile file that holds the tile."""
+        return self.tile_files[self._entry(p, l, tx, ty)[1]]
 
     def read_tile(self, p: int, l: int, tx: int, ty: int) -> np.ndarray:
         """Reads, decompresses and verifies one tile: (tile_size, tile_size, 3) uint8."""
         import xxhash
-        key = f"(painting {p}, level {l}, tile {tx}, {ty})"
-        e = self._entries[self._entry_index(p, l, tx, ty)]
-        offset, length = int(e["offset"]), int(e["length"])
-        if not e["flags"] & _STORED:
-            raise OSError(f"{self.path}: tile {key} is a hole (not stored)")
-        if offset < _HEADER.size or offset + length > self._tiles_size:
-            raise OSError(f"{self.path}: index entry of tile {key} points outside tiles.bin")
+        key, file, offset, length, checksum = self._entry(p, l, tx, ty)
         nbytes = self.tile_size * self.tile_size * 3
         if self._zstd is None and length != nbytes:
             raise OSError(f"{self.path}: tile {key} has length {length}, expected {nbytes}")
-        data = os.pread(self._fd, length, offset)
+        data = os.pread(self._fds[file], length, offset)
         if len(data) != length:
             raise OSError(f"{self.path}: short read of tile {key}")
-        if xxhash.xxh3_64_intdigest(data) != int(e["checksum"]):
+        seed = tile_seed(p, l, tx, ty) if self.version >= 2 else 0
+        if xxhash.xxh3_64_intdigest(data, seed=seed) != checksum:
             raise OSError(f"{self.path}: checksum mismatch in tile {key}")
         if self._zstd is not None:
             import zstandard

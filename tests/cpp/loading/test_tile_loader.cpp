@@ -127,7 +127,7 @@ TEST_P(LoaderTest, CorruptTileIsAnErrorResultAndTheThreadsSurvive) {
     TilePack pack(copy.string());
     const TileLocation loc = pack.locate(0, 0, 1, 1);
     {
-        std::FILE* f = std::fopen((copy / "tiles.bin").c_str(), "r+b");
+        std::FILE* f = std::fopen((copy / tile_file_name(0)).c_str(), "r+b");
         ASSERT_TRUE(f);
         std::fseek(f, long(loc.offset + 10), SEEK_SET);
         const int c = std::fgetc(f);

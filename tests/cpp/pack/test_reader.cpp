@@ -30,7 +30,7 @@ TEST(TilePack, ErrorsAreClear) {
         EXPECT_THROW(pack.locate(0, 0, 5, 0), InvalidArgument);
         const TileLocation loc = pack.locate(0, 0, 1, 1);
         // Corrupt one byte of that tile.
-        std::fstream f(dir.path / "tiles.bin", std::ios::in | std::ios::out | std::ios::binary);
+        std::fstream f(dir.path / tile_file_name(0), std::ios::in | std::ios::out | std::ios::binary);
         f.seekp(static_cast<std::streamoff>(loc.offset + 7));
         f.put('\x5a' ^ 0x7f);
         f.close();
