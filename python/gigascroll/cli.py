@@ -33,6 +33,8 @@ def main(argv: list[str] | None = None) -> int:
     except (UserError, ValueError, OSError) as e:
         print(f"gigascroll {args.command}: error: {e}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"gigascroll {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as e:  # SIGINT, or SIGTERM / SIGHUP during a build
+        signum = getattr(e, "signum", 2)
+        print(f"gigascroll {args.command}: interrupted{f' ({e})' if signum != 2 else ''}",
+              file=sys.stderr)
+        return 128 + signum

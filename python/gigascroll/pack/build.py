@@ -4,10 +4,14 @@ temporary sibling directory renamed into place at the end."""
 
 from __future__ import annotations
 
+import ctypes
+import contextlib
 import json
 import os
 import queue
+import re
 import shutil
+import signal
 import threading
 from pathlib import Path
 from typing import Iterator, Sequence
@@ -19,7 +23,7 @@ from .._core import TilePack, painting_geometry
 from .colour import plan_colour
 from .images import ImageSource, open_image
 
-__all__ = ["build_pack", "plan_layout", "MANIFEST"]
+__all__ = ["build_pack", "plan_layout", "MANIFEST", "BuildInterrupted"]
 
 MANIFEST = "manifest.json"
 
@@ -115,6 +119,119 @@ def _prepare_output(out: Path, force: bool) -> None:
             raise OSError(f"{out}: exists and is not a directory; refusing to overwrite it")
 
 
+# ----------------------------------------------------------------------------- files on disk
+
+class BuildInterrupted(KeyboardInterrupt):
+    """A build stopped by SIGTERM or SIGHUP (SIGINT stays a plain KeyboardInterrupt); its
+    temporary directory has been removed. `signum` is the signal's number."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+        self.signum = signum
+
+
+@contextlib.contextmanager
+def _signals_interrupt():
+    """While a build runs, SIGTERM and SIGHUP raise BuildInterrupted in the main thread (as
+    SIGINT raises KeyboardInterrupt), so the build's cleanup runs for them too. Outside the
+    main thread signal handlers cannot be set; the process' own handlers stay."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise BuildInterrupted(signum)
+
+    saved = {}
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(sig) in (signal.SIG_DFL, None):  # leave the caller's own handlers
+            saved[sig] = signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in saved.items():
+            signal.signal(sig, old)
+
+
+def _process_gone(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # exists, owned by someone else
+        return False
+    return False
+
+
+def _remove_stale_tmp(out: Path) -> list[Path]:
+    """Removes `OUT.tmp-<pid>` siblings of `out` left by builds whose process is gone
+    (SIGKILL, power loss); a live process' build directory is left alone. Returns them."""
+    pattern = re.compile(re.escape(out.name) + r"\.tmp-([0-9]{1,10})(-old)?")
+    removed = []
+    try:
+        siblings = list(out.parent.iterdir())
+    except OSError:
+        return removed
+    for p in siblings:
+        m = pattern.fullmatch(p.name)
+        if (m and int(m.group(1)) != os.getpid() and _process_gone(int(m.group(1)))
+                and p.is_dir() and not p.is_symlink()):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
+_RENAME_EXCHANGE = 2
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Atomically swaps two directory entries (Linux renameat2 RENAME_EXCHANGE). False when
+    the system or file system does not support it."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    AT_FDCWD = -100
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    if renameat2(AT_FDCWD, os.fsencode(a), AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: not supported here
+        return False
+    raise OSError(err, f"cannot replace {b}: {os.strerror(err)}")
+
+
+def _install(tmp: Path, out: Path) -> None:
+    """Puts the finished pack `tmp` at `out`. Replacing an existing pack is atomic: the two
+    directories are swapped in one step (readers see the old or the new pack, never none)
+    and the old one, now at `tmp`, is deleted. Without RENAME_EXCHANGE the old pack is moved
+    aside first (a crash then leaves it there, removed by the next build)."""
+    blocked = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)  # no half-done swap
+    try:
+        _install_now(tmp, out)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+
+
+def _install_now(tmp: Path, out: Path) -> None:
+    if out.exists():
+        if not _exchange(tmp, out):
+            aside = out.parent / f"{out.name}.tmp-{os.getpid()}-old"
+            os.rename(out, aside)
+            os.rename(tmp, out)
+            tmp = aside
+        _fsync_dir(out.parent)
+        shutil.rmtree(tmp)
+    else:
+        os.rename(tmp, out)
+        _fsync_dir(out.parent)  # make the rename itself durable
+
+
 def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = "raw", *,
                force: bool = False, names: Sequence[str] | None = None, layout: str = "brkga",
                seed: int = 0, threads: int = 0, zstd_level: int = 3, progress: bool = False,
@@ -144,7 +261,14 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                       "black_point_compensation": black_point_compensation}
     plan_colour("build_pack", 3, **colour_options)  # unknown mode / intent: now
     _prepare_output(out, force)
+    _remove_stale_tmp(out)
+    with _signals_interrupt():
+        return _build(inputs, out, tile_size, border, codec, names, layout, seed, threads,
+                      zstd_level, progress, band_rows, colour_options)
 
+
+def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, zstd_level,
+           progress, band_rows, colour_options) -> TilePack:
     sources: list[ImageSource] = []
     bar = None
     tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
@@ -190,10 +314,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         del builder
         if bar is not None:
             bar.close()
-        if out.exists():
-            shutil.rmtree(out)
-        os.rename(tmp, out)
-        _fsync_dir(out.parent)  # make the rename itself durable
+        _install(tmp, out)
     except BaseException:
         if bar is not None:
             bar.close()
