@@ -237,7 +237,7 @@ void bind_pack(nb::module_& m) {
         .def_prop_ro("bytes_written", &PackBuilder::bytes_written);
 
     nb::class_<IccTransform>(m, "IccTransform",
-                             "LittleCMS transform of an RGB or grey ICC profile to sRGB, 16 bits.")
+                             "LittleCMS transform of an RGB, grey or CMYK ICC profile to sRGB, 16 bits.")
         .def("__init__", [](IccTransform* self, nb::bytes profile, const std::string& intent,
                             bool bpc) {
             const auto* p = static_cast<const std::uint8_t*>(profile.data());
