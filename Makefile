@@ -16,7 +16,7 @@ export CMAKE_CXX_COMPILER_LAUNCHER := $(shell command -v ccache 2>/dev/null)
 export CMAKE_C_COMPILER_LAUNCHER := $(CMAKE_CXX_COMPILER_LAUNCHER)
 export CCACHE_BASEDIR := $(CURDIR)
 
-.PHONY: all deps venv build demo test ctest pytest sanitize bench clean
+.PHONY: all deps venv build demo test ctest pytest sanitize bench clean fuzz
 
 all: build
 
@@ -56,6 +56,10 @@ pytest: build
 	$(PY) -m pytest -q
 
 test: ctest pytest
+
+# The long fuzz runs (tests marked `fuzz`: many more examples per family than `make test`).
+fuzz: build
+	GIGASCROLL_FUZZ=1 $(PY) -m pytest -q -m fuzz tests/python/test_fuzz_*.py --hypothesis-show-statistics
 
 # C++ tests under sanitizers, each in its own build tree. Allocation failure must reach the
 # code as std::bad_alloc (tested), not abort the run.

@@ -21,7 +21,7 @@ import numpy as np
 from .. import _core
 from .._core import TilePack, painting_geometry
 from .colour import plan_colour
-from .images import ImageSource, open_image
+from .images import ImageSource, open_image, require_utf8_path
 
 __all__ = ["build_pack", "plan_layout", "MANIFEST", "BuildInterrupted"]
 
@@ -257,6 +257,11 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     if names is not None and len(names) != len(inputs):
         raise ValueError("names must have one entry per input")
     out = Path(out)
+    require_utf8_path(out.absolute())
+    if names is not None:
+        for n in names:
+            if not isinstance(n, str) or "\0" in n or any(0xD800 <= ord(c) <= 0xDFFF for c in n):
+                raise ValueError(f"painting name {n!r} is not a valid UTF-8 text")
     colour_options = {"mode": colour, "intent": intent,
                       "black_point_compensation": black_point_compensation}
     plan_colour("build_pack", 3, **colour_options)  # unknown mode / intent: now

@@ -152,6 +152,7 @@ class FileSource(ImageSource):
         self._oiio = oiio
         self._inp = None
         path = Path(path)
+        require_utf8_path(path)
         if not path.is_file():
             raise OSError(f"{path}: no such image file")
         # Keep colours as stored (no alpha premultiplication): alpha is dropped anyway.
@@ -284,6 +285,16 @@ class FileSource(ImageSource):
         if self._inp is not None:
             self._inp.close()
             self._inp = None
+
+
+def require_utf8_path(path) -> None:
+    """OSError for a path that is not valid UTF-8 (OpenImageIO, the core and manifest.json
+    take UTF-8 names only): a clear message instead of a codec error half-way."""
+    try:
+        os.fsencode(path).decode("utf-8")
+    except UnicodeDecodeError:
+        shown = os.fsencode(path).decode("utf-8", "backslashreplace")
+        raise OSError(f"{shown}: file name is not valid UTF-8; rename it") from None
 
 
 def _one_line(message: str | None) -> str:
