@@ -168,3 +168,21 @@ def test_tall_tiles_keep_memory_band_limited(tmp_path):
     whole = _peak_growth(tmp_path / "tall.tif", tmp_path / "c", "whole-tile-rows")
     assert tall <= banded + tile_row // 4, (tall, banded)
     assert whole > banded + tile_row, (whole, banded)  # the old way: several tile rows
+
+
+def test_decompression_bomb_is_one_clear_line(tmp_path, capsys):
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    w = h = 200000  # 120 GB claimed by a file of a few hundred bytes
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+           + chunk(b"IDAT", zlib.compress(b"\0" * (1 + 3 * w))) + chunk(b"IEND", b""))
+    (tmp_path / "bomb.png").write_bytes(png)
+    assert cli_main(["pack", str(tmp_path / "bomb.png"), "-o", str(tmp_path / "p")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "200000x200000" in err[0] and "decompression bomb" in err[0]
+    assert "OIIO attribute" not in err[0]  # advice a gigascroll user cannot follow
+    assert not (tmp_path / "p").exists()

@@ -298,8 +298,12 @@ def require_utf8_path(path) -> None:
 
 
 def _one_line(message: str | None) -> str:
-    """An error message of a library on one line (OpenImageIO's can span several)."""
-    return " ".join((message or "").split())
+    """An error message of a library on one line (OpenImageIO's can span several). OpenImageIO's
+    advice to raise its size limit is dropped: a gigascroll user cannot (and the limit is what
+    keeps a decompression bomb out)."""
+    text = " ".join((message or "").split())
+    cut = text.find(" If this is a valid file, raise the OIIO attribute")
+    return text if cut < 0 else text[:cut] + " (refused as a possible decompression bomb)"
 
 
 def open_image(image, name: str | None = None, band_rows: int = 0,
