@@ -67,6 +67,10 @@ def main(argv: list[str] | None = None) -> int:
     except (UserError, ValueError, OSError) as e:
         print(f"gigascroll {args.command}: error: {_one_line(e)}", file=sys.stderr)
         return 2
+    except MemoryError as e:  # sizes the core could not allocate: one line, not a traceback
+        print(f"gigascroll {args.command}: error: not enough memory for these sizes "
+              f"({_one_line(e)})", file=sys.stderr)
+        return 2
     except RecursionError:  # e.g. a JSON file nested thousands deep, read by a library
         print(f"gigascroll {args.command}: error: input nested too deeply to read",
               file=sys.stderr)

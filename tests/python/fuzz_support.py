@@ -9,7 +9,7 @@ exhausting the machine.
 
 Run lengths: the default run tries a bounded number of examples per family (the whole suite
 stays within about two minutes); `make fuzz` sets GIGASCROLL_FUZZ=1, which runs the tests
-marked `fuzz` with many more."""
+marked `fuzz` with many more (GIGASCROLL_FUZZ_EXAMPLES=N sets their count)."""
 
 from __future__ import annotations
 
@@ -31,6 +31,8 @@ def fuzz_settings(examples: int, long_examples: int | None = None, long: bool = 
     """Hypothesis settings of a fuzz family: no deadline (cases fork and may build packs),
     a bounded number of examples (more for the long run)."""
     n = (long_examples or 20 * examples) if long else examples
+    if long and os.environ.get("GIGASCROLL_FUZZ_EXAMPLES"):  # e.g. a shorter long run
+        n = int(os.environ["GIGASCROLL_FUZZ_EXAMPLES"])
     return settings(max_examples=n, deadline=None, derandomize=not long,
                     suppress_health_check=list(HealthCheck), database=None)
 

@@ -168,7 +168,7 @@ def _check_cases(fork_worker, files, tmp_path_factory, data, family):
     assert problem is None, f"gigascroll {argv!r}: {problem}\n{o.describe()}"
 
 
-@fuzz_settings(60)
+@fuzz_settings(100)
 @given(data=st.data())
 def test_fuzz_cli(fork_worker, files, tmp_path_factory, data):
     _check_cases(fork_worker, files, tmp_path_factory, data, "cli")
@@ -176,7 +176,7 @@ def test_fuzz_cli(fork_worker, files, tmp_path_factory, data):
 
 @pytest.mark.fuzz
 @long_only
-@fuzz_settings(60, long_examples=1500, long=True)
+@fuzz_settings(100, long_examples=2000, long=True)
 @given(data=st.data())
 def test_fuzz_cli_long(fork_worker, files, tmp_path_factory, data):
     _check_cases(fork_worker, files, tmp_path_factory, data, "cli-long")
@@ -192,6 +192,8 @@ def test_fuzz_cli_long(fork_worker, files, tmp_path_factory, data):
     ["render", "cornell", "-o", "{out}.png", "--photons", "99999999999999999999"],
     ["render", "cornell", "-o", "{out}.png", "--width", "99999999999", "--photons", "10"],
     ["render", "cornell", "-o", "{out}.png", "--threads", "99999999999", "--photons", "10"],
+    ["render", "cornell", "-o", "{out}.png", "--width", "30000", "--height", "30000",
+     "--photons", "10"],  # more than the case's 4 GB: one line, not a MemoryError traceback
     ["synth", "-o", "{out}.tif", "--width", "99999999999"],
     ["synth", "-o", "{out}.tif", "--seed", "-5", "--width", "40", "--height", "20"],
     ["scenario", "single", "--quick", "--path", "{path}", "--pack", "{pack}", "--out", "{out}"],

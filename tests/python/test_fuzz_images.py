@@ -29,8 +29,8 @@ def seeds(tmp_path_factory):
     tifffile.imwrite(d / "strip.tif", rgb, rowsperstrip=5)
     tifffile.imwrite(d / "tiled.tif", np.pad(rgb, ((0, 8), (0, 15), (0, 0))), tile=(16, 16),
                      compression="zlib")
-    tifffile.imwrite(d / "u16.tif", (rgb.astype(np.uint16) * 257))
-    tifffile.imwrite(d / "f32.tif", rgb.astype(np.float32) / 255)
+    tifffile.imwrite(d / "u16.tif", (rgb.astype(np.uint16) * 257), photometric="rgb")
+    tifffile.imwrite(d / "f32.tif", rgb.astype(np.float32) / 255, photometric="rgb")
     tifffile.imwrite(d / "s16.tif", (rgb.astype(np.int16) - 128) * 200, photometric="rgb")
     tifffile.imwrite(d / "cmyk.tif", rng.integers(0, 256, (12, 10, 4), np.uint8),
                      photometric="separated")
