@@ -223,7 +223,8 @@ class FileSource(ImageSource):
             self.colour = plan.record
             if plan.transforms:
                 self._plan = plan
-                stored = f"{spec.format} read as {np.dtype(dtype).name}; "
+                stored = (f"{spec.format} read as {np.dtype(dtype).name}; "
+                          if str(spec.format) != np.dtype(dtype).name else "")
                 rest = describe_conversion(np.uint16, 1 if plan.channels == 1 else 3)
                 self.conversion = stored + plan.step() + "; " + rest
                 extra = spec.nchannels - plan.channels
