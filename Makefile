@@ -9,7 +9,7 @@ APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzs
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
   liblcms2-dev colord-data iipimage-server lighttpd ccache \
-  xvfb xdotool libgl1-mesa-dri libglx-mesa0
+  xvfb xdotool libgl1-mesa-dri libglx-mesa0 libgs-common
 JOBS ?= $(shell nproc)
 # Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
 # the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.
@@ -17,7 +17,7 @@ export CMAKE_CXX_COMPILER_LAUNCHER := $(shell command -v ccache 2>/dev/null)
 export CMAKE_C_COMPILER_LAUNCHER := $(CMAKE_CXX_COMPILER_LAUNCHER)
 export CCACHE_BASEDIR := $(CURDIR)
 
-.PHONY: all deps venv build demo test ctest pytest sanitize bench clean
+.PHONY: all deps venv build demo test ctest pytest sanitize bench clean fuzz
 
 all: build
 
@@ -60,6 +60,10 @@ pytest: build
 	$(PY) -m pytest -q
 
 test: ctest pytest
+
+# The long fuzz runs (tests marked `fuzz`: many more examples per family than `make test`).
+fuzz: build
+	GIGASCROLL_FUZZ=1 $(PY) -m pytest -q -m fuzz tests/python/test_fuzz_*.py --hypothesis-show-statistics
 
 # C++ tests under sanitizers, each in its own build tree. Allocation failure must reach the
 # code as std::bad_alloc (tested), not abort the run.

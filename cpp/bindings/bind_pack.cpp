@@ -268,7 +268,7 @@ void bind_pack(nb::module_& m) {
         .def_prop_ro("bytes_written", &PackBuilder::bytes_written);
 
     nb::class_<IccTransform>(m, "IccTransform",
-                             "LittleCMS transform of an RGB or grey ICC profile to sRGB, 16 bits.")
+                             "LittleCMS transform of an RGB, grey or CMYK ICC profile to sRGB, 16 bits.")
         .def("__init__", [](IccTransform* self, nb::bytes profile, const std::string& intent,
                             bool bpc) {
             const auto* p = static_cast<const std::uint8_t*>(profile.data());
@@ -312,14 +312,17 @@ void bind_pack(nb::module_& m) {
         info["packer"] = method;
         info["fill_ratio"] = chosen.fill_ratio;
         info["shelf_fill_ratio"] = shelf.fill_ratio;
-        info["brkga_fill_ratio"] = brkga.fill_ratio;
         info["shelf_size"] = std::make_pair(shelf.width, shelf.height);
-        info["brkga_size"] = std::make_pair(brkga.width, brkga.height);
+        if (brkga.width > 0) {  // the GA ran (not for the shelf layout)
+            info["brkga_fill_ratio"] = brkga.fill_ratio;
+            info["brkga_size"] = std::make_pair(brkga.width, brkga.height);
+        }
         info["seed"] = seed;
         return std::make_tuple(chosen.width, chosen.height, chosen.offsets, info); },
         "sizes"_a, "method"_a = "brkga", "seed"_a = 0,
         "Packs power-of-two page tables (Mp, Np) into one merged table; returns "
-        "(width, height, offsets, info) with both packers' fill ratios in info.");
+        "(width, height, offsets, info) with the packers' fill ratios in info (the BRKGA's only "
+        "when it ran: method 'brkga').");
 
     m.def("painting_geometry", [](std::uint32_t w, std::uint32_t h, std::uint32_t tile_size,
                                   std::uint32_t border) {

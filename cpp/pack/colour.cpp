@@ -45,9 +45,11 @@ IccTransform::IccTransform(const std::vector<std::uint8_t>& profile, RenderingIn
     const cmsProfileClassSignature cls = cmsGetDeviceClass(h);
     require(cls != cmsSigLinkClass && cls != cmsSigAbstractClass && cls != cmsSigNamedColorClass,
             "the ICC profile is a device link, abstract or named-colour profile");
-    require(space == cmsSigRgbData || space == cmsSigGrayData,
-            "unsupported ICC colour space (only RGB and grey profiles can be converted)");
-    channels_ = space == cmsSigRgbData ? 3 : 1;
+    require(space == cmsSigRgbData || space == cmsSigGrayData || space == cmsSigCmykData,
+            "unsupported ICC colour space (only RGB, grey and CMYK profiles can be converted)");
+    channels_ = space == cmsSigRgbData ? 3 : space == cmsSigCmykData ? 4 : 1;
+    // LittleCMS' float CMYK is ink percentage (0..100), its float RGB and grey 0..1.
+    input_scale_ = (space == cmsSigCmykData ? 100.0f : 1.0f) / 65535.0f;
     Profile srgb(cmsCreate_sRGBProfile());
     // Float in and out: LittleCMS then evaluates the profiles' curves and matrices exactly
     // (a 16-bit transform would be resampled into a CLUT that interpolates across the gamut
@@ -55,7 +57,8 @@ IccTransform::IccTransform(const std::vector<std::uint8_t>& profile, RenderingIn
     // clipped per channel afterwards.
     cmsUInt32Number flags = cmsFLAGS_NOCACHE;
     if (black_point_compensation) flags |= cmsFLAGS_BLACKPOINTCOMPENSATION;
-    transform_ = cmsCreateTransform(h, channels_ == 3 ? TYPE_RGB_FLT : TYPE_GRAY_FLT,
+    transform_ = cmsCreateTransform(h, channels_ == 3 ? TYPE_RGB_FLT
+                                       : channels_ == 4 ? TYPE_CMYK_FLT : TYPE_GRAY_FLT,
                                     static_cast<cmsHPROFILE>(srgb.get()), TYPE_RGB_FLT,
                                     static_cast<cmsUInt32Number>(intent), flags);
     require(transform_ != nullptr, "LittleCMS cannot build a transform from the ICC profile" +
@@ -119,7 +122,7 @@ void IccTransform::apply(const std::uint16_t* in, std::size_t pixels, std::uint1
         for (std::size_t i = begin; i < end; i += chunk) {
             const std::size_t n = std::min(chunk, end - i);
             const std::uint16_t* p = in + i * channels_;
-            for (std::size_t k = 0; k < n * channels_; ++k) src[k] = p[k] * (1.0f / 65535.0f);
+            for (std::size_t k = 0; k < n * channels_; ++k) src[k] = p[k] * input_scale_;
             cmsDoTransform(static_cast<cmsHTRANSFORM>(transform_), src.data(), dst.data(),
                            static_cast<cmsUInt32Number>(n));
             std::uint16_t* q = out + i * 3;

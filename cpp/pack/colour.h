@@ -16,7 +16,7 @@ RenderingIntent parse_intent(const std::string& name);
 
 class IccTransform {
 public:
-    // `profile`: the ICC profile's bytes (RGB or grey, 3 or 1 channels); the target is
+    // `profile`: the ICC profile's bytes (RGB, grey or CMYK: 3, 1 or 4 channels); the target is
     // LittleCMS' built-in sRGB (IEC 61966-2-1). InvalidArgument when LittleCMS cannot open
     // the profile or build the transform (corrupt, wrong colour space, device link, ...).
     IccTransform(const std::vector<std::uint8_t>& profile, RenderingIntent intent,
@@ -25,7 +25,7 @@ public:
     IccTransform(const IccTransform&) = delete;
     IccTransform& operator=(const IccTransform&) = delete;
 
-    unsigned channels() const { return channels_; }  // input channels (1 grey, 3 RGB)
+    unsigned channels() const { return channels_; }  // input channels (1 grey, 3 RGB, 4 CMYK)
     // `pixels` pixels of channels() uint16 each -> `pixels` x 3 uint16 sRGB, on `threads`
     // threads (0 = all cores).
     void apply(const std::uint16_t* in, std::size_t pixels, std::uint16_t* out,
@@ -38,6 +38,7 @@ private:
     void* transform_ = nullptr;   // cmsHTRANSFORM, float in and out
     void* transform8_ = nullptr;  // 8-bit RGB in, 16 out (matrix/TRC profiles only)
     unsigned channels_ = 3;
+    float input_scale_ = 1.0f / 65535.0f;  // 16-bit sample -> LittleCMS' float input range
 };
 
 // LittleCMS' version, e.g. "2.14".

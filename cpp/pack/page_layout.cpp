@@ -74,12 +74,28 @@ Cost cost_of(const std::vector<Rect>& placed) {
 
 // Places tables in `order`, each with rule[i] (false: bottom-left, true: left-bottom), at the
 // best aligned candidate corner inside a strip of width `strip`.
+//
+// Speed (2000 paintings must lay out in seconds): every table is a power of two aligned to its
+// own size, so on a grid of cells as large as the largest table each table lies in exactly one
+// cell and only that cell's tables can overlap it; a corner covered by a placed table is dropped
+// (any position from it slides up past that table anyway).
 std::vector<Rect> place(const std::vector<TableSize>& tables, const std::vector<std::uint32_t>& order,
-                        const std::vector<bool>& left_first, std::uint64_t strip) {
+                        const std::vector<bool>& left_first, std::uint64_t strip,
+                        std::uint64_t* work = nullptr) {
+    std::uint64_t tests = 0;  // overlap tests: the decode's cost, for the GA's work budget
+    std::uint64_t cell_w = 1, cell_h = 1;
+    for (const auto& t : tables) {
+        cell_w = std::max<std::uint64_t>(cell_w, t.width);
+        cell_h = std::max<std::uint64_t>(cell_h, t.height);
+    }
+    const std::uint64_t grid_w = std::max<std::uint64_t>(1, strip / cell_w);
+    std::vector<std::vector<Rect>> cells;  // row-major, rows added as the packing grows
+    auto cell_of = [&](const Rect& r) -> std::vector<Rect>* {
+        const std::uint64_t k = (r.y / cell_h) * grid_w + r.x / cell_w;
+        return k < cells.size() ? &cells[k] : nullptr;
+    };
     std::vector<Rect> placed(tables.size());
-    std::vector<Rect> done;
-    done.reserve(tables.size());
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> corners{{0, 0}};
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> corners{{0, 0}}, kept;
     for (std::uint32_t i : order) {
         const std::uint64_t w = tables[i].width, h = tables[i].height;
         bool found = false;  // corner (0, 0) always yields a position: strip >= widest table
@@ -87,14 +103,17 @@ std::vector<Rect> place(const std::vector<TableSize>& tables, const std::vector<
         for (const auto& [cx, cy] : corners) {
             Rect r{round_up(cx, w), round_up(cy, h), w, h};
             if (r.x + w > strip) continue;
+            if (found && (left_first[i] ? r.x > best.x : r.y > best.y)) continue;  // cannot win
             // Slide up past blockers (keeps alignment), so every corner yields a position.
             for (bool moved = true; moved;) {
                 moved = false;
-                for (const Rect& o : done)
-                    if (overlaps(r, o)) {
-                        r.y = round_up(o.y + o.h, h);
-                        moved = true;
-                    }
+                if (const auto* blockers = cell_of(r))
+                    for (const Rect& o : *blockers)
+                        if (++tests, overlaps(r, o)) {
+                            r.y = round_up(o.y + o.h, h);
+                            moved = true;
+                            break;
+                        }
             }
             const bool better =
                 !found || (left_first[i] ? (r.x < best.x || (r.x == best.x && r.y < best.y))
@@ -104,11 +123,20 @@ std::vector<Rect> place(const std::vector<TableSize>& tables, const std::vector<
                 found = true;
             }
         }
+        const std::uint64_t k = (best.y / cell_h) * grid_w + best.x / cell_w;
+        if (k >= cells.size()) cells.resize((k / grid_w + 1) * grid_w);
+        cells[k].push_back(best);
         placed[i] = best;
-        done.push_back(best);
-        corners.emplace_back(best.x + best.w, best.y);
-        corners.emplace_back(best.x, best.y + best.h);
+        kept.clear();
+        for (const auto& c : corners)
+            if (!(c.first >= best.x && c.first < best.x + w && c.second >= best.y &&
+                  c.second < best.y + h))
+                kept.push_back(c);
+        corners.swap(kept);
+        if (best.x + w < strip) corners.emplace_back(best.x + w, best.y);
+        corners.emplace_back(best.x, best.y + h);
     }
+    if (work) *work = tests + corners.size();
     return placed;
 }
 
@@ -177,9 +205,11 @@ PlannedLayout plan_layout(const std::vector<TableSize>& tables, const std::strin
             "unknown layout method '" + method + "' (expected brkga or shelf)");
     PlannedLayout p;
     p.shelf = shelf_layout(tables);
-    BrkgaOptions o;
-    o.seed = seed;
-    p.brkga = brkga_layout(tables, o);
+    if (method == "brkga") {  // the shelf layout alone does not need the GA (its width stays 0)
+        BrkgaOptions o;
+        o.seed = seed;
+        p.brkga = brkga_layout(tables, o);
+    }
     p.chosen = method == "shelf" ? p.shelf : p.brkga;
     check_layout(tables, p.chosen);
     return p;
@@ -193,9 +223,6 @@ PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions
     const std::size_t n = tables.size();
     const std::vector<std::uint64_t> widths = strip_widths(tables);
     const std::size_t genes = 2 * n + 1;
-    const std::size_t pop = o.population ? o.population : std::clamp<std::size_t>(10 * genes, 40, 200);
-    const std::size_t n_elite = std::max<std::size_t>(1, std::size_t(o.elite_fraction * pop));
-    const std::size_t n_mutant = std::size_t(o.mutant_fraction * pop);
 
     // Lower bound on the merged area: stop as soon as it is reached.
     std::uint64_t area = 0, wmax = 0, hmax = 0;
@@ -206,23 +233,19 @@ PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions
     }
     const double bound = double(std::max(next_pow2(area), wmax * hmax));
 
-    auto decode = [&](const std::vector<double>& keys) {
+    auto decode = [&](const std::vector<double>& keys, std::uint64_t* work = nullptr) {
         std::vector<std::uint32_t> order(n);
         std::iota(order.begin(), order.end(), 0u);
         std::stable_sort(order.begin(), order.end(), [&](auto a, auto b) { return keys[a] < keys[b]; });
         std::vector<bool> left(n);
         for (std::size_t i = 0; i < n; ++i) left[i] = keys[n + i] >= 0.5;
         const std::size_t wi = std::min(widths.size() - 1, std::size_t(keys[2 * n] * widths.size()));
-        return place(tables, order, left, widths[wi]);
+        return place(tables, order, left, widths[wi], work);
     };
 
-    std::mt19937_64 rng(o.seed);
-    std::uniform_real_distribution<double> U(0.0, 1.0);
-    std::vector<std::vector<double>> population(pop, std::vector<double>(genes));
-    for (auto& c : population)
-        for (auto& k : c) k = U(rng);
     // Seed one chromosome with the shelf order (tallest first, bottom-left) so the GA starts
-    // no worse than a greedy heuristic.
+    // no worse than a greedy heuristic. Its decode also measures what one decode costs.
+    std::vector<double> seeded(genes, 0.0);
     {
         std::vector<std::uint32_t> order(n);
         std::iota(order.begin(), order.end(), 0u);
@@ -230,14 +253,45 @@ PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions
             return tables[a].height != tables[b].height ? tables[a].height > tables[b].height
                                                         : tables[a].width > tables[b].width;
         });
-        for (std::size_t r = 0; r < n; ++r) population[0][order[r]] = (r + 0.5) / n;
-        for (std::size_t i = 0; i < n; ++i) population[0][n + i] = 0.25;
+        for (std::size_t r = 0; r < n; ++r) seeded[order[r]] = (r + 0.5) / n;
+        for (std::size_t i = 0; i < n; ++i) seeded[n + i] = 0.25;
     }
+    std::uint64_t decode_work = 0;
+    const std::vector<Rect> seeded_placed = decode(seeded, &decode_work);
+    // Work budget (overlap tests, so deterministic; ~1e9 a second): with thousands of tables
+    // a decode is expensive, and the population (then the generations) shrink to fit.
+    const std::uint64_t budget = o.work_budget;
+    const std::uint64_t affordable = budget / std::max<std::uint64_t>(1, decode_work);
+    const std::size_t pop = o.population ? o.population
+                                         : std::min<std::size_t>(std::clamp<std::size_t>(10 * genes, 40, 200),
+                                                                 std::size_t(affordable / 4));
+    const std::size_t n_elite = std::max<std::size_t>(1, std::size_t(o.elite_fraction * pop));
+    const std::size_t n_mutant = std::size_t(o.mutant_fraction * pop);
+    auto best_of_shelf = [&](PageLayout out) {
+        // Never worse than the baseline (the GA's start need not contain the shelf layout).
+        PageLayout shelf = shelf_layout(tables);
+        return double(shelf.width) * shelf.height < double(out.width) * out.height ? shelf : out;
+    };
+    if (pop < 8 || cost_of(seeded_placed).first <= bound)  // no room for a GA, or optimal already
+        return best_of_shelf(finish_layout(tables, seeded_placed));
+
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    std::vector<std::vector<double>> population(pop, std::vector<double>(genes));
+    for (auto& c : population)
+        for (auto& k : c) k = U(rng);
+    population[0] = seeded;
     std::vector<Cost> cost(pop);
+    std::vector<std::uint64_t> work(pop);
+    std::uint64_t used = decode_work, last_generation = 0;
     auto evaluate = [&](std::size_t from) {
         parallel_for(pop - from, 4, [&](std::size_t b, std::size_t e) {
-            for (std::size_t i = from + b; i < from + e; ++i) cost[i] = cost_of(decode(population[i]));
+            for (std::size_t i = from + b; i < from + e; ++i)
+                cost[i] = cost_of(decode(population[i], &work[i]));
         }, o.threads);
+        last_generation = 0;
+        for (std::size_t i = from; i < pop; ++i) last_generation += work[i];
+        used += last_generation;
     };
     evaluate(0);
     std::vector<std::size_t> rank(pop);
@@ -256,7 +310,8 @@ PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions
     sort_population();
     Cost best = cost[0];
     std::uint32_t stall = 0;
-    for (std::uint32_t gen = 0; gen < o.generations && best.first > bound && stall < o.stall_generations; ++gen) {
+    for (std::uint32_t gen = 0; gen < o.generations && best.first > bound && stall < o.stall_generations &&
+                            used + last_generation <= budget; ++gen) {
         // Elites survive; mutants are fresh random keys; the rest are biased crossovers of an
         // elite and a non-elite parent, taking each key from the elite with probability rho_e.
         std::vector<std::vector<double>> next(pop, std::vector<double>(genes));
@@ -285,7 +340,7 @@ PageLayout brkga_layout(const std::vector<TableSize>& tables, const BrkgaOptions
             ++stall;
         }
     }
-    return finish_layout(tables, decode(population[0]));
+    return best_of_shelf(finish_layout(tables, decode(population[0])));
 }
 
 }  // namespace gigascroll

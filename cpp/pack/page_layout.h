@@ -35,6 +35,9 @@ struct BrkgaOptions {
     double rho_e = 0.7;             // probability a child inherits the elite parent's key
     std::uint64_t seed = 0;
     unsigned threads = 0;
+    // Overlap tests in all decodes (deterministic, about 1e9 a second): bounds the time with
+    // thousands of tables, where the population and then the generations shrink to fit.
+    std::uint64_t work_budget = 3'000'000'000;
 };
 
 PageLayout shelf_layout(const std::vector<TableSize>& tables);

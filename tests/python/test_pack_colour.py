@@ -204,7 +204,7 @@ def _patched(icc: bytes, offset: int, value: bytes) -> bytes:
 @pytest.mark.parametrize("kind, message", [
     ("truncated", "corrupt ICC profile"),
     ("garbage", "corrupt ICC profile"),
-    ("cmyk", "unsupported ICC colour space CMYK"),
+    ("cmyk", "CMYK ICC profile does not match"),
     ("link", "device link"),
     ("grey-on-rgb", "does not match"),
     ("bad-tags", "ICC profile"),

@@ -14,15 +14,17 @@ BENCHMARKS = {
     "photon": "seed 001 Tables 1-5 and run time against error",
     "gallery": "gallery rooms: photon pass, bake, stills, error against Mitsuba 3",
     "walk": "the gallery walk: display vs bare rays, stereo reuse, fps per eye size, latency",
+    "layout": "merged page-table layout time and fill against painting count (BRKGA vs shelf)",
 }
 
 
 def register(sub) -> None:
-    from ..benchmarks import cluster, export, gallery, loader, pack, photon, queues, views, walk
+    from ..benchmarks import (cluster, export, gallery, layout, loader, pack, photon, queues,
+                              views, walk)
 
     modules = {"pack": pack, "cluster": cluster, "export": export, "queues": queues,
                "loader": loader, "views": views, "photon": photon, "gallery": gallery,
-               "walk": walk}
+               "walk": walk, "layout": layout}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True

@@ -11,10 +11,13 @@ leaves no pack and `resume=True` reuses the shards that were completed and verif
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
 import shutil
+import signal
+import threading
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -23,10 +26,10 @@ import numpy as np
 from .. import _core
 from .._core import TilePack, painting_geometry
 from .colour import plan_colour
-from .images import ImageSource, open_image
+from .images import ImageSource, open_image, require_utf8_path
 from .shards import build_sharded, feed, publish
 
-__all__ = ["build_pack", "plan_layout", "MANIFEST"]
+__all__ = ["build_pack", "plan_layout", "MANIFEST", "BuildInterrupted"]
 
 MANIFEST = "manifest.json"
 
@@ -75,6 +78,70 @@ def _prepare_output(out: Path, force: bool) -> None:
             raise OSError(f"{out}: exists and is not a directory; refusing to overwrite it")
 
 
+# ----------------------------------------------------------------------------- files on disk
+
+class BuildInterrupted(KeyboardInterrupt):
+    """A build stopped by SIGTERM or SIGHUP (SIGINT stays a plain KeyboardInterrupt); its
+    temporary directory has been removed. `signum` is the signal's number."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"stopped by {signal.Signals(signum).name}")
+        self.signum = signum
+
+
+@contextlib.contextmanager
+def _signals_interrupt():
+    """While a build runs, SIGTERM and SIGHUP raise BuildInterrupted in the main thread (as
+    SIGINT raises KeyboardInterrupt), so the build's cleanup runs for them too. Outside the
+    main thread signal handlers cannot be set; the process' own handlers stay."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise BuildInterrupted(signum)
+
+    saved = {}
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        if signal.getsignal(sig) in (signal.SIG_DFL, None):  # leave the caller's own handlers
+            saved[sig] = signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in saved.items():
+            signal.signal(sig, old)
+
+
+def _process_gone(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # exists, owned by someone else
+        return False
+    return False
+
+
+def _remove_stale_tmp(out: Path) -> list[Path]:
+    """Removes `OUT.tmp-<pid>` siblings of `out` left by builds whose process is gone
+    (SIGKILL, power loss); a live process' build directory is left alone. Returns them."""
+    pattern = re.compile(re.escape(out.name) + r"\.tmp-([0-9]{1,10})(-old)?")
+    removed = []
+    try:
+        siblings = list(out.parent.iterdir())
+    except OSError:
+        return removed
+    for p in siblings:
+        m = pattern.fullmatch(p.name)
+        if (m and int(m.group(1)) != os.getpid() and _process_gone(int(m.group(1)))
+                and p.is_dir() and not p.is_symlink()):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
 def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = "raw", *,
                force: bool = False, names: Sequence[str] | None = None, layout: str = "brkga",
                seed: int = 0, threads: int = 0, zstd_level: int = 3, progress: bool = False,
@@ -120,11 +187,25 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     if resume and not sharded:
         raise ValueError("resume needs a sharded build (workers or scheduler)")
     out = Path(out)
+    require_utf8_path(out.absolute())
+    if names is not None:
+        for n in names:
+            if not isinstance(n, str) or "\0" in n or any(0xD800 <= ord(c) <= 0xDFFF for c in n):
+                raise ValueError(f"painting name {n!r} is not a valid UTF-8 text")
     colour_options = {"mode": colour, "intent": intent,
                       "black_point_compensation": black_point_compensation}
     plan_colour("build_pack", 3, **colour_options)  # unknown mode / intent: now
     _prepare_output(out, force)
+    _remove_stale_tmp(out)
+    with _signals_interrupt():
+        return _build(inputs, out, tile_size, border, codec, names, layout, seed, threads,
+                      zstd_level, progress, band_rows, colour_options,
+                      dict(sharded=sharded, workers=workers, scheduler=scheduler,
+                           executor=executor, resume=resume, hook=shard_hook))
 
+
+def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, zstd_level,
+           progress, band_rows, colour_options, sharding) -> TilePack:
     sources: list[ImageSource] = []
     bar = None
     tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
@@ -142,15 +223,16 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
             used.add(s.name)
         geoms = [painting_geometry(s.width, s.height, tile_size, border) for s in sources]
         table_w, table_h, offsets, info = plan_layout([g["table_size"] for g in geoms], layout, seed)
-        if sharded:
+        if sharding["sharded"]:
             for s in sources:  # the workers open their own
                 s.close()
             opts = {"tile_size": int(tile_size), "border": int(border), "codec": codec,
                     "zstd_level": int(zstd_level), "threads": int(threads) or 1,
                     "band_rows": int(band_rows), "colour": colour_options}
             build_sharded(inputs, sources, offsets, (table_w, table_h), info, out, opts,
-                          workers=int(workers), scheduler=scheduler, executor=executor,
-                          resume=resume, progress=progress, hook=shard_hook)
+                          workers=int(sharding["workers"]), scheduler=sharding["scheduler"],
+                          executor=sharding["executor"], resume=sharding["resume"],
+                          progress=progress, hook=sharding["hook"])
             return TilePack(out)
 
         if tmp.exists():

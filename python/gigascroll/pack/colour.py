@@ -34,7 +34,21 @@ REC709_CHROMATICITIES = (0.64, 0.33, 0.30, 0.60, 0.15, 0.06, 0.3127, 0.3290)
 _USABLE_CLASSES = {b"mntr": "mntr", b"scnr": "scnr", b"prtr": "prtr", b"spac": "spac"}
 _CLASS_NAMES = {b"link": "a device link", b"abst": "an abstract profile",
                 b"nmcl": "a named-colour profile"}
-_SPACES = {b"RGB ": "RGB", b"GRAY": "GRAY"}
+_SPACES = {b"RGB ": "RGB", b"GRAY": "GRAY", b"CMYK": "CMYK"}
+# The CMYK profile assumed for a CMYK image without an embedded one: Ghostscript's default
+# (SWOP-like press characterisation, Debian package libgs-common).
+DEFAULT_CMYK_PROFILES = ("/usr/share/color/icc/ghostscript/default_cmyk.icc",)
+
+
+def default_cmyk_profile() -> bytes | None:
+    """The bytes of the first installed default CMYK profile, None when there is none."""
+    for path in DEFAULT_CMYK_PROFILES:
+        try:
+            with open(path, "rb") as f:
+                return f.read()
+        except OSError:
+            continue
+    return None
 
 
 # ----------------------------------------------------------------------------- reading profiles
@@ -87,8 +101,8 @@ def parse_icc(data: bytes, where: str = "ICC profile") -> ProfileInfo:
         raise ValueError(f"{where}: corrupt ICC profile (unknown class {cls!r})")
     if space not in _SPACES:
         name = space.decode("latin-1").strip() or "unknown"
-        raise ValueError(f"{where}: unsupported ICC colour space {name} (only RGB and grey "
-                         "images can be converted; convert it to RGB first)")
+        raise ValueError(f"{where}: unsupported ICC colour space {name} (only RGB, grey and "
+                         "CMYK images can be converted; convert it to RGB first)")
     count, = struct.unpack_from(">I", data, 128)
     if 132 + 12 * count > size:
         raise ValueError(f"{where}: corrupt ICC profile (tag table overruns the profile)")
@@ -196,7 +210,7 @@ class ColourPlan:
     """What happens to one painting's colours; `record` goes into the manifest."""
     record: dict
     profile: bytes | None = None  # set when values are transformed
-    channels: int = 3             # colour channels the profile takes (1 grey, 3 RGB)
+    channels: int = 3             # colour channels the profile takes (1 grey, 3 RGB, 4 CMYK)
     _lcms: object = field(default=None, repr=False)  # the core's IccTransform, made on first use
 
     @property
@@ -209,6 +223,8 @@ class ColourPlan:
             return ""
         r = self.record
         what = (r["profile"]["description"] if r["profile"] else "EXR chromaticities")
+        if self.channels == 4:
+            what = f"CMYK ({what}{', assumed: no embedded profile' if r['source_space'] == 'default CMYK profile' else ''})"
         return (f"colour {what} -> sRGB ({r['intent']}"
                 f"{', BPC' if r['black_point_compensation'] else ''}; LittleCMS at 16 bits)")
 
@@ -234,27 +250,44 @@ class ColourPlan:
 
 def plan_colour(where: str, channels: int, icc: bytes | None = None,
                 chromaticities=None, mode: str = "convert", intent: str = "relative",
-                black_point_compensation: bool = True) -> ColourPlan:
+                black_point_compensation: bool = True, cmyk: bool = False) -> ColourPlan:
     """Decides how an input's colours are stored: `channels` is the image's channel count,
-    `icc` its embedded profile, `chromaticities` an EXR's attribute. ValueError for an unknown
-    mode or intent and for a profile that cannot be used."""
+    `icc` its embedded profile, `chromaticities` an EXR's attribute, `cmyk` whether its first
+    four channels are C, M, Y, K (converted with its CMYK profile or, without one, the default
+    CMYK profile; they cannot be kept). ValueError for an unknown mode or intent and for a
+    profile that cannot be used."""
     if mode not in COLOUR_MODES:
         raise ValueError(f"unknown colour mode '{mode}' (expected convert or keep)")
     if intent not in INTENTS:
         raise ValueError(f"unknown rendering intent '{intent}' (expected perceptual, relative, "
                          "saturation or absolute)")
-    colour_channels = 1 if channels <= 2 else 3
+    colour_channels = 4 if cmyk else 1 if channels <= 2 else 3
+    if cmyk and channels < 4:
+        raise ValueError(f"{where}: a CMYK image needs 4 channels, it has {channels}")
+    if cmyk and mode == "keep":
+        raise ValueError(f"{where}: a CMYK image cannot be stored untouched (tiles are RGB); "
+                         "use --colour convert (colour=\"convert\")")
+    if cmyk and not (icc is not None and len(icc)):
+        icc = default_cmyk_profile()
+        if icc is None:
+            raise ValueError(f"{where}: CMYK image without an embedded ICC profile, and no "
+                             f"default CMYK profile is installed ({DEFAULT_CMYK_PROFILES[0]}, "
+                             "Debian package libgs-common)")
+        assumed = True
+    else:
+        assumed = False
     record = {"mode": mode, "source_space": "assumed sRGB", "profile": None,
               "intent": None, "black_point_compensation": False, "stored_space": "sRGB",
               "transform": "none"}
     profile, info = None, None
     if icc is not None and len(icc):
         info = parse_icc(icc, where)
-        want = 1 if info.colour_space == "GRAY" else 3
+        want = {"GRAY": 1, "RGB": 3, "CMYK": 4}[info.colour_space]
         if want != colour_channels:
             raise ValueError(f"{where}: the embedded {info.colour_space} ICC profile does not "
                              f"match the image's {channels} channel(s)")
-        record.update(source_space="embedded ICC profile", profile=info.record())
+        record.update(source_space="default CMYK profile" if assumed else "embedded ICC profile",
+                      profile=info.record())
         profile = bytes(icc)[:info.size]
     elif chromaticities is not None:
         ch = tuple(float(c) for c in chromaticities)

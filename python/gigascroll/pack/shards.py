@@ -12,10 +12,12 @@ files still hash to what it recorded, and builds the rest."""
 
 from __future__ import annotations
 
+import ctypes
 import json
 import os
 import queue
 import shutil
+import signal
 import threading
 from pathlib import Path
 from typing import Callable, Iterator
@@ -93,12 +95,53 @@ def _fsync_dir(path: Path) -> None:
         os.close(fd)
 
 
+_RENAME_EXCHANGE = 2
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Atomically swaps two directory entries (Linux renameat2 RENAME_EXCHANGE). False when
+    the system or file system does not support it."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    AT_FDCWD = -100
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    if renameat2(AT_FDCWD, os.fsencode(a), AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: not supported here
+        return False
+    raise OSError(err, f"cannot replace {b}: {os.strerror(err)}")
+
+
 def publish(tmp: Path, out: Path) -> None:
-    """Renames a finished build into place (replacing an old pack the caller allowed)."""
+    """Puts the finished pack `tmp` at `out`. Replacing an existing pack is atomic: the two
+    directories are swapped in one step (readers see the old or the new pack, never none)
+    and the old one, now at `tmp`, is deleted. Without RENAME_EXCHANGE the old pack is moved
+    aside first (a crash then leaves it there, removed by the next build)."""
+    blocked = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)  # no half-done swap
+    try:
+        _install_now(tmp, out)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
+
+
+def _install_now(tmp: Path, out: Path) -> None:
     if out.exists():
-        shutil.rmtree(out)
-    os.rename(tmp, out)
-    _fsync_dir(out.parent)  # make the rename itself durable
+        if not _exchange(tmp, out):
+            aside = out.parent / f"{out.name}.tmp-{os.getpid()}-old"
+            os.rename(out, aside)
+            os.rename(tmp, out)
+            tmp = aside
+        _fsync_dir(out.parent)
+        shutil.rmtree(tmp)
+    else:
+        os.rename(tmp, out)
+        _fsync_dir(out.parent)  # make the rename itself durable
 
 
 # ----------------------------------------------------------------------------- one shard

@@ -17,7 +17,13 @@ def synth_painting(path, width: int, height: int, seed: int = 0, tile: int = 256
     BigTIFF, band by band (one tile row at a time), never holding the whole image. The file is
     written under a temporary name and renamed when complete."""
     import OpenImageIO as oiio
+    import numbers
+    for label, v in (("width", width), ("height", height), ("tile", tile), ("seed", seed)):
+        if not isinstance(v, numbers.Integral) or isinstance(v, bool):
+            raise ValueError(f"synth_painting: {label} must be an integer, got {v!r}")
     width, height, tile = int(width), int(height), int(tile)
+    if not 0 <= seed < 2**64:
+        raise ValueError(f"synth_painting: seed must be in [0, 2^64), got {seed}")
     if width <= 0 or height <= 0:
         raise ValueError(f"painting size must be positive, got {width} x {height}")
     if width > (1 << 30) or height > (1 << 30):

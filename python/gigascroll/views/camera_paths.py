@@ -47,10 +47,17 @@ class CameraPath:
             raise ValueError("camera path arrays differ in length")
         if np.any(np.linalg.norm(self.forward, axis=1) == 0):
             raise ValueError("camera path has a zero forward vector")
+        if np.any(np.linalg.norm(self.up, axis=1) == 0):
+            raise ValueError("camera path has a zero up vector")
+        if (self.magnifier_target is None) != (self.magnifier_normal is None):
+            raise ValueError("camera path has magnifier_target without magnifier_normal (or the "
+                             "reverse): give both or neither")
         for attr in ("magnifier_target", "magnifier_normal"):
             a = getattr(self, attr)
             if a is not None:
-                a = np.asarray(a, dtype=np.float64).reshape(n, 3)
+                a = np.asarray(a, dtype=np.float64)
+                if a.shape != (n, 3):
+                    raise ValueError(f"camera path {attr} must have shape ({n}, 3), got {a.shape}")
                 if np.any(np.isinf(a)):
                     raise ValueError(f"camera path {attr} contains infinite values")
                 setattr(self, attr, a)
@@ -100,8 +107,12 @@ class CameraPath:
     def load(cls, path: str | Path) -> "CameraPath":
         try:
             d = json.loads(Path(path).read_text())
-        except json.JSONDecodeError as e:
+        except (json.JSONDecodeError, UnicodeDecodeError) as e:
             raise ValueError(f"{path}: not a camera path JSON file ({e})") from None
+        except RecursionError:
+            raise ValueError(f"{path}: not a camera path JSON file (nested too deeply)") from None
+        if not isinstance(d, dict):
+            raise ValueError(f"{path}: not a camera path JSON file (expected an object)")
 
         def dec(a):
             return None if a is None else np.array(
@@ -109,10 +120,19 @@ class CameraPath:
         try:
             return cls(np.asarray(d["position"], float), np.asarray(d["forward"], float),
                        np.asarray(d["up"], float), dec(d.get("magnifier_target")),
-                       dec(d.get("magnifier_normal")), float(d.get("fps", FPS)),
+                       dec(d.get("magnifier_normal")), _number(path, d.get("fps", FPS)),
                        d.get("name", ""))
-        except (KeyError, TypeError) as e:
-            raise ValueError(f"{path}: camera path file is missing or mangles {e}") from None
+        except KeyError as e:
+            raise ValueError(f"{path}: camera path file is missing {e}") from None
+        except (TypeError, OverflowError, RecursionError) as e:
+            msg = "nested too deeply" if isinstance(e, RecursionError) else e
+            raise ValueError(f"{path}: camera path file has values of the wrong type ({msg})") from None
+
+
+def _number(path, v) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ValueError(f"{path}: camera path fps must be a number, got {v!r}"[:200])
+    return float(v)
 
 
 def scroll_path(distance: float = 0.40, speed: float = 1.0, duration: float = 10.0,

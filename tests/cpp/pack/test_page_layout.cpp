@@ -41,3 +41,28 @@ TEST(PageLayout, PackersAreAlignedDisjointAtEveryLevelAndDeterministic) {
     EXPECT_THROW(check_layout({{4, 4}, {4, 4}}, PageLayout{8, 8, {{0, 0}, {0, 0}}, 0}), InvalidArgument);
     EXPECT_THROW(check_layout({{4, 4}}, PageLayout{8, 8, {{2, 0}}, 0}), InvalidArgument);
 }
+
+TEST(PageLayout, WorkBudgetKeepsTheLayoutValidAndNoWorseThanShelf) {
+    // Tables the shelf packer cannot place optimally, with budgets from "no GA at all" up.
+    std::mt19937 rng(5);
+    std::vector<TableSize> tables(300);
+    for (auto& t : tables) t = {1u << (rng() % 7), 1u << (rng() % 3)};
+    const PageLayout shelf = shelf_layout(tables);
+    for (std::uint64_t budget : {std::uint64_t(1), std::uint64_t(100'000), std::uint64_t(20'000'000)}) {
+        BrkgaOptions o;
+        o.seed = 2;
+        o.work_budget = budget;
+        const PageLayout a = brkga_layout(tables, o);
+        ASSERT_NO_THROW(check_layout(tables, a));
+        EXPECT_GE(a.fill_ratio, shelf.fill_ratio);
+        EXPECT_EQ(a.offsets, brkga_layout(tables, o).offsets);  // deterministic (a work count, not a clock)
+    }
+}
+
+TEST(PageLayout, ShelfMethodDoesNotRunTheGa) {
+    const std::vector<TableSize> tables{{4, 4}, {2, 8}, {1, 1}};
+    const PlannedLayout p = plan_layout(tables, "shelf", 0);
+    EXPECT_EQ(p.brkga.width, 0u);
+    EXPECT_EQ(p.chosen.offsets, p.shelf.offsets);
+    EXPECT_GT(plan_layout(tables, "brkga", 0).brkga.width, 0u);
+}

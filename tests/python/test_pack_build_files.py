@@ -1,0 +1,140 @@
+"""Packs on disk (gigascroll.pack.build): replacing a pack with force=True is atomic for a
+concurrent reader, SIGTERM / SIGHUP clean up like SIGINT, and a later build removes the
+temporary directories of builds whose process is gone (and only those)."""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from pack_reference import check_pack_against, noise
+
+from gigascroll import TilePack, build_pack
+
+
+def test_force_replacement_is_atomic_for_a_reader(tmp_path):
+    out = tmp_path / "p"
+    images = {"a": noise(40, 60, seed=1), "b": noise(40, 60, seed=2)}
+    build_pack(images["a"], out, tile_size=16, border=2, names=["a"])
+    seen, failures, stop = [], [], threading.Event()
+
+    def reader():
+        while not stop.is_set():
+            try:  # the three files must always be there, together
+                names = sorted(os.listdir(out))
+                if names != ["index.bin", "manifest.json", "tiles.bin"]:
+                    failures.append(f"listing {names}")
+                    continue
+                pack = TilePack(out)
+                seen.append(pack.paintings[0].name)
+            except Exception as e:  # noqa: BLE001 - any failure to open is the bug
+                failures.append(repr(e))
+
+    t = threading.Thread(target=reader)
+    t.start()
+    try:
+        for k in range(6):
+            name = "ab"[(k + 1) % 2]
+            build_pack(images[name], out, tile_size=16, border=2, names=[name], force=True)
+    finally:
+        stop.set()
+        t.join()
+    assert not failures, failures[:5]
+    assert len(seen) > 0 and set(seen) <= {"a", "b"}
+    pack = TilePack(out)
+    assert pack.paintings[0].name == "a"  # the 6th build
+    check_pack_against(pack, 0, images["a"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p"]  # the old pack is gone
+
+
+def test_fallback_replacement_keeps_one_pack(tmp_path, monkeypatch):
+    # Without RENAME_EXCHANGE (another OS or file system) the old pack is moved aside first.
+    from gigascroll.pack import build as b
+    monkeypatch.setattr(b, "_exchange", lambda a, c: False)
+    out = tmp_path / "p"
+    build_pack(noise(20, 30, seed=1), out, tile_size=16, border=2)
+    img = noise(30, 20, seed=3)
+    check_pack_against(build_pack(img, out, tile_size=16, border=2, force=True), 0, img)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p"]
+
+
+# A child process that builds a big pack slowly (small bands) and reports when it started.
+_SLOW_BUILD = """
+import sys, time, numpy as np, gigascroll
+from gigascroll.pack import ArraySource
+class Slow(ArraySource):
+    def bands(self):
+        for i, band in enumerate(super().bands()):
+            if i == 1:
+                print("started", flush=True)
+            time.sleep(0.01)
+            yield band
+img = np.zeros((4000, 64, 3), np.uint8)
+gigascroll.build_pack([Slow(img, "x", band_rows=8)], sys.argv[1], tile_size=16, border=2)
+print("finished", flush=True)
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
+def test_signal_during_build_cleans_up(tmp_path, sig):
+    out = tmp_path / "p"
+    proc = subprocess.Popen([sys.executable, "-c", _SLOW_BUILD, str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "started"
+        assert list(tmp_path.glob("p.tmp-*"))  # the build is under way in its tmp directory
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode != 0
+    assert "Interrupt" in err  # BuildInterrupted / KeyboardInterrupt, not a default kill
+    assert not any(tmp_path.iterdir()), list(tmp_path.iterdir())
+
+
+def test_cli_reports_sigterm_with_its_exit_code(tmp_path):
+    from gigascroll.pack.build import BuildInterrupted
+    e = BuildInterrupted(signal.SIGTERM)
+    assert isinstance(e, KeyboardInterrupt) and e.signum == signal.SIGTERM
+    assert "SIGTERM" in str(e)
+
+
+def _dead_pid() -> int:
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid  # reaped: no process has it (until reuse, which a short test does not meet)
+
+
+def test_next_build_removes_leftovers_of_dead_builds_only(tmp_path):
+    dead = _dead_pid()
+    stale = tmp_path / f"p.tmp-{dead}"
+    stale.mkdir()
+    (stale / "tiles.bin").write_bytes(b"\0" * 1000)
+    stale_old = tmp_path / f"p.tmp-{dead}-old"
+    stale_old.mkdir()
+    live = tmp_path / f"p.tmp-{os.getppid()}"  # a live process (our parent): its build stays
+    live.mkdir()
+    other = tmp_path / f"q.tmp-{dead}"  # another output's leftovers: not this build's business
+    other.mkdir()
+    unrelated = tmp_path / f"p.tmp-{dead}x"
+    unrelated.mkdir()
+    build_pack(noise(10, 10), tmp_path / "p", tile_size=16, border=2)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted(["p", live.name, other.name, unrelated.name])
+
+
+def test_sigkilled_build_is_cleaned_by_the_next(tmp_path):
+    out = tmp_path / "p"
+    proc = subprocess.Popen([sys.executable, "-c", _SLOW_BUILD, str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
+    assert proc.stdout.readline().strip() == "started"
+    proc.kill()
+    proc.wait()
+    assert len(list(tmp_path.glob("p.tmp-*"))) == 1
+    img = noise(12, 9)
+    check_pack_against(build_pack(img, out, tile_size=16, border=2), 0, img)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p"]

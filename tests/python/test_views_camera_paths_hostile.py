@@ -1,0 +1,40 @@
+"""Camera path files a hostile user would hand over (gigascroll.views.camera_paths): each is
+a ValueError naming the problem, never a RecursionError, KeyError or a misleading message."""
+
+import json
+
+import numpy as np
+import pytest
+
+from gigascroll import CameraPath
+
+GOOD = {"position": [[0, 1.6, 2]], "forward": [[0, 0, -1]], "up": [[0, 1, 0]]}
+
+
+@pytest.mark.parametrize("text,message", [
+    ("[" * 100000 + "]" * 100000, "nested too deeply"),
+    ('{"a":' * 50000 + "1" + "}" * 50000, "nested too deeply"),
+    ("[1, 2]", "expected an object"),
+    (b"\xff\xfe{}", "not a camera path"),
+    (json.dumps(dict(GOOD, magnifier_target=[[0, 1.6, 0]])), "magnifier_target without magnifier_normal"),
+    (json.dumps(dict(GOOD, magnifier_target=[[0, 1, 0], [1, 1, 1]], magnifier_normal=[[0, 0, 1]])),
+     "magnifier_target must have shape"),
+    (json.dumps(dict(GOOD, up=[[0, 0, 0]])), "zero up vector"),
+    (json.dumps(dict(GOOD, forward=[[0, 0, 0]])), "zero forward vector"),
+    (json.dumps({"position": [[0, 0, 0]]}), "missing 'forward'"),
+    (json.dumps(dict(GOOD, fps="fast")), "camera path"),
+    (json.dumps(dict(GOOD, magnifier_target=[5], magnifier_normal=[[0, 0, 1]])), "wrong type"),
+])
+def test_bad_camera_path_files(tmp_path, text, message):
+    p = tmp_path / "path.json"
+    (p.write_bytes if isinstance(text, bytes) else p.write_text)(text)
+    with pytest.raises(ValueError, match=message):
+        CameraPath.load(p)
+
+
+def test_good_path_with_magnifier_round_trips(tmp_path):
+    path = CameraPath(np.array(GOOD["position"], float), np.array(GOOD["forward"], float),
+                      np.array(GOOD["up"], float), np.array([[0, 1.6, 0]]), np.array([[0, 0, 1.0]]))
+    path.save(tmp_path / "p.json")
+    back = CameraPath.load(tmp_path / "p.json")
+    np.testing.assert_array_equal(back.magnifier_normal, path.magnifier_normal)
