@@ -8,7 +8,8 @@ BUILD_DIR = $(shell ls -d build/cp3* 2>/dev/null | head -n 1)
 APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzstd-dev \
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
-  liblcms2-dev colord-data iipimage-server lighttpd ccache
+  liblcms2-dev colord-data iipimage-server lighttpd ccache \
+  libsquish-dev
 JOBS ?= $(shell nproc)
 # Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
 # the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.

@@ -8,8 +8,9 @@
 namespace gigascroll {
 
 DrainResult drain(TileLoader& loader, VirtualTexture& vt, std::size_t max_tiles) {
-    require(loader.tile_bytes() == vt.layout().tile_bytes(),
-            "drain: the loader's tiles are not the size of the virtual texture's slots");
+    require(loader.tile_bytes() == vt.slot_bytes(),
+            "drain: the loader's tiles are not the size of the virtual texture's slots (a bc1 "
+            "pack's loader delivers BC1 blocks: build the VirtualTexture from that pack)");
     std::vector<LoadedTile> results;
     loader.poll(results, max_tiles);
     DrainResult out;

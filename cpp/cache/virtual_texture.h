@@ -16,6 +16,7 @@
 #include "common/huge_buffer.h"
 #include "cache/page_table.h"
 #include "pack/geometry.h"
+#include "pack/texel_format.h"
 
 namespace gigascroll {
 
@@ -26,18 +27,21 @@ struct CacheStats {
 
 class VirtualTexture {
 public:
-    // Reads one tile (RGB8, tile_size^2 x 3 bytes) for pinning at construction.
+    // Reads one tile in the slots' format (slot_bytes()) for pinning at construction.
     using TileSource = std::function<void(const TileKey&, std::uint8_t*)>;
 
-    // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot.
+    // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot. Slots hold
+    // RGB8 texels or BC1 blocks (a bc1 pack's tiles as stored: 6x the slots per byte).
     VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x, std::uint32_t slots_y,
-                   const TileSource& pinned_source);
+                   const TileSource& pinned_source, TexelFormat format = TexelFormat::Rgb8);
 
     const PackGeometry& layout() const { return table_.layout(); }
     std::uint32_t slots_x() const { return slots_x_; }
     std::uint32_t slots_y() const { return slots_y_; }
+    TexelFormat format() const { return format_; }
+    std::size_t slot_bytes() const { return slot_bytes_; }
 
-    // Copies the tile into a slot (the least recently used one when full) and updates the
+    // Copies the tile (slot_bytes() in the slots' format) into a slot (the least recently used one when full) and updates the
     // page table. A resident tile is only marked used. Returns the evicted tile, if any.
     std::optional<TileKey> insert(const TileKey& key, const std::uint8_t* data);
     // A frame's requests: resident ones count as hits and become most recently used, the
@@ -59,8 +63,8 @@ public:
     // wait for it.
     std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock(mutex_); }
 
-    // The physical texture, tile-major: slot s holds its T x T x RGB8 texels contiguously
-    // at s * T * T * 3, so a bilinear footprint's two rows are T * 3 bytes apart and one
+    // The physical texture, tile-major: slot s holds its T x T x RGB8 texels (or its (T/4)^2
+    // BC1 blocks) contiguously at s * slot_bytes(), so a bilinear footprint's two rows are T * 3 bytes apart and one
     // tile spans 14 pages rather than T (the sampler's reads are scattered over the cache).
     const std::uint8_t* physical() const { return texels_.data(); }
 
@@ -73,6 +77,8 @@ private:
 
     PageTable table_;
     std::uint32_t slots_x_, slots_y_;
+    TexelFormat format_;
+    std::size_t slot_bytes_;
     HugeBuffer texels_;
     std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;  // packed key -> slot
     std::vector<std::uint64_t> key_of_;                        // slot -> packed key

@@ -71,8 +71,9 @@ public:
     LoaderStats stats() const;
     LoaderMode mode() const { return mode_; }
     unsigned threads() const { return threads_; }
-    std::size_t tile_bytes() const { return tile_bytes_; }
+    std::size_t tile_bytes() const { return tile_bytes_; }  // TilePack::slot_bytes()
     std::uint32_t tile_size() const;
+    const TilePack& pack() const { return pack_; }
     bool closed() const { return closed_; }
 
     struct Impl;  // the transport of one mode (tile_loader.cpp)

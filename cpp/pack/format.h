@@ -43,13 +43,14 @@ struct TileEntry {
 };
 static_assert(sizeof(TileEntry) == 24);
 
-enum class Codec : std::uint32_t { Raw = 0, Zstd = 1 };
+// Bc1: DXT1 blocks (pack/bc1.h), kept block-compressed in the cache.
+enum class Codec : std::uint32_t { Raw = 0, Zstd = 1, Bc1 = 2 };
 
 // IoError unless path is a regular file: a FIFO, device or directory in a pack's place would
 // block a reader's open() or read forever, or read as garbage.
 void require_regular_file(const std::string& path);
 
-// "raw" / "zstd"; InvalidArgument for anything else.
+// "raw" / "zstd" / "bc1"; InvalidArgument for anything else.
 Codec parse_codec(const std::string& name);
 const char* codec_name(Codec codec);
 

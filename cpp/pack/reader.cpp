@@ -14,6 +14,7 @@
 
 #include "common/checksum.h"
 #include "common/error.h"
+#include "pack/bc1.h"
 
 namespace gigascroll {
 namespace {
@@ -67,6 +68,9 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
     table_height_ = m.table_height;
     paintings_ = m.paintings;
     entry_count_ = m.tile_count;
+    if (codec_ == Codec::Bc1 && (tile_size_ % 4 != 0 || payload() % 4 != 0))
+        throw IoError(directory + "/" + kManifestName + ": a bc1 pack needs tile_size and payload "
+                      "that are multiples of 4");
 
     // Index: map it whole; entries are read-only afterwards.
     const std::string index_path = directory + "/" + kIndexName;
@@ -200,13 +204,41 @@ void TilePack::read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std
     }
     thread_local std::vector<std::uint8_t> scratch;
     scratch.resize(e.length);
-    if (!pread_all(tiles_fd_, scratch.data(), e.length, e.offset))
-        throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
-    if (checksum64(scratch.data(), e.length) != e.checksum)
-        throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
-    const std::size_t n = ZSTD_decompressDCtx(thread_dctx(), out, bytes, scratch.data(), e.length);
+    const std::uint8_t* stored = read_stored(e, p, l, tx, ty, scratch.data());
+    if (codec_ == Codec::Bc1) {
+        bc1_decode_tile(stored, tile_size_, out);
+        return;
+    }
+    const std::size_t n = ZSTD_decompressDCtx(thread_dctx(), out, bytes, stored, e.length);
     if (ZSTD_isError(n) || n != bytes)
         throw IoError(directory_ + ": corrupt zstd data in tile " + key_text(p, l, tx, ty));
+}
+
+const std::uint8_t* TilePack::read_stored(const TileEntry& e, std::uint32_t p, std::uint32_t l,
+                                          std::uint32_t tx, std::uint32_t ty,
+                                          std::uint8_t* into) const {
+    if (e.offset < sizeof(FileHeader) || e.offset + e.length > tiles_size_)
+        throw IoError(directory_ + ": index entry of tile " + key_text(p, l, tx, ty) +
+                      " points outside tiles.bin");
+    if (codec_ == Codec::Bc1 && e.length != bc1_tile_bytes(tile_size_))
+        throw IoError(directory_ + ": bc1 tile " + key_text(p, l, tx, ty) + " has length " +
+                      std::to_string(e.length) + ", expected " +
+                      std::to_string(bc1_tile_bytes(tile_size_)));
+    if (!pread_all(tiles_fd_, into, e.length, e.offset))
+        throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
+    if (checksum64(into, e.length) != e.checksum)
+        throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
+    return into;
+}
+
+void TilePack::read_slot_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
+                              std::uint32_t ty, std::uint8_t* out) const {
+    if (codec_ != Codec::Bc1) {
+        read_tile(p, l, tx, ty, out);
+        return;
+    }
+    // Straight into the caller's buffer: the blocks are what the cache keeps.
+    read_stored(entry(p, l, tx, ty), p, l, tx, ty, out);
 }
 
 }  // namespace gigascroll

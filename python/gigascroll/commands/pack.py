@@ -14,7 +14,8 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output pack directory")
     p.add_argument("--tile-size", type=int, default=128, help="tile size in texels (default 128)")
     p.add_argument("--border", type=int, default=4, help="border in texels (default 4)")
-    p.add_argument("--codec", default="raw", help="raw (RGB24) or zstd (default raw)")
+    p.add_argument("--codec", default="raw", help="raw (RGB24), zstd (lossless) or bc1 (DXT1 "
+                   "blocks, 4 bits per texel, kept compressed in the cache; default raw)")
     p.add_argument("--layout", default="brkga", choices=["brkga", "shelf"],
                    help="merged page-table packer (default brkga)")
     p.add_argument("--seed", type=int, default=0, help="BRKGA random seed (default 0)")

@@ -131,12 +131,15 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     inputs = list(inputs)
     if not inputs:
         raise ValueError("no input images")
-    if codec not in ("raw", "zstd"):
-        raise ValueError(f"unknown codec '{codec}' (expected raw or zstd)")
+    if codec not in ("raw", "zstd", "bc1"):
+        raise ValueError(f"unknown codec '{codec}' (expected raw, zstd or bc1)")
     if not (isinstance(tile_size, (int, np.integer)) and isinstance(border, (int, np.integer))):
         raise ValueError("tile_size and border must be integers")
     if border < 0 or tile_size <= 2 * border:
         raise ValueError(f"tile_size ({tile_size}) must be larger than 2 * border ({2 * border})")
+    if codec == "bc1" and (tile_size % 4 or (tile_size - 2 * border) % 4):
+        raise ValueError(f"bc1 needs tile_size and payload (tile_size - 2 border) to be multiples "
+                         f"of 4, got {tile_size} and {tile_size - 2 * border}")
     if names is not None and len(names) != len(inputs):
         raise ValueError("names must have one entry per input")
     out = Path(out)

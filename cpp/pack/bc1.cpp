@@ -1,0 +1,37 @@
+#include "pack/bc1.h"
+
+#include <squish.h>
+
+#include <cstring>
+
+namespace gigascroll {
+
+void bc1_decode_tile(const std::uint8_t* blocks, std::uint32_t tile_size, std::uint8_t* rgb) {
+    const std::uint32_t n = tile_size / 4;
+    for (std::uint32_t by = 0; by < n; ++by)
+        for (std::uint32_t bx = 0; bx < n; ++bx) {
+            const std::uint8_t* block = blocks + (std::size_t(by) * n + bx) * kBc1BlockBytes;
+            for (unsigned py = 0; py < 4; ++py) {
+                std::uint8_t* row = rgb + ((std::size_t(by) * 4 + py) * tile_size + bx * 4) * 3;
+                for (unsigned px = 0; px < 4; ++px) bc1_decode_texel(block, px, py, row + 3 * px);
+            }
+        }
+}
+
+void bc1_encode_tile(const std::uint8_t* rgb, std::uint32_t tile_size, std::uint8_t* blocks) {
+    const std::uint32_t n = tile_size / 4;
+    squish::u8 rgba[16 * 4];
+    for (std::uint32_t by = 0; by < n; ++by)
+        for (std::uint32_t bx = 0; bx < n; ++bx) {
+            for (unsigned py = 0; py < 4; ++py)
+                for (unsigned px = 0; px < 4; ++px) {
+                    const std::uint8_t* t = rgb + ((std::size_t(by) * 4 + py) * tile_size + bx * 4 + px) * 3;
+                    squish::u8* o = rgba + (py * 4 + px) * 4;
+                    o[0] = t[0], o[1] = t[1], o[2] = t[2], o[3] = 255;
+                }
+            squish::Compress(rgba, blocks + (std::size_t(by) * n + bx) * kBc1BlockBytes,
+                             squish::kDxt1 | squish::kColourClusterFit);
+        }
+}
+
+}  // namespace gigascroll
