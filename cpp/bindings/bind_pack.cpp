@@ -221,8 +221,9 @@ void bind_pack(nb::module_& m) {
                             "Low-level streaming pack writer; use gigascroll.build_pack instead.")
         .def("__init__", [](PackBuilder* self, const std::filesystem::path& dir,
                             std::uint32_t tile_size, std::uint32_t border, const std::string& codec,
-                            int zstd_level, unsigned threads) {
+                            int zstd_level, unsigned threads, const std::string& bc1_fit) {
             PackOptions o;
+            o.bc1_fit = parse_bc1_fit(bc1_fit);
             o.tile_size = tile_size;
             o.border = border;
             o.codec = parse_codec(codec);
@@ -230,7 +231,7 @@ void bind_pack(nb::module_& m) {
             o.threads = threads;
             new (self) PackBuilder(dir.string(), o); },
             "directory"_a, "tile_size"_a = 128, "border"_a = 4, "codec"_a = "raw",
-            "zstd_level"_a = 3, "threads"_a = 0)
+            "zstd_level"_a = 3, "threads"_a = 0, "bc1_fit"_a = "range")
         .def("begin_painting", [](PackBuilder& b, const std::string& name, std::uint32_t width,
                                   std::uint32_t height, const std::string& source,
                                   const std::string& conversion, std::uint32_t tx, std::uint32_t ty,

@@ -4,7 +4,15 @@
 
 #include <cstring>
 
+#include "common/error.h"
+
 namespace gigascroll {
+
+Bc1Fit parse_bc1_fit(const std::string& name) {
+    if (name == "range") return Bc1Fit::Range;
+    if (name == "cluster") return Bc1Fit::Cluster;
+    throw InvalidArgument("bc1 fit must be 'range' or 'cluster', got '" + name + "'");
+}
 
 void bc1_decode_tile(const std::uint8_t* blocks, std::uint32_t tile_size, std::uint8_t* rgb) {
     const std::uint32_t n = tile_size / 4;
@@ -18,7 +26,10 @@ void bc1_decode_tile(const std::uint8_t* blocks, std::uint32_t tile_size, std::u
         }
 }
 
-void bc1_encode_tile(const std::uint8_t* rgb, std::uint32_t tile_size, std::uint8_t* blocks) {
+void bc1_encode_tile(const std::uint8_t* rgb, std::uint32_t tile_size, std::uint8_t* blocks,
+                     Bc1Fit fit) {
+    const int flags = squish::kDxt1 | (fit == Bc1Fit::Cluster ? squish::kColourClusterFit
+                                                              : squish::kColourRangeFit);
     const std::uint32_t n = tile_size / 4;
     squish::u8 rgba[16 * 4];
     for (std::uint32_t by = 0; by < n; ++by)
@@ -29,8 +40,7 @@ void bc1_encode_tile(const std::uint8_t* rgb, std::uint32_t tile_size, std::uint
                     squish::u8* o = rgba + (py * 4 + px) * 4;
                     o[0] = t[0], o[1] = t[1], o[2] = t[2], o[3] = 255;
                 }
-            squish::Compress(rgba, blocks + (std::size_t(by) * n + bx) * kBc1BlockBytes,
-                             squish::kDxt1 | squish::kColourClusterFit);
+            squish::Compress(rgba, blocks + (std::size_t(by) * n + bx) * kBc1BlockBytes, flags);
         }
 }
 

@@ -188,7 +188,7 @@ void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::
                     cut(static_cast<std::uint32_t>(g0 + i), tile.data());
                     auto& out = packed[i];
                     out.resize(bc1_tile_bytes(T));
-                    bc1_encode_tile(tile.data(), T, out.data());
+                    bc1_encode_tile(tile.data(), T, out.data(), options_.bc1_fit);
                     sums[i] = checksum64(out.data(), out.size());
                 }
                 return;

@@ -64,8 +64,9 @@ TEST(Bc1, DecodesRandomBlocksLikeLibsquish) {
 TEST(Bc1, EncodedTileDecodesLikeLibsquish) {
     constexpr std::uint32_t T = 64;
     const auto img = painting_like(T, T, 3);
+    for (Bc1Fit fit : {Bc1Fit::Range, Bc1Fit::Cluster}) {
     std::vector<std::uint8_t> blocks(bc1_tile_bytes(T)), ours(T * T * 3);
-    bc1_encode_tile(img.data(), T, blocks.data());
+    bc1_encode_tile(img.data(), T, blocks.data(), fit);
     bc1_decode_tile(blocks.data(), T, ours.data());
     double se = 0;
     for (std::uint32_t by = 0; by < T / 4; ++by)
@@ -80,6 +81,8 @@ TEST(Bc1, EncodedTileDecodesLikeLibsquish) {
     for (std::size_t i = 0; i < img.size(); ++i) se += (double(ours[i]) - img[i]) * (ours[i] - img[i]);
     const double psnr = 10 * std::log10(255.0 * 255.0 / (se / img.size()));
     EXPECT_GT(psnr, 30.0);  // a working encoder, not just a decodable one
+    }
+    EXPECT_THROW(parse_bc1_fit("best"), InvalidArgument);
 }
 
 TEST(Bc1, PackStoresTheEncodingOfTheRawTilesAndSeamsAgree) {
