@@ -19,9 +19,15 @@ void bc1_decode_tile(const std::uint8_t* blocks, std::uint32_t tile_size, std::u
     for (std::uint32_t by = 0; by < n; ++by)
         for (std::uint32_t bx = 0; bx < n; ++bx) {
             const std::uint8_t* block = blocks + (std::size_t(by) * n + bx) * kBc1BlockBytes;
+            std::uint32_t palette[4];
+            bc1_palette(block, palette);
             for (unsigned py = 0; py < 4; ++py) {
                 std::uint8_t* row = rgb + ((std::size_t(by) * 4 + py) * tile_size + bx * 4) * 3;
-                for (unsigned px = 0; px < 4; ++px) bc1_decode_texel(block, px, py, row + 3 * px);
+                for (unsigned px = 0; px < 4; ++px) {
+                    const std::uint32_t c = palette[(block[4 + py] >> (2 * px)) & 3u];
+                    row[3 * px] = std::uint8_t(c), row[3 * px + 1] = std::uint8_t(c >> 8),
+                    row[3 * px + 2] = std::uint8_t(c >> 16);
+                }
             }
         }
 }

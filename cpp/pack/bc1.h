@@ -45,6 +45,28 @@ inline void bc1_decode_texel(const std::uint8_t* block, unsigned px, unsigned py
     }
 }
 
+// The block's 4 palette colours as RGB8 in the low 3 bytes of each word (r | g << 8 | b << 16),
+// the same values bc1_decode_texel gives: decode once, then a texel is one index lookup.
+inline void bc1_palette(const std::uint8_t* block, std::uint32_t* palette) {
+    const unsigned c0 = unsigned(block[0]) | unsigned(block[1]) << 8;
+    const unsigned c1 = unsigned(block[2]) | unsigned(block[3]) << 8;
+    const unsigned r0 = c0 >> 11, g0 = (c0 >> 5) & 63u, b0 = c0 & 31u;
+    const unsigned r1 = c1 >> 11, g1 = (c1 >> 5) & 63u, b1 = c1 & 31u;
+    const unsigned a[3] = {r0 << 3 | r0 >> 2, g0 << 2 | g0 >> 4, b0 << 3 | b0 >> 2};
+    const unsigned b[3] = {r1 << 3 | r1 >> 2, g1 << 2 | g1 >> 4, b1 << 3 | b1 >> 2};
+    std::uint32_t p2 = 0, p3 = 0;
+    if (c0 > c1) {
+        for (int c = 0; c < 3; ++c)
+            p2 |= ((2 * a[c] + b[c]) / 3) << (8 * c), p3 |= ((a[c] + 2 * b[c]) / 3) << (8 * c);
+    } else {
+        for (int c = 0; c < 3; ++c) p2 |= ((a[c] + b[c]) / 2) << (8 * c);
+    }
+    palette[0] = a[0] | a[1] << 8 | a[2] << 16;
+    palette[1] = b[0] | b[1] << 8 | b[2] << 16;
+    palette[2] = p2;
+    palette[3] = p3;
+}
+
 // Texel (x, y) of a T x T BC1 tile (blocks_per_row = T / 4).
 inline void bc1_tile_texel(const std::uint8_t* tile, std::uint32_t blocks_per_row,
                            std::uint32_t x, std::uint32_t y, std::uint8_t* rgb) {

@@ -102,13 +102,34 @@ private:
 
 // The 2 x 2 footprint at texel (jx, jy) of a BC1 tile, decoded into quad as RGB8 rows 6
 // bytes apart (16 bytes, so bilerp_rgb8_wide's 4-byte loads stay inside): the sampler then
-// blends exactly as on an RGB8 slot holding the decoded tile.
+// blends exactly as on an RGB8 slot holding the decoded tile. 9 footprints in 16 lie in one
+// block: its palette is decoded once for the four texels.
 inline void bc1_quad(const std::uint8_t* tile, std::uint32_t blocks_per_row, std::uint32_t jx,
                      std::uint32_t jy, std::uint8_t* quad) {
-    bc1_tile_texel(tile, blocks_per_row, jx, jy, quad);
-    bc1_tile_texel(tile, blocks_per_row, jx + 1, jy, quad + 3);
-    bc1_tile_texel(tile, blocks_per_row, jx, jy + 1, quad + 6);
-    bc1_tile_texel(tile, blocks_per_row, jx + 1, jy + 1, quad + 9);
+    auto block_of = [&](std::uint32_t x, std::uint32_t y) {
+        return tile + (std::size_t(y >> 2) * blocks_per_row + (x >> 2)) * kBc1BlockBytes;
+    };
+    auto index = [](const std::uint8_t* block, std::uint32_t x, std::uint32_t y) {
+        return (block[4 + (y & 3u)] >> (2 * (x & 3u))) & 3u;
+    };
+    std::uint32_t c[4];
+    const std::uint8_t* b = block_of(jx, jy);
+    std::uint32_t palette[4];
+    bc1_palette(b, palette);
+    if ((jx & 3u) != 3u && (jy & 3u) != 3u) {
+        c[0] = palette[index(b, jx, jy)], c[1] = palette[index(b, jx + 1, jy)];
+        c[2] = palette[index(b, jx, jy + 1)], c[3] = palette[index(b, jx + 1, jy + 1)];
+    } else {
+        c[0] = palette[index(b, jx, jy)];
+        const std::uint32_t xs[3] = {jx + 1, jx, jx + 1}, ys[3] = {jy, jy + 1, jy + 1};
+        for (int k = 0; k < 3; ++k) {
+            const std::uint8_t* bk = block_of(xs[k], ys[k]);
+            if (bk != b) bc1_palette(bk, palette), b = bk;
+            c[k + 1] = palette[index(bk, xs[k], ys[k])];
+        }
+    }
+    // Little-endian words: each store's 4th byte is overwritten by the next texel's first.
+    for (int k = 0; k < 4; ++k) std::memcpy(quad + 3 * k, &c[k], 4);
 }
 constexpr std::size_t kQuadRow = 6;
 

@@ -11,14 +11,15 @@ BENCHMARKS = {
     "loader": "seed 000 Table 1: lock-free vs locked tile loading, and VT sampling cost",
     "views": "tile determination: the four request-processing methods against scale",
     "photon": "seed 001 Tables 1-5 and run time against error",
+    "bc1": "the bc1 (DXT1) codec: PSNR and FLIP per painting, sampling cost, hit rate per byte",
 }
 
 
 def register(sub) -> None:
-    from ..benchmarks import export, loader, pack, photon, queues, views
+    from ..benchmarks import bc1, export, loader, pack, photon, queues, views
 
     modules = {"pack": pack, "export": export, "queues": queues, "loader": loader, "views": views,
-               "photon": photon}
+               "photon": photon, "bc1": bc1}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True
