@@ -39,6 +39,7 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	$(PIP) install -q scikit-build-core nanobind ninja "cmake>=3.26"
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
 	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science
+	$(PIP) install -q flip-evaluator
 	touch $@
 
 venv: $(VENV)/.deps-stamp
