@@ -9,7 +9,8 @@ APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzs
   libxxhash-dev libgtest-dev libgmock-dev libbenchmark-dev libboost-dev \
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
   liblcms2-dev colord-data iipimage-server lighttpd ccache \
-  xvfb xdotool libgl1-mesa-dri libglx-mesa0 libgs-common
+  xvfb xdotool libgl1-mesa-dri libglx-mesa0 libgs-common \
+  libsquish-dev
 JOBS ?= $(shell nproc)
 # Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
 # the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.
@@ -40,8 +41,8 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
 	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science
 	$(PIP) install -q imageio-ffmpeg pyglet
-
 	$(PIP) install -q "dask[distributed]"
+	$(PIP) install -q flip-evaluator
 	touch $@
 
 venv: $(VENV)/.deps-stamp

@@ -50,11 +50,15 @@ void bind_cache(nb::module_& m) {
             "pack"_a, "slots"_a = std::make_pair(30u, 30u))
         .def_prop_ro("slots", [](const VirtualTexture& vt) { return std::make_pair(vt.slots_x(), vt.slots_y()); })
         .def_prop_ro("tile_size", [](const VirtualTexture& vt) { return vt.layout().tile_size; })
+        .def_prop_ro("format", [](const VirtualTexture& vt) { return std::string(texel_format_name(vt.format())); },
+                     "'rgb8' or 'bc1': how the slots hold their tiles.")
+        .def_prop_ro("slot_bytes", &VirtualTexture::slot_bytes)
         .def("insert", [](VirtualTexture& vt, const KeyTuple& key, const TileIn& data) {
-            const std::size_t T = vt.layout().tile_size;
-            require(data.shape(0) == T && data.shape(1) == T && data.shape(2) == 3,
-                    "tile data must be a (" + std::to_string(T) + ", " + std::to_string(T) +
-                        ", 3) uint8 array");
+            const auto shape = texel_format_tile_shape(vt.format(), vt.layout().tile_size);
+            require(data.shape(0) == shape[0] && data.shape(1) == shape[1] && data.shape(2) == shape[2],
+                    "tile data must be a (" + std::to_string(shape[0]) + ", " + std::to_string(shape[1]) +
+                        ", " + std::to_string(shape[2]) + ") uint8 array (" +
+                        texel_format_name(vt.format()) + " slots)");
             const auto ev = vt.insert(to_key(key), data.data());
             return ev ? std::optional<KeyTuple>(to_tuple(*ev)) : std::nullopt; },
             "key"_a, "data"_a, "Copies a tile into the cache; returns the evicted tile's key, if any.")
@@ -96,11 +100,13 @@ void bind_cache(nb::module_& m) {
             return vt.page_table_matches_rebuild(); },
             "Whether the incrementally updated page table equals a full rebuild (tests).")
         .def_prop_ro("physical", [](const VirtualTexture& vt) {
-            const std::size_t T = vt.layout().tile_size;
+            const auto shape = texel_format_tile_shape(vt.format(), vt.layout().tile_size);
             return nb::ndarray<nb::numpy, const std::uint8_t, nb::ndim<4>>(
-                vt.physical(), {std::size_t(vt.slots_y()) * vt.slots_x(), T, T, 3}, nb::handle()); },
+                vt.physical(), {std::size_t(vt.slots_y()) * vt.slots_x(), shape[0], shape[1], shape[2]},
+                nb::handle()); },
             nb::rv_policy::reference_internal,
-            "The physical texture, tile-major (read-only view): [slot, y, x, rgb].");
+            "The physical texture, tile-major (read-only view): [slot, y, x, rgb], or "
+            "[slot, block_y, block_x, 8] for bc1 slots.");
 
     nb::class_<VirtualTextureLookup, ResidencyLookup>(
         m, "VirtualTextureLookup", "Request processing's view of a VirtualTexture's page table.")

@@ -24,9 +24,11 @@ using namespace nb::literals;
 namespace gigascroll::bindings {
 namespace {
 using Tile = nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>>;
-Tile new_tile(std::size_t T, const std::uint8_t* src) {
-    FreshArray<std::uint8_t, nb::ndim<3>> tile({T, T, 3});
-    std::memcpy(tile.data, src, T * T * 3);
+// A finished tile in the cache's form (RGB8 texels or a bc1 pack's blocks).
+Tile new_tile(const TilePack& pack, const std::uint8_t* src) {
+    const auto shape = texel_format_tile_shape(pack.slot_format(), pack.tile_size());
+    FreshArray<std::uint8_t, nb::ndim<3>> tile({shape[0], shape[1], shape[2]});
+    std::memcpy(tile.data, src, pack.slot_bytes());
     return tile.array;
 }
 
@@ -63,7 +65,7 @@ void bind_loading(nb::module_& m) {
                 for (; next < results.size(); ++next) {
                     const LoadedTile& r = results[next];
                     if (r.buffer >= 0) {
-                        out.append(nb::make_tuple(to_tuple(r.key), new_tile(l.tile_size(), l.data(r.buffer))));
+                        out.append(nb::make_tuple(to_tuple(r.key), new_tile(l.pack(), l.data(r.buffer))));
                         l.release(r.buffer);
                     } else {
                         out.append(nb::make_tuple(to_tuple(r.key), r.error));

@@ -204,6 +204,21 @@ void bind_pack(nb::module_& m) {
             return tile.array; },
             "painting"_a, "level"_a, "tx"_a, "ty"_a,
             "The tile as a (tile_size, tile_size, 3) uint8 array, checksum verified.")
+        .def("read_slot_tile", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
+                                  std::uint32_t tx, std::uint32_t ty) {
+            const auto shape = texel_format_tile_shape(p.slot_format(), p.tile_size());
+            FreshArray<std::uint8_t, nb::ndim<3>> tile({shape[0], shape[1], shape[2]});
+            {
+                nb::gil_scoped_release release;
+                p.read_slot_tile(pi, l, tx, ty, tile.data);
+            }
+            return tile.array; },
+            "painting"_a, "level"_a, "tx"_a, "ty"_a,
+            "The tile as the cache keeps it, checksum verified: (tile_size / 4, tile_size / 4, 8) "
+            "BC1 blocks (row-major) for a bc1 pack, else what read_tile gives.")
+        .def_prop_ro("slot_format", [](const TilePack& p) { return std::string(texel_format_name(p.slot_format())); },
+                     "'bc1' when the cache keeps this pack's tiles block-compressed, else 'rgb8'.")
+        .def_prop_ro("slot_bytes", &TilePack::slot_bytes, "Bytes of one tile in the cache.")
         .def("read_tile_into", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
                                   std::uint32_t tx, std::uint32_t ty, TileOut out) {
             check_tile_out(p, out);
@@ -216,8 +231,10 @@ void bind_pack(nb::module_& m) {
                             "Low-level streaming pack writer; use gigascroll.build_pack instead.")
         .def("__init__", [](PackBuilder* self, const std::filesystem::path& dir,
                             std::uint32_t tile_size, std::uint32_t border, const std::string& codec,
-                            int zstd_level, unsigned threads, std::uint32_t first_painting) {
+                            int zstd_level, unsigned threads, const std::string& bc1_fit,
+                            std::uint32_t first_painting) {
             PackOptions o;
+            o.bc1_fit = parse_bc1_fit(bc1_fit);
             o.tile_size = tile_size;
             o.border = border;
             o.codec = parse_codec(codec);
@@ -225,7 +242,7 @@ void bind_pack(nb::module_& m) {
             o.threads = threads;
             new (self) PackBuilder(dir.string(), o, first_painting); },
             "directory"_a, "tile_size"_a = 128, "border"_a = 4, "codec"_a = "raw",
-            "zstd_level"_a = 3, "threads"_a = 0, "first_painting"_a = 0)
+            "zstd_level"_a = 3, "threads"_a = 0, "bc1_fit"_a = "range", "first_painting"_a = 0)
         .def("begin_painting", [](PackBuilder& b, const std::string& name, std::uint32_t width,
                                   std::uint32_t height, const std::string& source,
                                   const std::string& conversion, std::uint32_t tx, std::uint32_t ty,

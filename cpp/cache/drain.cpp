@@ -11,8 +11,9 @@
 namespace gigascroll {
 
 DrainResult drain(TileLoader& loader, VirtualTexture& vt, std::size_t max_tiles) {
-    require(loader.tile_bytes() == vt.layout().tile_bytes(),
-            "drain: the loader's tiles are not the size of the virtual texture's slots");
+    require(loader.tile_bytes() == vt.slot_bytes(),
+            "drain: the loader's tiles are not the size of the virtual texture's slots (a bc1 "
+            "pack's loader delivers BC1 blocks: build the VirtualTexture from that pack)");
     require(vt.pack_fingerprint() == 0 || vt.pack_fingerprint() == loader.pack_fingerprint(),
             "drain: the loader reads another pack than the one the virtual texture was built from");
     DrainResult out;

@@ -13,13 +13,18 @@
 namespace gigascroll {
 
 VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x,
-                               std::uint32_t slots_y, const TileSource& pinned_source)
-    : table_(layout), slots_x_(slots_x), slots_y_(slots_y) {
+                               std::uint32_t slots_y, const TileSource& pinned_source,
+                               TexelFormat format)
+    : table_(layout), slots_x_(slots_x), slots_y_(slots_y), format_(format),
+      slot_bytes_(texel_format_tile_bytes(format, layout.tile_size)) {
+    require(format != TexelFormat::Bc1 ||
+                (layout.tile_size % 4 == 0 && layout.payload() % 4 == 0),
+            "bc1 slots need tile_size and payload that are multiples of 4");
     require(slots_x >= 1 && slots_y >= 1 && std::uint64_t(slots_x) * slots_y < (1u << 24),
             "slots must be positive and fewer than 2^24 in total");
     const std::uint32_t n = slots_x * slots_y;
     // Checked before the pinned tiles are listed or anything is allocated.
-    require_memory(double(n), double(layout.tile_bytes()), double(kMaxCacheBytes),
+    require_memory(double(n), double(slot_bytes_), double(kMaxCacheBytes),
                    "slots=(" + std::to_string(slots_x) + ", " + std::to_string(slots_y) + ")");
     // Pinned: every tile of the tail levels (which include the coarsest, single-tile level).
     std::vector<TileKey> pinned;
@@ -33,13 +38,13 @@ VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x
     require(pinned.size() < n, "slots=(" + std::to_string(slots_x) + ", " + std::to_string(slots_y) +
                                    ") cannot hold the " + std::to_string(pinned.size()) +
                                    " pinned coarse tiles plus one streamed tile");
-    texels_ = HugeBuffer(std::size_t(n) * layout.tile_bytes());
+    texels_ = HugeBuffer(std::size_t(n) * slot_bytes_);
     key_of_.assign(n, 0);
     pinned_.assign(n, 0);
     prev_.assign(n, kNil);
     next_.assign(n, kNil);
     stats_.slots = n;
-    std::vector<std::uint8_t> tile(layout.tile_bytes());
+    std::vector<std::uint8_t> tile(slot_bytes_);
     std::uint32_t slot = 0;
     for (const TileKey& k : pinned) {
         pinned_source(k, tile.data());
@@ -53,8 +58,8 @@ VirtualTexture::VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x
 
 VirtualTexture::VirtualTexture(const TilePack& pack, std::uint32_t slots_x, std::uint32_t slots_y)
     : VirtualTexture(pack.geometry(), slots_x, slots_y, [&](const TileKey& k, std::uint8_t* out) {
-          pack.read_tile(k.painting, k.level, k.tx, k.ty, out);
-      }) {
+          pack.read_slot_tile(k.painting, k.level, k.tx, k.ty, out);
+      }, pack.slot_format()) {
     pack_fingerprint_ = gigascroll::pack_fingerprint(pack);
 }
 
@@ -74,7 +79,7 @@ std::uint32_t VirtualTexture::resident_slot(const TileKey& key) const {
 }
 
 void VirtualTexture::store(std::uint32_t slot, const TileKey& key, const std::uint8_t* data) {
-    std::memcpy(texels_.data() + slot * layout().tile_bytes(), data, layout().tile_bytes());
+    std::memcpy(texels_.data() + std::size_t(slot) * slot_bytes_, data, slot_bytes_);
     key_of_[slot] = key.packed();
     slot_of_[key.packed()] = slot;
     table_.insert(key, slot);

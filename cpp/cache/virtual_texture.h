@@ -17,6 +17,7 @@
 #include "loading/tile_loader.h"
 #include "cache/page_table.h"
 #include "pack/geometry.h"
+#include "pack/texel_format.h"
 
 namespace gigascroll {
 
@@ -27,16 +28,17 @@ struct CacheStats {
 
 class VirtualTexture {
 public:
-    // Reads one tile (RGB8, tile_size^2 x 3 bytes) for pinning at construction.
+    // Reads one tile in the slots' format (slot_bytes()) for pinning at construction.
     using TileSource = std::function<void(const TileKey&, std::uint8_t*)>;
 
     // Largest physical texture: 16 GiB of tile slots.
     static constexpr std::size_t kMaxCacheBytes = std::size_t(16) << 30;
     // InvalidArgument if the slots cannot hold the pinned tiles plus one free slot, or their
-    // texels would take more than kMaxCacheBytes.
+    // texels would take more than kMaxCacheBytes. Slots hold RGB8 texels or BC1 blocks (a bc1
+    // pack's tiles as stored: 6x the slots per byte).
     VirtualTexture(const PackGeometry& layout, std::uint32_t slots_x, std::uint32_t slots_y,
-                   const TileSource& pinned_source);
-    // The cache of a pack, pinned tiles read from it; remembers the pack's fingerprint so
+                   const TileSource& pinned_source, TexelFormat format = TexelFormat::Rgb8);
+    // The cache of a pack, pinned tiles read from it in its slot format; remembers the pack's fingerprint so
     // that tiles of another pack (a loader opened on it) are refused.
     VirtualTexture(const TilePack& pack, std::uint32_t slots_x, std::uint32_t slots_y);
 
@@ -46,8 +48,10 @@ public:
     const PackGeometry& layout() const { return table_.layout(); }
     std::uint32_t slots_x() const { return slots_x_; }
     std::uint32_t slots_y() const { return slots_y_; }
+    TexelFormat format() const { return format_; }
+    std::size_t slot_bytes() const { return slot_bytes_; }
 
-    // Copies the tile into a slot (the least recently used one when full) and updates the
+    // Copies the tile (slot_bytes() in the slots' format) into a slot (the least recently used one when full) and updates the
     // page table. A resident tile is only marked used. Returns the evicted tile, if any.
     std::optional<TileKey> insert(const TileKey& key, const std::uint8_t* data);
     // A frame's requests: resident ones count as hits and become most recently used, the
@@ -69,8 +73,8 @@ public:
     // wait for it.
     std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock(mutex_); }
 
-    // The physical texture, tile-major: slot s holds its T x T x RGB8 texels contiguously
-    // at s * T * T * 3, so a bilinear footprint's two rows are T * 3 bytes apart and one
+    // The physical texture, tile-major: slot s holds its T x T x RGB8 texels (or its (T/4)^2
+    // BC1 blocks) contiguously at s * slot_bytes(), so a bilinear footprint's two rows are T * 3 bytes apart and one
     // tile spans 14 pages rather than T (the sampler's reads are scattered over the cache).
     const std::uint8_t* physical() const { return texels_.data(); }
 
@@ -84,6 +88,8 @@ private:
     PageTable table_;
     std::uint32_t slots_x_, slots_y_;
     std::uint64_t pack_fingerprint_ = 0;
+    TexelFormat format_;
+    std::size_t slot_bytes_;
     HugeBuffer texels_;
     std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;  // packed key -> slot
     std::vector<std::uint64_t> key_of_;                        // slot -> packed key

@@ -19,7 +19,7 @@ namespace gigascroll {
 // What both modes share: the buffer pool and the read of one tile.
 struct TileLoader::Impl {
     Impl(const TilePack& pack, std::size_t pool_tiles)
-        : pack(pack), tile_bytes(pack.tile_bytes()), pool(pool_tiles * tile_bytes) {}
+        : pack(pack), tile_bytes(pack.slot_bytes()), pool(pool_tiles * tile_bytes) {}
     virtual ~Impl() = default;
     // Queues up to n packed keys; returns how many were taken. Never blocks in lock-free mode.
     virtual std::size_t push(const std::uint64_t* keys, std::size_t n) = 0;
@@ -31,12 +31,13 @@ struct TileLoader::Impl {
 
     std::uint8_t* buffer(std::int32_t b) { return pool.data() + std::size_t(b) * tile_bytes; }
 
-    // Reads one tile into buffer b; a failure is a result, never an escaping exception.
+    // Reads one tile into buffer b in the cache's form (RGB8, or a bc1 pack's blocks as
+    // stored); a failure is a result, never an escaping exception.
     LoadedTile load(std::uint64_t packed, std::int32_t b) {
         LoadedTile r;
         r.key = TileKey::unpack(packed);
         try {
-            pack.read_tile(r.key.painting, r.key.level, r.key.tx, r.key.ty, buffer(b));
+            pack.read_slot_tile(r.key.painting, r.key.level, r.key.tx, r.key.ty, buffer(b));
             r.buffer = b;
         } catch (const std::exception& e) {
             r.error = e.what();
@@ -262,7 +263,7 @@ const char* loader_mode_name(LoaderMode mode) {
 }
 
 TileLoader::TileLoader(const TilePack& pack, LoaderMode mode, unsigned threads, const LoaderOptions& o)
-    : pack_(pack), mode_(mode), threads_(threads), tile_bytes_(pack.tile_bytes()),
+    : pack_(pack), mode_(mode), threads_(threads), tile_bytes_(pack.slot_bytes()),
       fingerprint_(gigascroll::pack_fingerprint(pack)) {
     require(threads >= 1 && threads <= 64, "loader threads must be in 1..64");
     require(o.queue_capacity >= 1 && o.pool_tiles >= 1, "queue_capacity and pool_tiles must be positive");

@@ -83,7 +83,7 @@ public:
     LoaderStats stats() const;
     LoaderMode mode() const { return mode_; }
     unsigned threads() const { return threads_; }
-    std::size_t tile_bytes() const { return tile_bytes_; }
+    std::size_t tile_bytes() const { return tile_bytes_; }  // TilePack::slot_bytes()
     std::uint32_t tile_size() const;
     bool closed() const { return closed_.load(std::memory_order_acquire); }
     const TilePack& pack() const { return pack_; }

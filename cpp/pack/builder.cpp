@@ -15,6 +15,7 @@
 #include "common/checksum.h"
 #include "common/error.h"
 #include "common/parallel.h"
+#include "pack/bc1.h"
 #include "pack/manifest.h"
 #include "pack/tile_key.h"
 
@@ -99,6 +100,14 @@ PackBuilder::PackBuilder(const std::string& directory, const PackOptions& option
     struct stat st {};
     if (::stat(directory.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
         throw IoError(directory + ": not a directory to build a pack in");
+    // Blocks must tile the tile, and tiles start P texels apart: with P a multiple of 4 the
+    // overlapping borders of neighbouring tiles are the same blocks of the same texels, so
+    // they decode to the same bytes and bilinear filtering stays seamless across tiles.
+    require(options.codec != Codec::Bc1 ||
+                (options.tile_size % 4 == 0 && (options.tile_size - 2 * options.border) % 4 == 0),
+            "bc1 needs tile_size and payload (tile_size - 2 border) to be multiples of 4, got " +
+                std::to_string(options.tile_size) + " and " +
+                std::to_string(options.tile_size - 2 * options.border));
 }
 
 PackBuilder::~PackBuilder() {
@@ -235,6 +244,16 @@ void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::
                 return;
             }
             std::vector<std::uint8_t> tile(tile_bytes);
+            if (options_.codec == Codec::Bc1) {
+                for (std::size_t i = begin; i < end; ++i) {
+                    cut(static_cast<std::uint32_t>(g0 + i), tile.data());
+                    auto& out = packed[i];
+                    out.resize(bc1_tile_bytes(T));
+                    bc1_encode_tile(tile.data(), T, out.data(), options_.bc1_fit);
+                    sums[i] = checksum64(out.data(), out.size());
+                }
+                return;
+            }
             ZSTD_CCtx* ctx = ZSTD_createCCtx();
             for (std::size_t i = begin; i < end; ++i) {
                 cut(static_cast<std::uint32_t>(g0 + i), tile.data());

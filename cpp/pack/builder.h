@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "pack/bc1.h"
 #include "pack/format.h"
 #include "pack/geometry.h"
 #include "pack/mip_reducer.h"
@@ -30,6 +31,7 @@ struct PackOptions {
     std::uint32_t border = 4;
     Codec codec = Codec::Raw;
     int zstd_level = 3;
+    Bc1Fit bc1_fit = Bc1Fit::Range;
     unsigned threads = 0;  // 0 = all cores
 };
 

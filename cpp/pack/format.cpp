@@ -41,9 +41,16 @@ void require_regular_file(const std::string& path) {
 Codec parse_codec(const std::string& name) {
     if (name == "raw") return Codec::Raw;
     if (name == "zstd") return Codec::Zstd;
-    throw InvalidArgument("unknown codec '" + name + "' (expected raw or zstd)");
+    if (name == "bc1") return Codec::Bc1;
+    throw InvalidArgument("unknown codec '" + name + "' (expected raw, zstd or bc1)");
 }
 
-const char* codec_name(Codec codec) { return codec == Codec::Zstd ? "zstd" : "raw"; }
+const char* codec_name(Codec codec) {
+    switch (codec) {
+        case Codec::Zstd: return "zstd";
+        case Codec::Bc1: return "bc1";
+        default: return "raw";
+    }
+}
 
 }  // namespace gigascroll

@@ -55,7 +55,8 @@ struct TileEntry {
 };
 static_assert(sizeof(TileEntry) == 24);
 
-enum class Codec : std::uint32_t { Raw = 0, Zstd = 1 };
+// Bc1: DXT1 blocks (pack/bc1.h), kept block-compressed in the cache.
+enum class Codec : std::uint32_t { Raw = 0, Zstd = 1, Bc1 = 2 };
 
 inline constexpr std::uint64_t kTileSeedSalt = 0x9E3779B97F4A7C15ull;  // no valid key: level 121
 
@@ -73,7 +74,7 @@ std::uint64_t tile_checksum(std::uint32_t version, std::uint64_t packed_key, con
 // block a reader's open() or read forever, or read as garbage.
 void require_regular_file(const std::string& path);
 
-// "raw" / "zstd"; InvalidArgument for anything else.
+// "raw" / "zstd" / "bc1"; InvalidArgument for anything else.
 Codec parse_codec(const std::string& name);
 const char* codec_name(Codec codec);
 

@@ -17,6 +17,7 @@
 #include "common/checksum.h"
 #include "common/error.h"
 #include "pack/tile_key.h"
+#include "pack/bc1.h"
 
 namespace gigascroll {
 namespace {
@@ -93,6 +94,9 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
         warnings_.push_back(directory + ": a version-1 pack: its checksums do not name their "
                             "tiles, so swapped or duplicated index entries cannot be detected "
                             "(rebuild it to get version 2)");
+    if (codec_ == Codec::Bc1 && (tile_size_ % 4 != 0 || payload() % 4 != 0))
+        throw IoError(directory + "/" + kManifestName + ": a bc1 pack needs tile_size and payload "
+                      "that are multiples of 4");
 
     // Index: map it whole; entries are read-only afterwards.
     const std::string index_path = directory + "/" + kIndexName;
@@ -279,13 +283,40 @@ void TilePack::read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std
     }
     thread_local std::vector<std::uint8_t> scratch;
     scratch.resize(e.length);
-    if (!pread_all(fd, scratch.data(), e.length, e.offset))
-        throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
-    if (tile_checksum(version_, key, scratch.data(), e.length) != e.checksum)
-        throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
-    const std::size_t n = ZSTD_decompressDCtx(thread_dctx(), out, bytes, scratch.data(), e.length);
+    const std::uint8_t* stored = read_stored(e, p, l, tx, ty, scratch.data());
+    if (codec_ == Codec::Bc1) {
+        bc1_decode_tile(stored, tile_size_, out);
+        return;
+    }
+    const std::size_t n = ZSTD_decompressDCtx(thread_dctx(), out, bytes, stored, e.length);
     if (ZSTD_isError(n) || n != bytes)
         throw IoError(directory_ + ": corrupt zstd data in tile " + key_text(p, l, tx, ty));
+}
+
+const std::uint8_t* TilePack::read_stored(const TileEntry& e, std::uint32_t p, std::uint32_t l,
+                                          std::uint32_t tx, std::uint32_t ty,
+                                          std::uint8_t* into) const {
+    // entry() has checked that e lies inside its tile file.
+    if (codec_ == Codec::Bc1 && e.length != bc1_tile_bytes(tile_size_))
+        throw IoError(directory_ + ": bc1 tile " + key_text(p, l, tx, ty) + " has length " +
+                      std::to_string(e.length) + ", expected " +
+                      std::to_string(bc1_tile_bytes(tile_size_)));
+    if (!pread_all(file_descriptor(e.file), into, e.length, e.offset))
+        throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
+    const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
+    if (tile_checksum(version_, key, into, e.length) != e.checksum)
+        throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
+    return into;
+}
+
+void TilePack::read_slot_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx,
+                              std::uint32_t ty, std::uint8_t* out) const {
+    if (codec_ != Codec::Bc1) {
+        read_tile(p, l, tx, ty, out);
+        return;
+    }
+    // Straight into the caller's buffer: the blocks are what the cache keeps.
+    read_stored(entry(p, l, tx, ty), p, l, tx, ty, out);
 }
 
 }  // namespace gigascroll

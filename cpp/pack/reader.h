@@ -15,6 +15,7 @@
 #include "pack/format.h"
 #include "pack/geometry.h"
 #include "pack/manifest.h"
+#include "pack/texel_format.h"
 
 namespace gigascroll {
 
@@ -46,6 +47,10 @@ public:
     PackGeometry geometry() const;
     std::uint64_t tile_count() const { return entry_count_; }
     std::size_t tile_bytes() const { return std::size_t(tile_size_) * tile_size_ * 3; }
+    // How the cache keeps this pack's tiles (RGB8, or BC1 for a bc1 pack) and the bytes of one
+    // tile in that form: what read_slot_tile() writes and the loader delivers.
+    TexelFormat slot_format() const { return texel_format_of(codec_); }
+    std::size_t slot_bytes() const { return texel_format_tile_bytes(slot_format(), tile_size_); }
     // The manifest as this reader parsed it, serialised again (JSON text).
     const std::string& manifest_json() const { return manifest_json_; }
     std::uint32_t version() const { return version_; }
@@ -65,9 +70,16 @@ public:
     // IoError on a bad entry, a short read, a checksum mismatch or a corrupt zstd frame.
     void read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty,
                    std::uint8_t* out) const;
+    // The tile in the cache's form into out[slot_bytes()]: the verified BC1 blocks as stored
+    // for a bc1 pack, what read_tile() gives otherwise. The same errors as read_tile().
+    void read_slot_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty,
+                        std::uint8_t* out) const;
 
 private:
     struct TileFile;
+    // Reads the stored bytes of e into scratch and verifies their length and checksum.
+    const std::uint8_t* read_stored(const TileEntry& e, std::uint32_t p, std::uint32_t l,
+                                    std::uint32_t tx, std::uint32_t ty, std::uint8_t* into) const;
     void release();
     // The checked entry of a stored tile (InvalidArgument / IoError as for locate).
     TileEntry entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;

@@ -10,6 +10,7 @@
 #include "common/divider.h"
 #include "common/error.h"
 #include "common/parallel.h"
+#include "pack/bc1.h"
 #include "sampling/bilinear.h"
 
 namespace gigascroll {
@@ -22,6 +23,7 @@ Filter parse_filter(const std::string& f) {
 
 namespace {
 void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
+template <TexelFormat F>
 void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
 
 void check_request(const VirtualTexture& vt, const SampleRequest& r) {
@@ -56,10 +58,10 @@ inline std::uint32_t tap_tile(const Tap& t, const Divider& P) {
 // physical address of a texel of the tile that answered.
 class TexelFinder {
 public:
-    TexelFinder(const PageTable& table, std::uint32_t painting, const std::uint8_t* physical)
-        : table_(table), painting_(painting), physical_(physical),
-          P_(table.layout().payload()), E_(table.layout().border), T_(table.layout().tile_size),
-          tile_bytes_(table.layout().tile_bytes()) {}
+    TexelFinder(const VirtualTexture& vt, std::uint32_t painting)
+        : table_(vt.page_table()), painting_(painting), physical_(vt.physical()),
+          P_(table_.layout().payload()), E_(table_.layout().border), T_(table_.layout().tile_size),
+          tile_bytes_(vt.slot_bytes()) {}
 
     std::size_t row_bytes() const { return std::size_t(T_) * 3; }
 
@@ -74,9 +76,18 @@ public:
     // eq (7,8)'s in-tile offset with the border, clamped so the 2 x 2 footprint stays inside.
     const std::uint8_t* texel(PageEntry e, std::uint32_t s, std::int64_t i, std::int64_t j,
                               std::uint32_t cx, std::uint32_t cy) const {
-        const std::int64_t jx = std::clamp<std::int64_t>(i - std::int64_t(cx >> s) * P_ + E_, 0, T_ - 2);
-        const std::int64_t jy = std::clamp<std::int64_t>(j - std::int64_t(cy >> s) * P_ + E_, 0, T_ - 2);
-        return physical_ + e.slot() * tile_bytes_ + jy * row_bytes() + jx * 3;
+        std::uint32_t jx, jy;
+        const std::uint8_t* tile = footprint(e, s, i, j, cx, cy, jx, jy);
+        return tile + jy * row_bytes() + jx * 3;
+    }
+
+    // The same for any slot format: the slot's first byte and the in-tile texel (jx, jy).
+    const std::uint8_t* footprint(PageEntry e, std::uint32_t s, std::int64_t i, std::int64_t j,
+                                  std::uint32_t cx, std::uint32_t cy, std::uint32_t& jx,
+                                  std::uint32_t& jy) const {
+        jx = std::uint32_t(std::clamp<std::int64_t>(i - std::int64_t(cx >> s) * P_ + E_, 0, T_ - 2));
+        jy = std::uint32_t(std::clamp<std::int64_t>(j - std::int64_t(cy >> s) * P_ + E_, 0, T_ - 2));
+        return physical_ + std::size_t(e.slot()) * tile_bytes_;
     }
 
 private:
@@ -88,6 +99,39 @@ private:
     std::uint32_t last_l_ = ~0u, last_cx_ = 0, last_cy_ = 0;
     PageEntry last_;
 };
+
+// The 2 x 2 footprint at texel (jx, jy) of a BC1 tile, decoded into quad as RGB8 rows 6
+// bytes apart (16 bytes, so bilerp_rgb8_wide's 4-byte loads stay inside): the sampler then
+// blends exactly as on an RGB8 slot holding the decoded tile. 9 footprints in 16 lie in one
+// block: its palette is decoded once for the four texels.
+inline void bc1_quad(const std::uint8_t* tile, std::uint32_t blocks_per_row, std::uint32_t jx,
+                     std::uint32_t jy, std::uint8_t* quad) {
+    auto block_of = [&](std::uint32_t x, std::uint32_t y) {
+        return tile + (std::size_t(y >> 2) * blocks_per_row + (x >> 2)) * kBc1BlockBytes;
+    };
+    auto index = [](const std::uint8_t* block, std::uint32_t x, std::uint32_t y) {
+        return (block[4 + (y & 3u)] >> (2 * (x & 3u))) & 3u;
+    };
+    std::uint32_t c[4];
+    const std::uint8_t* b = block_of(jx, jy);
+    std::uint32_t palette[4];
+    bc1_palette(b, palette);
+    if ((jx & 3u) != 3u && (jy & 3u) != 3u) {
+        c[0] = palette[index(b, jx, jy)], c[1] = palette[index(b, jx + 1, jy)];
+        c[2] = palette[index(b, jx, jy + 1)], c[3] = palette[index(b, jx + 1, jy + 1)];
+    } else {
+        c[0] = palette[index(b, jx, jy)];
+        const std::uint32_t xs[3] = {jx + 1, jx, jx + 1}, ys[3] = {jy, jy + 1, jy + 1};
+        for (int k = 0; k < 3; ++k) {
+            const std::uint8_t* bk = block_of(xs[k], ys[k]);
+            if (bk != b) bc1_palette(bk, palette), b = bk;
+            c[k + 1] = palette[index(bk, xs[k], ys[k])];
+        }
+    }
+    // Little-endian words: each store's 4th byte is overwritten by the next texel's first.
+    for (int k = 0; k < 4; ++k) std::memcpy(quad + 3 * k, &c[k], 4);
+}
+constexpr std::size_t kQuadRow = 6;
 
 constexpr std::size_t kBatch = 64;
 
@@ -148,14 +192,19 @@ void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
 // near 1 on the widest painting.
 void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
     if (r.filter == Filter::Bilinear) {
-        sample_bilinear(vt, r, begin, end);
+        if (vt.format() == TexelFormat::Bc1)
+            sample_bilinear<TexelFormat::Bc1>(vt, r, begin, end);
+        else
+            sample_bilinear<TexelFormat::Rgb8>(vt, r, begin, end);
         return;
     }
     const PaintingGeometry& pt = vt.layout().paintings[r.painting];
     const std::uint32_t L = pt.levels();
     const LevelAxes axes(pt.width(), pt.height(), L);
     const Divider divide_p(vt.layout().payload());
-    TexelFinder finder(vt.page_table(), r.painting, vt.physical());
+    TexelFinder finder(vt, r.painting);
+    const bool bc1 = vt.format() == TexelFormat::Bc1;
+    const std::uint32_t blocks_per_row = vt.layout().tile_size / 4;
 
     // Bilinear sample at level l with page-table fallback; returns the level that answered.
     auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out)
@@ -168,8 +217,16 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
             tx = axes.tap_x(x0, al);
             ty = axes.tap_y(y0, al);
         }
-        bilerp_rgb8(finder.texel(e, s, tx.i0, ty.i0, cx, cy), finder.row_bytes(), 3, 1, tx.f,
-                    ty.f, out);
+        if (bc1) {
+            std::uint32_t jx, jy;
+            const std::uint8_t* tile = finder.footprint(e, s, tx.i0, ty.i0, cx, cy, jx, jy);
+            std::uint8_t quad[16];
+            bc1_quad(tile, blocks_per_row, jx, jy, quad);
+            bilerp_rgb8(quad, kQuadRow, 3, 1, tx.f, ty.f, out);
+        } else {
+            bilerp_rgb8(finder.texel(e, s, tx.i0, ty.i0, cx, cy), finder.row_bytes(), 3, 1, tx.f,
+                        ty.f, out);
+        }
         return al;
     };
 
@@ -199,16 +256,21 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
 // taps and tile at that level; (2) the page-table lookup (reused while samples stay in one
 // tile), the fallback to a resident ancestor, the texel address, and a prefetch of both
 // rows; (3) the blends, whose reads the prefetches have mostly brought in by then.
+// For BC1 slots, (2) prefetches the footprint's first and last blocks and (3) decodes the
+// footprint's four texels before the same blend.
+template <TexelFormat F>
 void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
     const PaintingGeometry& pt = vt.layout().paintings[r.painting];
     const std::uint32_t L = pt.levels(), width = pt.width(), height = pt.height();
     const LevelAxes axes(width, height, L);
     const Divider divide_p(vt.layout().payload());
-    TexelFinder finder(vt.page_table(), r.painting, vt.physical());
+    TexelFinder finder(vt, r.painting);
     const std::size_t row = finder.row_bytes();
+    const std::uint32_t blocks_per_row = vt.layout().tile_size / 4;
 
     TapBatch b;
     const std::uint8_t* texel[kBatch];
+    std::uint32_t jx_of[kBatch], jy_of[kBatch];
     float lod_scalar[kBatch];
     double u_dense[kBatch], v_dense[kBatch];
     std::fill(lod_scalar, lod_scalar + kBatch, r.lod_scalar);
@@ -236,10 +298,19 @@ void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size
                 const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
                 i = tx.i0, j = ty.i0, b.fx[k] = tx.f, b.fy[k] = ty.f;
             }
-            const std::uint8_t* p = finder.texel(e, s, i, j, cx, cy);
-            __builtin_prefetch(p);
-            __builtin_prefetch(p + row);
-            texel[k] = p;
+            if constexpr (F == TexelFormat::Bc1) {
+                std::uint32_t jx, jy;
+                const std::uint8_t* tile = finder.footprint(e, s, i, j, cx, cy, jx, jy);
+                __builtin_prefetch(tile + (std::size_t(jy >> 2) * blocks_per_row + (jx >> 2)) * kBc1BlockBytes);
+                __builtin_prefetch(tile + (std::size_t((jy + 1) >> 2) * blocks_per_row + ((jx + 1) >> 2)) *
+                                              kBc1BlockBytes);
+                texel[k] = tile, jx_of[k] = jx, jy_of[k] = jy;
+            } else {
+                const std::uint8_t* p = finder.texel(e, s, i, j, cx, cy);
+                __builtin_prefetch(p);
+                __builtin_prefetch(p + row);
+                texel[k] = p;
+            }
             if (r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
         }
         // (3)
@@ -247,6 +318,20 @@ void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size
         // after; not past this range's end (another thread may own the next sample).
         float* out = r.out + 3 * b0;
         std::size_t k = 0;
+        if constexpr (F == TexelFormat::Bc1) {
+            for (; k < n; ++k) {
+                alignas(16) std::uint8_t quad[16];
+                bc1_quad(texel[k], blocks_per_row, jx_of[k], jy_of[k], quad);
+#if defined(__SSE2__)
+                if (k + 1 < n || b0 + n < end) {
+                    bilerp_rgb8_wide(quad, kQuadRow, b.fx[k], b.fy[k], out + 3 * k);
+                    continue;
+                }
+#endif
+                bilerp_rgb8(quad, kQuadRow, 3, 1, b.fx[k], b.fy[k], out + 3 * k);
+            }
+            continue;
+        }
 #if defined(__SSE2__)
         for (; k + 1 < n || (k < n && b0 + n < end); ++k)
             bilerp_rgb8_wide(texel[k], row, b.fx[k], b.fy[k], out + 3 * k);

@@ -90,7 +90,8 @@ class TileLoader(_core.TileLoader):
             self._submit(_keys(keys))
 
     def poll(self, max_tiles: int | None = None) -> list:
-        """Finished tiles as ``[(key, data)]``: data is a (T, T, 3) uint8 array, or a
+        """Finished tiles as ``[(key, data)]``: data is a (T, T, 3) uint8 array (BC1 blocks,
+        (T/4, T/4, 8), for a bc1 pack), or a
         :class:`LoadError` for a tile that could not be read."""
         n = (1 << 62) if max_tiles is None else int(max_tiles)
         if n < 0:
@@ -111,14 +112,17 @@ class VirtualTexture(_core.VirtualTexture):
 
     ``VirtualTexture(pack, slots=(30, 30))``: slots_x x slots_y tiles, LRU replacement; every
     tile of each painting's coarse "tail" levels (at least its single coarsest tile) is pinned,
-    so every lookup has a resident answer. ``drain(loader, max_tiles=2**64 - 1)`` polls the
+    so every lookup has a resident answer. A bc1 pack's tiles stay BC1 blocks in the slots
+    (``format`` 'bc1', ``slot_bytes`` T^2 / 2 against 3 T^2: 6x the tiles per byte), decoded
+    by ``sample`` on the fly. ``drain(loader, max_tiles=2**64 - 1)`` polls the
     loader and inserts its finished tiles in C++, returning ``(arrived, failed)``: the request
     keys (1-D uint64) of every tile that came back, inserted or not, and
     ``[((painting, level, tx, ty), message), ...]`` for the loads that failed.
     """
 
     def insert(self, key, data: np.ndarray):
-        """Copies one tile (a (T, T, 3) uint8 array) into the cache and updates
+        """Copies one tile (a (T, T, 3) uint8 array, or (T/4, T/4, 8) BC1 blocks when the
+        pack's codec is bc1: see ``format``) into the cache and updates
         the page table; returns the evicted tile's key, or None."""
         data = np.asarray(data)
         if data.dtype != np.uint8:

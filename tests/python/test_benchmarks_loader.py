@@ -11,13 +11,17 @@ from gigascroll import cli
 def test_bench_loader_small_run(tmp_path, capsys):
     out = tmp_path / "out"
     rc = cli.main(["bench", "loader", "--width", "3000", "--height", "400", "--tiles", "600",
-                   "--repeat", "1", "--configs", "locked:2,lockfree:1", "--codecs", "raw,zstd",
+                   "--repeat", "1", "--configs", "locked:2,lockfree:1", "--codecs", "raw,zstd,bc1",
                    "--samples", "20000", "--sample-size", "1024x512",
                    "--cache", str(tmp_path / "cache"), "--out", str(out)])
     assert rc == 0
     result = json.loads((out / "loader.json").read_text())
-    assert set(result["loading"]) == {"raw", "zstd"}
-    for codec in ("raw", "zstd"):
+    assert set(result["loading"]) == {"raw", "zstd", "bc1"}
+    # zstd's own decode limit is measured; a bc1 pack's tiles are 1/6 of raw's and not decoded
+    assert result["loading"]["zstd"]["decode_limit_tiles_per_s"] > 0
+    assert result["loading"]["bc1"]["decode_limit_tiles_per_s"] is None
+    assert result["loading"]["bc1"]["mean_tile_bytes"] * 6 == result["loading"]["raw"]["mean_tile_bytes"]
+    for codec in ("raw", "zstd", "bc1"):
         rows = result["loading"][codec]["rows"]
         assert [r["config"] for r in rows] == ["locked:2", "lockfree:1"]
         assert all(r["seconds"] > 0 for r in rows)

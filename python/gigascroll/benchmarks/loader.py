@@ -15,7 +15,10 @@ The physical limit is a single thread reading the same number of stored bytes se
 from tiles.bin (pread, 1 MiB chunks); both run from the page cache (the pack is read once
 beforehand), so the comparison is about the loaders' overhead, not the disk. "direct" is one
 thread calling TilePack.read_tile on the same tile sequence with no queues or threads: the
-per-tile work (read, checksum, zstd decode) the loaders parallelise.
+per-tile work (read, checksum, zstd decode) the loaders parallelise. For a zstd pack,
+"decode limit" is the codec's own speed on the same frames: one thread decompressing the
+tile sequence's stored frames from memory with the libzstd the core links (through ctypes,
+one reused ZSTD_DCtx, into one buffer), the most a loader thread could reach. A bc1 pack's loader only reads and verifies: its tiles stay blocks.
 """
 
 from __future__ import annotations
@@ -43,7 +46,8 @@ def add_arguments(p) -> None:
     p.add_argument("--tiles", type=int, default=50000, help="tiles to load per run (default 50000)")
     p.add_argument("--configs", default=DEFAULT_CONFIGS,
                    help=f"mode:threads list (default {DEFAULT_CONFIGS})")
-    p.add_argument("--codecs", default="raw,zstd", help="packs to test (default raw,zstd)")
+    p.add_argument("--codecs", default="raw,zstd", help="packs to test: raw, zstd, bc1 "
+                   "(default raw,zstd)")
     p.add_argument("--repeat", type=int, default=3, help="rounds over all configurations; medians reported")
     p.add_argument("--fps", type=float, default=90.0)
     p.add_argument("--copies", type=int, default=10, help="copies of each frame's command set")
@@ -194,6 +198,44 @@ def run_direct(pack, frames: list[np.ndarray], tiles: int) -> float:
     return time.perf_counter() - t0
 
 
+def run_decode_limit(pack, frames: list[np.ndarray], tiles: int) -> float:
+    """Seconds for one thread to decompress `tiles` stored zstd frames of the frames' tile
+    sequence, already in memory: no read, no checksum, no queue."""
+    import ctypes
+    import ctypes.util
+    lib = ctypes.CDLL(ctypes.util.find_library("zstd") or "libzstd.so.1")
+    lib.ZSTD_createDCtx.restype = ctypes.c_void_p
+    lib.ZSTD_freeDCtx.argtypes = [ctypes.c_void_p]
+    lib.ZSTD_decompressDCtx.restype = ctypes.c_size_t
+    lib.ZSTD_decompressDCtx.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
+                                        ctypes.c_char_p, ctypes.c_size_t]
+    lib.ZSTD_isError.argtypes = [ctypes.c_size_t]
+    keys = [tuple(map(int, k)) for f in frames for k in f]
+    stored = {}
+    fd = os.open(Path(pack.path) / "tiles.bin", os.O_RDONLY)
+    try:
+        for k in keys:
+            if k not in stored:
+                offset, length, _ = pack.locate(*k)
+                stored[k] = os.pread(fd, length, offset)
+    finally:
+        os.close(fd)
+    sequence = [stored[keys[i % len(keys)]] for i in range(tiles)]
+    nbytes = pack.tile_size * pack.tile_size * 3
+    out = ctypes.create_string_buffer(nbytes)
+    ctx = lib.ZSTD_createDCtx()
+    decompress = lib.ZSTD_decompressDCtx
+    try:
+        t0 = time.perf_counter()
+        for frame in sequence:
+            n = decompress(ctx, out, nbytes, frame, len(frame))
+            if n != nbytes:
+                raise OSError(f"{pack.path}: a stored zstd frame did not decompress to a tile")
+        return time.perf_counter() - t0
+    finally:
+        lib.ZSTD_freeDCtx(ctx)
+
+
 # ----------------------------------------------------------------------------- sampling
 
 def run_sampling(cache: Path, args) -> dict:
@@ -282,8 +324,8 @@ def run(args) -> int:
     if not parts or parts - {"loading", "sampling"}:
         raise UserError("--parts must list loading and/or sampling")
     codecs = [c.strip() for c in args.codecs.split(",")] if "loading" in parts else []
-    if any(c not in ("raw", "zstd") for c in codecs):
-        raise UserError("--codecs must list raw and/or zstd")
+    if any(c not in ("raw", "zstd", "bc1") for c in codecs):
+        raise UserError("--codecs must list raw, zstd and/or bc1")
     cache, out_dir = Path(args.cache), Path(args.out)
     cache.mkdir(parents=True, exist_ok=True)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -304,6 +346,8 @@ def run(args) -> int:
         for _ in range(args.repeat):
             runs.setdefault("physical", []).append(run_physical(pack, nbytes))
             runs.setdefault("direct", []).append(run_direct(pack, frames, args.tiles))
+            if codec == "zstd":
+                runs.setdefault("decode", []).append(run_decode_limit(pack, frames, args.tiles))
             for mode, threads in configs:
                 runs.setdefault(f"{mode}:{threads}", []).append(
                     run_loader(pack, mode, threads, args, frames))
@@ -317,7 +361,17 @@ def run(args) -> int:
                          "runs": runs[name], "seed_seconds": SEED_TABLE1.get(name)})
             print(f"{codec:4s} {mode:8s} {threads} threads: {sec:7.3f} s  "
                   f"{args.tiles / sec:10.0f} tiles/s", flush=True)
+        decode = statistics.median(runs["decode"]) if "decode" in runs else None
+        for r in rows:
+            threads = int(r["config"].split(":")[1])
+            r["per_thread_of_decode_limit"] = (
+                None if decode is None else r["tiles_per_s"] / threads / (args.tiles / decode))
+        if decode is not None:
+            print(f"{codec:4s} decode limit (1 thread, frames in memory): {decode:7.3f} s  "
+                  f"{args.tiles / decode:10.0f} tiles/s", flush=True)
         result["loading"][codec] = {
+            "decode_seconds": decode,
+            "decode_limit_tiles_per_s": None if decode is None else args.tiles / decode,
             "requests_per_frame": mean_requests, "mean_tile_bytes": nbytes / args.tiles,
             "physical_seconds": phys, "physical_tiles_per_s": args.tiles / phys,
             "direct_seconds": direct, "direct_tiles_per_s": args.tiles / direct, "rows": rows}

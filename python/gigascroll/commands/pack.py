@@ -14,7 +14,11 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output pack directory")
     p.add_argument("--tile-size", type=int, default=128, help="tile size in texels (default 128)")
     p.add_argument("--border", type=int, default=4, help="border in texels (default 4)")
-    p.add_argument("--codec", default="raw", help="raw (RGB24) or zstd (default raw)")
+    p.add_argument("--codec", default="raw", help="raw (RGB24), zstd (lossless) or bc1 (DXT1 "
+                   "blocks, 4 bits per texel, kept compressed in the cache; default raw)")
+    p.add_argument("--bc1-fit", default="range", choices=["range", "cluster"],
+                   help="bc1 encoder fit: range (fast, default) or cluster (~1.4 dB better PSNR, "
+                   "~25x slower)")
     p.add_argument("--layout", default="brkga", choices=["brkga", "shelf"],
                    help="merged page-table packer (default brkga)")
     p.add_argument("--seed", type=int, default=0, help="BRKGA random seed (default 0)")
@@ -48,7 +52,7 @@ def run(args) -> int:
     t0 = time.perf_counter()
     pack = build_pack(args.inputs, args.output, args.tile_size, args.border, args.codec,
                       force=args.force, layout=args.layout, seed=args.seed,
-                      threads=args.threads, progress=True, colour=args.colour,
+                      threads=args.threads, bc1_fit=args.bc1_fit, progress=True, colour=args.colour,
                       intent=args.intent, black_point_compensation=args.bpc,
                       workers=args.workers, scheduler=args.scheduler, resume=args.resume)
     seconds = time.perf_counter() - t0

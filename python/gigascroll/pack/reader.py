@@ -21,8 +21,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest", "tile_key",
-           "tile_seed",
-           "SCHEMA_PATH"]
+           "tile_seed", "SCHEMA_PATH", "decode_bc1"]
 
 SCHEMA_PATH = Path(__file__).with_name("manifest.schema.json")
 _HEADER = struct.Struct("<8sIIQQ")  # magic, version, entry size, count, data bytes
@@ -48,6 +47,28 @@ def tile_key(p: int, l: int, tx: int, ty: int) -> int:
 def tile_seed(p: int, l: int, tx: int, ty: int) -> int:
     """The XXH3-64 seed of a version-2 tile's checksum: its key XOR TILE_SEED_SALT."""
     return tile_key(p, l, tx, ty) ^ TILE_SEED_SALT
+
+
+def decode_bc1(blocks: np.ndarray) -> np.ndarray:
+    """(by, bx, 8) uint8 BC1 blocks -> (4 by, 4 bx, 3) uint8 RGB, with the core's (and
+    libsquish's) arithmetic: endpoints widened by bit replication, thirds or halves by integer
+    division, black for index 3 of a block whose c0 <= c1."""
+    b = np.asarray(blocks, np.uint8)
+    by, bx = b.shape[:2]
+    c = b[..., :4].astype(np.uint32)
+    c0, c1 = c[..., 0] | c[..., 1] << 8, c[..., 2] | c[..., 3] << 8
+    def widen(v):
+        r, g, bl = v >> 11, (v >> 5) & 63, v & 31
+        return np.stack([r << 3 | r >> 2, g << 2 | g >> 4, bl << 3 | bl >> 2], -1)
+    a, e = widen(c0), widen(c1)
+    four = (c0 > c1)[..., None]
+    palette = np.stack([a, e, np.where(four, (2 * a + e) // 3, (a + e) // 2),
+                        np.where(four, (a + 2 * e) // 3, 0)], -2)  # (by, bx, 4, 3)
+    rows = b[..., 4:8].astype(np.uint32)  # (by, bx, 4 rows)
+    idx = (rows[..., :, None] >> (2 * np.arange(4, dtype=np.uint32))) & 3  # (by, bx, 4, 4)
+    texels = np.take_along_axis(palette, idx.reshape(by, bx, 16, 1), axis=2)  # (by, bx, 16, 3)
+    out = texels.reshape(by, bx, 4, 4, 3).transpose(0, 2, 1, 3, 4).reshape(4 * by, 4 * bx, 3)
+    return out.astype(np.uint8)
 
 
 @lru_cache(maxsize=1)
@@ -133,6 +154,8 @@ def validate_manifest(m: dict, where: str = "manifest.json") -> None:
     T, b = m["tile_size"], m["border"]
     if T <= 2 * b or m["payload"] != T - 2 * b:
         raise OSError(f"{where}: tile_size {T}, border {b} and payload {m['payload']} disagree")
+    if m["codec"] == "bc1" and (T % 4 or (T - 2 * b) % 4):
+        raise OSError(f"{where}: a bc1 pack needs tile_size and payload that are multiples of 4")
     P = T - 2 * b
     Mc, Nc = m["page_table"]["width"], m["page_table"]["height"]
     entries = area = wmax = hmax = 0
@@ -381,6 +404,8 @@ class PurePack:
         import xxhash
         key, file, offset, length, checksum = self._entry(p, l, tx, ty)
         nbytes = self.tile_size * self.tile_size * 3
+        if self.codec == "bc1":
+            nbytes = self.tile_size * self.tile_size // 2
         if self._zstd is None and length != nbytes:
             raise OSError(f"{self.path}: tile {key} has length {length}, expected {nbytes}")
         data = os.pread(self._fds[file], length, offset)
@@ -397,4 +422,7 @@ class PurePack:
                 raise OSError(f"{self.path}: corrupt zstd data in tile {key}: {err}") from None
             if len(data) != nbytes:
                 raise OSError(f"{self.path}: corrupt zstd data in tile {key}")
+        if self.codec == "bc1":
+            n = self.tile_size // 4
+            return decode_bc1(np.frombuffer(data, np.uint8).reshape(n, n, 8))
         return np.frombuffer(data, np.uint8).reshape(self.tile_size, self.tile_size, 3).copy()

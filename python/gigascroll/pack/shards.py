@@ -190,6 +190,7 @@ def build_shard(directory: str, index: int, image, name: str, opts: dict, job: d
         try:
             builder = _core.PackBuilder(work, opts["tile_size"], opts["border"], opts["codec"],
                                         opts["zstd_level"], opts["threads"],
+                                        bc1_fit=opts.get("bc1_fit", "range"),
                                         first_painting=index)
             builder.begin_painting(source.name, source.width, source.height, source.source,
                                    source.conversion, 0, 0,
