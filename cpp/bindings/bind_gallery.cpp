@@ -1,6 +1,7 @@
 // gallery/: the one scene of room and paintings, its lighting and its display pass.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
@@ -72,6 +73,7 @@ void bind_gallery(nb::module_& m) {
             nb::gil_scoped_release release;
             g.bake(s);
         }, "spacing"_a, "light_samples"_a, "threads"_a)
+        .def("_bake_progress", &Gallery::bake_progress)
         .def_prop_ro("stats", [](const Gallery& g) {
             const LightingStats& s = g.stats();
             nb::dict d;

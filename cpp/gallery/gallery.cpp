@@ -357,6 +357,8 @@ void Gallery::bake(const BakeSettings& s) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;
     for (std::size_t t = 0; t < tris; ++t)
         for (std::uint32_t i = 0; i <= n[t]; ++i) rows.emplace_back(std::uint32_t(t), i);
+    bake_done_ = 0;
+    bake_total_ = rows.size();
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -379,6 +381,7 @@ void Gallery::bake(const BakeSettings& s) {
                 }
             }
         }
+        bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
     }, s.threads ? s.threads : lighting_.threads);
     bake_n_ = std::move(n);
     offset.pop_back();

@@ -29,8 +29,10 @@
 // reuse the left eye's E (E is view-independent; the albedo is re-sampled at the right eye's
 // lambda): radiance = albedo x E / pi + emission.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <shared_mutex>
 #include <string>
 #include <vector>
@@ -126,6 +128,11 @@ public:
         return renderer_ != nullptr;
     }
     void bake(const BakeSettings& settings);
+    // (lattice rows done, rows in all) of the bake running now or last; readable from any
+    // thread while bake() runs (for a progress bar).
+    std::pair<std::uint64_t, std::uint64_t> bake_progress() const {
+        return {bake_done_.load(std::memory_order_relaxed), bake_total_.load(std::memory_order_relaxed)};
+    }
     bool baked() const {
         std::shared_lock lock(mutex_);
         return !bake_offset_.empty();
@@ -167,6 +174,7 @@ private:
     std::vector<std::uint64_t> bake_offset_;
     std::vector<Vec3f> bake_front_, bake_back_;
     LightingStats stats_;
+    std::atomic<std::uint64_t> bake_done_{0}, bake_total_{0};
     // light() and bake() replace what render_display reads: they exclude it.
     mutable std::shared_mutex mutex_;
 };
