@@ -11,9 +11,13 @@
 // table) instead of a scene class, and the ExhibitionScene is one more provider of that view.
 //
 // Light on the paintings (issue 13 §2):
-//  - light(): the photon pass (photon/photon_tracer.h) over the whole room. A painting's albedo
-//    at a photon's bounce comes from the virtual texture at the painting's finest pinned level
-//    (see PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor.
+//  - light(): the photon pass (photon/photon_tracer.h, through Scene::albedo_at) over the
+//    whole room into a hash-grid PhotonMap (photon/photon_map.h). A painting's albedo at a
+//    photon's bounce comes from the virtual texture at the painting's finest pinned level (see
+//    PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor. Photons
+//    trapped between a painting and its wall are dropped before the map is built (see
+//    drop_hidden_photons): through a 1 mm gap a gather on the painting would count them.
+//    Direct light is the photon Renderer's emitter sampling (Renderer::direct_irradiance).
 //  - Display radiance = albedo x E / pi + emission. A painting's albedo is the VT's trilinear
 //    sample at the pixel's level of detail (kPaintingReflectance x the linearised sRGB texel);
 //    E is direct light (emitter sampling, shadow rays) plus the photon gather (seed 001 eq. 1).
@@ -32,9 +36,9 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
-#include <utility>
 #include <shared_mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cache/virtual_texture.h"
