@@ -71,6 +71,10 @@ struct LightingSettings {
     int light_samples = 16;            // emitter samples per pixel in lighting "full"
     std::uint64_t seed = 0;
     unsigned threads = 0;              // 0 = all cores
+    // Gather over the surface disc (photon/surface_disc.h: the query's plane only, clipped
+    // where walls stand or the surface ends) instead of the sphere: no darkening at room edges
+    // and painting borders, up to 24 rays per gather near other surfaces.
+    bool disc = false;
 };
 
 struct BakeSettings {
@@ -160,6 +164,7 @@ private:
     void require_lit() const;
     void check_texture(const VirtualTexture& vt) const;
     Vec3f barycentric(std::uint32_t tri, Vec3f p) const;  // (b1, b2, 0) on tri's lattice
+    Vec3f indirect(Vec3f p, Vec3f n, KnnHeap& heap) const;  // the photon map's flux density
 
     Scene scene_;
     std::vector<PaintingPlacement> placements_;

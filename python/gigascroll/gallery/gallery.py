@@ -148,9 +148,11 @@ class Gallery(_core._Gallery):
     # lighting ---------------------------------------------------------------------------------
 
     def light(self, vt, photons: int = 1 << 19, radius: float | None = None, light_samples: int = 16,
-              seed: int = 0, threads: int = 0) -> dict:
+              seed: int = 0, threads: int = 0, disc: bool = False) -> dict:
         """The photon pass over the whole room and its photon map (replaces any previous
-        lighting and bake). `radius` None: about 100 photons per gather disc. Returns `stats`."""
+        lighting and bake). `radius` None: about 100 photons per gather disc. disc=True gathers
+        over the surface disc (no darkening at room edges and painting borders; slower near
+        other surfaces) instead of the sphere. Returns `stats`."""
         for name, value in (("photons", photons), ("light_samples", light_samples), ("seed", seed),
                             ("threads", threads)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
@@ -158,7 +160,7 @@ class Gallery(_core._Gallery):
         r = 0.0 if radius is None else float(radius)
         if not math.isfinite(r) or r < 0 or (radius is not None and r == 0):
             raise ValueError(f"radius must be positive and finite, got {radius!r}")
-        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads))
+        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads), bool(disc))
         return self.stats
 
     def bake(self, spacing: float | None = None, light_samples: int = 32, threads: int = 0,
