@@ -284,8 +284,16 @@ Vec3f Gallery::irradiance_full(const Hit& hit) const {
     ShadeCounters c;
     KnnHeap heap;
     Vec3f E = renderer_->direct_irradiance(hit, lighting_.light_samples, c);
-    if (map_) E += map_->gather(hit.p, hit.n, gather_, heap);
-    return E;
+    return E + indirect(hit.p, hit.n, heap);
+}
+
+Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap) const {
+    if (!map_) return {0, 0, 0};
+    if (!lighting_.disc) return map_->gather(p, n, gather_, heap);
+    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, gather_.radius);
+    // A disc clipped to (almost) nothing carries no usable estimate (as the Renderer does).
+    if (!(e.area > 1e-3f * float(M_PI) * gather_.radius * gather_.radius)) return {0, 0, 0};
+    return e.power * (1.0f / e.area);
 }
 
 Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
@@ -357,6 +365,8 @@ void Gallery::bake(const BakeSettings& s) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;
     for (std::size_t t = 0; t < tris; ++t)
         for (std::uint32_t i = 0; i <= n[t]; ++i) rows.emplace_back(std::uint32_t(t), i);
+    bake_done_ = 0;
+    bake_total_ = rows.size();
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -374,11 +384,12 @@ void Gallery::bake(const BakeSettings& s) {
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
                     Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (map_) E += map_->gather(h.p, h.n, gather_, heap);
+                    E += indirect(h.p, h.n, heap);
                     (h.front ? front : back)[k] = E;
                 }
             }
         }
+        bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
     }, s.threads ? s.threads : lighting_.threads);
     bake_n_ = std::move(n);
     offset.pop_back();
