@@ -1,6 +1,7 @@
 // gallery/: the one scene of room and paintings, its lighting and its display pass.
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
@@ -63,17 +64,18 @@ void bind_gallery(nb::module_& m) {
             return std::make_tuple(std::array<float, 3>{a.x, a.y, a.z}, std::array<float, 3>{b.x, b.y, b.z});
         })
         .def("_light", [](Gallery& g, const VirtualTexture& vt, std::uint64_t photons, float radius,
-                          int light_samples, std::uint64_t seed, unsigned threads) {
-            LightingSettings s{photons, radius, light_samples, seed, threads};
+                          int light_samples, std::uint64_t seed, unsigned threads, bool disc) {
+            LightingSettings s{photons, radius, light_samples, seed, threads, disc};
             nb::gil_scoped_release release;
             g.light(vt, s);
-        }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a)
+        }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a, "disc"_a)
         .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads) {
             BakeSettings s;
             s.spacing = spacing, s.light_samples = light_samples, s.threads = threads;
             nb::gil_scoped_release release;
             g.bake(s);
         }, "spacing"_a, "light_samples"_a, "threads"_a)
+        .def("_bake_progress", &Gallery::bake_progress)
         .def_prop_ro("stats", [](const Gallery& g) {
             const LightingStats& s = g.stats();
             nb::dict d;

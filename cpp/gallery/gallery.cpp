@@ -156,6 +156,7 @@ std::size_t Gallery::add_surface(const float* vertices, std::size_t nv, const st
     const std::size_t before = scene_.geometry_count();
     const std::size_t kept = scene_.add_mesh(vertices, nv, triangles, nt, al, false, emission);
     if (kept == 0) return 0;
+    geom_first_tri_.push_back(std::uint32_t(tri_v0_.size()));
     // The same degeneracy test as Scene::add_mesh, so our copy lists the triangles it kept.
     auto vert = [&](std::int64_t i) {
         return Vec3f(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
@@ -283,8 +284,16 @@ Vec3f Gallery::irradiance_full(const Hit& hit) const {
     ShadeCounters c;
     KnnHeap heap;
     Vec3f E = renderer_->direct_irradiance(hit, lighting_.light_samples, c);
-    if (map_) E += map_->gather(hit.p, hit.n, gather_, heap);
-    return E;
+    return E + indirect(hit.p, hit.n, heap);
+}
+
+Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap) const {
+    if (!map_) return {0, 0, 0};
+    if (!lighting_.disc) return map_->gather(p, n, gather_, heap);
+    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, gather_.radius);
+    // A disc clipped to (almost) nothing carries no usable estimate (as the Renderer does).
+    if (!(e.area > 1e-3f * float(M_PI) * gather_.radius * gather_.radius)) return {0, 0, 0};
+    return e.power * (1.0f / e.area);
 }
 
 Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
@@ -327,12 +336,12 @@ Vec3f Gallery::irradiance_baked(const Hit& hit) const {
 }
 
 void Gallery::bake(const BakeSettings& s) {
-    require_lit();
     require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
     require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
             "Gallery.bake: light_samples must be in [1, 65536]");
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
+    require_lit();
     const double spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
     const std::size_t tris = tri_v0_.size();
     std::vector<std::uint32_t> n(tris);
@@ -356,6 +365,8 @@ void Gallery::bake(const BakeSettings& s) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;
     for (std::size_t t = 0; t < tris; ++t)
         for (std::uint32_t i = 0; i <= n[t]; ++i) rows.emplace_back(std::uint32_t(t), i);
+    bake_done_ = 0;
+    bake_total_ = rows.size();
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -373,11 +384,12 @@ void Gallery::bake(const BakeSettings& s) {
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
                     Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (map_) E += map_->gather(h.p, h.n, gather_, heap);
+                    E += indirect(h.p, h.n, heap);
                     (h.front ? front : back)[k] = E;
                 }
             }
         }
+        bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
     }, s.threads ? s.threads : lighting_.threads);
     bake_n_ = std::move(n);
     offset.pop_back();
@@ -395,7 +407,7 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
     check_texture(vt);
     std::shared_lock lock(mutex_);
     if (lighting != Lighting::Unlit) require_lit();
-    require(lighting != Lighting::Baked || baked(), "Gallery: call bake() before lighting 'baked'");
+    require(lighting != Lighting::Baked || !bake_offset_.empty(), "Gallery: call bake() before lighting 'baked'");
     const std::uint32_t W = camera.width, H = camera.height;
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
     const Vec3f origin(camera.position);
@@ -406,65 +418,102 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
             int slot;
             Vec3f scale, add;  // radiance = albedo * scale + add
         };
+        RTCRayHit16 packet;
+        for (std::uint32_t k = 0; k < 16; ++k) {
+            packet.ray.org_x[k] = origin.x, packet.ray.org_y[k] = origin.y, packet.ray.org_z[k] = origin.z;
+            packet.ray.tnear[k] = 0.f;
+            packet.ray.time[k] = 0.f;
+            packet.ray.mask[k] = ~0u;
+            packet.ray.id[k] = k;
+            packet.ray.flags[k] = 0;
+            packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
         std::vector<Pending> pending;
         std::vector<double> uv;
         std::vector<float> lods, texels;
         for (std::size_t y = row_begin; y < row_end; ++y) {
             pending.clear(), uv.clear(), lods.clear();
             float* out_row = rgb + y * std::size_t(W) * 3;
-            for (std::uint32_t x = 0; x < W; ++x) {
-                const std::size_t px = y * std::size_t(W) + x;
-                const Vec3d dd = camera.direction(x + 0.5, y + 0.5);
-                Hit hit;
-                const bool found = scene_.intersect(origin, Vec3f(normalize(dd)), hit);
-                int slot = found ? tri_slot_[hit.tri] : -1;
-                if (hits.position) {
-                    const Vec3f p = found ? hit.p : Vec3f(kNaN, kNaN, kNaN);
-                    hits.position[3 * px] = p.x, hits.position[3 * px + 1] = p.y,
-                    hits.position[3 * px + 2] = p.z;
+            // Primary rays in Embree packets of 16 pixels of the row (coherent), as the
+            // feedback pass casts them; the hit then as Scene::intersect reports it.
+            for (std::uint32_t x0 = 0; x0 < W; x0 += 16) {
+                const std::uint32_t n16 = std::min<std::uint32_t>(16, W - x0);
+                alignas(64) int valid[16];
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    valid[k] = k < n16 ? -1 : 0;
+                    const Vec3f d(normalize(camera.direction(x0 + std::min(k, n16 - 1) + 0.5, y + 0.5)));
+                    packet.ray.dir_x[k] = d.x, packet.ray.dir_y[k] = d.y, packet.ray.dir_z[k] = d.z;
+                    packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
+                    packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
                 }
-                if (hits.slot) hits.slot[px] = slot;
-                if (!found) {
-                    out_row[3 * x] = out_row[3 * x + 1] = out_row[3 * x + 2] = 0;
+                RTCIntersectContext context;
+                rtcInitIntersectContext(&context);
+                context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+                rtcIntersect16(valid, scene_.handle(), &context, &packet);
+                for (std::uint32_t k = 0; k < n16; ++k) {
+                    const std::uint32_t x = x0 + k;
+                    const std::size_t px = y * std::size_t(W) + x;
+                    const Vec3d dd = camera.direction(x + 0.5, y + 0.5);
+                    Hit hit;
+                    const bool found = packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+                    if (found) {
+                        const Vec3f d(packet.ray.dir_x[k], packet.ray.dir_y[k], packet.ray.dir_z[k]);
+                        hit.t = packet.ray.tfar[k];
+                        hit.tri = geom_first_tri_[packet.hit.geomID[k]] + packet.hit.primID[k];
+                        hit.p = origin + d * hit.t;
+                        const Vec3f nn = scene_.normal(hit.tri);
+                        hit.front = dot(nn, d) < 0;
+                        hit.n = hit.front ? nn : -nn;
+                    }
+                    int slot = found ? tri_slot_[hit.tri] : -1;
+                    if (hits.position) {
+                        const Vec3f p = found ? hit.p : Vec3f(kNaN, kNaN, kNaN);
+                        hits.position[3 * px] = p.x, hits.position[3 * px + 1] = p.y,
+                        hits.position[3 * px + 2] = p.z;
+                    }
+                    if (hits.slot) hits.slot[px] = slot;
+                    if (!found) {
+                        out_row[3 * x] = out_row[3 * x + 1] = out_row[3 * x + 2] = 0;
+                        if (hits.irradiance)
+                            hits.irradiance[3 * px] = hits.irradiance[3 * px + 1] = hits.irradiance[3 * px + 2] = 0;
+                        if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
+                        if (hits.lod) hits.lod[px] = kNaN;
+                        continue;
+                    }
+                    Vec3f E;
+                    switch (lighting) {
+                        case Lighting::Unlit: E = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
+                        case Lighting::Baked: E = irradiance_baked(hit); break;
+                        case Lighting::Full: E = irradiance_full(hit); break;
+                    }
+                    const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
                     if (hits.irradiance)
-                        hits.irradiance[3 * px] = hits.irradiance[3 * px + 1] = hits.irradiance[3 * px + 2] = 0;
-                    if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
-                    if (hits.lod) hits.lod[px] = kNaN;
-                    continue;
+                        hits.irradiance[3 * px] = E.x, hits.irradiance[3 * px + 1] = E.y,
+                        hits.irradiance[3 * px + 2] = E.z;
+                    if (slot < 0) {
+                        const Vec3f L = scene_.albedo(hit.tri) * E * kInvPi + Le;
+                        out_row[3 * x] = L.x, out_row[3 * x + 1] = L.y, out_row[3 * x + 2] = L.z;
+                        if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
+                        if (hits.lod) hits.lod[px] = kNaN;
+                        continue;
+                    }
+                    // The painting coordinates in double from the plane (a 12 m scroll of 150k
+                    // texels needs more than float), the level from the ray differentials as in
+                    // the feedback pass.
+                    const PaintingPlacement& pl = placements_[slot];
+                    const Vec3d n = pl.normal();
+                    const double t = dot(pl.origin - camera.position, n) / dot(dd, n);
+                    const Vec3d rel = camera.position + t * dd - pl.origin;
+                    const double u = std::clamp(dot(rel, pl.u_axis) / pl.width_m, 0.0, 1.0);
+                    const double v = std::clamp(dot(rel, pl.v_axis) / pl.height_m, 0.0, 1.0);
+                    double lambda = std::log2(texel_footprint(pl, camera, dd, t));
+                    if (!std::isfinite(lambda)) lambda = 0;
+                    uv.push_back(u), uv.push_back(v);
+                    lods.push_back(float(lambda));
+                    pending.push_back({x, slot, E * kInvPi, Le});
+                    if (hits.uv) hits.uv[2 * px] = u, hits.uv[2 * px + 1] = v;
+                    if (hits.lod) hits.lod[px] = float(lambda);
                 }
-                Vec3f E;
-                switch (lighting) {
-                    case Lighting::Unlit: E = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
-                    case Lighting::Baked: E = irradiance_baked(hit); break;
-                    case Lighting::Full: E = irradiance_full(hit); break;
-                }
-                const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
-                if (hits.irradiance)
-                    hits.irradiance[3 * px] = E.x, hits.irradiance[3 * px + 1] = E.y,
-                    hits.irradiance[3 * px + 2] = E.z;
-                if (slot < 0) {
-                    const Vec3f L = scene_.albedo(hit.tri) * E * kInvPi + Le;
-                    out_row[3 * x] = L.x, out_row[3 * x + 1] = L.y, out_row[3 * x + 2] = L.z;
-                    if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
-                    if (hits.lod) hits.lod[px] = kNaN;
-                    continue;
-                }
-                // The painting coordinates in double from the plane (a 12 m scroll of 150k
-                // texels needs more than float), the level from the ray differentials as in
-                // the feedback pass.
-                const PaintingPlacement& pl = placements_[slot];
-                const Vec3d n = pl.normal();
-                const double t = dot(pl.origin - camera.position, n) / dot(dd, n);
-                const Vec3d rel = camera.position + t * dd - pl.origin;
-                const double u = std::clamp(dot(rel, pl.u_axis) / pl.width_m, 0.0, 1.0);
-                const double v = std::clamp(dot(rel, pl.v_axis) / pl.height_m, 0.0, 1.0);
-                double lambda = std::log2(texel_footprint(pl, camera, dd, t));
-                if (!std::isfinite(lambda)) lambda = 0;
-                uv.push_back(u), uv.push_back(v);
-                lods.push_back(float(lambda));
-                pending.push_back({x, slot, E * kInvPi, Le});
-                if (hits.uv) hits.uv[2 * px] = u, hits.uv[2 * px + 1] = v;
-                if (hits.lod) hits.lod[px] = float(lambda);
             }
             texels.resize(3 * pending.size());
             for (std::size_t k0 = 0; k0 < pending.size();) {

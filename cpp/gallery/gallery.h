@@ -11,9 +11,13 @@
 // table) instead of a scene class, and the ExhibitionScene is one more provider of that view.
 //
 // Light on the paintings (issue 13 §2):
-//  - light(): the photon pass (photon/photon_tracer.h) over the whole room. A painting's albedo
-//    at a photon's bounce comes from the virtual texture at the painting's finest pinned level
-//    (see PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor.
+//  - light(): the photon pass (photon/photon_tracer.h, through Scene::albedo_at) over the
+//    whole room into a hash-grid PhotonMap (photon/photon_map.h). A painting's albedo at a
+//    photon's bounce comes from the virtual texture at the painting's finest pinned level (see
+//    PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor. Photons
+//    trapped between a painting and its wall are dropped before the map is built (see
+//    drop_hidden_photons): through a 1 mm gap a gather on the painting would count them.
+//    Direct light is the photon Renderer's emitter sampling (Renderer::direct_irradiance).
 //  - Display radiance = albedo x E / pi + emission. A painting's albedo is the VT's trilinear
 //    sample at the pixel's level of detail (kPaintingReflectance x the linearised sRGB texel);
 //    E is direct light (emitter sampling, shadow rays) plus the photon gather (seed 001 eq. 1).
@@ -29,10 +33,12 @@
 // reuse the left eye's E (E is view-independent; the albedo is re-sampled at the right eye's
 // lambda): radiance = albedo x E / pi + emission.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <shared_mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cache/virtual_texture.h"
@@ -65,6 +71,10 @@ struct LightingSettings {
     int light_samples = 16;            // emitter samples per pixel in lighting "full"
     std::uint64_t seed = 0;
     unsigned threads = 0;              // 0 = all cores
+    // Gather over the surface disc (photon/surface_disc.h: the query's plane only, clipped
+    // where walls stand or the surface ends) instead of the sphere: no darkening at room edges
+    // and painting borders, up to 24 rays per gather near other surfaces.
+    bool disc = false;
 };
 
 struct BakeSettings {
@@ -121,10 +131,25 @@ public:
     // sqrt(100 A / (pi N)) for the room's area A and N photons (about 100 photons per disc),
     // clamped to [1e-4, 0.05] x the diagonal.
     void light(const VirtualTexture& vt, const LightingSettings& settings);
-    bool lit() const { return renderer_ != nullptr; }
+    bool lit() const {
+        std::shared_lock lock(mutex_);
+        return renderer_ != nullptr;
+    }
     void bake(const BakeSettings& settings);
-    bool baked() const { return !bake_offset_.empty(); }
-    const LightingStats& stats() const { return stats_; }
+    // (lattice rows done, rows in all) of the bake running now or last; readable from any
+    // thread while bake() runs (for a progress bar).
+    std::pair<std::uint64_t, std::uint64_t> bake_progress() const {
+        return {bake_done_.load(std::memory_order_relaxed), bake_total_.load(std::memory_order_relaxed)};
+    }
+    bool baked() const {
+        std::shared_lock lock(mutex_);
+        return !bake_offset_.empty();
+    }
+    // A copy, taken under the lock (light() and bake() may be rewriting it on another thread).
+    LightingStats stats() const {
+        std::shared_lock lock(mutex_);
+        return stats_;
+    }
 
     // One primary ray through each pixel centre: linear RGB radiance (height, width, 3).
     void render_display(const Camera& camera, const VirtualTexture& vt, Lighting lighting,
@@ -142,11 +167,13 @@ private:
     void require_lit() const;
     void check_texture(const VirtualTexture& vt) const;
     Vec3f barycentric(std::uint32_t tri, Vec3f p) const;  // (b1, b2, 0) on tri's lattice
+    Vec3f indirect(Vec3f p, Vec3f n, KnnHeap& heap) const;  // the photon map's flux density
 
     Scene scene_;
     std::vector<PaintingPlacement> placements_;
     std::vector<int> geom_placement_;   // Embree geometry id -> painting slot or -1
     std::vector<int> tri_slot_;         // global triangle -> painting slot or -1
+    std::vector<std::uint32_t> geom_first_tri_;  // Embree geometry id -> its first triangle
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // every kept triangle
     LightingSettings lighting_;
     std::unique_ptr<AlbedoTexture> albedo_;
@@ -159,6 +186,7 @@ private:
     std::vector<std::uint64_t> bake_offset_;
     std::vector<Vec3f> bake_front_, bake_back_;
     LightingStats stats_;
+    std::atomic<std::uint64_t> bake_done_{0}, bake_total_{0};
     // light() and bake() replace what render_display reads: they exclude it.
     mutable std::shared_mutex mutex_;
 };

@@ -24,7 +24,9 @@ def lit(red_pack):
     gal = Gallery.from_room(box_room(), red_pack)
     vt = g.VirtualTexture(red_pack)
     gal.light(vt, photons=100_000)
-    gal.bake(spacing=0.2, light_samples=16)
+    gal.bake(spacing=0.2, light_samples=16, progress=True)
+    done, rows = gal._bake_progress()
+    assert done == rows > 0  # every lattice row counted once
     return gal, vt
 
 
@@ -181,6 +183,8 @@ def test_bad_render_arguments(lit):
         gal.light(vt, radius=-1.0)
     with pytest.raises(ValueError, match="spacing too fine"):
         gal.bake(spacing=1e-5)
+    with pytest.raises(ValueError, match="spacing too fine"):  # from the worker thread too
+        gal.bake(spacing=1e-5, progress=True)
 
 
 def test_render_cli_renders_a_room_still(tmp_path, red_pack, gigascroll_cli):

@@ -134,3 +134,18 @@ def test_red_painting_bleeds_onto_the_white_floor_as_in_mitsuba(tmp_path):
     assert ratios["red"][0] > 1.1 and abs(ratios["white"][0] - 1) < 0.02
     red_floor = ratios["red"][1]
     assert red_floor[0] / red_floor[1] == pytest.approx(ratios["red"][0], rel=0.04)
+
+
+def test_surface_disc_gather_removes_edge_darkening(tmp_path):
+    """light(disc=True): the gather stays on the query's plane and divides by the clipped disc,
+    so the room's edges are no longer darkened: closer to Mitsuba than the sphere gather
+    (measured: relMSE 7.0e-4 against 1.1e-3)."""
+    pack = gradient_pack(tmp_path / "g.pack")
+    gal = Gallery.from_room(box_room(painting="gradient"), pack)
+    vt = g.VirtualTexture(pack)
+    ref = mitsuba_still(gal, gal.camera((W, H), fov=70), "box_gradient")
+    errors = {}
+    for disc in (False, True):
+        gal.light(vt, photons=400_000, disc=disc)
+        errors[disc] = image_errors(supersampled(gal, vt, "full"), ref)["relmse"]
+    assert errors[True] < 1e-3 and errors[True] < errors[False]

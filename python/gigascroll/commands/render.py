@@ -104,7 +104,7 @@ def run_room(args, out: Path) -> int:
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
     t0 = time.perf_counter()
     try:
-        image = gallery.still(camera, lighting=args.lighting, photons=args.photons, seed=args.seed,
+        image = gallery.still(camera, lighting=args.lighting, progress=True, photons=args.photons, seed=args.seed,
                               threads=args.threads, **({} if args.radius is None else {"radius": args.radius}))
     except ValueError as e:
         raise UserError(str(e)) from None

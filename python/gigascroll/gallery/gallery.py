@@ -148,9 +148,11 @@ class Gallery(_core._Gallery):
     # lighting ---------------------------------------------------------------------------------
 
     def light(self, vt, photons: int = 1 << 19, radius: float | None = None, light_samples: int = 16,
-              seed: int = 0, threads: int = 0) -> dict:
+              seed: int = 0, threads: int = 0, disc: bool = False) -> dict:
         """The photon pass over the whole room and its photon map (replaces any previous
-        lighting and bake). `radius` None: about 100 photons per gather disc. Returns `stats`."""
+        lighting and bake). `radius` None: about 100 photons per gather disc. disc=True gathers
+        over the surface disc (no darkening at room edges and painting borders; slower near
+        other surfaces) instead of the sphere. Returns `stats`."""
         for name, value in (("photons", photons), ("light_samples", light_samples), ("seed", seed),
                             ("threads", threads)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
@@ -158,19 +160,45 @@ class Gallery(_core._Gallery):
         r = 0.0 if radius is None else float(radius)
         if not math.isfinite(r) or r < 0 or (radius is not None and r == 0):
             raise ValueError(f"radius must be positive and finite, got {radius!r}")
-        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads))
+        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads), bool(disc))
         return self.stats
 
-    def bake(self, spacing: float | None = None, light_samples: int = 32, threads: int = 0) -> dict:
+    def bake(self, spacing: float | None = None, light_samples: int = 32, threads: int = 0,
+             progress: bool = False) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
-        point with `light_samples` emitter samples plus the photon gather. Returns `stats`."""
+        point with `light_samples` emitter samples plus the photon gather. progress=True shows
+        a tqdm bar over the lattice rows. Returns `stats`."""
         s = 0.0 if spacing is None else float(spacing)
         if not math.isfinite(s) or s < 0 or (spacing is not None and s == 0):
             raise ValueError(f"spacing must be positive and finite, got {spacing!r}")
         if isinstance(light_samples, bool) or not isinstance(light_samples, (int, np.integer)):
             raise ValueError(f"light_samples must be an integer, got {light_samples!r}")
-        self._bake(s, int(light_samples), int(threads))
+        if not progress:
+            self._bake(s, int(light_samples), int(threads))
+            return self.stats
+        import threading
+
+        from tqdm import tqdm
+
+        failed = []
+
+        def work():
+            try:
+                self._bake(s, int(light_samples), int(threads))
+            except BaseException as e:  # re-raised on the calling thread
+                failed.append(e)
+
+        worker = threading.Thread(target=work, name="gallery-bake")
+        worker.start()
+        with tqdm(desc="bake", unit="row", leave=False) as bar:
+            while worker.is_alive():
+                worker.join(0.2)
+                done, total = self._bake_progress()
+                bar.total, bar.n = total, done
+                bar.refresh()
+        if failed:
+            raise failed[0]
         return self.stats
 
     # rendering --------------------------------------------------------------------------------
@@ -222,7 +250,7 @@ class Gallery(_core._Gallery):
         return inserted
 
     def still(self, camera: Camera, lighting: str = "baked", vt=None, slots: int | None = None,
-              **light_options) -> np.ndarray:
+              progress: bool = False, **light_options) -> np.ndarray:
         """A still frame: a virtual texture sized for the view (`slots` x `slots` tiles, default
         from the view's requests), the view's tiles streamed in (`stream`), lighting as needed,
         then `render_display`. light_options go to `light` when it has not run."""
@@ -238,6 +266,8 @@ class Gallery(_core._Gallery):
         self.stream(camera, vt)
         if lighting != "unlit" and not self.lit:
             self.light(vt, **light_options)
+        if lighting == "baked" and not self.baked:
+            self.bake(progress=progress)
         return self.render_display(camera, vt, lighting=lighting)
 
     def camera(self, resolution=(256, 256), fov: float = 60.0, eye=None, target=None) -> Camera:

@@ -11,6 +11,7 @@
 #include "common/error.h"
 #include "gallery/gallery.h"
 #include "pack/geometry.h"
+#include "views/camera.h"
 
 using namespace gigascroll;
 
@@ -105,4 +106,31 @@ TEST(Gallery, RefusesBadInput) {
     EXPECT_THROW(dark.light(room.vt, {}), InvalidArgument);  // no light
     EXPECT_THROW(dark.bake({}), InvalidArgument);             // not lit
     EXPECT_THROW(parse_lighting("sunny"), InvalidArgument);
+}
+
+TEST(Gallery, DisplayShowsAlbedoTimesIrradianceOverPiOnTwoThreads) {
+    Room room;
+    LightingSettings ls;
+    ls.photons = 20000;
+    ls.threads = 2;
+    room.gallery.light(room.vt, ls);
+    BakeSettings bs;
+    bs.spacing = 0.25, bs.threads = 2;
+    room.gallery.bake(bs);
+    const Camera camera = Camera::look_at({0, 0.75, 1.5}, {0, 0.75, -0.5}, {0, 1, 0}, 50, 24, 16);
+    std::vector<float> unlit(24 * 16 * 3), baked(24 * 16 * 3), E(24 * 16 * 3);
+    std::vector<std::int32_t> slot(24 * 16);
+    room.gallery.render_display(camera, room.vt, Lighting::Unlit, unlit.data(), {}, 2);
+    DisplayHits hits;
+    hits.slot = slot.data(), hits.irradiance = E.data();
+    room.gallery.render_display(camera, room.vt, Lighting::Baked, baked.data(), hits, 2);
+    const float red = kPaintingReflectance * srgb_to_linear(200 / 255.0f);
+    int painting = 0;
+    for (std::size_t i = 0; i < slot.size(); ++i) {
+        if (slot[i] != 0) continue;
+        ++painting;
+        EXPECT_NEAR(unlit[3 * i], red, 2e-3f);
+        EXPECT_NEAR(baked[3 * i], unlit[3 * i] * E[3 * i] / float(M_PI), 1e-5f + 1e-4f * baked[3 * i]);
+    }
+    EXPECT_GT(painting, 20);
 }
