@@ -122,6 +122,16 @@ def test_vertices_are_numpy_matrix_products(example):
     assert light.emission == pytest.approx((6.0, 5.4, 4.8))
 
 
+def test_camera_from_the_node_hierarchy(example):
+    path, spec = example
+    header, _ = read_gltf(path)
+    m = local_matrix(header["nodes"][0]) @ local_matrix(header["nodes"][9])  # gallery, camera
+    np.testing.assert_allclose(spec.camera_eye, m[:3, 3], atol=1e-12)
+    np.testing.assert_allclose(np.subtract(spec.camera_target, spec.camera_eye), -m[:3, 2],
+                               atol=1e-12)
+    assert spec.name == "room"  # the file's stem: the example's scene has no name
+
+
 def test_placeholders_become_slots(example):
     path, spec = example
     ref = world_meshes(path)
@@ -252,6 +262,17 @@ def test_builtin_rooms_round_trip(tmp_path, suffix, room, count):
     # glTF stores positions as float32: within its rounding of a ~30 m room
     same_room(spec, back, atol=4e-6 if suffix in (".glb", ".gltf") else 1e-12)
     assert [s.name for s in back.surfaces] == [s.name for s in spec.surfaces]
+    if suffix in (".glb", ".gltf"):  # the name and the camera too (OBJ / PLY have neither)
+        assert back.name == spec.name == room
+        np.testing.assert_allclose(back.camera_eye, spec.camera_eye, atol=1e-12)
+        np.testing.assert_allclose(back.camera_target, spec.camera_target, atol=1e-12)
+        # without the target hint the camera still looks the same way (down its -z)
+        header, blob = read_gltf(tmp_path / f"{room}{suffix}")
+        (cam,) = [n for n in header["nodes"] if "camera" in n]
+        m = local_matrix(cam)
+        d = np.subtract(spec.camera_target, spec.camera_eye)
+        np.testing.assert_allclose(-m[:3, 2], d / np.linalg.norm(d), atol=1e-12)
+        np.testing.assert_allclose(m[:3, 1] @ [0, 1, 0] > 0, True)
     assert ROOM_NAMES == ("scroll", "hall")
 
 
@@ -318,6 +339,9 @@ def write(tmp_path, nodes, name="bad.glb"):
     (lambda n: n.append(dict(name="painting:p", vertices=[[0, 0, 0], [2, 0, 0], [2, 1, 0],
                                                           [0, 1, 0]],
                              triangles=[[0, 1, 2], [0, 3, 2]])), "'painting:p'"),
+    (lambda n: n.append(dict(name="painting:p", vertices=[[0, 0, 0], [2, 0, 0], [2, 1, 0],
+                                                          [0, 1, 0]],
+                             triangles=[[0, 1, 2], [0, 1, 3]])), "'painting:p'.*cover"),
     (lambda n: n.append(dict(name="x", vertices=[[0, 0, 0], [2e-4, 0, 0], [2e-4, 1e-4, 0],
                                                  [0, 1e-4, 0]],
                              triangles=[[0, 1, 2], [0, 2, 3]], extras={"painting": 0})), "'x'"),
@@ -361,3 +385,42 @@ def test_accepts_a_tile_pack(tmp_path):
                                  triangles=[[0, 1, 2], [0, 2, 3]])]
     (slot,) = load_room(write(tmp_path, nodes), pack).paintings
     assert slot.painting in (0, pack.paintings[0].name)
+
+
+def test_external_buffers(tmp_path):
+    embedded = write_example_room(tmp_path / "e.gltf")
+    header = json.loads(embedded.read_text())
+    blob = base64.b64decode(header["buffers"][0]["uri"].split(",", 1)[1])
+    (tmp_path / "e.bin").write_bytes(blob)
+    header["buffers"][0]["uri"] = "e.bin"
+    (tmp_path / "ext.gltf").write_text(json.dumps(header))
+    same_room(load_room(embedded, EXAMPLE_PAINTINGS), load_room(tmp_path / "ext.gltf",
+                                                                 EXAMPLE_PAINTINGS))
+    for uri in ("missing.bin", "/dev/zero", "."):
+        header["buffers"][0]["uri"] = uri
+        (tmp_path / "bad.gltf").write_text(json.dumps(header))
+        with pytest.raises(OSError, match="bad.gltf.*buffer 0"):
+            load_room(tmp_path / "bad.gltf", EXAMPLE_PAINTINGS)
+
+
+def test_obj_without_its_materials(tmp_path):
+    obj = write_example_room(tmp_path / "room.obj")
+    (tmp_path / "room.mtl").unlink()
+    with pytest.raises(ValueError, match=r"room.obj: node '\w+' has no material"):
+        load_room(obj, EXAMPLE_PAINTINGS)
+
+
+def test_node_trees_only(tmp_path):
+    lamp = base_nodes()[0]
+    chain = [dict(name=f"n{i}", translation=[0.01, 0, 0], children=[i + 1]) for i in range(64)]
+    spec = load_room(write(tmp_path, chain + [lamp]), {"p": 2.0})  # 64 levels deep: fine
+    np.testing.assert_allclose(spec.surfaces[0].vertices[0], [0.64, 3, 0], atol=1e-9)
+    chain = [dict(name=f"n{i}", children=[i + 1]) for i in range(65)]
+    with pytest.raises(ValueError, match="bad.glb: node 65 is nested more than 64"):
+        load_room(write(tmp_path, chain + [lamp]), {"p": 2.0})
+    cycle = [dict(name="a", children=[1]), dict(lamp, children=[0])]
+    with pytest.raises(ValueError, match="bad.glb.*cycle"):
+        load_room(write_gltf(cycle, tmp_path / "bad.glb", roots=[0]), {"p": 2.0})
+    two_parents = [dict(name="a", children=[2]), dict(name="b", children=[2]), lamp]
+    with pytest.raises(ValueError, match="bad.glb: node 2 has two parents"):
+        load_room(write(tmp_path, two_parents), {"p": 2.0})

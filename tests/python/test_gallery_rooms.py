@@ -245,3 +245,51 @@ def test_bad_arguments():
     for bad in ([], [("a", 0, 1)], {"a": float("nan")}, 3, [("a", 1e9, 1)]):
         with pytest.raises(ValueError):
             builtin_room("hall", bad)
+
+
+def photon_scene(spec):
+    """The room in the photon renderer's Scene, paintings as grey quads (albedo 0.5)."""
+    from gigascroll import Scene
+
+    scene = Scene()
+    for s in spec.surfaces:
+        scene.add_mesh(s.vertices, s.triangles, albedo=s.albedo, emission=s.emission)
+    for slot in spec.paintings:
+        c = slot_corners(slot)[[0, 1, 3, 2]]
+        scene.add_mesh(c, np.array([[0, 1, 2], [0, 2, 3]]), albedo=(0.5, 0.5, 0.5))
+    scene.commit()
+    return scene
+
+
+@pytest.mark.parametrize("name", ROOM_NAMES)
+def test_direct_light_matches_the_photon_renderer(name):
+    """The Lambert-formula calibration against the photon renderer's light sampling (Embree,
+    shadow rays): a narrow camera on a painting's centre sees 0.5 * E_direct / pi."""
+    from gigascroll import Camera, render
+
+    spec = builtin_room(name, TABLE4_PAINTINGS)
+    scene = photon_scene(spec)
+    slot = spec.paintings[0]
+    o, u, v = (np.asarray(x) for x in (slot.origin, slot.u_axis, slot.v_axis))
+    centre = o + (u * slot.width_m + v * slot.height_m) / 2
+    front = np.cross(v, u) if name == "hall" else -np.cross(v, u)  # the side the room is on
+    cam = Camera(tuple(centre + 0.5 * front), tuple(centre), tuple(-v), fov=1.0,
+                 resolution=(8, 8))
+    img = render(scene, cam, photons=1000, radius=0.05, spp=4, light_samples=64,
+                 indirect=False)
+    expected = 0.5 * rooms.direct_irradiance(spec, centre, front) / math.pi
+    np.testing.assert_allclose(img.mean(axis=(0, 1)), expected, rtol=0.02)
+
+
+def test_lambert_formula_against_the_rectangle_form_factor():
+    """Point under the corner of an a x b rectangle at distance c, planes parallel:
+    F = 1/(2 pi) [A/sqrt(1+A^2) atan(B/sqrt(1+A^2)) + B/sqrt(1+B^2) atan(A/sqrt(1+B^2))],
+    A = a/c, B = b/c; E = pi F for unit radiance (Howell's catalogue, configuration B-3)."""
+    for a, b, c in ((1.0, 1.0, 1.0), (0.3, 2.0, 0.7), (5.0, 0.1, 3.0)):
+        A, B = a / c, b / c
+        f = (A / math.sqrt(1 + A * A) * math.atan(B / math.sqrt(1 + A * A))
+             + B / math.sqrt(1 + B * B) * math.atan(A / math.sqrt(1 + B * B))) / (2 * math.pi)
+        quad = [[0, c, 0], [a, c, 0], [a, c, b], [0, c, b]]  # counter-clockwise from below
+        assert rooms.polygon_irradiance([0, 0, 0], [0, 1, 0], quad) == pytest.approx(
+            math.pi * f, rel=1e-12)
+        assert rooms.polygon_irradiance([0, 0, 0], [0, 1, 0], quad[::-1]) == 0.0  # its back

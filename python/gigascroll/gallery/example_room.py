@@ -17,6 +17,7 @@ Nodes (parents first):
       painting:<first painting>   1.5 m wide at the painting's aspect, facing +z (the room)
     side_art        translation (-2.99, 1.5, 0), 90 degrees about +y
       side placeholder            extras {"painting": 1}: 1.0 m high, facing +x (the room)
+    camera          translation (0, 1.6, 2), 10 degrees about +y, looking down its -z
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def example_nodes(paintings=None) -> list[dict]:
     side_v, side_t = _quad_facing_z(1.0 * sizes[1].aspect, 1.0)
     return [
         dict(name="gallery", translation=[2.0, 0.0, -1.0], rotation=_quaternion_y(20.0),
-             children=[1, 2, 3, 5, 7]),
+             children=[1, 2, 3, 5, 7, 9]),
         dict(name="walls", vertices=walls.vertices, triangles=walls.faces,
              albedo=(0.70, 0.68, 0.65)),
         dict(name="plinth", translation=[1.0, 0.4, 0.5], rotation=_quaternion_y(45.0),
@@ -81,6 +82,8 @@ def example_nodes(paintings=None) -> list[dict]:
              children=[8]),
         dict(name="side placeholder", vertices=side_v, triangles=side_t,
              extras={"painting": 1}),
+        dict(name="camera", translation=[0.0, 1.6, 2.0], rotation=_quaternion_y(10.0),
+             camera={"type": "perspective", "perspective": {"yfov": 1.0, "znear": 0.01}}),
     ]
 
 

@@ -13,6 +13,10 @@ white (albedo 1).
 
 OBJ: one object (`o NAME`) per node, vertices already in world space (OBJ has no transforms);
 its material from the .mtl next to it: Kd -> albedo, Ke -> emission (radiance, no clamping).
+A glTF file's first camera node gives the RoomSpec's camera: eye at the node's world position,
+target from the node's extras {"target": [x, y, z]} or 1 m down its -z; the scene's name (else
+the file's stem) names the room.
+
 PLY (no scene graph, no materials): one file holds the whole room; the face property `surface`
 (int) indexes an element `surface` with float properties albedo_r, albedo_g, albedo_b,
 emission_r, emission_g, emission_b and a list of uchar `name` (UTF-8), one row per node.
@@ -53,6 +57,8 @@ ROOM_FILE_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 PAINTING_PREFIX = "painting:"
 MAX_FILE_BYTES = 1 << 30       # 1 GiB: a room, not a city
 MAX_TRIANGLES = 20_000_000
+MAX_NODES = 20_000              # trimesh takes ~1 ms per node
+MAX_NODE_DEPTH = 64            # glTF node nesting (trimesh's graph is quadratic in it)
 MAX_EXTENT_M = 10_000.0        # every vertex within 10 km of the origin
 MIN_PAINTING_M = 1e-3          # a placeholder's sides are at least 1 mm ...
 MAX_RADIANCE = 1e9             # ... and no emitter is brighter than this (W / m^2 / sr)
@@ -61,6 +67,7 @@ PLANAR_TOLERANCE = 1e-4        # relative to the placeholder's diagonal (float32
 _GLB_MAGIC, _GLB_JSON, _GLB_BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 _TAG = "gigascroll_node"       # extras key that tags each node before trimesh reads the file
 _MATERIAL_TAG = "gigascroll-material-"
+_CAMERA = "gigascroll_camera"  # marks the camera pseudo-node between reader and assembly
 
 
 @dataclass
@@ -91,8 +98,16 @@ def load_room(path, paintings, name: str | None = None) -> RoomSpec:
     if size > MAX_FILE_BYTES:
         raise ValueError(f"{path}: {size} bytes is too large for a room file")
     reader = {".glb": _gltf_nodes, ".gltf": _gltf_nodes, ".obj": _obj_nodes, ".ply": _ply_nodes}
-    nodes = reader[suffix](path)
-    return _room_from_nodes(path, nodes, sizes, name or path.stem)
+    try:
+        with np.errstate(all="ignore"):  # hostile transforms overflow inside trimesh; checked after
+            nodes = reader[suffix](path)
+    except (TypeError, KeyError, IndexError, AttributeError, OverflowError) as e:
+        # a JSON value of the wrong shape that the checks above did not anticipate
+        raise ValueError(f"{path}: malformed room file: {type(e).__name__}: {e}") from None
+    spec = _room_from_nodes(path, nodes, sizes, path.stem)
+    if name:
+        spec.name = name
+    return spec
 
 
 # --- glTF --------------------------------------------------------------------------------------
@@ -155,6 +170,82 @@ def _check_buffers(header: dict, path: Path):
             raise ValueError(f"{path}: buffer {i} file {uri!r} is too large")
 
 
+_COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
+_TYPE_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+
+
+def _check_accessors(header: dict, path: Path):
+    """Every accessor within its buffer view and every view within its buffer, before trimesh
+    allocates anything (a hostile count would otherwise ask for terabytes)."""
+    buffers = _list_of_dicts(header, "buffers", path)
+    views = _list_of_dicts(header, "bufferViews", path)
+
+    def integer(x, what):
+        if isinstance(x, bool) or not isinstance(x, int) or not 0 <= x <= MAX_FILE_BYTES:
+            raise ValueError(f"{path}: glTF {what} must be an integer in [0, {MAX_FILE_BYTES}], "
+                             f"got {x!r}")
+        return x
+
+    for i, v in enumerate(views):
+        b = integer(v.get("buffer", -1), f"bufferViews[{i}].buffer")
+        if b >= len(buffers):
+            raise ValueError(f"{path}: glTF bufferViews[{i}] names a missing buffer")
+        end = integer(v.get("byteOffset", 0), "byteOffset") + integer(v.get("byteLength", -1),
+                                                                        "byteLength")
+        if end > integer(buffers[b].get("byteLength", -1), f"buffers[{b}].byteLength"):
+            raise ValueError(f"{path}: glTF bufferViews[{i}] runs past its buffer")
+    for i, a in enumerate(_list_of_dicts(header, "accessors", path)):
+        ct, kind = a.get("componentType"), a.get("type")
+        size = _COMPONENT_BYTES.get(ct) if isinstance(ct, int) else None
+        width = _TYPE_WIDTH.get(kind) if isinstance(kind, str) else None
+        if size is None or width is None:
+            raise ValueError(f"{path}: glTF accessors[{i}] has a bad componentType or type")
+        nbytes = integer(a.get("count", -1), f"accessors[{i}].count") * size * width
+        if "sparse" in a:
+            raise ValueError(f"{path}: glTF accessors[{i}]: sparse accessors are not supported")
+        if "bufferView" not in a:  # all zeros (sparse is refused): no reason to be large
+            if nbytes > 1 << 20:
+                raise ValueError(f"{path}: glTF accessors[{i}] has no buffer view and "
+                                 f"{a['count']} elements")
+            continue
+        view = integer(a["bufferView"], f"accessors[{i}].bufferView")
+        if view >= len(views):
+            raise ValueError(f"{path}: glTF accessors[{i}] names a missing buffer view")
+        stride = views[view].get("byteStride", size * width)
+        integer(stride, f"bufferViews[{view}].byteStride")
+        need = integer(a.get("byteOffset", 0), "byteOffset") + (
+            0 if nbytes == 0 else stride * (nbytes // (size * width) - 1) + size * width)
+        if need > views[view].get("byteLength", 0):
+            raise ValueError(f"{path}: glTF accessors[{i}] runs past its buffer view")
+
+
+def _check_node_tree(header: dict, path: Path):
+    """glTF nodes form trees (one parent at most, no cycles); and a bounded depth, since
+    trimesh's scene graph slows down quadratically with it (a hostile file could stall us)."""
+    nodes = _list_of_dicts(header, "nodes", path)
+    if len(nodes) > MAX_NODES:
+        raise ValueError(f"{path}: {len(nodes)} glTF nodes, more than {MAX_NODES}")
+    parent = {}
+    for i, n in enumerate(nodes):
+        children = n.get("children", [])
+        if not isinstance(children, list):
+            raise ValueError(f"{path}: node {i} has non-list children")
+        for c in children:
+            if isinstance(c, bool) or not isinstance(c, int) or not 0 <= c < len(nodes):
+                raise ValueError(f"{path}: node {i} has a child {c!r} that is not a node")
+            if c in parent or c == i:
+                raise ValueError(f"{path}: node {c} has two parents or is its own child "
+                                 f"(glTF nodes form trees)")
+            parent[c] = i
+    for i in range(len(nodes)):
+        depth, j = 0, i
+        while j in parent:
+            j, depth = parent[j], depth + 1
+            if depth > MAX_NODE_DEPTH:
+                raise ValueError(f"{path}: node {i} is nested more than {MAX_NODE_DEPTH} deep "
+                                 f"(or in a cycle)")
+
+
 def _gltf_material(header: dict, index, path: Path, node: str) -> tuple[tuple, tuple]:
     materials = _list_of_dicts(header, "materials", path)
     if not isinstance(index, int) or not 0 <= index < len(materials):
@@ -192,6 +283,8 @@ def _gltf_nodes(path: Path) -> list[_Node]:
 
     header, binary = _read_gltf(path)
     _check_buffers(header, path)
+    _check_accessors(header, path)
+    _check_node_tree(header, path)
     nodes = _list_of_dicts(header, "nodes", path)
     for key in ("meshes", "materials", "accessors", "bufferViews", "scenes"):
         _list_of_dicts(header, key, path)
@@ -219,11 +312,11 @@ def _gltf_nodes(path: Path) -> list[_Node]:
             resolver = trimesh.resolvers.FilePathResolver(str(path.parent / "x.gltf"))
             scene = trimesh.load(io.BytesIO(text), file_type="gltf", resolver=resolver,
                                  force="scene", process=False)
-    except (OSError, MemoryError):
+    except OSError:
         raise
     except Exception as e:  # trimesh raises anything from KeyError to AssertionError
         raise ValueError(f"{path}: trimesh cannot read it: {type(e).__name__}: {e}") from None
-    out = []
+    out = [(-1, _gltf_camera(header, path))]
     for frame in scene.graph.nodes_geometry:
         matrix, geometry_name = scene.graph[frame]
         geometry = scene.geometry.get(geometry_name)
@@ -246,7 +339,59 @@ def _gltf_nodes(path: Path) -> list[_Node]:
         if _placeholder_key(node) is None:
             node.albedo, node.emission = _gltf_material(header, material_index, path, node_name)
         out.append((index, node))
-    return [node for _, node in sorted(out, key=lambda item: item[0])]
+    return [node for _, node in sorted(out, key=lambda item: item[0]) if node is not None]
+
+
+def _local_matrix(node: dict) -> np.ndarray:
+    if "matrix" in node:
+        return np.array(node["matrix"], dtype=np.float64).reshape(4, 4).T  # column-major
+    x, y, z, w = node.get("rotation", [0.0, 0.0, 0.0, 1.0])
+    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    m = np.eye(4)
+    m[:3, :3] = rotation * np.asarray(node.get("scale", [1.0, 1.0, 1.0]), dtype=np.float64)
+    m[:3, 3] = node.get("translation", [0.0, 0.0, 0.0])
+    return m
+
+
+def _gltf_camera(header: dict, path: Path):
+    """The first camera node as a _Node without geometry carrying extras eye / target (or
+    None): eye at its world position, target from extras "target" or 1 m down its -z."""
+    nodes = header.get("nodes", [])
+    parent = {}
+    for i, n in enumerate(nodes):
+        for c in n.get("children", []) if isinstance(n.get("children"), list) else []:
+            if isinstance(c, int):
+                parent.setdefault(c, i)
+    for i, n in enumerate(nodes):
+        if "camera" not in n:
+            continue
+        m, j, seen = np.eye(4), i, set()
+        while j is not None and j not in seen and 0 <= j < len(nodes):
+            seen.add(j)
+            m = _local_matrix(nodes[j]) @ m
+            j = parent.get(j)
+        eye = m[:3, 3]
+        extras = n.get("extras") if isinstance(n.get("extras"), dict) else {}
+        target = (np.array(_numbers(extras["target"], 3, path, "camera", "extras.target"))
+                  if "target" in extras else eye - m[:3, 2] / max(np.linalg.norm(m[:3, 2]), 1e-300))
+        if not (np.isfinite(eye).all() and np.isfinite(target).all()):
+            raise ValueError(f"{path}: camera node {n.get('name', i)!r} has a non-finite transform")
+        return _Node("camera", np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
+                     extras={"eye": tuple(map(float, eye)), "target": tuple(map(float, target)),
+                             _CAMERA: True, "scene": _scene_name(header)})
+    return _Node("camera", np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64),
+                 extras={_CAMERA: True, "scene": _scene_name(header)})
+
+
+def _scene_name(header: dict):
+    scenes = header.get("scenes")
+    index = header.get("scene", 0)
+    if isinstance(scenes, list) and isinstance(index, int) and 0 <= index < len(scenes) \
+            and isinstance(scenes[index], dict) and isinstance(scenes[index].get("name"), str):
+        return scenes[index]["name"]
+    return None
 
 
 def _transformed(path: Path, name: str, matrix, geometry) -> tuple[np.ndarray, np.ndarray]:
@@ -310,7 +455,7 @@ def _obj_nodes(path: Path) -> list[_Node]:
     try:
         scene = trimesh.load(str(path), file_type="obj", force="scene", process=False,
                              split_objects=True, group_material=True, maintain_order=True)
-    except (OSError, MemoryError):
+    except OSError:
         raise
     except Exception as e:
         raise ValueError(f"{path}: trimesh cannot read it: {type(e).__name__}: {e}") from None
@@ -353,7 +498,7 @@ def _ply_nodes(path: Path) -> list[_Node]:
         columns = {k: np.asarray(table[k]) for k in ("albedo_r", "albedo_g", "albedo_b",
                                                        "emission_r", "emission_g", "emission_b")}
         names = [bytes(np.asarray(n, dtype=np.uint8)).decode("utf-8") for n in table["name"]]
-    except (OSError, MemoryError):
+    except OSError:
         raise
     except Exception as e:
         raise ValueError(f"{path}: trimesh cannot read it as a gigascroll PLY room (face "
@@ -445,7 +590,13 @@ def _slot(node: _Node, sizes: list[PaintingSize], path: Path) -> PaintingSlot:
             np.linalg.norm(c[0] + c[2] - c[1] - c[3]) > PLANAR_TOLERANCE * scale or \
             abs(np.dot(e1, e2)) > PLANAR_TOLERANCE * scale * scale:
         raise ValueError(f"{what} is not a rectangle")
-    if abs(areas.sum() / 2 - np.linalg.norm(e1) * np.linalg.norm(e2)) > 1e-3 * areas.sum() / 2:
+    # Cover it: the triangles' corners (in c's counter-clockwise order) share one diagonal.
+    corner_of = [int(np.argmin(np.linalg.norm(c - p, axis=1))) for p in v[f.reshape(-1)]]
+    a, b = set(corner_of[:3]), set(corner_of[3:])
+    shared = sorted(a & b)
+    if len(a) != 3 or len(b) != 3 or len(shared) != 2 or shared[1] - shared[0] != 2 or \
+            abs(areas.sum() / 2 - np.linalg.norm(e1) * np.linalg.norm(e2)) > \
+            1e-3 * areas.sum() / 2:
         raise ValueError(f"{what}: its two triangles do not cover the rectangle")
     up = _up_of(node, n, path)
     down = -(up - np.dot(up, n) * n)
@@ -491,7 +642,12 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
     surfaces, slots = [], []
     total = 0
     used_names = set()
+    eye = target = None
     for node in nodes:
+        if node.extras.get(_CAMERA) is True and len(node.triangles) == 0:
+            eye, target = node.extras.get("eye"), node.extras.get("target")
+            name = node.extras.get("scene") or name
+            continue
         total += len(node.triangles)
         if total > MAX_TRIANGLES:
             raise ValueError(f"{path}: more than {MAX_TRIANGLES} triangles")
@@ -517,7 +673,7 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
                                 tuple(emission)))
     if not any(max(s.emission) > 0 for s in surfaces):
         raise ValueError(f"{path}: the room has no light (no node with emission > 0)")
-    return RoomSpec(name, surfaces, slots)
+    return RoomSpec(name, surfaces, slots, camera_eye=eye, camera_target=target)
 
 
 # --- writing -----------------------------------------------------------------------------------
@@ -538,7 +694,14 @@ def save_room(spec: RoomSpec, path) -> Path:
                               vertices=_slot_corners(slot), triangles=_QUAD,
                               extras={"painting": slot.painting,
                                       "up": [-x for x in slot.v_axis]}))
-        write_gltf(nodes, path)
+        if spec.camera_eye is not None and spec.camera_target is not None:
+            nodes.append(dict(name="camera", matrix=_look_at_matrix(spec.camera_eye,
+                                                                    spec.camera_target),
+                              camera={"type": "perspective",
+                                      "perspective": {"yfov": math.radians(60.0),
+                                                      "znear": 0.01}},
+                              extras={"target": [float(x) for x in spec.camera_target]}))
+        write_gltf(nodes, path, scene_name=spec.name)
     elif suffix == ".obj":
         _write_obj(spec, path)
     elif suffix == ".ply":
@@ -551,6 +714,19 @@ def save_room(spec: RoomSpec, path) -> Path:
 _QUAD = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
 
 
+def _look_at_matrix(eye, target) -> np.ndarray:
+    """A glTF camera node's transform: at eye, looking down -z towards target, y up."""
+    eye, target = np.asarray(eye, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    back = eye - target
+    back /= np.linalg.norm(back)
+    up = np.array([0.0, 1.0, 0.0]) if abs(back[1]) < 0.999 else np.array([0.0, 0.0, -1.0])
+    right = np.cross(up, back)
+    right /= np.linalg.norm(right)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, np.cross(back, right), back, eye
+    return m
+
+
 def _slot_corners(slot: PaintingSlot) -> np.ndarray:
     """Top-left, bottom-left, bottom-right, top-right: counter-clockwise seen from v x u."""
     o, u, v = (np.asarray(x, dtype=np.float64) for x in (slot.origin, slot.u_axis, slot.v_axis))
@@ -558,11 +734,13 @@ def _slot_corners(slot: PaintingSlot) -> np.ndarray:
     return np.array([o, o + v, o + u + v, o + u])
 
 
-def write_gltf(nodes: list[dict], path, roots: list[int] | None = None) -> Path:
+def write_gltf(nodes: list[dict], path, roots: list[int] | None = None,
+               scene_name: str | None = None) -> Path:
     """Write nodes as a glTF 2.0 file (.glb, or .gltf with the buffer embedded as a data URI).
     Each node: name, optional vertices (n, 3) + triangles (m, 3) with albedo / emission (or
     extras marking a placeholder), optional matrix (4 x 4, row-major numpy convention) or
-    translation / rotation (xyzw) / scale, optional children (node indices), optional extras.
+    translation / rotation (xyzw) / scale, optional children (node indices), optional extras,
+    optional camera (a glTF camera object; the camera looks down its node's -z).
     `roots`: the scene's root nodes (default: nodes nobody lists as a child)."""
     path = Path(path)
     blob = bytearray()
@@ -591,6 +769,9 @@ def write_gltf(nodes: list[dict], path, roots: list[int] | None = None) -> Path:
             children_of_someone.update(out["children"])
         if node.get("extras"):
             out["extras"] = node["extras"]
+        if node.get("camera"):
+            header.setdefault("cameras", []).append(node["camera"])
+            out["camera"] = len(header["cameras"]) - 1
         if node.get("vertices") is not None:
             v = np.ascontiguousarray(node["vertices"], dtype=np.float32)
             t = np.ascontiguousarray(node["triangles"], dtype=np.uint32)
@@ -628,6 +809,8 @@ def write_gltf(nodes: list[dict], path, roots: list[int] | None = None) -> Path:
     if roots is None:
         roots = [i for i in range(len(nodes)) if i not in children_of_someone]
     header["scenes"] = [{"nodes": list(roots)}]
+    if scene_name:
+        header["scenes"][0]["name"] = scene_name
     if uses_strength:
         header["extensionsUsed"] = ["KHR_materials_emissive_strength"]
     blob.extend(b"\0" * (-len(blob) % 4))

@@ -35,7 +35,8 @@ from .room import PaintingSlot, RoomSpec, Surface
 from .sizes import PaintingSize, painting_sizes
 
 __all__ = ["ROOM_NAMES", "builtin_room", "scroll_room", "hall_room", "LUMENS_PER_WATT",
-           "GALLERY_LUX", "lux_to_irradiance", "polygon_irradiance", "direct_irradiance",
+           "GALLERY_LUX", "lux_to_irradiance", "polygon_irradiance", "unit_irradiance",
+           "direct_irradiance",
            "emitted_power"]
 
 ROOM_NAMES = ("scroll", "hall")
@@ -95,22 +96,27 @@ def polygon_irradiance(point, normal, polygon) -> float:
     from the front). Lambert's formula: E = 1/2 sum_i theta_i (n . g_i), g_i the unit normal of
     the plane through the point and edge i. The polygon must lie wholly above the receiver's
     horizon (all the rooms here place lights so)."""
-    p = np.asarray(point, dtype=np.float64)
+    return float(unit_irradiance([point], normal, [polygon])[0, 0])
+
+
+def unit_irradiance(points, normal, polygons) -> np.ndarray:
+    """polygon_irradiance for P points (one receiver normal) and Q polygons of as many corners
+    each: a (P, Q) array."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     n = np.asarray(normal, dtype=np.float64)
-    poly = np.asarray(polygon, dtype=np.float64)
-    light_normal = np.cross(poly[1] - poly[0], poly[2] - poly[0])
-    if np.dot(p - poly[0], light_normal) <= 0:
-        return 0.0  # behind the emitting side
-    r = poly - p
-    if np.any(r @ n <= 0):
+    poly = np.asarray(polygons, dtype=np.float64)                     # (Q, K, 3)
+    light_normal = np.cross(poly[:, 1] - poly[:, 0], poly[:, 2] - poly[:, 0])
+    facing = np.einsum("pqk,qk->pq", p[:, None] - poly[None, :, 0], light_normal) > 0
+    r = poly[None] - p[:, None, None]                                 # (P, Q, K, 3)
+    if np.any((r @ n <= 0).any(axis=2) & facing):
         raise ValueError("polygon_irradiance: the light crosses the receiver's horizon")
-    r /= np.linalg.norm(r, axis=1, keepdims=True)
-    total = 0.0
-    for a, b in zip(r, np.roll(r, -1, axis=0)):
-        theta = math.acos(float(np.clip(np.dot(a, b), -1.0, 1.0)))
-        g = np.cross(a, b)
-        total += theta * float(np.dot(n, g / np.linalg.norm(g)))
-    return abs(total) / 2.0
+    r /= np.linalg.norm(r, axis=3, keepdims=True)
+    nxt = np.roll(r, -1, axis=2)
+    theta = np.arccos(np.clip((r * nxt).sum(axis=3), -1.0, 1.0))
+    g = np.cross(r, nxt)
+    g /= np.linalg.norm(g, axis=3, keepdims=True)
+    total = (theta * (g @ n)).sum(axis=2)
+    return np.where(facing, np.abs(total) / 2.0, 0.0)
 
 
 def direct_irradiance(spec: RoomSpec, point, normal) -> np.ndarray:
@@ -120,8 +126,7 @@ def direct_irradiance(spec: RoomSpec, point, normal) -> np.ndarray:
     for s in spec.surfaces:
         if max(s.emission) <= 0:
             continue
-        for quad in _quads_of(s):
-            e += polygon_irradiance(point, normal, quad) * np.asarray(s.emission)
+        e += unit_irradiance([point], normal, _quads_of(s)).sum() * np.asarray(s.emission)
     return e
 
 
@@ -208,7 +213,7 @@ def _size_m(p: PaintingSize, width_m: float) -> tuple[float, float]:
 
 
 def _mean_unit_irradiance(quads, points, normal) -> float:
-    return float(np.mean([sum(polygon_irradiance(p, normal, q) for q in quads) for p in points]))
+    return float(unit_irradiance(points, normal, quads).sum(axis=1).mean())
 
 
 # --- the rooms -------------------------------------------------------------------------------
