@@ -44,10 +44,13 @@ AdaptiveGrid::AdaptiveGrid(const std::vector<Photon>& photons, float radius, flo
             hi_ = vmax(hi_, p.p);
         }
     }
+    // Within 1e30 the cell arithmetic below (extent / edge, doubling edges) cannot overflow.
     for (int a = 0; a < 3; ++a)
-        require(std::isfinite(lo_[a]) && std::isfinite(hi_[a]), "AdaptiveGrid: photon positions must be finite");
+        require(std::abs(lo_[a]) <= 1e30f && std::abs(hi_[a]) <= 1e30f,
+                "AdaptiveGrid: photon positions must be finite and within 1e30");
     if (cells_per_radius == 0) {
-        // Seed-sized cells first; the photons found around a sample of photons decide the edge.
+        // Seed-sized cells (or coarser if they would be many) first; the photons found around a
+        // sample of photons decide the edge.
         build(photons, radius);
         const std::size_t n = photons.size(), samples = std::min<std::size_t>(n, 256);
         double found = 0;
@@ -76,7 +79,8 @@ void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge) {
     float extent = 0;
     for (int a = 0; a < 3; ++a) extent = std::max({extent, std::abs(lo_[a]), std::abs(hi_[a])});
     extent += edge;
-    const double limit = std::max<double>(double(1 << 22), 4.0 * double(n));
+    // Few photons need few cells (a progressive pass rebuilds the grid for a few thousand).
+    const double limit = std::max<double>(double(1 << 16), 4.0 * double(n));
     while (double(cells_for(edge)) > limit || 1e-6f * (extent + edge) / edge > 0.2f) edge *= 2.0f;
     h_ = edge;
     inv_h_ = 1.0f / edge;
@@ -194,6 +198,50 @@ Vec3f AdaptiveGrid::sum(Vec3f q, Vec3f nq, float r2, float* count) const {
         found += sw[l];
     }
     if (count) *count = found;
+    return total;
+}
+
+Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+    constexpr int kLanes = 8;
+    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {}, sf[kLanes] = {};
+    const float r2 = d.r * d.r, reach2 = d.reach2[0], thick = d.thickness;
+    PhotonRun rs[kMaxRuns];
+    const int nr = runs(d.x, d.r, rs);
+    const float* px = px_.data(); const float* py = py_.data(); const float* pz = pz_.data();
+    const float* nx = nx_.data(); const float* ny = ny_.data(); const float* nz = nz_.data();
+    const float* pr = pr_.data(); const float* pg = pg_.data(); const float* pb = pb_.data();
+    // The arithmetic of gather_disc and SurfaceDisc::contains, term for term, so the same
+    // photons pass: within r (sphere), then normals, the slab |h| <= thickness, the disc.
+    auto lane = [&](std::uint64_t j, int l) {
+        const float dx = px[j] - d.x.x, dy = py[j] - d.x.y, dz = pz[j] - d.x.z;
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        const float agree = nx[j] * d.n.x + ny[j] * d.n.y + nz[j] * d.n.z;
+        const float h = dx * d.n.x + dy * d.n.y + dz * d.n.z;
+        const float u = dx * d.t.x + dy * d.t.y + dz * d.t.z, v = dx * d.b.x + dy * d.b.y + dz * d.b.z;
+        const bool near = d2 <= r2;
+        const bool in = (agree > 0.5f) & (std::fabs(h) <= thick) & (u * u + v * v <= reach2);
+        const float w = float(near & in);
+        sr[l] += w * pr[j];
+        sg[l] += w * pg[j];
+        sb[l] += w * pb[j];
+        sw[l] += w;
+        sf[l] += float(near & !in);
+    };
+    for (int i = 0; i < nr; ++i) {
+        std::uint64_t j = rs[i].begin;
+        for (; j + kLanes <= rs[i].end; j += kLanes)
+            for (int l = 0; l < kLanes; ++l) lane(j + std::uint64_t(l), l);
+        for (int l = 0; j < rs[i].end; ++j, ++l) lane(j, l);
+    }
+    Vec3f total{0, 0, 0};
+    float found = 0, rejected = 0;
+    for (int l = 0; l < kLanes; ++l) {
+        total += Vec3f(sr[l], sg[l], sb[l]);
+        found += sw[l];
+        rejected += sf[l];
+    }
+    *count = found;
+    *foreign = rejected;
     return total;
 }
 

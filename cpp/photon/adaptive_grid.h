@@ -22,6 +22,7 @@
 
 #include "photon/hash_grid.h"
 #include "photon/photon_tracer.h"
+#include "photon/surface_disc.h"
 
 namespace gigascroll {
 
@@ -32,7 +33,7 @@ public:
     static constexpr int kMaxRuns = (2 * 4 + 3) * (2 * 4 + 3);
 
     // cells_per_radius = r / cell edge; 0 chooses it from the photons' density. The grid is
-    // dense; when its cells would exceed max(2^22, 4 * photons) the cells are made coarser.
+    // dense; when its cells would exceed max(2^16, 4 * photons) the cells are made coarser.
     AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius = 0);
 
     float radius() const { return r_; }
@@ -67,6 +68,12 @@ public:
     Vec3f sum_in_radius(Vec3f q, float r2, float* count = nullptr) const;
     // The same restricted to photons whose normals agree with n (gather.h's box gather).
     Vec3f sum_box(Vec3f q, Vec3f n, float r2, float* count = nullptr) const;
+
+    // The first, unclipped pass of the surface-disc gather (surface_disc.h) vectorised: the
+    // summed power of the photons within d.r of d.x that gather_disc(*this, d) accepts
+    // (normals agree and d.contains), their count in *count and in *foreign how many within
+    // d.r it rejects. d must be unclipped (full_surface_disc). The same photons as gather_disc.
+    Vec3f sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const;
 
 private:
     template <bool CheckNormal>

@@ -93,7 +93,10 @@ DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Ve
     DiscEstimate e;
     SurfaceDisc d = full_surface_disc(x, n, r);
     float foreign = 0;
-    e.power = gather_disc(map, d, &e.count, &foreign);
+    if constexpr (requires { map.sum_full_disc(d, &e.count, &foreign); })
+        e.power = map.sum_full_disc(d, &e.count, &foreign);  // vectorised, the same photons
+    else
+        e.power = gather_disc(map, d, &e.count, &foreign);
     e.area = d.area;
     if (foreign > 0) {
         d = make_surface_disc(scene, x, n, r);

@@ -241,3 +241,29 @@ TEST(AdaptiveGrid, PhotonMapDispatchesToIt) {
     expect_equal(sorted(got), brute(ph, q, 0.08f * 0.08f));
     EXPECT_THROW(map.query_radius(q, 0.2f), InvalidArgument);
 }
+
+TEST(AdaptiveGrid, FullDiscPassMatchesTheGenericDiscGather) {
+    // Photons on the plane z = 0 (within the disc's slab) and off it, normals up or tilted.
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<Photon> ph(30000);
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+        Photon& p = ph[i];
+        p.p = {u(rng), u(rng), i % 3 ? 0.004f * u(rng) : 0.3f * u(rng)};
+        p.n = i % 5 ? Vec3f(0, 0, 1) : normalize(Vec3f(u(rng), u(rng), 0.5f));
+        p.power = {0.5f + 0.5f * u(rng), 1, 2};
+    }
+    const AdaptiveGrid grid(ph, 0.1f);
+    for (int i = 0; i < 300; ++i) {
+        const Vec3f x{u(rng), u(rng), 0.002f * u(rng)};
+        const Vec3f n = i % 2 ? Vec3f(0, 0, 1) : normalize(Vec3f(0.1f * u(rng), 0.1f * u(rng), 1));
+        const SurfaceDisc d = full_surface_disc(x, n, 0.1f * (0.5f + 0.5f * std::fabs(u(rng))));
+        float c_ref = 0, f_ref = 0, c = -1, f = -1;
+        const Vec3f s_ref = gather_disc(grid, d, &c_ref, &f_ref);
+        const Vec3f s = grid.sum_full_disc(d, &c, &f);
+        EXPECT_EQ(c, c_ref);
+        EXPECT_EQ(f, f_ref);
+        EXPECT_NEAR(s.x, s_ref.x, 1e-5f * (1 + std::fabs(s_ref.x)));
+        EXPECT_NEAR(s.z, s_ref.z, 1e-5f * (1 + s_ref.z));
+    }
+}
