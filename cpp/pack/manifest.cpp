@@ -139,7 +139,6 @@ void validate_manifest(const Manifest& m) {
             "unsupported pack version " + std::to_string(m.version) + " (this build reads " +
                 std::to_string(kOldestPackVersion) + " to " + std::to_string(kPackVersion) + ")");
     check_tile_parameters(m.tile_size, m.border);
-    require(m.codec == Codec::Raw || m.codec == Codec::Zstd, "field 'codec': unknown codec");
     require(!m.paintings.empty(), "field 'paintings': a pack has at least one painting");
     require(m.paintings.size() <= kMaxPackPaintings,
             "field 'paintings': " + std::to_string(m.paintings.size()) +

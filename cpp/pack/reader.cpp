@@ -77,6 +77,8 @@ namespace {
 // Descriptors kept open from construction; a pack of thousands of paintings opens the rest
 // on demand rather than exhausting the process's descriptor limit.
 constexpr std::size_t kOpenFileBudget = 64;
+// Descriptors cached at most (those kept from construction included).
+constexpr std::size_t kMaxCachedFiles = 512;
 }  // namespace
 
 TilePack::TilePack(const std::string& directory) : directory_(directory) {
@@ -160,6 +162,8 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
             if (i >= kOpenFileBudget) {
                 ::close(fd);
                 f.fd.store(-1);
+            } else {
+                cached_fds_.fetch_add(1, std::memory_order_relaxed);
             }
         }
         if (tiles != entry_count_)
@@ -176,8 +180,9 @@ TilePack::TilePack(const std::string& directory) : directory_(directory) {
 
 TilePack::~TilePack() { release(); }
 
-int TilePack::file_descriptor(std::uint32_t file) const {
+int TilePack::file_descriptor(std::uint32_t file, bool& transient) const {
     TileFile& f = files_[file];
+    transient = false;
     int fd = f.fd.load(std::memory_order_acquire);
     if (fd >= 0) return fd;
     fd = ::open(f.path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -188,9 +193,17 @@ int TilePack::file_descriptor(std::uint32_t file) const {
         ::close(fd);
         throw IoError(f.path + ": replaced or resized since the pack was opened");
     }
+    // Past the cache budget (a pack of thousands of paintings), read through a descriptor of
+    // its own that the caller closes, rather than exhausting the process's descriptors.
+    if (cached_fds_.fetch_add(1, std::memory_order_relaxed) >= kMaxCachedFiles) {
+        cached_fds_.fetch_sub(1, std::memory_order_relaxed);
+        transient = true;
+        return fd;
+    }
     int expected = -1;
     if (!f.fd.compare_exchange_strong(expected, fd, std::memory_order_acq_rel)) {
         ::close(fd);  // another thread opened it first
+        cached_fds_.fetch_sub(1, std::memory_order_relaxed);
         return expected;
     }
     return fd;
@@ -269,7 +282,13 @@ void TilePack::read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std
                          std::uint8_t* out) const {
     const TileEntry e = entry(p, l, tx, ty);
     const std::size_t bytes = tile_bytes();
-    const int fd = file_descriptor(e.file);
+    bool transient = false;
+    const int fd = file_descriptor(e.file, transient);
+    struct Release {
+        int fd;
+        bool close;
+        ~Release() { if (close) ::close(fd); }
+    } release_fd{fd, transient};
     const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
     if (codec_ == Codec::Raw) {
         if (e.length != bytes)

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -83,7 +84,8 @@ private:
     void release();
     // The checked entry of a stored tile (InvalidArgument / IoError as for locate).
     TileEntry entry(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) const;
-    int file_descriptor(std::uint32_t file) const;
+    // The tile file's descriptor; `transient`: the caller must close it (descriptors ran out).
+    int file_descriptor(std::uint32_t file, bool& transient) const;
 
     std::string directory_;
     std::string manifest_json_;
@@ -94,6 +96,7 @@ private:
     std::uint32_t version_ = kPackVersion;
     std::vector<std::string> tile_files_, warnings_;
     std::unique_ptr<TileFile[]> files_;
+    mutable std::atomic<std::size_t> cached_fds_{0};  // descriptors held in files_
     void* index_map_ = nullptr;
     std::size_t index_map_size_ = 0;
     const TileEntry* entries_ = nullptr;

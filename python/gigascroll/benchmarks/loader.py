@@ -12,7 +12,7 @@ waiting (a fresh set replaces a stale one, as in the seed); the main thread drai
 tiles every half millisecond and discards the data. The clock stops at the 50,000th tile.
 
 The physical limit is a single thread reading the same number of stored bytes sequentially
-from tiles.bin (pread, 1 MiB chunks); both run from the page cache (the pack is read once
+from the tile file (pread, 1 MiB chunks); both run from the page cache (the pack is read once
 beforehand), so the comparison is about the loaders' overhead, not the disk. "direct" is one
 thread calling TilePack.read_tile on the same tile sequence with no queues or threads: the
 per-tile work (read, checksum, zstd decode) the loaders parallelise. For a zstd pack,

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <cstring>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -241,4 +243,41 @@ TEST(Manifest, ChecksumsAreBoundToTheirTileKeys) {
         TilePack pack(p.dir.path.string());
         EXPECT_THROW(pack.read_tile(0, 0, 1, 0, out.data()), IoError);
     }
+}
+
+// 600 paintings: 600 tile files, more than the reader keeps open (64 from the start, 512 at
+// most): every tile still reads back right, from two threads at once.
+TEST(Manifest, PacksWithMoreTileFilesThanCachedDescriptors) {
+    TempDir dir;
+    PackOptions o;
+    o.tile_size = 4;
+    o.border = 1;
+    const std::uint32_t n = 600, side = 32;  // 1 x 1 tables on a 32 x 32 grid
+    std::vector<std::vector<std::uint8_t>> images;
+    {
+        PackBuilder b(dir.path.string(), o);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            images.push_back(random_image(2, 2, 100 + i));
+            b.begin_painting({"p" + std::to_string(i), "", "", 2, 2, i % side, i / side});
+            b.add_rows(images.back().data(), 2, 2);
+            b.end_painting();
+        }
+        b.finish(side, side);
+    }
+    const TilePack pack(dir.path.string());
+    ASSERT_EQ(pack.tile_files().size(), n);
+    std::vector<int> bad(2, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 2; ++t)
+        threads.emplace_back([&, t] {
+            std::vector<std::uint8_t> out(4 * 4 * 3);
+            for (int rep = 0; rep < 2; ++rep)
+                for (std::uint32_t i = t; i < n; i += 1) {
+                    pack.read_tile(i, 0, 0, 0, out.data());
+                    // Texel (1, 1) of the tile is pixel (0, 0) of the 2 x 2 image.
+                    bad[t] += std::memcmp(&out[(1 * 4 + 1) * 3], images[i].data(), 3) != 0;
+                }
+        });
+    for (auto& th : threads) th.join();
+    EXPECT_EQ(bad[0] + bad[1], 0);
 }
