@@ -38,6 +38,7 @@ Camera Camera::look_at(Vec3d position, Vec3d target, Vec3d up, double fov_y_deg,
     // and the renderer shared this type (ray_direction() is single precision anyway).
     const Vec3f p(position), t(target), u(up);
     require(length(t - p) > 0.0f, "camera: look_at equals position");
+    require(length(u) > 0.0f, "camera: up must be a non-zero vector");
     const Vec3f f = normalize(t - p);
     const Vec3f r = cross(f, u);
     require(length(r) > 1e-6f * length(u), "camera: up is parallel to the viewing direction");
