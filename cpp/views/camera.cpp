@@ -52,6 +52,7 @@ Camera Camera::look_at(Vec3d position, Vec3d target, Vec3d up, double fov_y_deg,
     const double up_max = max_component(vabs(up));
     const Vec3f p(position), t(target), u(up_max > 1e-18 && up_max < 1e18 ? up : up / up_max);
     require(length(t - p) > 0.0f, "camera: look_at equals position");
+    require(length(u) > 0.0f, "camera: up must be a non-zero vector");
     const Vec3f f = normalize(t - p);
     const Vec3f r = cross(f, u);
     require(length(r) > 1e-6f * length(u), "camera: up is parallel to the viewing direction");

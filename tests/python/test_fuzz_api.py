@@ -95,9 +95,10 @@ try:
 except ALLOWED:
     pass
 except AttributeError as e:
-    # Duck typing: an argument of a plain type where a gigascroll object belongs is misuse by
-    # type, reported by Python itself; anything else is a bug.
-    if not re.match(r"'(int|float|str|list|tuple|dict|NoneType|bool|numpy\\.ndarray)' object has no attribute", str(e)):
+    # Duck typing: an argument of the wrong type (a plain value, or another gigascroll object,
+    # where a gigascroll object belongs) is misuse by type, reported by Python itself as a
+    # missing attribute of the argument; any other AttributeError is a bug.
+    if not re.fullmatch(r"'[\\w.]+' object has no attribute '\\w+'", str(e)):
         raise
 """
 

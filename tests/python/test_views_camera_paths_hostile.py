@@ -38,3 +38,11 @@ def test_good_path_with_magnifier_round_trips(tmp_path):
     path.save(tmp_path / "p.json")
     back = CameraPath.load(tmp_path / "p.json")
     np.testing.assert_array_equal(back.magnifier_normal, path.magnifier_normal)
+
+
+@pytest.mark.parametrize("up,message", [((0, 0, 0), "up must be a non-zero vector"),
+                                        ((0, 0, -5), "parallel"), ((0, float("nan"), 1), "finite")])
+def test_camera_up_messages_say_what_is_wrong(up, message):
+    from gigascroll import Camera
+    with pytest.raises(ValueError, match=message):
+        Camera((0, 0, 0), (0, 0, -1), up)
