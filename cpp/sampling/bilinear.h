@@ -87,4 +87,31 @@ inline void bilerp_rgb8_wide(const std::uint8_t* p00, std::size_t stride, float 
 }
 #endif
 
+// The same blend from four texels held as words (r | g << 8 | b << 16: a BC1 palette entry),
+// t00, t10, t01, t11: the same products summed in the same order as bilerp_rgb8 and
+// bilerp_rgb8_wide, so the same floats; writes out[3] only.
+inline void bilerp_words(const std::uint32_t* t, float fx, float fy, float* out) {
+    const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+#if defined(__SSE2__)
+    auto texel = [](std::uint32_t bytes) {
+        const __m128i zero = _mm_setzero_si128();
+        const __m128i b = _mm_cvtsi32_si128(static_cast<int>(bytes));
+        return _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_unpacklo_epi8(b, zero), zero));
+    };
+    __m128 c = _mm_mul_ps(_mm_set1_ps(w00), texel(t[0]));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_set1_ps(w10), texel(t[1])));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_set1_ps(w01), texel(t[2])));
+    c = _mm_add_ps(c, _mm_mul_ps(_mm_set1_ps(w11), texel(t[3])));
+    alignas(16) float lanes[4];
+    _mm_store_ps(lanes, c);
+    out[0] = lanes[0], out[1] = lanes[1], out[2] = lanes[2];
+#else
+    for (int k = 0; k < 3; ++k) {
+        const unsigned s = 8 * k;
+        out[k] = w00 * float((t[0] >> s) & 255u) + w10 * float((t[1] >> s) & 255u) +
+                 w01 * float((t[2] >> s) & 255u) + w11 * float((t[3] >> s) & 255u);
+    }
+#endif
+}
+
 }  // namespace gigascroll

@@ -100,38 +100,47 @@ private:
     PageEntry last_;
 };
 
-// The 2 x 2 footprint at texel (jx, jy) of a BC1 tile, decoded into quad as RGB8 rows 6
-// bytes apart (16 bytes, so bilerp_rgb8_wide's 4-byte loads stay inside): the sampler then
-// blends exactly as on an RGB8 slot holding the decoded tile. 9 footprints in 16 lie in one
-// block: its palette is decoded once for the four texels.
-inline void bc1_quad(const std::uint8_t* tile, std::uint32_t blocks_per_row, std::uint32_t jx,
-                     std::uint32_t jy, std::uint8_t* quad) {
-    auto block_of = [&](std::uint32_t x, std::uint32_t y) {
-        return tile + (std::size_t(y >> 2) * blocks_per_row + (x >> 2)) * kBc1BlockBytes;
-    };
-    auto index = [](const std::uint8_t* block, std::uint32_t x, std::uint32_t y) {
-        return (block[4 + (y & 3u)] >> (2 * (x & 3u))) & 3u;
-    };
-    std::uint32_t c[4];
-    const std::uint8_t* b = block_of(jx, jy);
-    std::uint32_t palette[4];
-    bc1_palette(b, palette);
-    if ((jx & 3u) != 3u && (jy & 3u) != 3u) {
-        c[0] = palette[index(b, jx, jy)], c[1] = palette[index(b, jx + 1, jy)];
-        c[2] = palette[index(b, jx, jy + 1)], c[3] = palette[index(b, jx + 1, jy + 1)];
-    } else {
-        c[0] = palette[index(b, jx, jy)];
+// The 2 x 2 footprint at texel (jx, jy) of a BC1 tile as four palette words t00, t10, t01,
+// t11, which bilerp_words blends exactly as bilerp_rgb8 blends an RGB8 slot holding the
+// decoded tile. 9 footprints in 16 lie in one block, and neighbouring samples often share
+// blocks: the last block's palette is kept and decoded again only for another block.
+class Bc1Footprint {
+public:
+    explicit Bc1Footprint(std::uint32_t blocks_per_row) : blocks_per_row_(blocks_per_row) {}
+
+    void quad(const std::uint8_t* tile, std::uint32_t jx, std::uint32_t jy, std::uint32_t* c) {
+        const std::uint8_t* b = block_of(tile, jx, jy);
+        const std::uint32_t* pal = palette(b);
+        if ((jx & 3u) != 3u && (jy & 3u) != 3u) {
+            c[0] = pal[index(b, jx, jy)], c[1] = pal[index(b, jx + 1, jy)];
+            c[2] = pal[index(b, jx, jy + 1)], c[3] = pal[index(b, jx + 1, jy + 1)];
+            return;
+        }
+        c[0] = pal[index(b, jx, jy)];
         const std::uint32_t xs[3] = {jx + 1, jx, jx + 1}, ys[3] = {jy, jy + 1, jy + 1};
         for (int k = 0; k < 3; ++k) {
-            const std::uint8_t* bk = block_of(xs[k], ys[k]);
-            if (bk != b) bc1_palette(bk, palette), b = bk;
-            c[k + 1] = palette[index(bk, xs[k], ys[k])];
+            const std::uint8_t* bk = block_of(tile, xs[k], ys[k]);
+            c[k + 1] = palette(bk)[index(bk, xs[k], ys[k])];
         }
     }
-    // Little-endian words: each store's 4th byte is overwritten by the next texel's first.
-    for (int k = 0; k < 4; ++k) std::memcpy(quad + 3 * k, &c[k], 4);
-}
-constexpr std::size_t kQuadRow = 6;
+
+private:
+    const std::uint8_t* block_of(const std::uint8_t* tile, std::uint32_t x, std::uint32_t y) const {
+        return tile + (std::size_t(y >> 2) * blocks_per_row_ + (x >> 2)) * kBc1BlockBytes;
+    }
+    static std::uint32_t index(const std::uint8_t* block, std::uint32_t x, std::uint32_t y) {
+        return (block[4 + (y & 3u)] >> (2 * (x & 3u))) & 3u;
+    }
+    // Valid while the cache is read-locked (the sampler holds the lock for the whole call).
+    const std::uint32_t* palette(const std::uint8_t* block) {
+        if (block != last_) bc1_palette(block, palette_), last_ = block;
+        return palette_;
+    }
+
+    const std::uint32_t blocks_per_row_;
+    const std::uint8_t* last_ = nullptr;
+    std::uint32_t palette_[4] = {};
+};
 
 constexpr std::size_t kBatch = 64;
 
@@ -204,7 +213,7 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
     const Divider divide_p(vt.layout().payload());
     TexelFinder finder(vt, r.painting);
     const bool bc1 = vt.format() == TexelFormat::Bc1;
-    const std::uint32_t blocks_per_row = vt.layout().tile_size / 4;
+    Bc1Footprint bc1_footprint(vt.layout().tile_size / 4);
 
     // Bilinear sample at level l with page-table fallback; returns the level that answered.
     auto bilinear = [&](double x0, double y0, std::uint32_t l, float* out)
@@ -220,9 +229,9 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
         if (bc1) {
             std::uint32_t jx, jy;
             const std::uint8_t* tile = finder.footprint(e, s, tx.i0, ty.i0, cx, cy, jx, jy);
-            std::uint8_t quad[16];
-            bc1_quad(tile, blocks_per_row, jx, jy, quad);
-            bilerp_rgb8(quad, kQuadRow, 3, 1, tx.f, ty.f, out);
+            std::uint32_t quad[4];
+            bc1_footprint.quad(tile, jx, jy, quad);
+            bilerp_words(quad, tx.f, ty.f, out);
         } else {
             bilerp_rgb8(finder.texel(e, s, tx.i0, ty.i0, cx, cy), finder.row_bytes(), 3, 1, tx.f,
                         ty.f, out);
@@ -267,6 +276,7 @@ void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size
     TexelFinder finder(vt, r.painting);
     const std::size_t row = finder.row_bytes();
     const std::uint32_t blocks_per_row = vt.layout().tile_size / 4;
+    Bc1Footprint bc1_footprint(blocks_per_row);
 
     TapBatch b;
     const std::uint8_t* texel[kBatch];
@@ -320,15 +330,9 @@ void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size
         std::size_t k = 0;
         if constexpr (F == TexelFormat::Bc1) {
             for (; k < n; ++k) {
-                alignas(16) std::uint8_t quad[16];
-                bc1_quad(texel[k], blocks_per_row, jx_of[k], jy_of[k], quad);
-#if defined(__SSE2__)
-                if (k + 1 < n || b0 + n < end) {
-                    bilerp_rgb8_wide(quad, kQuadRow, b.fx[k], b.fy[k], out + 3 * k);
-                    continue;
-                }
-#endif
-                bilerp_rgb8(quad, kQuadRow, 3, 1, b.fx[k], b.fy[k], out + 3 * k);
+                std::uint32_t quad[4];
+                bc1_footprint.quad(texel[k], jx_of[k], jy_of[k], quad);
+                bilerp_words(quad, b.fx[k], b.fy[k], out + 3 * k);
             }
             continue;
         }
