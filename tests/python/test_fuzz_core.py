@@ -147,6 +147,7 @@ class Worker:
         self.proc = None
         self.counts = {}    # cases per family
         self.outcomes = {}  # family -> {"ok" or exception type: cases}
+        self.examples = {}  # (family, message start) -> first case
 
     def start(self):
         env = dict(os.environ, PYTHONFAULTHANDLER="1")
@@ -177,6 +178,8 @@ class Worker:
         per = self.outcomes.setdefault(case["kind"], {})
         tag = out["outcome"] if out["outcome"] == "ok" else out["type"]
         per[tag] = per.get(tag, 0) + 1
+        if out["outcome"] == "error":
+            self.examples.setdefault((case["kind"], out["message"][:60]), case)
         if out["outcome"] == "error":
             assert out["type"] in CLEAN, f"{out['type']} on {case}:\n{out['trace']}"
             assert out["message"].strip(), f"empty {out['type']} message on {case}"
@@ -217,7 +220,11 @@ coord = st.one_of(
                      1e300, math.inf, -math.inf, math.nan]),
     st.floats(allow_nan=True, allow_infinity=True),
 )
-vec = st.lists(coord, min_size=3, max_size=3)
+# Ordinary values often enough that valid cameras, rays and meshes really render and trace
+# (far cameras included: 1e11 is inside the bound and must render, not abort).
+ordinary = st.one_of(st.floats(-3, 3), st.sampled_from([0.0, 1.0, -1.0, 1e11, -9.9e11]))
+vec = st.one_of(st.lists(ordinary, min_size=3, max_size=3), st.lists(coord, min_size=3, max_size=3))
+positive = st.one_of(st.floats(0.01, 10), coord)
 size = st.one_of(st.integers(0, 70), st.sampled_from([1 << 20, 1 << 24, (1 << 24) + 1, 1 << 31, (1 << 32) - 1,
                                                     1 << 32, 1 << 40, 1 << 61, (1 << 63) - 1, (1 << 64) - 1]),
                  st.integers(0, (1 << 64) - 1))
@@ -231,8 +238,9 @@ def scaled(n):
 
 def camera_cases(n):
     @scaled(n)
-    @given(position=vec, look_at=vec, up=vec, fov=coord,
-           resolution=st.tuples(st.sampled_from([1, 2, 4, 8, 65536, 65537, 1 << 31]), st.sampled_from([1, 3, 8, 70000])))
+    @given(position=vec, look_at=vec, up=vec, fov=st.one_of(st.floats(1, 179), coord),
+           resolution=st.tuples(st.sampled_from([1, 2, 4, 8, 8, 8, 65536, 65537, 1 << 31]),
+                                st.sampled_from([1, 3, 8, 8, 8, 70000])))
     def run(worker, position, look_at, up, fov, resolution):
         worker.run(dict(kind="camera", position=enc(position), look_at=enc(look_at), up=enc(up), fov=enc(fov),
                         resolution=list(resolution)))
@@ -240,10 +248,15 @@ def camera_cases(n):
 
 
 def camera_raw_cases(n):
+    # Half the cases have every value ordinary (they must render), half draw each value wild.
     @scaled(n)
-    @given(position=vec, forward=vec, up=vec, tx=coord, ty=coord,
-           w=st.sampled_from([0, 1, 4, 8, 1 << 19, 1 << 20]), h=st.sampled_from([1, 2, 8, -1]))
-    def run(worker, position, forward, up, tx, ty, w, h):
+    @given(sane=st.booleans(), data=st.data())
+    def run(worker, sane, data):
+        v3 = st.lists(ordinary, min_size=3, max_size=3) if sane else vec
+        position, forward, up = data.draw(v3), data.draw(v3), data.draw(v3)
+        tx, ty = data.draw(st.floats(0.05, 5) if sane else positive), data.draw(st.floats(0.05, 5) if sane else positive)
+        w = data.draw(st.sampled_from([1, 4, 8]) if sane else st.sampled_from([0, 1, 8, 1 << 19, 1 << 20]))
+        h = data.draw(st.sampled_from([1, 2, 8]) if sane else st.sampled_from([1, 8, -1]))
         worker.run(dict(kind="camera_raw", position=enc(position), forward=enc(forward), up=enc(up), tx=enc(tx),
                         ty=enc(ty), width=w, height=h))
     return run
@@ -251,7 +264,7 @@ def camera_raw_cases(n):
 
 def stereo_cases(n):
     @scaled(n)
-    @given(position=st.one_of(st.just([0.0, 0.0, 3.9]), vec), ipd=coord)
+    @given(position=st.one_of(st.just([0.0, 0.0, 3.9]), vec), ipd=st.one_of(st.floats(0, 1), coord))
     def run(worker, position, ipd):
         worker.run(dict(kind="stereo", position=enc(position), ipd=enc(ipd)))
     return run
@@ -267,8 +280,15 @@ def ray_cases(n):
 
 def mesh_cases(n):
     @scaled(n)
-    @given(vertices=st.lists(coord, min_size=9, max_size=9), o=vec, d=vec)
-    def run(worker, vertices, o, d):
+    @given(sane=st.booleans(), data=st.data())
+    def run(worker, sane, data):
+        if sane:  # a unit triangle moved by up to 0.3 per coordinate: never degenerate
+            base = [0, 0, 0, 1, 0, 0, 0, 1, 0]
+            vertices = [b + x for b, x in zip(base, data.draw(st.lists(st.floats(-0.3, 0.3), min_size=9, max_size=9)))]
+        else:
+            vertices = data.draw(st.lists(coord, min_size=9, max_size=9))
+        o = data.draw(st.lists(st.floats(-3, 3), min_size=3, max_size=3) if sane else vec)
+        d = data.draw(st.lists(st.floats(-1, 1), min_size=3, max_size=3) if sane else vec)
         worker.run(dict(kind="mesh", vertices=enc(vertices), o=enc(o), d=enc(d)))
     return run
 
