@@ -278,19 +278,27 @@ TileLocation TilePack::locate(std::uint32_t p, std::uint32_t l, std::uint32_t tx
     return {e.offset, e.length, e.checksum, e.file};
 }
 
+// A tile file's descriptor for one read: the cached one, or (past the cache budget) one of its
+// own, closed when the read is done.
+struct TilePack::FileHandle {
+    FileHandle(const TilePack& pack, std::uint32_t file) : fd(pack.file_descriptor(file, transient)) {}
+    ~FileHandle() {
+        if (transient) ::close(fd);
+    }
+    FileHandle(const FileHandle&) = delete;
+    FileHandle& operator=(const FileHandle&) = delete;
+    bool transient = false;
+    int fd;
+};
+
 void TilePack::read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std::uint32_t ty,
                          std::uint8_t* out) const {
     const TileEntry e = entry(p, l, tx, ty);
     const std::size_t bytes = tile_bytes();
-    bool transient = false;
-    const int fd = file_descriptor(e.file, transient);
-    struct Release {
-        int fd;
-        bool close;
-        ~Release() { if (close) ::close(fd); }
-    } release_fd{fd, transient};
-    const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
     if (codec_ == Codec::Raw) {
+        const FileHandle file(*this, e.file);
+        const int fd = file.fd;
+        const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
         if (e.length != bytes)
             throw IoError(directory_ + ": tile " + key_text(p, l, tx, ty) + " has length " +
                           std::to_string(e.length) + ", expected " + std::to_string(bytes));
@@ -320,7 +328,8 @@ const std::uint8_t* TilePack::read_stored(const TileEntry& e, std::uint32_t p, s
         throw IoError(directory_ + ": bc1 tile " + key_text(p, l, tx, ty) + " has length " +
                       std::to_string(e.length) + ", expected " +
                       std::to_string(bc1_tile_bytes(tile_size_)));
-    if (!pread_all(file_descriptor(e.file), into, e.length, e.offset))
+    const FileHandle file(*this, e.file);
+    if (!pread_all(file.fd, into, e.length, e.offset))
         throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
     const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
     if (tile_checksum(version_, key, into, e.length) != e.checksum)

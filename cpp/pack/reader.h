@@ -78,6 +78,7 @@ public:
 
 private:
     struct TileFile;
+    struct FileHandle;
     // Reads the stored bytes of e into scratch and verifies their length and checksum.
     const std::uint8_t* read_stored(const TileEntry& e, std::uint32_t p, std::uint32_t l,
                                     std::uint32_t tx, std::uint32_t ty, std::uint8_t* into) const;
