@@ -250,7 +250,7 @@ void PackBuilder::emit_tile_row(const MipReducer::Level& lv, TileRows& tr, std::
                     auto& out = packed[i];
                     out.resize(bc1_tile_bytes(T));
                     bc1_encode_tile(tile.data(), T, out.data(), options_.bc1_fit);
-                    sums[i] = checksum64(out.data(), out.size());
+                    sums[i] = tile_checksum(kPackVersion, key(g0 + i), out.data(), out.size());
                 }
                 return;
             }
