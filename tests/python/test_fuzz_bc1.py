@@ -42,9 +42,9 @@ def _first_entry(path):
 @given(pos=st.integers(0, T * T // 2 - 1), flip=st.integers(1, 255))
 def test_corrupt_block_bytes_fail_the_checksum(bc1_pack, tmp_path_factory, pos, flip):
     path = _copy(bc1_pack, tmp_path_factory)
-    offset, length, _, _ = _first_entry(path)
+    offset, length, _ = TilePack(path).locate(0, 0, 0, 0)
     assert length == T * T // 2
-    with open(path / "tiles.bin", "r+b") as f:
+    with open(path / TilePack(path).tile_file(0, 0, 0, 0), "r+b") as f:
         f.seek(offset + pos)
         b = f.read(1)[0]
         f.seek(offset + pos)

@@ -212,14 +212,18 @@ def run_decode_limit(pack, frames: list[np.ndarray], tiles: int) -> float:
     lib.ZSTD_isError.argtypes = [ctypes.c_size_t]
     keys = [tuple(map(int, k)) for f in frames for k in f]
     stored = {}
-    fd = os.open(Path(pack.path) / "tiles.bin", os.O_RDONLY)
+    fds = {}
     try:
         for k in keys:
             if k not in stored:
                 offset, length, _ = pack.locate(*k)
-                stored[k] = os.pread(fd, length, offset)
+                file = pack.tile_file(*k)
+                if file not in fds:
+                    fds[file] = os.open(Path(pack.path) / file, os.O_RDONLY)
+                stored[k] = os.pread(fds[file], length, offset)
     finally:
-        os.close(fd)
+        for fd in fds.values():
+            os.close(fd)
     sequence = [stored[keys[i % len(keys)]] for i in range(tiles)]
     nbytes = pack.tile_size * pack.tile_size * 3
     out = ctypes.create_string_buffer(nbytes)
