@@ -156,8 +156,6 @@ int AdaptiveGrid::runs(Vec3f q, float r, PhotonRun* out) const {
 
 template <bool CheckNormal>
 Vec3f AdaptiveGrid::sum(Vec3f q, Vec3f nq, float r2, float* count) const {
-    constexpr int kLanes = 8;  // independent partial sums: a fixed-width inner loop vectorises
-    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {};
     PhotonRun rs[kMaxRuns];
     const int nr = runs(q, std::sqrt(r2), rs);
     const float* px = px_.data(); const float* py = py_.data(); const float* pz = pz_.data();
@@ -173,32 +171,7 @@ Vec3f AdaptiveGrid::sum(Vec3f q, Vec3f nq, float r2, float* count) const {
             return float(d2 <= r2);
         }
     };
-    for (int i = 0; i < nr; ++i) {
-        std::uint64_t j = rs[i].begin;
-        for (; j + kLanes <= rs[i].end; j += kLanes)
-            for (int l = 0; l < kLanes; ++l) {
-                const float w = weight(j + l);
-                sr[l] += w * pr[j + l];
-                sg[l] += w * pg[j + l];
-                sb[l] += w * pb[j + l];
-                sw[l] += w;
-            }
-        for (int l = 0; j < rs[i].end; ++j, ++l) {
-            const float w = weight(j);
-            sr[l] += w * pr[j];
-            sg[l] += w * pg[j];
-            sb[l] += w * pb[j];
-            sw[l] += w;
-        }
-    }
-    Vec3f total{0, 0, 0};
-    float found = 0;
-    for (int l = 0; l < kLanes; ++l) {
-        total += Vec3f(sr[l], sg[l], sb[l]);
-        found += sw[l];
-    }
-    if (count) *count = found;
-    return total;
+    return sum_runs(rs, nr, pr, pg, pb, weight, count);
 }
 
 Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {

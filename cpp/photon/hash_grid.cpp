@@ -68,8 +68,6 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
 }
 
 Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2, float* count) const {
-    constexpr int kLanes = 8;  // independent partial sums: a fixed-width inner loop vectorises
-    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {};
     PhotonRun rs[27];
     const int nr = runs(q, rs);
     const float* px = px_.data(); const float* py = py_.data(); const float* pz = pz_.data();
@@ -81,32 +79,7 @@ Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2, float* count) const {
         const float agree = nx[j] * n.x + ny[j] * n.y + nz[j] * n.z;
         return float((d2 <= r2) & (agree > kNormalAgreement));
     };
-    for (int i = 0; i < nr; ++i) {
-        std::uint64_t j = rs[i].begin;
-        for (; j + kLanes <= rs[i].end; j += kLanes)
-            for (int l = 0; l < kLanes; ++l) {
-                const float w = weight(j + l);
-                sr[l] += w * pr[j + l];
-                sg[l] += w * pg[j + l];
-                sb[l] += w * pb[j + l];
-                sw[l] += w;
-            }
-        for (int l = 0; j < rs[i].end; ++j, ++l) {
-            const float w = weight(j);
-            sr[l] += w * pr[j];
-            sg[l] += w * pg[j];
-            sb[l] += w * pb[j];
-            sw[l] += w;
-        }
-    }
-    Vec3f sum{0, 0, 0};
-    float total = 0;
-    for (int l = 0; l < kLanes; ++l) {
-        sum += Vec3f(sr[l], sg[l], sb[l]);
-        total += sw[l];
-    }
-    if (count) *count = total;
-    return sum;
+    return sum_runs(rs, nr, pr, pg, pb, weight, count);
 }
 
 bool HashGrid::cell_of(Vec3f q, std::int64_t c[3]) const {

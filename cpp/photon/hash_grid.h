@@ -21,6 +21,42 @@ struct PhotonRun {
     std::uint64_t begin, end;
 };
 
+// Sum over the runs of weight(j) * power_j, the weights' sum into *count (if not null). The
+// structure-of-arrays grids share it: kLanes independent partial sums make a fixed-width
+// inner loop that vectorises, and one summation order keeps their results bit-identical.
+template <class Weight>
+inline Vec3f sum_runs(const PhotonRun* rs, int nr, const float* pr, const float* pg,
+                      const float* pb, Weight&& weight, float* count) {
+    constexpr int kLanes = 8;
+    float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {};
+    for (int i = 0; i < nr; ++i) {
+        std::uint64_t j = rs[i].begin;
+        for (; j + kLanes <= rs[i].end; j += kLanes)
+            for (int l = 0; l < kLanes; ++l) {
+                const float w = weight(j + l);
+                sr[l] += w * pr[j + l];
+                sg[l] += w * pg[j + l];
+                sb[l] += w * pb[j + l];
+                sw[l] += w;
+            }
+        for (int l = 0; j < rs[i].end; ++j, ++l) {
+            const float w = weight(j);
+            sr[l] += w * pr[j];
+            sg[l] += w * pg[j];
+            sb[l] += w * pb[j];
+            sw[l] += w;
+        }
+    }
+    Vec3f total{0, 0, 0};
+    float found = 0;
+    for (int l = 0; l < kLanes; ++l) {
+        total += Vec3f(sr[l], sg[l], sb[l]);
+        found += sw[l];
+    }
+    if (count) *count = found;
+    return total;
+}
+
 class HashGrid {
 public:
     enum class Mode { Auto, Dense, Hashed };
