@@ -101,7 +101,13 @@ def test_scroll_where_single_scroll_puts_it():
     np.testing.assert_array_equal(slot.v_axis, v)
     assert (slot.width_m, slot.height_m) == (w, h) == (12.0, 0.5)
     # by hand: top edge at 1.5 + 0.25, wall 5 mm behind, wall box of single_scroll
-    assert slot.origin == (0.0, 1.75, 0.0)
+    assert slot.origin == (12.0, 1.75, 0.0)
+    # From the room the scroll reads unmirrored: texel (0, 0) is on the left of the screen.
+    from gigascroll import Camera
+    cam = Camera((6.0, 1.5, -8.0), (6.0, 1.5, 0.0), (0.0, 1.0, 0.0), fov=90.0)
+    first = cam.project(slot.origin)
+    last = cam.project(tuple(np.add(slot.origin, np.multiply(slot.u_axis, slot.width_m))))
+    assert first is not None and last is not None and first[0] < last[0]
     bounds = room_mesh(spec, SHELL).bounds
     np.testing.assert_allclose(bounds, [[-2.0, 0.0, -3.995], [14.0, 3.0, 0.005]])
 
@@ -272,7 +278,7 @@ def test_direct_light_matches_the_photon_renderer(name):
     slot = spec.paintings[0]
     o, u, v = (np.asarray(x) for x in (slot.origin, slot.u_axis, slot.v_axis))
     centre = o + (u * slot.width_m + v * slot.height_m) / 2
-    front = np.cross(v, u) if name == "hall" else -np.cross(v, u)  # the side the room is on
+    front = np.cross(v, u)  # the side the room is on: both rooms read unmirrored from it
     cam = Camera(tuple(centre + 0.5 * front), tuple(centre), tuple(-v), fov=1.0,
                  resolution=(8, 8))
     img = render(scene, cam, photons=1000, radius=0.05, spp=4, light_samples=64,

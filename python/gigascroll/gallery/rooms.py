@@ -19,9 +19,9 @@ a physical size (`PaintingSpec`) keeps it, and one given in texels gets the scro
 
 Orientation: image x runs along u and image y (down) along v. With the project's camera
 (right = forward x up), the image reads unmirrored from the side v x u points to. The hall's
-paintings (u = +x, v = +z) face up, v x u = +y. The scroll's placement (u = +x, v = -y, kept from
-`single_scroll`) reads unmirrored from behind its wall (v x u = +z); from the room (z < 0) it is
-mirrored left-right, as it already is in the scenarios.
+paintings (u = +x, v = +z) face up, v x u = +y. The scroll's placement (origin at x = length,
+u = -x, v = -y, as in `single_scroll`) faces the room, v x u = -z: it reads unmirrored from
+z < 0, where the visitors stand.
 """
 
 from __future__ import annotations
@@ -239,7 +239,8 @@ def scroll_room(paintings, painting: int | str = 0) -> RoomSpec:
     _check_size(width, height, p.name, max_width=100.0, max_height=2.5)
     centre = SCROLL_CENTRE_HEIGHT
     top = centre + height / 2
-    slot = PaintingSlot(index, (0.0, top, 0.0), (1.0, 0.0, 0.0), (0.0, -1.0, 0.0), width, height,
+    # Texel (0, 0) top-left as seen from the room (z < 0): image x runs along -x.
+    slot = PaintingSlot(index, (width, top, 0.0), (-1.0, 0.0, 0.0), (0.0, -1.0, 0.0), width, height,
                         name=p.name)
 
     lo = np.array([-SCROLL_MARGIN_X, 0.0, SCROLL_WALL_Z - SCROLL_ROOM_DEPTH])

@@ -96,12 +96,14 @@ class Exhibition:
 
 def single_scroll(spec: PaintingSpec = SCROLL, tile_size: int = 128, border: int = 4,
                   centre_height: float = 1.5) -> Exhibition:
-    """Seed 000 section 5.3: one scroll on a wall (a box behind it), facing -z; texel (0, 0)
-    at x = 0, the top edge at centre_height + height_m / 2."""
+    """Seed 000 section 5.3: one scroll on a wall (a box behind it) in the plane z = 0 from
+    x = 0 to width_m, seen from z < 0; the top edge at centre_height + height_m / 2. Texel
+    (0, 0) is the top-left corner as a visitor sees it, at x = width_m: a camera looking +z
+    has its right along -x, so image x runs along -x (with u = +x it would read mirrored)."""
     tiles = spec.tiles(tile_size, border)
     scene = ExhibitionScene()
     top = centre_height + spec.height_m / 2
-    scene.add_painting(0, tiles, (0.0, top, 0.0), (1.0, 0.0, 0.0), (0.0, -1.0, 0.0),
+    scene.add_painting(0, tiles, (spec.width_m, top, 0.0), (-1.0, 0.0, 0.0), (0.0, -1.0, 0.0),
                        spec.width_m, spec.height_m)
     scene.add_box((-2.0, 0.0, 0.005), (spec.width_m + 2.0, 3.0, 0.2))  # the wall
     scene.add_box((-2.0, -0.1, -4.0), (spec.width_m + 2.0, 0.0, 0.2))  # the floor
