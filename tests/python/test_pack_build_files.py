@@ -23,16 +23,35 @@ def test_force_replacement_is_atomic_for_a_reader(tmp_path):
     seen, failures, stop = [], [], threading.Event()
 
     def reader():
+        # A read that starts in the old pack and outlives the swap sees that pack being
+        # deleted (it holds the old directory, no longer the one at the path): such reads are
+        # recognised by the directory at the path having changed meanwhile, and retried. What
+        # must never happen is a read that begins and ends on one directory and finds it
+        # incomplete, or no pack at the path.
         while not stop.is_set():
+            try:
+                before = os.stat(out).st_ino
+            except Exception as e:  # noqa: BLE001 - no pack at the path is the bug
+                failures.append(repr(e))
+                continue
             try:  # the three files must always be there, together
                 names = sorted(os.listdir(out))
-                if names != ["index.bin", "manifest.json", "tiles-00000.bin"]:
-                    failures.append(f"listing {names}")
-                    continue
-                pack = TilePack(out)
-                seen.append(pack.paintings[0].name)
+                pack = TilePack(out) if names == ["index.bin", "manifest.json",
+                                                  "tiles-00000.bin"] else None
+                failure = None if pack else f"listing {names}"
             except Exception as e:  # noqa: BLE001 - any failure to open is the bug
+                failure = repr(e)
+            try:
+                swapped = os.stat(out).st_ino != before
+            except Exception as e:  # noqa: BLE001
                 failures.append(repr(e))
+                continue
+            if swapped:
+                continue
+            if failure:
+                failures.append(failure)
+            else:
+                seen.append(pack.paintings[0].name)
 
     t = threading.Thread(target=reader)
     t.start()
