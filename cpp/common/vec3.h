@@ -8,6 +8,9 @@
 
 namespace gigascroll {
 
+// 1 / pi: Lambertian radiance = albedo x irradiance / pi.
+inline constexpr float kInvPi = float(1.0 / 3.14159265358979323846);
+
 template <typename T>
 struct Vector3 {
     T x = 0, y = 0, z = 0;

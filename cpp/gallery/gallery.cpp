@@ -1,11 +1,11 @@
 #include "gallery/gallery.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <mutex>
 
+#include "common/timing.h"
 #include "common/error.h"
 #include "common/parallel.h"
 #include "pack/tile_key.h"
@@ -15,12 +15,6 @@
 namespace gigascroll {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-constexpr float kInvPi = float(1.0 / M_PI);
 
 // A painting's albedo where photons bounce off it, read once per lighting through the virtual
 // texture at the painting's finest pinned level: the pinned tail (cache/page_table.h) is

@@ -1,10 +1,10 @@
 #include "photon/progressive.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 
+#include "common/timing.h"
 #include "common/error.h"
 #include "common/parallel.h"
 #include "photon/adaptive_grid.h"
@@ -16,10 +16,6 @@
 namespace gigascroll {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 // A pixel's running SPPM statistics, and this pass's visible point.
 struct PixelState {

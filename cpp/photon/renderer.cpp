@@ -1,11 +1,11 @@
 #include "photon/renderer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <mutex>
 #include <numeric>
 
+#include "common/timing.h"
 #include "common/error.h"
 #include "common/limits.h"
 #include "common/parallel.h"
@@ -14,11 +14,6 @@
 namespace gigascroll {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-constexpr float kInvPi = float(1.0 / M_PI);
 // Hit points per cooperative block (seed 001 Algorithm 1 uses a thread group).
 constexpr std::size_t kCoopBlock = 64;
 }  // namespace

@@ -1,20 +1,15 @@
 #include "photon/stereo.h"
 
 #include <atomic>
-#include <chrono>
 #include <memory>
 #include <mutex>
 
+#include "common/timing.h"
 #include "common/error.h"
 #include "common/parallel.h"
 #include "photon/rng.h"
 
 namespace gigascroll {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-}  // namespace
 
 StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reuse, bool keep_sources) {
     require(R.settings().pipeline == Pipeline::Fused, "render_stereo: stereo reuse renders with the fused pipeline");

@@ -4,11 +4,11 @@
 #include <array>
 #include <atomic>
 #include <bit>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
+#include "common/timing.h"
 #include "common/error.h"
 #include "common/parallel.h"
 #include "sampling/sampler.h"
@@ -17,10 +17,6 @@
 namespace gigascroll {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 constexpr unsigned kNoHit = RTC_INVALID_GEOMETRY_ID;
 constexpr std::uint64_t kUnclaimed = ~std::uint64_t(0);
 
@@ -240,7 +236,6 @@ void DisplayPass::shade(const DisplayLighting& lighting, GBuffer& g, const GBuff
                         EyeStats& st) {
     const auto t0 = Clock::now();
     const std::size_t n = std::size_t(g.width) * g.height;
-    constexpr float kInvPi = float(1.0 / 3.14159265358979323846);  // as the Gallery's
     const SrgbTable& srgb_decode = srgb_table();
     parallel_for(n, 4096, [&](std::size_t b, std::size_t e) {
         SurfaceLight sl;
