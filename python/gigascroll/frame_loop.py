@@ -23,7 +23,9 @@ import numpy as np
 
 from . import runtime
 from . import views as v
-from ._core import VirtualTextureLookup
+from ._core import TilePack, VirtualTextureLookup
+from .errors import expect_type
+from .pack.reader import PurePack
 from .views.baselines import BASELINES, make_baseline
 
 __all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
@@ -71,6 +73,8 @@ class FrameLoop:
     last_images: list = field(default_factory=list, init=False)
 
     def __post_init__(self):
+        expect_type(self.exhibition, v.Exhibition, "FrameLoop: exhibition")
+        expect_type(self.pack, (TilePack, PurePack), "FrameLoop: pack")
         if self.strategy not in LOADING_STRATEGIES:
             raise ValueError(f"unknown loading strategy {self.strategy!r}; choose from "
                              f"{', '.join(LOADING_STRATEGIES)}")

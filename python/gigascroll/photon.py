@@ -18,6 +18,7 @@ import numpy as np
 
 from . import _core
 from ._core import Camera, PhotonMap, StereoCamera
+from .errors import expect_type
 
 __all__ = ["Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
            "RoomScene", "room_scene", "ROOMS", "default_radius", "render", "render_stereo",
@@ -233,12 +234,16 @@ def room_scene(name: str) -> RoomScene:
 
 def default_radius(scene: Scene) -> float:
     """1% of the scene's bounding-box diagonal (0.035 in the Cornell box)."""
+    expect_type(scene, _core._Scene, "scene")
     lo, hi = scene.bounds
     return 0.01 * math.dist(lo, hi)
 
 
 def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
               cooperative, direct, indirect, threads, hash_mode, disc=False) -> dict:
+    if not isinstance(scene, _core._Scene):
+        raise TypeError(f"scene must be a gigascroll Scene (or, for render, a Gallery), not "
+                        f"{type(scene).__name__}")
     if radius is None:
         radius = default_radius(scene)
     for name, value in (("photons", photons), ("k", k), ("spp", spp), ("light_samples", light_samples),

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .._core import TilePack
+from ..errors import expect_type
+from .reader import PurePack
 
 __all__ = ["pack_manifest", "read_level", "verify_pack", "pack_summary"]
 
@@ -20,6 +22,7 @@ def pack_manifest(path) -> dict:
 
 def read_level(pack: TilePack, painting: int, level: int) -> np.ndarray:
     """Assembles one whole mip level (height, width, 3) from the payloads of its tiles."""
+    expect_type(pack, (TilePack, PurePack), "read_level: pack")
     p = pack.paintings[painting]
     if not 0 <= level < p.levels:
         raise ValueError(f"level {level} out of range (painting has {p.levels})")
@@ -38,6 +41,7 @@ def read_level(pack: TilePack, painting: int, level: int) -> np.ndarray:
 def verify_pack(pack: TilePack, progress: bool = False) -> int:
     """Reads every stored tile, verifying its checksum; returns the number of tiles read.
     Raises OSError on the first corrupt tile."""
+    expect_type(pack, (TilePack, PurePack), "verify_pack: pack")
     bar = None
     if progress:
         from tqdm import tqdm
@@ -59,6 +63,7 @@ def verify_pack(pack: TilePack, progress: bool = False) -> int:
 
 def pack_summary(pack: TilePack) -> str:
     """A human-readable summary of a pack: geometry, layout and paintings."""
+    expect_type(pack, (TilePack, PurePack), "pack_summary: pack")
     m = pack_manifest(pack.path)
     pt = m["page_table"]
     size = sum(f.stat().st_size for f in Path(pack.path).iterdir() if f.is_file())

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .._core import ExhibitionScene, PaintingGeometry, ResidentSet
+from ..errors import expect_type
 
 __all__ = ["HEADSET", "MAGNIFIER", "SCROLL", "TABLE4_PAINTINGS", "Headset", "Magnifier",
            "PaintingSpec", "Exhibition", "single_scroll", "multi_exhibition", "FPS", "TEXEL_M",
@@ -100,6 +101,7 @@ def single_scroll(spec: PaintingSpec = SCROLL, tile_size: int = 128, border: int
     x = 0 to width_m, seen from z < 0; the top edge at centre_height + height_m / 2. Texel
     (0, 0) is the top-left corner as a visitor sees it, at x = width_m: a camera looking +z
     has its right along -x, so image x runs along -x (with u = +x it would read mirrored)."""
+    expect_type(spec, PaintingSpec, "single_scroll: spec")
     tiles = spec.tiles(tile_size, border)
     scene = ExhibitionScene()
     top = centre_height + spec.height_m / 2
