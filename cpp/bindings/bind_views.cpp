@@ -144,16 +144,9 @@ void bind_views(nb::module_& m) {
     m.def("render_view", [](const ExhibitionScene& scene, const Camera& camera, std::int64_t width,
                             std::int64_t height, double lod_bias, unsigned threads,
                             std::int64_t display_step, bool display) {
-        require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
-                "view resolution out of range");
-        require(display_step >= 1 && display_step < (1 << 16), "display_step must be >= 1");
-        FeedbackOptions o{std::uint32_t(width), std::uint32_t(height), lod_bias, threads,
-                          std::uint32_t(display_step)};
-        const std::size_t w = feedback_width(camera, o), h = feedback_height(camera, o);
-        require_feedback_size(w, h);
-        const std::size_t dw = display_extent(std::uint32_t(w), o.display_step),
-                          dh = display_extent(std::uint32_t(h), o.display_step);
-        FreshArray<std::uint64_t> keys({h, w});
+        const FeedbackOptions o = checked_feedback_options(width, height, lod_bias, threads, display_step);
+        const FeedbackShape s = feedback_shape(camera, o);
+        FreshArray<std::uint64_t> keys({s.height, s.width});
         nb::dict d;
         d["keys"] = keys.array;
         d["display_step"] = display_step;
@@ -166,8 +159,8 @@ void bind_views(nb::module_& m) {
             d["uv"] = nb::none();
             return d;
         }
-        FreshArray<float> lod({dh, dw});
-        FreshArray<double> uv({dh, dw, 2});
+        FreshArray<float> lod({s.display_height, s.display_width});
+        FreshArray<double> uv({s.display_height, s.display_width, 2});
         {
             nb::gil_scoped_release release;
             render_view(scene, camera, o, keys.data, lod.data, uv.data);

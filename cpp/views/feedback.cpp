@@ -53,6 +53,21 @@ std::uint32_t feedback_height(const Camera& camera, const FeedbackOptions& optio
     return options.height ? options.height : std::max(1u, camera.height / 8);
 }
 
+FeedbackOptions checked_feedback_options(std::int64_t width, std::int64_t height, double lod_bias,
+                                         unsigned threads, std::int64_t display_step) {
+    require(width >= 0 && height >= 0 && width < (1 << 16) && height < (1 << 16),
+            "view resolution out of range");
+    require(display_step >= 1 && display_step < (1 << 16), "display_step must be >= 1");
+    return FeedbackOptions{std::uint32_t(width), std::uint32_t(height), lod_bias, threads,
+                           std::uint32_t(display_step)};
+}
+
+FeedbackShape feedback_shape(const Camera& camera, const FeedbackOptions& options) {
+    const std::uint32_t w = feedback_width(camera, options), h = feedback_height(camera, options);
+    require_feedback_size(w, h);
+    return {w, h, display_extent(w, options.display_step), display_extent(h, options.display_step)};
+}
+
 namespace {
 
 // A painting plane seen through a pinhole camera. With the ray direction

@@ -58,4 +58,15 @@ void require_feedback_size(std::uint64_t width, std::uint64_t height);
 std::uint32_t feedback_width(const Camera& camera, const FeedbackOptions& options);
 std::uint32_t feedback_height(const Camera& camera, const FeedbackOptions& options);
 
+// Options from a caller's untrusted integers (resolution in [0, 2^16) a side, 0 = the 1/8
+// default; display_step in [1, 2^16)): InvalidArgument otherwise.
+FeedbackOptions checked_feedback_options(std::int64_t width, std::int64_t height, double lod_bias,
+                                         unsigned threads, std::int64_t display_step);
+// What a feedback pass of `camera` writes: keys (height x width) and lod/uv on the display grid
+// (display_height x display_width). require_feedback_size applies: callers allocate from it.
+struct FeedbackShape {
+    std::uint32_t width, height, display_width, display_height;
+};
+FeedbackShape feedback_shape(const Camera& camera, const FeedbackOptions& options);
+
 }  // namespace gigascroll

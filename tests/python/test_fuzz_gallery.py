@@ -118,3 +118,17 @@ def test_relighting_while_rendering_from_another_thread(pack):
     t.join()
     assert all("bake" in str(e) for e in errors)
     assert all(np.isfinite(f).all() for f in frames)
+
+
+def test_huge_feedback_pass_is_refused_before_allocating(lit):
+    """The gallery's feedback pass has the exhibition's size bound (2^26 pixels): a 65535^2
+    pass would need about 110 GiB and must be refused with the memory named, not attempted."""
+    gal, _vt = lit
+    cam = gal.camera((4, 4))
+    with pytest.raises(ValueError, match=r"would need .*GiB"):
+        gal.render_view(cam, width=65535, height=65535)
+    with pytest.raises(ValueError, match="out of range"):
+        gal.render_view(cam, width=1 << 16, height=4)
+    with pytest.raises(ValueError, match="display_step"):
+        gal.render_view(cam, width=4, height=4, display_step=0)
+    assert gal.render_view(cam, width=4, height=2)["keys"].shape == (2, 4)
