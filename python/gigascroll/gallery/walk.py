@@ -267,7 +267,9 @@ class GalleryWalk:
     pace: sleep to the path's frame boundaries (False: flat out).
     wait_loads: block each frame until that frame's loads arrived (deterministic tests).
     on_frame(frame, record, images): called with the frame's record and its display images
-    (left, right, magnifier or None, lenses) before the next frame starts."""
+    (left, right, magnifier or None, lenses) before the next frame starts.
+    foveation: a gallery.foveation.Foveation (None: off): each eye's fovea traced at full
+    density, its periphery at a lower one, and both requested by their own cameras."""
     source: FrameSource
     pack: object
     path: v.CameraPath
@@ -281,6 +283,7 @@ class GalleryWalk:
     pace: bool = False
     wait_loads: bool = False
     threads: int = 0
+    foveation: object = None
     records: list = field(default_factory=list, init=False)
 
     def __post_init__(self):
@@ -294,6 +297,8 @@ class GalleryWalk:
         if len(self.pack.paintings) < len(self.source.tiles):
             raise ValueError("the pack lacks paintings the scene shows")
         self.headset = Headset(width=int(w), height=int(h))
+        if self.foveation is not None:  # a fovea wider than the eye fails here, not mid-walk
+            self.foveation.layout(self.cameras(0)[0][0])
 
     def cameras(self, frame: int):
         """The frame's views: (camera, feedback w, feedback h) for left, right[, magnifier]."""
@@ -320,7 +325,8 @@ class GalleryWalk:
             direct=v.DirectLoading(self.per_frame),
             levels=np.array([t.levels for t in src.tiles], np.int64), loader=loader,
             oracle_vt=runtime.VirtualTexture(pack, self.oracle_slots) if self.oracle else None,
-            passes=[_core.DisplayPass() for _ in range(4)])
+            passes=[_core.DisplayPass() for _ in range(4)],
+            foveated=None if self.foveation is None else _foveated_displays(self.foveation))
 
     def run(self, progress: bool = False, on_frame=None) -> dict:
         src = self.source
@@ -365,7 +371,9 @@ class GalleryWalk:
             views = self.cameras(frame)
         if moving is None:
             moving = frame + 1 < len(self.path) and _pose_changes(self.path, frame)
-        buffers = [src.feedback(cam, fw, fh, thr) for cam, fw, fh in views]
+        feedback_views = (views if self.foveation is None else
+                          self.foveation.feedback_views(views, self.headset.feedback_scale))
+        buffers = [src.feedback(cam, fw, fh, thr) for cam, fw, fh in feedback_views]
         t["feedback"] = time.perf_counter() - t0
 
         t0 = time.perf_counter()
@@ -405,10 +413,14 @@ class GalleryWalk:
 
         t0 = time.perf_counter()
         (lc, _, _), (rc, _, _) = views[0], views[1]
-        left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr)
+        if state.foveated is None:
+            left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr)
+            ls, rs = dpass.left_stats, dpass.right_stats
+        else:
+            left, right = state.foveated[0].display_stereo(src, vt, lc, rc, self.reuse, thr)
+            ls, rs = state.foveated[0].left_stats, state.foveated[0].right_stats
         mag = src.display(mpass, vt, views[2][0], thr) if len(views) > 2 else None
         t["display"] = time.perf_counter() - t0
-        ls, rs = dpass.left_stats, dpass.right_stats
         ms = mpass.left_stats if mag is not None else None
         parts = {}
         for part in DISPLAY_PARTS:
@@ -423,6 +435,7 @@ class GalleryWalk:
             "right_display_ms": 1e3 * (rs["total_seconds"]),
             "magnifier_display_ms": 1e3 * ms["total_seconds"] if ms else 0.0,
             "reused_share": rs["reused"] / max(1, rs["pixels"]),
+            "traced_rays": int(ls["traced"] + rs["traced"]),
             "total_ms": 1e3 * sum(t.values()), "requests": n_requests, "hit_rate": hit_rate,
             "issued": int(issue.size), "loaded": int(arrived.size),
             "moving": bool(moving),
@@ -437,7 +450,10 @@ class GalleryWalk:
             if missing.size:
                 for key in zip(*(a.tolist() for a in v.unpack_requests(missing))):
                     oracle_vt.insert(key, self.pack.read_tile(*key))
-            ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr)
+            if state.foveated is None:
+                ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr)
+            else:  # the oracle of a foveated frame is the same foveated frame, all resident
+                ol, orr = state.foveated[1].display_stereo(src, oracle_vt, lc, rc, self.reuse, thr)
             om = src.display(ompass, oracle_vt, views[2][0], thr) if mag is not None else None
             shown = [left, right] + ([mag] if mag is not None else [])
             truth_imgs = [ol, orr] + ([om] if om is not None else [])
@@ -488,6 +504,12 @@ class _LoopState:
     loader: object
     oracle_vt: object
     passes: list
+    foveated: list | None = None  # with foveation: the displays of the frame and its oracle
+
+
+def _foveated_displays(foveation) -> list:
+    from .foveation import FoveatedDisplay
+    return [FoveatedDisplay(foveation), FoveatedDisplay(foveation)]
 
 
 def stops_of(records: list) -> list[dict]:
