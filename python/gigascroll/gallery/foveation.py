@@ -103,7 +103,13 @@ class FoveaLayout:
     factor: int
     fovea: object       # Camera: the crop
     periphery: object   # Camera: the whole eye at 1/factor density
-    weight: np.ndarray  # fovea_height x fovea_width blend weight of the fovea's image
+    weight_x: np.ndarray  # per fovea column: the fovea image's blend weight along x
+    weight_y: np.ndarray  # per fovea row
+
+    @property
+    def weight(self) -> np.ndarray:
+        """fovea_height x fovea_width: the fovea image's blend weight (1: the fovea alone)."""
+        return np.outer(self.weight_y, self.weight_x)
 
     @property
     def traced_pixels(self) -> int:
@@ -122,8 +128,18 @@ class FoveaLayout:
         band[sl] = self.weight < 1.0
         return {"fovea": inner, "band": band, "periphery": ~(inner | band)}
 
-    def composite(self, fovea_img: np.ndarray, periphery_img: np.ndarray) -> np.ndarray:
-        """The eye's frame: the periphery upsampled, the fovea blended in over its rectangle."""
+    def composite(self, fovea_img: np.ndarray, periphery_img: np.ndarray,
+                  threads: int = 0) -> np.ndarray:
+        """The eye's frame: the periphery upsampled, the fovea blended in over its rectangle
+        (one multithreaded pass in the core: sampling/foveation.h)."""
+        from .. import _core
+        return _core._composite_foveated(
+            np.ascontiguousarray(periphery_img, np.float32),
+            np.ascontiguousarray(fovea_img, np.float32), self.weight_x, self.weight_y,
+            self.x0, self.y0, self.factor, self.width, self.height, threads)
+
+    def composite_reference(self, fovea_img: np.ndarray, periphery_img: np.ndarray) -> np.ndarray:
+        """composite() in numpy (the reference the tests hold the core to)."""
         out = upsample_to(periphery_img, self.width, self.height, self.factor)
         ys = slice(self.y0, self.y0 + self.fovea_height)
         xs = slice(self.x0, self.x0 + self.fovea_width)
@@ -172,10 +188,9 @@ class Foveation:
             return max(e, 2 - n % 2)
         fw, fh = extent(W, camera.tan_half_x), extent(H, camera.tan_half_y)
         band = self.blend * min(fw, fh) / 2
-        weight = np.outer(_ramp(fh, band), _ramp(fw, band))
         return FoveaLayout(W, H, (W - fw) // 2, (H - fh) // 2, fw, fh, int(self.factor),
                            crop_camera(camera, fw, fh), _scaled_camera(camera, self.factor),
-                           weight)
+                           _ramp(fw, band), _ramp(fh, band))
 
     def feedback_views(self, views, feedback_scale: int = 8) -> list:
         """The feedback views of a frame foveated: each eye (the first two views) replaced by
@@ -216,8 +231,8 @@ class FoveatedDisplay:
         images = []
         for eye, lay, f_img, p_img in ((0, ll, lf, lp), (1, rl, rf, rp)):
             t0 = time.perf_counter()
-            images.append(lay.composite(f_img, p_img))
-            s = {k: 0.0 for k in _STAT_KEYS}
+            images.append(lay.composite(f_img, p_img, threads))
+            s = {k: 0.0 if k.endswith("_seconds") else 0 for k in _STAT_KEYS}
             for d in self.passes:
                 es = d.left_stats if eye == 0 else d.right_stats
                 for k in _STAT_KEYS:
