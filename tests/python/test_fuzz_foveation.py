@@ -99,3 +99,25 @@ def test_parse_foveation_any_value(deg, factor, w, h):
         assert str(e).startswith("--fovea")
         return
     assert f is None or (0 < f.fovea_deg < 180 and 2 <= f.factor <= 16)
+
+
+@fuzz_settings(20)
+@given(deg=st.sampled_from(HOSTILE_DEG + ["30"]), factor=st.sampled_from(HOSTILE_FACTOR + ["2"]),
+       eye=st.sampled_from([None, "16x16", "64x48", "1800x1920"]))
+def test_view_fovea_option_hostile_values(fork_worker, tmp_path_factory, deg, factor, eye):
+    """`gigascroll view --fovea`: bad values fail with the gallery's one-line message before
+    the display or the pack is looked at; good ones get as far as the (missing) display."""
+    count_case("foveation-view-cli")
+    missing = tmp_path_factory.mktemp("fovea-view") / "no.pack"
+    argv = ["view", str(missing), "--fovea", deg, "--fovea-factor", factor]
+    if eye is not None:
+        argv += ["--eye", eye]
+    o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=60)
+    problem = cli_message_ok(o)
+    assert problem is None, f"view {argv[2:]}: {problem}\n{o.describe()}"
+    assert o.code == 2
+    if deg == "30" and factor == "2":
+        # No display in the fuzz worker (or, with one, no pack at that path).
+        assert "display" in o.stderr or "not a tile pack" in o.stderr, o.describe()
+    else:
+        assert "--fovea" in o.stderr or "invalid" in o.stderr, o.describe()

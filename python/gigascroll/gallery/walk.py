@@ -357,10 +357,12 @@ class GalleryWalk:
                 bar.close()
         return self.summary()
 
-    def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None):
+    def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None,
+             foveate: bool = True):
         """One frame: (record, (left, right, magnifier or None, lenses)). views: the frame's
         (camera, feedback w, feedback h) list (default: the path's frame); moving: whether the
-        pose changes after this frame (default: from the path)."""
+        pose changes after this frame (default: from the path); foveate=False: this frame
+        without the walk's foveation (an interactive viewer's toggle)."""
         vt, lookup, proc, truth = state.vt, state.lookup, state.proc, state.truth
         direct, levels, loader, oracle_vt = state.direct, state.levels, state.loader, state.oracle_vt
         dpass, mpass, opass, ompass = state.passes
@@ -371,8 +373,10 @@ class GalleryWalk:
             views = self.cameras(frame)
         if moving is None:
             moving = frame + 1 < len(self.path) and _pose_changes(self.path, frame)
-        feedback_views = (views if self.foveation is None else
-                          self.foveation.feedback_views(views, self.headset.feedback_scale))
+        foveation = self.foveation if foveate else None
+        foveated = state.foveated if foveation is not None else None
+        feedback_views = (views if foveation is None else
+                          foveation.feedback_views(views, self.headset.feedback_scale))
         buffers = [src.feedback(cam, fw, fh, thr) for cam, fw, fh in feedback_views]
         t["feedback"] = time.perf_counter() - t0
 
@@ -413,12 +417,12 @@ class GalleryWalk:
 
         t0 = time.perf_counter()
         (lc, _, _), (rc, _, _) = views[0], views[1]
-        if state.foveated is None:
+        if foveated is None:
             left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr)
             ls, rs = dpass.left_stats, dpass.right_stats
         else:
-            left, right = state.foveated[0].display_stereo(src, vt, lc, rc, self.reuse, thr)
-            ls, rs = state.foveated[0].left_stats, state.foveated[0].right_stats
+            left, right = foveated[0].display_stereo(src, vt, lc, rc, self.reuse, thr)
+            ls, rs = foveated[0].left_stats, foveated[0].right_stats
         mag = src.display(mpass, vt, views[2][0], thr) if len(views) > 2 else None
         t["display"] = time.perf_counter() - t0
         ms = mpass.left_stats if mag is not None else None
@@ -450,10 +454,10 @@ class GalleryWalk:
             if missing.size:
                 for key in zip(*(a.tolist() for a in v.unpack_requests(missing))):
                     oracle_vt.insert(key, self.pack.read_tile(*key))
-            if state.foveated is None:
+            if foveated is None:
                 ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr)
             else:  # the oracle of a foveated frame is the same foveated frame, all resident
-                ol, orr = state.foveated[1].display_stereo(src, oracle_vt, lc, rc, self.reuse, thr)
+                ol, orr = foveated[1].display_stereo(src, oracle_vt, lc, rc, self.reuse, thr)
             om = src.display(ompass, oracle_vt, views[2][0], thr) if mag is not None else None
             shown = [left, right] + ([mag] if mag is not None else [])
             truth_imgs = [ol, orr] + ([om] if om is not None else [])
