@@ -25,6 +25,7 @@ import numpy as np
 from .. import _core
 from .. import runtime
 from .. import views as v
+from ..frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
 from ..views.exhibition import Headset
 from .room import RoomSpec
 
@@ -332,10 +333,7 @@ class GalleryWalk:
         src = self.source
         period = 1.0 / self.path.fps
         self.records = []
-        bar = None
-        if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=len(self.path), unit="frame", desc=f"walk {src.name}")
+        bar = progress_bar(progress, len(self.path), f"walk {src.name}")
         try:
             with runtime.TileLoader(self.pack, mode="lockfree", threads=1) as loader:
                 state = self.open_state(loader)
@@ -346,12 +344,7 @@ class GalleryWalk:
                     self.records.append(rec)
                     if on_frame is not None:
                         on_frame(frame, rec, images)
-                    if bar is not None:
-                        bar.update(1)
-                    if self.pace:
-                        delay = start + (frame + 1) * period - time.perf_counter()
-                        if delay > 0:
-                            time.sleep(delay)
+                    end_frame(bar, self.pace, start, frame, period)
         finally:
             if bar is not None:
                 bar.close()
@@ -392,28 +385,11 @@ class GalleryWalk:
                 commands = np.concatenate([commands, missing])
         t["processing"] = time.perf_counter() - t0
 
-        t0 = time.perf_counter()
-        direct.set_commands(commands)
-        issue = direct.issue(lookup)
-        if issue.size:
-            loader.submit(issue)
-        t["issue"] = time.perf_counter() - t0
-
-        t0 = time.perf_counter()
-        arrived, _ = vt.drain(loader)
-        if self.wait_loads:
-            deadline = time.perf_counter() + 30
-            while arrived.size < issue.size and time.perf_counter() < deadline:
-                time.sleep(0.0002)
-                arrived = np.concatenate([arrived, vt.drain(loader)[0]])
-        t["drain"] = time.perf_counter() - t0
-
-        t0 = time.perf_counter()
-        if arrived.size:
-            direct.loaded(arrived)
-        if new_set["responses"].size:
-            vt.request(new_set["responses"])
-        t["update"] = time.perf_counter() - t0
+        def issue_tiles():
+            direct.set_commands(commands)
+            return direct.issue(lookup)
+        issue, arrived = load_stages(t, issue_tiles, vt, loader, direct, new_set["responses"],
+                                     self.wait_loads, wait_timeout=30)
 
         t0 = time.perf_counter()
         (lc, _, _), (rc, _, _) = views[0], views[1]
@@ -431,7 +407,7 @@ class GalleryWalk:
             key = f"{part}_seconds"
             parts[part] = ls[key] + rs[key] + (ms[key] if ms else 0.0)
 
-        hit_rate, n_requests = _hit_rate(truth, buffers, lookup, frame)
+        hit_rate, n_requests = request_hit_rate(truth, buffers, lookup, frame)
         rec = {
             "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in WALK_STAGES},
             **{f"display_{p}_ms": 1e3 * parts[p] for p in DISPLAY_PARTS},
@@ -474,21 +450,14 @@ class GalleryWalk:
         r = self.records
         if not r:
             return {}
-        frame_ms = [x["total_ms"] for x in r]
-        times = [x["time_s"] for x in r]
         out = {
             "frames": len(r), "eye": list(self.eye), "path_fps": self.path.fps,
-            "fps": (len(r) - 1) / (times[-1] - times[0]) if len(r) > 1 else float("nan"),
-            "fps_from_frame_time": 1e3 / statistics.mean(frame_ms),
-            "frame_ms_std": statistics.pstdev(frame_ms),
-            **{f"{s}_ms": statistics.mean(x[f"{s}_ms"] for x in r) for s in WALK_STAGES},
+            **frame_summary(r, WALK_STAGES),
             **{f"display_{p}_ms": statistics.mean(x[f"display_{p}_ms"] for x in r)
                for p in DISPLAY_PARTS},
             "left_display_ms": statistics.mean(x["left_display_ms"] for x in r),
             "right_display_ms": statistics.mean(x["right_display_ms"] for x in r),
             "reused_share": statistics.mean(x["reused_share"] for x in r),
-            "hit_rate": statistics.mean(x["hit_rate"] for x in r),
-            "requests_per_frame": statistics.mean(x["requests"] for x in r),
             "stops": stops_of(r),
         }
         if "error" in r[0]:
@@ -543,13 +512,6 @@ def _pose_changes(path: v.CameraPath, frame: int) -> bool:
     a = (path.position[frame], path.forward[frame], path.up[frame])
     b = (path.position[frame + 1], path.forward[frame + 1], path.up[frame + 1])
     return not all(np.array_equal(x, y) for x, y in zip(a, b))
-
-
-def _hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
-    """(share of the distinct requests answered at their own level, count)."""
-    s = truth.process(buffers, lookup, frame)
-    n = int(s["requests"].size)
-    return (float(np.mean(s["responses"] == s["requests"])) if n else 1.0), n
 
 
 def walk_path(room: RoomSpec, seconds: float = 6.0, fps: float = v.FPS,
