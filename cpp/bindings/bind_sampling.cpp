@@ -16,6 +16,7 @@
 
 #include "pack/reader.h"
 #include "sampling/display.h"
+#include "sampling/foveation.h"
 #include "sampling/mip_texture.h"
 #include "sampling/sampler.h"
 #include "sampling/stereo_display.h"
@@ -207,6 +208,33 @@ void bind_sampling(nb::module_& m) {
           "(h', w', 3) float32, black where no painting is seen.");
 
     bind_stereo_display(m);
+
+    using Image = nb::ndarray<const float, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
+    using Weights = nb::ndarray<const float, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+    m.def("_composite_foveated", [](const Image& periphery, const Image& fovea,
+                                    const Weights& weight_x, const Weights& weight_y,
+                                    std::uint32_t x0, std::uint32_t y0, std::uint32_t factor,
+                                    std::uint32_t width, std::uint32_t height, unsigned threads) {
+        require(periphery.shape(2) == 3 && fovea.shape(2) == 3,
+                "composite_foveated: images must be (h, w, 3)");
+        require(weight_x.shape(0) == fovea.shape(1) && weight_y.shape(0) == fovea.shape(0),
+                "composite_foveated: one weight per fovea column and row");
+        require(width > 0 && height > 0 && width <= (1u << 16) && height <= (1u << 16),
+                "composite_foveated: eye size out of range");
+        const FoveatedEye eye{width, height, factor, std::uint32_t(periphery.shape(1)),
+                              std::uint32_t(periphery.shape(0)), x0, y0,
+                              std::uint32_t(fovea.shape(1)), std::uint32_t(fovea.shape(0))};
+        FreshArray<float, nb::ndim<3>> out({height, width, 3});
+        {
+            nb::gil_scoped_release release;
+            composite_foveated(eye, periphery.data(), fovea.data(), weight_x.data(),
+                               weight_y.data(), out.data, threads);
+        }
+        return out.array;
+    }, "periphery"_a, "fovea"_a, "weight_x"_a, "weight_y"_a, "x0"_a, "y0"_a, "factor"_a,
+       "width"_a, "height"_a, "threads"_a = 0,
+       "A foveated eye (sampling/foveation.h): the periphery upsampled bilinearly by factor,\n"
+       "the fovea blended in at (x0, y0) with weight weight_y[y] * weight_x[x].");
 }
 
 }  // namespace gigascroll::bindings

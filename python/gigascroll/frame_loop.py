@@ -28,7 +28,8 @@ from .errors import expect_type
 from .pack.reader import PurePack
 from .views.baselines import BASELINES, make_baseline
 
-__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
+__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS", "load_stages",
+           "request_hit_rate", "progress_bar", "end_frame", "frame_summary"]
 
 METHODS = v.PROCESSING_METHODS + BASELINES
 
@@ -116,10 +117,7 @@ class FrameLoop:
         latency = 0
         period = 1.0 / self.path.fps
         self.records = []
-        bar = None
-        if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=len(self.path), unit="frame", desc=f"{self.method}/{self.strategy}")
+        bar = progress_bar(progress, len(self.path), f"{self.method}/{self.strategy}")
         with runtime.TileLoader(self.pack, mode=self.loader_mode,
                                 threads=self.loader_threads) as loader:
             start = time.perf_counter()
@@ -155,34 +153,18 @@ class FrameLoop:
                     latency = 0
                 t["processing"] = time.perf_counter() - t0
 
-                t0 = time.perf_counter()
                 if new_set is not None:
                     commands = new_set["commands"]
-                    if direct is not None:
+
+                def issue_tiles():
+                    if direct is None:
+                        return mip.issue(commands, lookup)
+                    if new_set is not None:
                         direct.set_commands(commands)
-                issue = direct.issue(lookup) if direct is not None else mip.issue(commands, lookup)
-                if issue.size:
-                    loader.submit(issue)
-                t["issue"] = time.perf_counter() - t0
-
-                # The loader's finished tiles go into the physical cache and the page table in
-                # one C++ call; a tile that failed to load comes back without being inserted.
-                t0 = time.perf_counter()
-                arrived, _ = vt.drain(loader)
-                if self.wait_loads:
-                    while arrived.size < issue.size:
-                        time.sleep(0.0002)
-                        arrived = np.concatenate([arrived, vt.drain(loader)[0]])
-                t["drain"] = time.perf_counter() - t0
-
-                t0 = time.perf_counter()
-                if arrived.size:
-                    loading.loaded(arrived)
-                if new_set is not None and new_set["responses"].size:
-                    # The tiles the display samples become most recently used, so the LRU
-                    # evicts what the views left, not what they still show.
-                    vt.request(new_set["responses"])
-                t["update"] = time.perf_counter() - t0
+                    return direct.issue(lookup)
+                issue, arrived = load_stages(
+                    t, issue_tiles, vt, loader, loading,
+                    None if new_set is None else new_set["responses"], self.wait_loads)
 
                 t0 = time.perf_counter()
                 images = [self._display(vt, d) for d in views]
@@ -190,8 +172,8 @@ class FrameLoop:
 
                 # Hit rate after this frame's updates: what the display showed. A request
                 # hits when its response (finest resident tile answering it) is itself.
-                hit_rate = _hit_rate(truth, buffers, lookup, frame)
-                view_hits = ([_hit_rate(truth, [b], lookup, frame)[0] for b in buffers]
+                hit_rate = request_hit_rate(truth, buffers, lookup, frame)
+                view_hits = ([request_hit_rate(truth, [b], lookup, frame)[0] for b in buffers]
                              if frame == len(self.path) - 1 else None)
                 self.last_images = images
                 self.records.append({
@@ -203,12 +185,7 @@ class FrameLoop:
                     "moving": frame + 1 < len(self.path) and not np.array_equal(
                         self.path.position[frame], self.path.position[frame + 1]),
                     "time_s": time.perf_counter() - start})
-                if bar is not None:
-                    bar.update(1)
-                if self.pace:
-                    delay = start + (frame + 1) * period - time.perf_counter()
-                    if delay > 0:
-                        time.sleep(delay)
+                end_frame(bar, self.pace, start, frame, period)
         if bar is not None:
             bar.close()
         return self.summary()
@@ -229,9 +206,6 @@ class FrameLoop:
         r = self.records
         if not r:
             return {}
-        frame_ms = [x["total_ms"] for x in r]
-        times = [x["time_s"] for x in r]
-        fps = (len(r) - 1) / (times[-1] - times[0]) if len(r) > 1 else float("nan")
         # Display latency: from the first frame after the camera stopped until every visible
         # request is resident at its level.
         stop = next((i for i in range(len(r)) if not r[i]["moving"]
@@ -241,18 +215,84 @@ class FrameLoop:
             sharp = next((i for i in range(stop, len(r)) if r[i]["hit_rate"] == 1.0), None)
             display_latency = None if sharp is None else sharp - stop + 1
         return {
-            "frames": len(r), "fps": fps,
-            "fps_from_frame_time": 1e3 / statistics.mean(frame_ms),
-            "frame_ms_std": statistics.pstdev(frame_ms),
-            **{f"{s}_ms": statistics.mean(x[f"{s}_ms"] for x in r) for s in STAGES},
-            "hit_rate": statistics.mean(x["hit_rate"] for x in r),
+            **frame_summary(r, STAGES),
             "latency_frames": statistics.mean(x["latency_frames"] for x in r),
-            "requests_per_frame": statistics.mean(x["requests"] for x in r),
             "display_latency_frames": display_latency,
         }
 
 
-def _hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
+def frame_summary(records: list, stages) -> dict:
+    """What every run's summary holds: frames, the frame rate (over the wall clock and
+    from the mean frame time), the frame time's spread, each stage's mean time, the mean
+    hit rate and requests per frame. records: non-empty, with time_s, total_ms,
+    <stage>_ms, hit_rate and requests."""
+    frame_ms = [x["total_ms"] for x in records]
+    times = [x["time_s"] for x in records]
+    n = len(records)
+    return {
+        "frames": n, "fps": (n - 1) / (times[-1] - times[0]) if n > 1 else float("nan"),
+        "fps_from_frame_time": 1e3 / statistics.mean(frame_ms),
+        "frame_ms_std": statistics.pstdev(frame_ms),
+        **{f"{s}_ms": statistics.mean(x[f"{s}_ms"] for x in records) for s in stages},
+        "hit_rate": statistics.mean(x["hit_rate"] for x in records),
+        "requests_per_frame": statistics.mean(x["requests"] for x in records),
+    }
+
+
+def progress_bar(progress: bool, frames: int, desc: str):
+    """A tqdm bar over a run's frames (None without `progress`)."""
+    if not progress:
+        return None
+    from tqdm import tqdm
+    return tqdm(total=frames, unit="frame", desc=desc)
+
+
+def end_frame(bar, pace: bool, start: float, frame: int, period: float) -> None:
+    """After a frame: the bar's step and, with `pace`, a sleep to the frame's end (frame
+    boundaries every `period` seconds from `start`)."""
+    if bar is not None:
+        bar.update(1)
+    if pace:
+        delay = start + (frame + 1) * period - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+
+
+def load_stages(t: dict, issue_tiles, vt, loader, loading, responses, wait_loads: bool,
+                wait_timeout: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The issue, drain and update stages of one frame, each timed into `t`; returns
+    (issued, arrived) tile keys. issue: issue_tiles() gives the tiles the loading strategy
+    loads this frame, submitted to the loader. drain: the loader's finished tiles go into
+    the physical cache and the page table in one C++ call (a tile that failed to load comes
+    back without being inserted); with `wait_loads`, until every issued tile arrived (or
+    `wait_timeout` seconds passed). update: the strategy learns what arrived, and the tiles
+    the display samples (`responses`, or None) become most recently used, so the LRU evicts
+    what the views left, not what they still show."""
+    t0 = time.perf_counter()
+    issue = issue_tiles()
+    if issue.size:
+        loader.submit(issue)
+    t["issue"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    arrived, _ = vt.drain(loader)
+    if wait_loads:
+        deadline = None if wait_timeout is None else time.perf_counter() + wait_timeout
+        while arrived.size < issue.size and (deadline is None or time.perf_counter() < deadline):
+            time.sleep(0.0002)
+            arrived = np.concatenate([arrived, vt.drain(loader)[0]])
+    t["drain"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    if arrived.size:
+        loading.loaded(arrived)
+    if responses is not None and responses.size:
+        vt.request(responses)
+    t["update"] = time.perf_counter() - t0
+    return issue, arrived
+
+
+def request_hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
     """(share of the distinct requests in `buffers` answered at their own level, count)."""
     s = truth.process(buffers, lookup, frame)
     n = int(s["requests"].size)

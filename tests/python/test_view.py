@@ -53,13 +53,16 @@ def read(path):
     raise AssertionError(f"no screenshot {path}")
 
 
-def test_window_walks_and_sharpens(display, tmp_path, small_scroll_pack):
-    env = display
+def run_view(env, pack, tmp_path, options, actions):
+    """Runs `gigascroll view PACK` in a 384 x 256 window with `options`, focuses it and calls
+    actions(key, shot): key(*xdotool args) sends input, shot() saves the window's frame (P)
+    and returns it as uint8 RGB. Then Esc; returns (what actions returned, stdout)."""
     app = subprocess.Popen(
-        [sys.executable, "-m", "gigascroll", "view", str(small_scroll_pack.path), "--window",
-         "384x256", "--lighting", "unlit", "--per-frame", "1", "--target-fps", "2",
-         "--screenshot", str(tmp_path / "shot-{n}.png"), "--quit-after", "120"],
+        [sys.executable, "-m", "gigascroll", "view", str(pack.path), "--window", "384x256",
+         "--lighting", "unlit", *options, "--screenshot", str(tmp_path / "shot-{n}.png"),
+         "--quit-after", "120"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    shots = []
     try:
         wid = subprocess.run(["xdotool", "search", "--sync", "--name", "gigascroll view"],
                              env=env, capture_output=True, text=True, timeout=120).stdout.split()[0]
@@ -67,27 +70,36 @@ def test_window_walks_and_sharpens(display, tmp_path, small_scroll_pack):
 
         def key(*args):
             subprocess.run(["xdotool", *args], env=env, check=True, timeout=30)
-        key("key", "p")
-        first = read(tmp_path / "shot-0.png")
-        # Step back from the painting for half a second: the view moves.
-        key("keydown", "s")
-        time.sleep(0.5)
-        key("keyup", "s")
-        key("key", "p")
-        moved = read(tmp_path / "shot-1.png")
-        time.sleep(8)          # standing still: the loader streams the finer tiles in
-        key("key", "p")
-        later = read(tmp_path / "shot-2.png")
-        key("key", "m")        # the magnifier off
-        time.sleep(1)
-        key("key", "p")
-        no_lens = read(tmp_path / "shot-3.png")
+
+        def shot():
+            key("key", "p")
+            shots.append(read(tmp_path / f"shot-{len(shots)}.png"))
+            return shots[-1]
+        result = actions(key, shot)
         key("key", "Escape")
         out, err = app.communicate(timeout=60)
     finally:
         if app.poll() is None:
             app.kill()
     assert app.returncode == 0, err
+    return result, out
+
+
+def test_window_walks_and_sharpens(display, tmp_path, small_scroll_pack):
+    def walk(key, shot):
+        first = shot()
+        # Step back from the painting for half a second: the view moves.
+        key("keydown", "s")
+        time.sleep(0.5)
+        key("keyup", "s")
+        moved = shot()
+        time.sleep(8)          # standing still: the loader streams the finer tiles in
+        later = shot()
+        key("key", "m")        # the magnifier off
+        time.sleep(1)
+        return first, moved, later, shot()
+    (first, moved, later, no_lens), out = run_view(
+        display, small_scroll_pack, tmp_path, ["--per-frame", "1", "--target-fps", "2"], walk)
     assert first.shape == moved.shape == (256, 384, 3)
     assert np.abs(first.astype(int) - moved).mean() > 2       # the view moved
     # The first frame shows the pinned coarse tiles; one tile a frame later it is sharp. The
@@ -104,3 +116,46 @@ def test_view_without_a_display_says_so(gigascroll_cli, small_scroll_pack, monke
     r = gigascroll_cli("view", small_scroll_pack.path)
     assert r.returncode == 2
     assert "display" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_window_toggles_the_foveation(display, tmp_path, small_scroll_pack):
+    """--fovea starts the window foveated; V switches it off. Standing still with every tile
+    resident, the fovea's pixels are the unfoveated eye's (a centred crop of the same pinhole
+    image) while the periphery, traced at 1/4 density and requested two levels coarser,
+    differs; the rays traced per frame drop to the layout's count."""
+    from gigascroll import views as v
+    from gigascroll.gallery.foveation import Foveation
+    from gigascroll.views.exhibition import Headset
+
+    def toggle(key, shot):
+        key("key", "m")        # the magnifier off: its lens would cover the fovea
+        time.sleep(6)          # standing still: every tile the frame asks for streams in
+        foveated = shot()
+        key("key", "v")        # the foveation off: the periphery's finer tiles stream in
+        time.sleep(6)
+        return foveated, shot()
+    (foveated, full), out = run_view(
+        display, small_scroll_pack, tmp_path,
+        ["--target-fps", "0.1", "--fovea", "40", "--fovea-factor", "4"], toggle)
+    # The left eye (192 x 256): its fovea's inner pixels (the fovea alone) and its periphery
+    # outside the fovea's rectangle, below the overlay.
+    hs = Headset(width=192, height=256)
+    lay = Foveation(40.0, 4).layout(v.Camera((0, 0, 0), (0, 0, -1), (0, 1, 0), hs.tan_half_x,
+                                             hs.tan_half_y, 192, 256))
+    band = int(np.ceil(0.25 * min(lay.fovea_width, lay.fovea_height) / 2))
+    ys = slice(lay.y0 + band, lay.y0 + lay.fovea_height - band)  # centred: either way up
+    xs = slice(lay.x0 + band, lay.x0 + lay.fovea_width - band)
+    centre_f, centre_u = foveated[ys, xs].astype(int), full[ys, xs].astype(int)
+    assert centre_f.size > 30 * 30 * 3
+    assert np.abs(centre_f - centre_u).max() <= 1, "the fovea is the unfoveated eye's image"
+    periphery = (slice(60, 256), slice(0, lay.x0 - 2))
+    assert np.abs(foveated[periphery].astype(int) - full[periphery]).mean() > 2
+    # The rays: the first frame foveated, then off after V. The foveated left eye traces
+    # the fovea's and the periphery's pixels, the right eye at most as many.
+    lines = [ln for ln in out.splitlines() if ln.startswith("foveation")]
+    assert lines[0].startswith("foveation on") and lines[1].startswith("foveation off"), out
+    on_rays, off_rays = (int(ln.split(", ")[1].split()[0]) for ln in lines[:2])
+    foveated_left = lay.fovea_width * lay.fovea_height + (192 // 4) * (256 // 4)
+    assert foveated_left <= on_rays <= 2 * foveated_left
+    assert 192 * 256 <= off_rays <= 2 * 192 * 256
+    assert "foveation off" in out.splitlines()[-1]

@@ -14,6 +14,7 @@ BENCHMARKS = {
     "photon": "seed 001 Tables 1-5 and run time against error",
     "gallery": "gallery rooms: photon pass, bake, stills, error against Mitsuba 3",
     "walk": "the gallery walk: display vs bare rays, stereo reuse, fps per eye size, latency",
+    "foveation": "the gallery walk foveated: rays and time saved, requests, error per region",
     "layout": "merged page-table layout time and fill against painting count (BRKGA vs shelf)",
     "bc1": "the bc1 (DXT1) codec: PSNR and FLIP per painting, sampling cost, hit rate per byte",
 }
@@ -22,10 +23,11 @@ BENCHMARKS = {
 def register(sub) -> None:
     from ..benchmarks import (bc1, cluster, export, gallery, layout, loader, pack, photon,
                               queues, views, walk)
+    from ..benchmarks import foveation
 
     modules = {"pack": pack, "cluster": cluster, "export": export, "queues": queues,
                "loader": loader, "views": views, "photon": photon, "gallery": gallery,
-               "walk": walk, "layout": layout, "bc1": bc1}
+               "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True

@@ -41,6 +41,12 @@ def register(sub) -> None:
     p.add_argument("--photons", type=int, default=1 << 18, help="photons for the lighting")
     p.add_argument("--pace", action="store_true", help="sleep to the path's frame rate")
     p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    p.add_argument("--fovea", type=float, default=None, metavar="DEG",
+                   help="fixed foveation: a centred fovea DEG degrees wide and high traced at "
+                        "full density, the periphery at 1/--fovea-factor per axis and requested "
+                        "that much coarser (default: off)")
+    p.add_argument("--fovea-factor", type=int, default=2, metavar="K",
+                   help="with --fovea: the periphery's density is 1/K per axis (default 2)")
     p.set_defaults(func=run)
 
 
@@ -52,6 +58,24 @@ def parse_eye(text: str) -> tuple[int, int]:
     if not (16 <= w <= 16384 and 16 <= h <= 16384):
         raise UserError(f"--eye must be between 16x16 and 16384x16384 pixels, got {w}x{h}")
     return w, h
+
+
+def parse_foveation(degrees, factor, eye=(1800, 1920)):
+    """--fovea DEG and --fovea-factor K as a Foveation (None when --fovea is not given),
+    checked against the headset's field of view at the per-eye resolution `eye`."""
+    from .. import views as v
+    from ..gallery.foveation import Foveation
+    from ..views.exhibition import Headset
+    if degrees is None:
+        return None
+    try:
+        f = Foveation(float(degrees), int(factor))
+        hs = Headset(width=eye[0], height=eye[1])
+        f.layout(v.Camera((0, 0, 0), (0, 0, -1), (0, 1, 0), hs.tan_half_x, hs.tan_half_y,
+                          eye[0], eye[1]))
+        return f
+    except (TypeError, ValueError, OverflowError) as e:
+        raise UserError(f"--fovea / --fovea-factor: {e}") from None
 
 
 def load_room(room: str, pack):
@@ -97,6 +121,7 @@ def run(args) -> int:
     from ..pack import TilePack
 
     eye = parse_eye(args.eye)
+    foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
     if not (args.seconds > 0 and args.seconds <= 3600):
         raise UserError(f"--seconds must be in (0, 3600], got {args.seconds}")
     if args.png_every is not None and args.png_every < 1:
@@ -125,11 +150,14 @@ def run(args) -> int:
               f"({source.light_stats.get('photons_stored', 0)} photons stored)")
         walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
                            reuse=not args.no_reuse, oracle=not args.no_oracle, pace=args.pace,
-                           threads=args.threads)
+                           threads=args.threads, foveation=foveation)
         settings = {"room": args.room, "path": args.path, "eye": f"{eye[0]}x{eye[1]}",
                     "magnifier": not args.no_magnifier, "lighting": args.lighting,
                     "seconds": args.seconds, "reuse": not args.no_reuse,
                     "photons": args.photons, "frames": len(path)}
+        if foveation is not None:
+            settings["foveation"] = {"fovea_deg": foveation.fovea_deg,
+                                     "factor": foveation.factor, "blend": foveation.blend}
         results = record_walk(walk, out, exr=args.exr, png_every=args.png_every,
                               video=not args.no_video, progress=True, settings=settings, tmp=tmp)
     except BaseException:

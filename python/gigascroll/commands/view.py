@@ -1,9 +1,11 @@
 """`gigascroll view PACK [--room ...]`: a desktop window onto the live gallery loop.
 
 Keys: W / S walk forward and back, A / D step left and right, arrow keys (or a mouse drag)
-turn, R / F up and down, M toggles the magnifier, P saves the window's frame (--screenshot),
-Esc quits. An overlay shows the frame rate and the stage times; the eyes' resolution adapts
-so the window stays responsive (each frame's display is upscaled to the window)."""
+turn, R / F up and down, M toggles the magnifier, V toggles the fixed foveation (--fovea's,
+or a 30 degree fovea at 1/2 density without it), P saves the window's frame (--screenshot),
+Esc quits. An overlay shows the frame rate, the stage times and the primary rays the eyes
+traced; the eyes' resolution adapts so the window stays responsive (each frame's display is
+upscaled to the window)."""
 
 from __future__ import annotations
 
@@ -34,6 +36,11 @@ def register(sub) -> None:
                    help="file pattern P writes the window's frame to ({n}: a counter)")
     p.add_argument("--quit-after", type=float, default=None, help="close after this many seconds")
     p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--fovea", type=float, default=None, metavar="DEG",
+                   help="start foveated (as gigascroll gallery --fovea): a centred fovea DEG "
+                        "degrees wide and high at full density, the periphery at 1/K (V toggles)")
+    p.add_argument("--fovea-factor", type=int, default=2, metavar="K",
+                   help="with --fovea: the periphery's density is 1/K per axis (default 2)")
     p.set_defaults(func=run)
 
 
@@ -46,14 +53,17 @@ def _size(text: str, what: str) -> tuple[int, int]:
 
 
 def run(args) -> int:
-    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
-            and not os.environ.get("WAYLAND_DISPLAY"):
-        raise UserError("no display to open a window on (DISPLAY is not set); "
-                        "use `gigascroll gallery` to write the walk to files")
+    from .gallery import parse_foveation
     win_w, win_h = _size(args.window, "--window")
     eye = _size(args.eye, "--eye") if args.eye else (win_w // 2, win_h)
     if not (args.target_fps > 0 and math.isfinite(args.target_fps)):
         raise UserError("--target-fps must be positive")
+    # Bad options fail before the display is looked for, so they are reported everywhere.
+    foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
+            and not os.environ.get("WAYLAND_DISPLAY"):
+        raise UserError("no display to open a window on (DISPLAY is not set); "
+                        "use `gigascroll gallery` to write the walk to files")
     from ..pack import TilePack
     from .gallery import load_room
     p = Path(args.pack)
@@ -68,17 +78,18 @@ def run(args) -> int:
                                       vsync=False)
     except Exception as e:  # noqa: BLE001 (pyglet raises several kinds for "no display")
         raise UserError(f"cannot open a window: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
-    return Viewer(window, pack, room, args, eye).run()
+    return Viewer(window, pack, room, args, eye, foveation).run()
 
 
 class Viewer:
     """The window, the pose, and the live loop stepping one frame per redraw."""
 
-    def __init__(self, window, pack, room, args, eye):
+    def __init__(self, window, pack, room, args, eye, foveation=None):
         import numpy as np
 
         from .. import runtime
         from .. import views as v
+        from ..gallery.foveation import Foveation
         from ..gallery.walk import GallerySource, GalleryWalk, walk_path
         self.np, self.v, self.window, self.args = np, v, window, args
         self.source = GallerySource(room, pack, args.lighting, photons=args.photons,
@@ -86,8 +97,12 @@ class Viewer:
         path = walk_path(room, seconds=0.05)
         if args.per_frame < 1:
             raise UserError("--per-frame must be >= 1")
+        # The walk always holds a foveation so V can switch it on; --fovea starts it on.
+        self.foveate = foveation is not None
+        self.shown_foveate = None
         self.walk = GalleryWalk(self.source, pack, path, eye=eye, oracle=False,
-                                per_frame=args.per_frame, threads=args.threads)
+                                per_frame=args.per_frame, threads=args.threads,
+                                foveation=foveation or Foveation())
         self.loader = runtime.TileLoader(pack, mode="lockfree", threads=1)
         self.state = self.walk.open_state(self.loader)
         self.position = np.array(path.position[0])
@@ -162,6 +177,8 @@ class Viewer:
             return True
         if symbol == key.M:
             self.magnifier = not self.magnifier
+        if symbol == key.V:
+            self.foveate = not self.foveate
         if symbol == key.P:
             self.want_shot = True  # saved right after the next frame is drawn
         return None
@@ -189,7 +206,8 @@ class Viewer:
         moved = self.move(dt if dt < 0.5 else 0.5)
         t0 = time.perf_counter()
         rec, (left, right, mag, lenses) = self.walk.step(self.frame, self.state,
-                                                         views=self.views(), moving=moved)
+                                                         views=self.views(), moving=moved,
+                                                         foveate=self.foveate)
         from ..gallery.walk import compose_frame, tone_map
         rgb = tone_map(compose_frame(left, right, mag, lenses), self.source.exposure)
         frame_s = time.perf_counter() - t0
@@ -200,6 +218,10 @@ class Viewer:
         elif frame_s < 0.6 * target:
             self.scale = min(1.0, self.scale * 1.1)
         self.record = rec
+        if self.foveate != self.shown_foveate:  # the first frame, and each V after it
+            self.shown_foveate = self.foveate
+            print(f"foveation {'on' if self.foveate else 'off'}: frame {self.frame}, "
+                  f"{rec['traced_rays']} rays traced", flush=True)
         self.frame += 1
         import pyglet
         h, w = rgb.shape[:2]
@@ -213,9 +235,12 @@ class Viewer:
             self.texture.blit(0, 0, width=self.window.width, height=self.window.height)
         r = self.record
         if r:
+            f = self.walk.foveation
+            fovea = f"fovea {f.fovea_deg:g} deg 1/{f.factor}" if self.foveate else "fovea off"
             self.label.text = (
                 f"{self.fps:5.1f} fps  eye {self.eye[0]}x{self.eye[1]}  hit {r['hit_rate']:.2f}"
-                f"  magnifier {'on' if self.magnifier else 'off'} (M)\n"
+                f"  magnifier {'on' if self.magnifier else 'off'} (M)  {fovea} (V)"
+                f"  rays {r['traced_rays']}\n"
                 + "  ".join(f"{k} {r[k + '_ms']:.1f}" for k in
                             ("feedback", "processing", "issue", "drain", "update"))
                 + "\ndisplay " + "  ".join(f"{p} {r['display_' + p + '_ms']:.1f}" for p in
@@ -235,7 +260,10 @@ class Viewer:
             pyglet.app.run()
         finally:
             self.loader.close()
-        print(f"view: {self.frame} frames, last eye {self.eye[0]}x{self.eye[1]}", flush=True)
+        rays = self.record["traced_rays"] if self.record else 0
+        print(f"view: {self.frame} frames, last eye {self.eye[0]}x{self.eye[1]}, "
+              f"foveation {'on' if self.foveate else 'off'}, {rays} rays traced in the last "
+              "frame", flush=True)
         return 0
 
 

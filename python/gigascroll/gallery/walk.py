@@ -25,6 +25,7 @@ import numpy as np
 from .. import _core
 from .. import runtime
 from .. import views as v
+from ..frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
 from ..views.exhibition import Headset
 from .room import RoomSpec
 
@@ -267,7 +268,9 @@ class GalleryWalk:
     pace: sleep to the path's frame boundaries (False: flat out).
     wait_loads: block each frame until that frame's loads arrived (deterministic tests).
     on_frame(frame, record, images): called with the frame's record and its display images
-    (left, right, magnifier or None, lenses) before the next frame starts."""
+    (left, right, magnifier or None, lenses) before the next frame starts.
+    foveation: a gallery.foveation.Foveation (None: off): each eye's fovea traced at full
+    density, its periphery at a lower one, and both requested by their own cameras."""
     source: FrameSource
     pack: object
     path: v.CameraPath
@@ -281,6 +284,7 @@ class GalleryWalk:
     pace: bool = False
     wait_loads: bool = False
     threads: int = 0
+    foveation: object = None
     records: list = field(default_factory=list, init=False)
 
     def __post_init__(self):
@@ -294,6 +298,8 @@ class GalleryWalk:
         if len(self.pack.paintings) < len(self.source.tiles):
             raise ValueError("the pack lacks paintings the scene shows")
         self.headset = Headset(width=int(w), height=int(h))
+        if self.foveation is not None:  # a fovea wider than the eye fails here, not mid-walk
+            self.foveation.layout(self.cameras(0)[0][0])
 
     def cameras(self, frame: int):
         """The frame's views: (camera, feedback w, feedback h) for left, right[, magnifier]."""
@@ -320,16 +326,14 @@ class GalleryWalk:
             direct=v.DirectLoading(self.per_frame),
             levels=np.array([t.levels for t in src.tiles], np.int64), loader=loader,
             oracle_vt=runtime.VirtualTexture(pack, self.oracle_slots) if self.oracle else None,
-            passes=[_core.DisplayPass() for _ in range(4)])
+            passes=[_core.DisplayPass() for _ in range(4)],
+            foveated=None if self.foveation is None else _foveated_displays(self.foveation))
 
     def run(self, progress: bool = False, on_frame=None) -> dict:
         src = self.source
         period = 1.0 / self.path.fps
         self.records = []
-        bar = None
-        if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=len(self.path), unit="frame", desc=f"walk {src.name}")
+        bar = progress_bar(progress, len(self.path), f"walk {src.name}")
         try:
             with runtime.TileLoader(self.pack, mode="lockfree", threads=1) as loader:
                 state = self.open_state(loader)
@@ -340,21 +344,18 @@ class GalleryWalk:
                     self.records.append(rec)
                     if on_frame is not None:
                         on_frame(frame, rec, images)
-                    if bar is not None:
-                        bar.update(1)
-                    if self.pace:
-                        delay = start + (frame + 1) * period - time.perf_counter()
-                        if delay > 0:
-                            time.sleep(delay)
+                    end_frame(bar, self.pace, start, frame, period)
         finally:
             if bar is not None:
                 bar.close()
         return self.summary()
 
-    def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None):
+    def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None,
+             foveate: bool = True):
         """One frame: (record, (left, right, magnifier or None, lenses)). views: the frame's
         (camera, feedback w, feedback h) list (default: the path's frame); moving: whether the
-        pose changes after this frame (default: from the path)."""
+        pose changes after this frame (default: from the path); foveate=False: this frame
+        without the walk's foveation (an interactive viewer's toggle)."""
         vt, lookup, proc, truth = state.vt, state.lookup, state.proc, state.truth
         direct, levels, loader, oracle_vt = state.direct, state.levels, state.loader, state.oracle_vt
         dpass, mpass, opass, ompass = state.passes
@@ -365,7 +366,11 @@ class GalleryWalk:
             views = self.cameras(frame)
         if moving is None:
             moving = frame + 1 < len(self.path) and _pose_changes(self.path, frame)
-        buffers = [src.feedback(cam, fw, fh, thr) for cam, fw, fh in views]
+        foveation = self.foveation if foveate else None
+        foveated = state.foveated if foveation is not None else None
+        feedback_views = (views if foveation is None else
+                          foveation.feedback_views(views, self.headset.feedback_scale))
+        buffers = [src.feedback(cam, fw, fh, thr) for cam, fw, fh in feedback_views]
         t["feedback"] = time.perf_counter() - t0
 
         t0 = time.perf_counter()
@@ -380,42 +385,29 @@ class GalleryWalk:
                 commands = np.concatenate([commands, missing])
         t["processing"] = time.perf_counter() - t0
 
-        t0 = time.perf_counter()
-        direct.set_commands(commands)
-        issue = direct.issue(lookup)
-        if issue.size:
-            loader.submit(issue)
-        t["issue"] = time.perf_counter() - t0
-
-        t0 = time.perf_counter()
-        arrived, _ = vt.drain(loader)
-        if self.wait_loads:
-            deadline = time.perf_counter() + 30
-            while arrived.size < issue.size and time.perf_counter() < deadline:
-                time.sleep(0.0002)
-                arrived = np.concatenate([arrived, vt.drain(loader)[0]])
-        t["drain"] = time.perf_counter() - t0
-
-        t0 = time.perf_counter()
-        if arrived.size:
-            direct.loaded(arrived)
-        if new_set["responses"].size:
-            vt.request(new_set["responses"])
-        t["update"] = time.perf_counter() - t0
+        def issue_tiles():
+            direct.set_commands(commands)
+            return direct.issue(lookup)
+        issue, arrived = load_stages(t, issue_tiles, vt, loader, direct, new_set["responses"],
+                                     self.wait_loads, wait_timeout=30)
 
         t0 = time.perf_counter()
         (lc, _, _), (rc, _, _) = views[0], views[1]
-        left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr)
+        if foveated is None:
+            left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr)
+            ls, rs = dpass.left_stats, dpass.right_stats
+        else:
+            left, right = foveated[0].display_stereo(src, vt, lc, rc, self.reuse, thr)
+            ls, rs = foveated[0].left_stats, foveated[0].right_stats
         mag = src.display(mpass, vt, views[2][0], thr) if len(views) > 2 else None
         t["display"] = time.perf_counter() - t0
-        ls, rs = dpass.left_stats, dpass.right_stats
         ms = mpass.left_stats if mag is not None else None
         parts = {}
         for part in DISPLAY_PARTS:
             key = f"{part}_seconds"
             parts[part] = ls[key] + rs[key] + (ms[key] if ms else 0.0)
 
-        hit_rate, n_requests = _hit_rate(truth, buffers, lookup, frame)
+        hit_rate, n_requests = request_hit_rate(truth, buffers, lookup, frame)
         rec = {
             "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in WALK_STAGES},
             **{f"display_{p}_ms": 1e3 * parts[p] for p in DISPLAY_PARTS},
@@ -423,6 +415,7 @@ class GalleryWalk:
             "right_display_ms": 1e3 * (rs["total_seconds"]),
             "magnifier_display_ms": 1e3 * ms["total_seconds"] if ms else 0.0,
             "reused_share": rs["reused"] / max(1, rs["pixels"]),
+            "traced_rays": int(ls["traced"] + rs["traced"]),
             "total_ms": 1e3 * sum(t.values()), "requests": n_requests, "hit_rate": hit_rate,
             "issued": int(issue.size), "loaded": int(arrived.size),
             "moving": bool(moving),
@@ -437,7 +430,10 @@ class GalleryWalk:
             if missing.size:
                 for key in zip(*(a.tolist() for a in v.unpack_requests(missing))):
                     oracle_vt.insert(key, self.pack.read_tile(*key))
-            ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr)
+            if foveated is None:
+                ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr)
+            else:  # the oracle of a foveated frame is the same foveated frame, all resident
+                ol, orr = foveated[1].display_stereo(src, oracle_vt, lc, rc, self.reuse, thr)
             om = src.display(ompass, oracle_vt, views[2][0], thr) if mag is not None else None
             shown = [left, right] + ([mag] if mag is not None else [])
             truth_imgs = [ol, orr] + ([om] if om is not None else [])
@@ -454,21 +450,14 @@ class GalleryWalk:
         r = self.records
         if not r:
             return {}
-        frame_ms = [x["total_ms"] for x in r]
-        times = [x["time_s"] for x in r]
         out = {
             "frames": len(r), "eye": list(self.eye), "path_fps": self.path.fps,
-            "fps": (len(r) - 1) / (times[-1] - times[0]) if len(r) > 1 else float("nan"),
-            "fps_from_frame_time": 1e3 / statistics.mean(frame_ms),
-            "frame_ms_std": statistics.pstdev(frame_ms),
-            **{f"{s}_ms": statistics.mean(x[f"{s}_ms"] for x in r) for s in WALK_STAGES},
+            **frame_summary(r, WALK_STAGES),
             **{f"display_{p}_ms": statistics.mean(x[f"display_{p}_ms"] for x in r)
                for p in DISPLAY_PARTS},
             "left_display_ms": statistics.mean(x["left_display_ms"] for x in r),
             "right_display_ms": statistics.mean(x["right_display_ms"] for x in r),
             "reused_share": statistics.mean(x["reused_share"] for x in r),
-            "hit_rate": statistics.mean(x["hit_rate"] for x in r),
-            "requests_per_frame": statistics.mean(x["requests"] for x in r),
             "stops": stops_of(r),
         }
         if "error" in r[0]:
@@ -488,6 +477,12 @@ class _LoopState:
     loader: object
     oracle_vt: object
     passes: list
+    foveated: list | None = None  # with foveation: the displays of the frame and its oracle
+
+
+def _foveated_displays(foveation) -> list:
+    from .foveation import FoveatedDisplay
+    return [FoveatedDisplay(foveation), FoveatedDisplay(foveation)]
 
 
 def stops_of(records: list) -> list[dict]:
@@ -517,13 +512,6 @@ def _pose_changes(path: v.CameraPath, frame: int) -> bool:
     a = (path.position[frame], path.forward[frame], path.up[frame])
     b = (path.position[frame + 1], path.forward[frame + 1], path.up[frame + 1])
     return not all(np.array_equal(x, y) for x, y in zip(a, b))
-
-
-def _hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
-    """(share of the distinct requests answered at their own level, count)."""
-    s = truth.process(buffers, lookup, frame)
-    n = int(s["requests"].size)
-    return (float(np.mean(s["responses"] == s["requests"])) if n else 1.0), n
 
 
 def walk_path(room: RoomSpec, seconds: float = 6.0, fps: float = v.FPS,

@@ -211,6 +211,14 @@ class Report:
         save_png(self.out / file, rgb)
         self.lines.append(f"![{caption}]({file})\n")
 
+    def finish(self, checks: dict, report, *args) -> dict:
+        """The end of every scenario: its invariants into the results, the report's body by
+        report(self, results, *args), then both files written; returns the results."""
+        self.results["checks"] = checks
+        report(self, self.results, *args)
+        self.write()
+        return self.results
+
     def write(self) -> Path:
         self.out.mkdir(parents=True, exist_ok=True)
         # Results first, report last: a report on disk means the run completed.

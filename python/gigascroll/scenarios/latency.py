@@ -61,10 +61,7 @@ def run(opts: c.Options) -> dict:
             checks["hash_not_slower_than_cpu_async"] = (
                 (by["hash"]["display_latency_frames"] or 10 ** 9)
                 <= (by["cpu-async"]["display_latency_frames"] or 10 ** 9))
-    res["checks"] = checks
-    _report(rep, res)
-    rep.write()
-    return res
+    return rep.finish(checks, _report)
 
 
 def _report(rep, res):

@@ -62,10 +62,7 @@ def run(opts: c.Options) -> dict:
     if not opts.quick:
         cpu = {r["paintings"]: r["hash"]["cpu_ms"] for r in res["full_size"]}
         checks["hash_flat_within_15pct"] = cpu[max(cpu)] <= 1.15 * cpu[min(cpu)]
-    res["checks"] = checks
-    _report(rep, res, methods)
-    rep.write()
-    return res
+    return rep.finish(checks, _report, methods)
 
 
 def _report(rep, res, methods):

@@ -94,11 +94,7 @@ def run(opts: c.Options) -> dict:
     checks["salt_no_loss_twice_in_a_row"] = res["salt"]["lost_twice_in_a_row"] == 0
     d, mm = (r["display_latency_frames"] for r in res["table3"])
     checks["direct_not_slower_than_mip_by_mip"] = d is not None and (mm is None or d <= mm)
-    res["checks"] = checks
-
-    _report(rep, res, shown)
-    rep.write()
-    return res
+    return rep.finish(checks, _report, shown)
 
 
 def _report(rep, res, shown):

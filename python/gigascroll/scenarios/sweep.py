@@ -52,16 +52,14 @@ def run(opts: c.Options) -> dict:
             row["determination_ms"] = row["feedback_ms"] + row["processing_ms"]
             res["rows"].append(row)
     rows = res["rows"]
-    res["checks"] = {
+    checks = {
         # Every method ends with the static view fully sharp: each requests what it needs.
         "all_methods_end_sharp": all(r["records"][-1]["hit_rate"] == 1.0 for r in rows),
         # (the quick run's totals are too small to time reliably)
         "ma_vt_cost_grows_with_tiles": None if opts.quick else _grows(
             [r for r in rows if r["method"] == "ma-vt"]),
     }
-    _report(rep, res, methods)
-    rep.write()
-    return res
+    return rep.finish(checks, _report, methods)
 
 
 def _grows(rows) -> bool | None:
