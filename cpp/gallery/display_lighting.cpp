@@ -33,6 +33,23 @@ void GalleryLighting::light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, Surf
     out.emission = hit.front ? scene.emission(hit.tri) : Vec3f(0, 0, 0);
 }
 
+void GalleryLighting::light_batch(const LightQuery* queries, std::size_t count,
+                                  SurfaceLight* out) const {
+    if (lighting_ != Lighting::Baked) {
+        DisplayLighting::light_batch(queries, count, out);
+        return;
+    }
+    const Scene& scene = gallery_.scene();
+    for (std::size_t i = 0; i < count; ++i) {
+        const LightQuery& q = queries[i];
+        const std::uint32_t tri = scene.triangle_of(q.geom, q.prim);
+        const bool front = dot(scene.normal(tri), q.n) > 0;  // q.n faces the eye
+        out[i].irradiance = gallery_.irradiance_baked_at(tri, front, q.b1, q.b2);
+        out[i].albedo = scene.albedo(tri);
+        out[i].emission = front ? scene.emission(tri) : Vec3f(0, 0, 0);
+    }
+}
+
 DisplayOptions GalleryLighting::options(unsigned threads) {
     DisplayOptions o;
     o.srgb_albedo = true;

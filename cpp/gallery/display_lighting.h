@@ -15,6 +15,9 @@ public:
     // InvalidArgument when the lighting needs light() or bake() that has not been done.
     GalleryLighting(const Gallery& gallery, Lighting lighting);
     void light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const override;
+    // Baked: the lattice at Embree's barycentrics, one call per packet (no point-to-barycentric
+    // solve in double per pixel); unlit and full as light().
+    void light_batch(const LightQuery* queries, std::size_t count, SurfaceLight* out) const override;
     // The display options that match the gallery's display (painting reflectance, sRGB).
     static DisplayOptions options(unsigned threads = 0);
 

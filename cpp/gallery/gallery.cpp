@@ -306,11 +306,21 @@ Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
 }
 
 Vec3f Gallery::irradiance_baked(const Hit& hit) const {
-    const std::uint32_t t = hit.tri, n = bake_n_[t];
-    const Vec3f b = barycentric(t, hit.p);
-    const std::vector<Vec3f>& side = hit.front ? bake_front_ : bake_back_;
+    const Vec3f b = barycentric(hit.tri, hit.p);
+    return irradiance_baked_at(hit.tri, hit.front, b.x, b.y);
+}
+
+Vec3f Gallery::irradiance_baked_at(std::uint32_t t, bool front, float b1, float b2) const {
+    // Clamped onto the triangle as barycentric() does (Embree's u, v may round just outside).
+    b1 = std::clamp(b1, 0.0f, 1.0f), b2 = std::clamp(b2, 0.0f, 1.0f);
+    if (b1 + b2 > 1.0f) {
+        const float s = b1 + b2;
+        b1 /= s, b2 /= s;
+    }
+    const std::uint32_t n = bake_n_[t];
+    const std::vector<Vec3f>& side = front ? bake_front_ : bake_back_;
     const Vec3f* E = side.data() + bake_offset_[t];
-    const float x = b.x * float(n), y = b.y * float(n);  // x + y <= n
+    const float x = b1 * float(n), y = b2 * float(n);  // x + y <= n
     const std::uint32_t i = std::min(std::uint32_t(x), n - 1);
     const std::uint32_t j = std::min(std::uint32_t(y), n - 1 - i);
     float fx = std::max(x - float(i), 0.0f), fy = std::max(y - float(j), 0.0f);

@@ -159,6 +159,10 @@ public:
     // viewer), as lighting "full" / "baked" compute it. For tests and reprojection.
     Vec3f irradiance_full(const Hit& hit) const;
     Vec3f irradiance_baked(const Hit& hit) const;
+    // The baked lattice at barycentrics (b1, b2) of triangle tri (p = v0 + b1 e1 + b2 e2,
+    // Embree's hit u, v), on the front or back side: irradiance_baked without recomputing the
+    // barycentrics from the point. The caller holds read_lock() and the gallery is baked.
+    Vec3f irradiance_baked_at(std::uint32_t tri, bool front, float b1, float b2) const;
     // Held by a display pass that calls the irradiance functions itself (gallery/display_lighting.h):
     // light() and bake() wait for it.
     std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock(mutex_); }

@@ -46,6 +46,11 @@ void sample_serial(const VirtualTexture& vt, const SampleRequest& r) {
     sample_range(vt, r, 0, r.count);
 }
 
+void sample_serial_locked(const VirtualTexture& vt, const SampleRequest& r) {
+    check_request(vt, r);
+    sample_range(vt, r, 0, r.count);
+}
+
 namespace {
 // Tile column holding the tap's sample point: floor((i0 + 0.5 + f) / P) (i0 >= 0 after the
 // clamp; 32-bit division is the cheaper one).
