@@ -259,14 +259,23 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     g.lod[i] = kNaN;
                     continue;
                 }
-                g.prim[i] = h.hit.primID[k];
+                const unsigned prim = h.hit.primID[k];
+                g.prim[i] = prim;
                 const Vec3f d{h.ray.dir_x[k], h.ray.dir_y[k], h.ray.dir_z[k]};
                 const Vec3f p = origin + d * h.ray.tfar[k];
                 Vec3f ng{h.hit.Ng_x[k], h.hit.Ng_y[k], h.hit.Ng_z[k]};
                 ng = ng / std::sqrt(dot(ng, ng));
                 const Vec3f nf = dot(ng, d) > 0 ? -ng : ng;  // two-sided: the side the eye sees
-                g.p[i] = p, g.n[i] = nf;
-                queries[m] = {geom, h.hit.primID[k], h.hit.u[k], h.hit.v[k], p, nf};
+                // Component stores: a Vec3f copied through the stack stalled on store
+                // forwarding (a 12-byte object read back as 8 + 4 bytes).
+                Vec3f& gp = g.p[i];
+                gp.x = p.x, gp.y = p.y, gp.z = p.z;
+                Vec3f& gn = g.n[i];
+                gn.x = nf.x, gn.y = nf.y, gn.z = nf.z;
+                LightQuery& q = queries[m];
+                q.geom = geom, q.prim = prim, q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
+                q.p.x = p.x, q.p.y = p.y, q.p.z = p.z;
+                q.n.x = nf.x, q.n.y = nf.y, q.n.z = nf.z;
                 lane[m++] = k;
             }
             hit_count += m;
@@ -415,39 +424,49 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
         }
     }, o.threads);
     // Release claims on depth edges; the surviving claims are the right eye's reused pixels.
+    // A claim is on an edge when its depth exceeds an 8-neighbour's claimed depth x ratio,
+    // i.e. the 3 x 3 minimum of claimed depths (itself included: ratio >= 1) x ratio: the
+    // minimum is taken separably, along rows into row_min_, then across three rows.
     // parallel_for's join orders the claims before these reads.
     claimed_.resize(n);
     sources_.resize(n);
+    row_min_.resize(n);
     const float ratio = 1.0f + o.edge_depth_ratio;
-    const std::int64_t w = right.width, h = right.height;
-    std::atomic<std::uint64_t> reused{0};
-    parallel_for(std::size_t(h), 8, [&](std::size_t rb, std::size_t re) {
-        std::uint64_t count = 0;
-        for (std::int64_t y = std::int64_t(rb); y < std::int64_t(re); ++y)
-            for (std::int64_t x = 0; x < w; ++x) {
-                const std::size_t i = std::size_t(y * w + x);
-                const std::uint64_t c = claims_[i];
-                claimed_[i] = 0;
-                sources_[i] = -1;
-                if (c == kUnclaimed) continue;
-                const float depth = std::bit_cast<float>(std::uint32_t(c >> 32));
-                bool edge = false;
-                for (std::int64_t dy = -1; dy <= 1 && !edge; ++dy)
-                    for (std::int64_t dx = -1; dx <= 1; ++dx) {
-                        const std::int64_t nx = x + dx, ny = y + dy;
-                        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-                        const std::uint64_t nc = claims_[std::size_t(ny * w + nx)];
-                        if (nc == kUnclaimed) continue;
-                        if (depth > std::bit_cast<float>(std::uint32_t(nc >> 32)) * ratio) {
-                            edge = true;
-                            break;
-                        }
-                    }
-                if (edge) continue;
-                claimed_[i] = 1;
-                sources_[i] = std::int32_t(c & 0xffffffffu);
-                ++count;
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    const std::size_t w = right.width, h = right.height;
+    auto depth_of = [](std::uint64_t c) {
+        return c == kUnclaimed ? kInf : std::bit_cast<float>(std::uint32_t(c >> 32));
+    };
+    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
+        for (std::size_t y = rb; y < re; ++y) {
+            const std::uint64_t* c = claims_.data() + y * w;
+            float* m = row_min_.data() + y * w;
+            float prev = kInf, here = depth_of(c[0]);
+            for (std::size_t x = 0; x < w; ++x) {
+                const float next = x + 1 < w ? depth_of(c[x + 1]) : kInf;
+                m[x] = std::min(std::min(prev, here), next);
+                prev = here, here = next;
             }
+        }
+    }, o.threads);
+    std::atomic<std::uint64_t> reused{0};
+    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
+        std::uint64_t count = 0;
+        for (std::size_t y = rb; y < re; ++y) {
+            const float* up = row_min_.data() + (y > 0 ? y - 1 : y) * w;
+            const float* mid = row_min_.data() + y * w;
+            const float* down = row_min_.data() + (y + 1 < h ? y + 1 : y) * w;
+            const std::uint64_t* c = claims_.data() + y * w;
+            std::uint8_t* claimed = claimed_.data() + y * w;
+            std::int32_t* source = sources_.data() + y * w;
+            for (std::size_t x = 0; x < w; ++x) {
+                const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
+                const bool keep = c[x] != kUnclaimed && !(depth_of(c[x]) > nearest * ratio);
+                claimed[x] = keep;
+                source[x] = keep ? std::int32_t(c[x] & 0xffffffffu) : -1;
+                count += keep;
+            }
+        }
         reused.fetch_add(count, std::memory_order_relaxed);
     }, o.threads);
     st.reused = reused.load();

@@ -145,6 +145,7 @@ private:
     EyeStats stats_[2];
     std::vector<std::uint64_t> claims_;
     std::vector<std::uint8_t> claimed_;
+    std::vector<float> row_min_;  // per right pixel: the nearest claimed depth of its row's 3 neighbours
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     std::vector<std::int32_t> sources_;
 };
