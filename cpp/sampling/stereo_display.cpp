@@ -122,7 +122,7 @@ struct PlaneMap {
     }
 
     // uv clamped to [0, 1] and lambda = log2(footprint in texels).
-    void map(Vec3d D, double& u, double& v, float& lod) const {
+    __attribute__((always_inline)) void map(Vec3d D, double& u, double& v, float& lod) const {
         const double dn = dot(D, n), du = dot(D, u_axis), dv = dot(D, v_axis);
         const double k = 1.0 / dn, t = h * k;
         u = std::clamp((cu + t * du) * inv_width, 0.0, 1.0);
@@ -221,7 +221,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             pending.clear(), copied.clear(), uv.clear(), lods.clear();
         };
         auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
-                                  std::int32_t source, Vec3f scale, Vec3f add) {
+                                  std::int32_t source, Vec3f scale, Vec3f add)
+                                  __attribute__((always_inline)) {
             double u, v;
             float lod;
             maps[std::size_t(pl)].map(D, u, v, lod);
@@ -311,8 +312,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     if (s < 0) continue;
                     const std::size_t si = std::size_t(s);
                     const unsigned geom = left->geom[si];
-                    g.geom[i] = geom, g.prim[i] = left->prim[si];
-                    g.p[i] = left->p[si], g.n[i] = left->n[si];
+                    g.geom[i] = geom;  // the point stays in the left buffer (hit_points)
                     ++hit_count;
                     const int pl = scene.placement_of(geom);
                     if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
@@ -320,7 +320,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                         g.lod[i] = kNaN;
                         continue;
                     }
-                    const Vec3d to_p = Vec3d(g.p[i]) - eye.position;
+                    const Vec3d to_p = Vec3d(left->p[si]) - eye.position;
                     painting_pixel(i, x, pl, to_p / dot(to_p, eye.forward), s, left->scale[si],
                                    left->add[si]);
                 }
@@ -392,7 +392,10 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
     const auto t0 = Clock::now();
     const GBuffer& L = g_[0];
     const std::size_t n = std::size_t(right.width) * right.height;
-    claims_.assign(n, kUnclaimed);
+    // The last frame's release pass left every claim unclaimed again (no 8-byte fill of the
+    // image per frame); after a resize or an interrupted frame they are filled here.
+    if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
+    claims_clear_ = false;
     const Vec3f eye(right.position), fwd(right.forward), rgt(right.right), up(right.up);
     // Camera::project's arithmetic with its constants hoisted (the same bits).
     const float tan_y = float(right.tan_half_y), aspect = float(right.tan_half_x / right.tan_half_y);
@@ -456,7 +459,7 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
             const float* up = row_min_.data() + (y > 0 ? y - 1 : y) * w;
             const float* mid = row_min_.data() + y * w;
             const float* down = row_min_.data() + (y + 1 < h ? y + 1 : y) * w;
-            const std::uint64_t* c = claims_.data() + y * w;
+            std::uint64_t* c = claims_.data() + y * w;
             std::uint8_t* claimed = claimed_.data() + y * w;
             std::int32_t* source = sources_.data() + y * w;
             for (std::size_t x = 0; x < w; ++x) {
@@ -465,10 +468,12 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
                 claimed[x] = keep;
                 source[x] = keep ? std::int32_t(c[x] & 0xffffffffu) : -1;
                 count += keep;
+                c[x] = kUnclaimed;  // ready for the next frame (row_min_ holds what neighbours need)
             }
         }
         reused.fetch_add(count, std::memory_order_relaxed);
     }, o.threads);
+    claims_clear_ = true;
     st.reused = reused.load();
     st.reuse_seconds = seconds_since(t0);
 }
@@ -532,8 +537,13 @@ std::vector<float> DisplayPass::hit_points(int eye) const {
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
     const GBuffer& g = g_[eye];
     std::vector<float> out(3 * g.geom.size(), std::numeric_limits<float>::quiet_NaN());
-    for (std::size_t i = 0; i < g.geom.size(); ++i)
-        if (g.geom[i] != kNoHit) out[3 * i] = g.p[i].x, out[3 * i + 1] = g.p[i].y, out[3 * i + 2] = g.p[i].z;
+    // A reused right pixel's point is its left source's.
+    const bool reused = eye == 1 && sources_.size() == g.geom.size();
+    for (std::size_t i = 0; i < g.geom.size(); ++i) {
+        if (g.geom[i] == kNoHit) continue;
+        const Vec3f& p = reused && sources_[i] >= 0 ? g_[0].p[std::size_t(sources_[i])] : g.p[i];
+        out[3 * i] = p.x, out[3 * i + 1] = p.y, out[3 * i + 2] = p.z;
+    }
     return out;
 }
 
