@@ -1,5 +1,6 @@
 #include "gallery/display_lighting.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/error.h"
@@ -40,13 +41,25 @@ void GalleryLighting::light_batch(const LightQuery* queries, std::size_t count,
         return;
     }
     const Scene& scene = gallery_.scene();
-    for (std::size_t i = 0; i < count; ++i) {
-        const LightQuery& q = queries[i];
-        const std::uint32_t tri = scene.triangle_of(q.geom, q.prim);
-        const bool front = dot(scene.normal(tri), q.n) > 0;  // q.n faces the eye
-        out[i].irradiance = gallery_.irradiance_baked_at(tri, front, q.b1, q.b2);
-        out[i].albedo = scene.albedo(tri);
-        out[i].emission = front ? scene.emission(tri) : Vec3f(0, 0, 0);
+    std::uint32_t tri[16];
+    bool front[16];
+    float b1[16], b2[16];
+    Vec3f E[16];
+    for (std::size_t k0 = 0; k0 < count; k0 += 16) {
+        const std::size_t n = std::min<std::size_t>(16, count - k0);
+        for (std::size_t k = 0; k < n; ++k) {
+            const LightQuery& q = queries[k0 + k];
+            tri[k] = scene.triangle_of(q.geom, q.prim);
+            front[k] = dot(scene.normal(tri[k]), q.n) > 0;  // q.n faces the eye
+            b1[k] = q.b1, b2[k] = q.b2;
+        }
+        gallery_.irradiance_baked_batch(tri, front, b1, b2, n, E);
+        for (std::size_t k = 0; k < n; ++k) {
+            SurfaceLight& o = out[k0 + k];
+            o.irradiance = E[k];
+            o.albedo = scene.albedo(tri[k]);
+            o.emission = front[k] ? scene.emission(tri[k]) : Vec3f(0, 0, 0);
+        }
     }
 }
 

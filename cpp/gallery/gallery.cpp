@@ -310,16 +310,16 @@ Vec3f Gallery::irradiance_baked(const Hit& hit) const {
     return irradiance_baked_at(hit.tri, hit.front, b.x, b.y);
 }
 
-Vec3f Gallery::irradiance_baked_at(std::uint32_t t, bool front, float b1, float b2) const {
+namespace {
+// Linear interpolation on triangle t's lattice of n segments (points E) at barycentrics
+// (b1, b2), clamped onto the triangle.
+inline Vec3f lattice_lerp(const Vec3f* E, std::uint32_t n, float b1, float b2) {
     // Clamped onto the triangle as barycentric() does (Embree's u, v may round just outside).
     b1 = std::clamp(b1, 0.0f, 1.0f), b2 = std::clamp(b2, 0.0f, 1.0f);
     if (b1 + b2 > 1.0f) {
         const float s = b1 + b2;
         b1 /= s, b2 /= s;
     }
-    const std::uint32_t n = bake_n_[t];
-    const std::vector<Vec3f>& side = front ? bake_front_ : bake_back_;
-    const Vec3f* E = side.data() + bake_offset_[t];
     const float x = b1 * float(n), y = b2 * float(n);  // x + y <= n
     const std::uint32_t i = std::min(std::uint32_t(x), n - 1);
     const std::uint32_t j = std::min(std::uint32_t(y), n - 1 - i);
@@ -337,6 +337,22 @@ Vec3f Gallery::irradiance_baked_at(std::uint32_t t, bool front, float b1, float 
     // The upper sub-triangle (i+1, j+1), (i, j+1), (i+1, j).
     return E[lattice_index(i + 1, j + 1, n)] * (fx + fy - 1) + E[lattice_index(i, j + 1, n)] * (1 - fx) +
            E[lattice_index(i + 1, j, n)] * (1 - fy);
+}
+}  // namespace
+
+Vec3f Gallery::irradiance_baked_at(std::uint32_t t, bool front, float b1, float b2) const {
+    const std::vector<Vec3f>& side = front ? bake_front_ : bake_back_;
+    return lattice_lerp(side.data() + bake_offset_[t], bake_n_[t], b1, b2);
+}
+
+void Gallery::irradiance_baked_batch(const std::uint32_t* tri, const bool* front, const float* b1,
+                                     const float* b2, std::size_t count, Vec3f* out) const {
+    const Vec3f* front_E = bake_front_.data();
+    const Vec3f* back_E = bake_back_.data();
+    for (std::size_t k = 0; k < count; ++k) {
+        const std::uint32_t t = tri[k];
+        out[k] = lattice_lerp((front[k] ? front_E : back_E) + bake_offset_[t], bake_n_[t], b1[k], b2[k]);
+    }
 }
 
 void Gallery::bake(const BakeSettings& s) {
