@@ -324,19 +324,21 @@ inline Vec3f lattice_lerp(const Vec3f* E, std::uint32_t n, float b1, float b2) {
     const std::uint32_t i = std::min(std::uint32_t(x), n - 1);
     const std::uint32_t j = std::min(std::uint32_t(y), n - 1 - i);
     float fx = std::max(x - float(i), 0.0f), fy = std::max(y - float(j), 0.0f);
-    if (fx + fy <= 1.0f || i + j + 2 > n) {
-        // The lower sub-triangle (i, j), (i+1, j), (i, j+1); on the far edge (no upper one)
-        // rounding can put the point just past it: scale back onto the edge.
-        if (fx + fy > 1.0f) {
-            const float s = 1.0f / (fx + fy);
-            fx *= s, fy *= s;
-        }
-        return E[lattice_index(i, j, n)] * (1 - fx - fy) + E[lattice_index(i + 1, j, n)] * fx +
-               E[lattice_index(i, j + 1, n)] * fy;
+    // The lower sub-triangle (i, j), (i+1, j), (i, j+1) or the upper one (i+1, j+1),
+    // (i, j+1), (i+1, j), chosen by selects: which one a pixel falls in is a coin toss, and
+    // a branch on it mispredicted half the time. On the far edge (no upper one) rounding
+    // can put the point just past the lower one: scale back onto the edge.
+    const bool upper = fx + fy > 1.0f && i + j + 2 <= n;
+    if (!upper && fx + fy > 1.0f) {
+        const float s = 1.0f / (fx + fy);
+        fx *= s, fy *= s;
     }
-    // The upper sub-triangle (i+1, j+1), (i, j+1), (i+1, j).
-    return E[lattice_index(i + 1, j + 1, n)] * (fx + fy - 1) + E[lattice_index(i, j + 1, n)] * (1 - fx) +
-           E[lattice_index(i + 1, j, n)] * (1 - fy);
+    const std::uint64_t right = lattice_index(i + 1, j, n), up = lattice_index(i, j + 1, n);
+    const std::uint64_t k0 = upper ? lattice_index(i + 1, j + 1, n) : lattice_index(i, j, n);
+    const std::uint64_t k1 = upper ? up : right, k2 = upper ? right : up;
+    const float w0 = upper ? fx + fy - 1 : 1 - fx - fy;
+    const float w1 = upper ? 1 - fx : fx, w2 = upper ? 1 - fy : fy;
+    return E[k0] * w0 + E[k1] * w1 + E[k2] * w2;
 }
 }  // namespace
 

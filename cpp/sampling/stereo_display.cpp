@@ -8,6 +8,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 #include "common/timing.h"
 #include "common/error.h"
@@ -138,6 +141,17 @@ struct PlaneMap {
     }
 };
 
+// 1 / sqrt(x) for x > 0 to about 1e-7 relative: the hardware estimate and one Newton step
+// (a square root and a division per pixel were a tenth of the fused loop).
+inline float inverse_sqrt(float x) {
+#if defined(__SSE__)
+    const float r = _mm_cvtss_f32(_mm_rsqrt_ss(_mm_set_ss(x)));
+    return r * (1.5f - 0.5f * x * r * r);
+#else
+    return 1.0f / std::sqrt(x);
+#endif
+}
+
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
     require(std::uint64_t(eye.width) * eye.height < (std::uint64_t(1) << 31),
@@ -265,7 +279,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const Vec3f d{h.ray.dir_x[k], h.ray.dir_y[k], h.ray.dir_z[k]};
                 const Vec3f p = origin + d * h.ray.tfar[k];
                 Vec3f ng{h.hit.Ng_x[k], h.hit.Ng_y[k], h.hit.Ng_z[k]};
-                ng = ng / std::sqrt(dot(ng, ng));
+                ng = ng * inverse_sqrt(dot(ng, ng));
                 const Vec3f nf = dot(ng, d) > 0 ? -ng : ng;  // two-sided: the side the eye sees
                 // Component stores: a Vec3f copied through the stack stalled on store
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
