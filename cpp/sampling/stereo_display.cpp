@@ -411,9 +411,10 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
     if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
     claims_clear_ = false;
     const Vec3f eye(right.position), fwd(right.forward), rgt(right.right), up(right.up);
-    // Camera::project's arithmetic with its constants hoisted (the same bits).
-    const float tan_y = float(right.tan_half_y), aspect = float(right.tan_half_x / right.tan_half_y);
+    // Camera::project (seed 001 eqs. 3-5) with its constants hoisted and one division per
+    // point: pixel = floor((x / (z tan_x) + 1) w / 2), floor((1 - y / (z tan_y)) h / 2).
     const float fw = float(right.width), fh = float(right.height);
+    const float sx = 0.5f * fw / float(right.tan_half_x), sy = 0.5f * fh / float(right.tan_half_y);
     const std::uint32_t rw = right.width;
     // Claims: the nearest left hit per right pixel wins (depth in the high word, so the
     // smaller 64-bit value is the nearer claim; positive floats order as their bits).
@@ -425,9 +426,9 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
             const Vec3f d = p - eye;
             const Vec3f dir{dot(d, rgt), dot(d, up), dot(d, fwd)};
             if (!(dir.z > 0.0f)) continue;
-            const float cx = dir.x / (dir.z * tan_y * aspect), cy = dir.y / (dir.z * tan_y);
-            const float fx = std::floor((cx + 1.0f) * 0.5f * fw);
-            const float fy = std::floor((1.0f - cy) * 0.5f * fh);
+            const float inv_z = 1.0f / dir.z;
+            const float fx = std::floor(0.5f * fw + dir.x * inv_z * sx);
+            const float fy = std::floor(0.5f * fh - dir.y * inv_z * sy);
             if (!(fx >= 0.0f && fx < fw && fy >= 0.0f && fy < fh)) continue;
             const float depth = dot(p - eye, fwd);
             if (!(depth > 0)) continue;
