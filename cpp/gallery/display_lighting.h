@@ -1,6 +1,7 @@
 // The Gallery's light as the full-resolution display pass asks it (sampling/stereo_display.h):
 // per hit, the room surface's albedo and emission and the irradiance there, baked or full,
-// exactly as Gallery::render_display computes them. Holds the gallery's read lock while it
+// as Gallery::render_display computes them (baked: at Embree's barycentrics rather than the
+// ones solved from the point, equal to float rounding). Holds the gallery's read lock while it
 // lives, so light() and bake() cannot change what a frame reads.
 #pragma once
 #include <shared_mutex>

@@ -13,6 +13,14 @@
 // the right eye's level of detail (the left eye's sample when the levels agree to within
 // reuse_lod_tolerance), so the reused pixel is what the right eye computes for that point.
 //
+// One fused sweep per eye (issue 14 §5): per row, 16-ray packets are traced and, while their
+// hits are in cache, lit in one DisplayLighting::light_batch call (with Embree's
+// barycentrics) and mapped to painting coordinates and level of detail (a per-eye plane map
+// of each painting, double precision); the row's painting pixels are then sampled in runs of
+// one painting (trilinear, under one VT read lock for the frame) and shaded. Per pixel the
+// pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
+// eye reuses, its texel and light.
+//
 // The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
 // is not reentrant.
 #pragma once
@@ -88,7 +96,9 @@ struct DisplayOptions {
     unsigned threads = 0;  // 0 = all cores
 };
 
-// Per-eye times and counts of the last render().
+// Per-eye times and counts of the last render(). The stages interleave row by row, so
+// rays, vt and shade are the pass's wall time split in the proportion the threads spent in
+// each on every 8th row (their sum is the pass's wall time).
 struct EyeStats {
     double rays_seconds = 0;     // primary rays (the right eye: only the unclaimed pixels)
     double reuse_seconds = 0;    // right eye: projection, claims and edge release
