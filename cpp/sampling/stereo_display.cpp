@@ -209,9 +209,9 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
         std::vector<PendingPixel> pending, copied;
         pending.reserve(w);
-        std::vector<double> uv, column_sx(w);
+        std::vector<double> us, vs, column_sx(w);  // u and v apart: the sampler's batches read them densely
         std::vector<float> lods, texels;
-        uv.reserve(2 * std::size_t(w)), lods.reserve(w);
+        us.reserve(w), vs.reserve(w), lods.reserve(w);
         for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
@@ -232,7 +232,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (row == current_row) return;
             current_row = row;
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            pending.clear(), copied.clear(), uv.clear(), lods.clear();
+            pending.clear(), copied.clear(), us.clear(), vs.clear(), lods.clear();
         };
         auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
                                   std::int32_t source, Vec3f scale, Vec3f add)
@@ -251,7 +251,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 return;
             }
             pending.push_back({x, pl, -1, scale, add});
-            uv.push_back(u), uv.push_back(v);
+            us.push_back(u), vs.push_back(v);
             lods.push_back(lod);
         };
         std::array<LightQuery, 16> queries;
@@ -349,7 +349,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 r.painting = scene.paintings[std::size_t(pl)].painting;
                 require(r.painting < paintings, "display: a painting of the scene is not in "
                                                 "the virtual texture");
-                r.u = uv.data() + 2 * k0, r.v = r.u + 1, r.uv_stride = 2;
+                r.u = us.data() + k0, r.v = vs.data() + k0, r.uv_stride = 1;
                 r.lod = lods.data() + k0;
                 r.count = k1 - k0;
                 r.filter = Filter::Trilinear;
