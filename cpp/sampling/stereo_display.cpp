@@ -170,8 +170,8 @@ void DisplayLighting::light_batch(const LightQuery* queries, std::size_t count,
 void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_light) {
     width = w, height = h;
     const std::size_t n = std::size_t(w) * h;
-    geom.resize(n), prim.resize(n), p.resize(n), this->n.resize(n), lod.resize(n);
-    if (keep_light) texel.resize(n), scale.resize(n), add.resize(n);
+    geom.resize(n), p.resize(n), lod.resize(n);
+    if (keep_light) this->n.resize(n), texel.resize(n), scale.resize(n), add.resize(n);
 }
 
 namespace {
@@ -275,7 +275,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     continue;
                 }
                 const unsigned prim = h.hit.primID[k];
-                g.prim[i] = prim;
                 const Vec3f d{h.ray.dir_x[k], h.ray.dir_y[k], h.ray.dir_z[k]};
                 const Vec3f p = origin + d * h.ray.tfar[k];
                 Vec3f ng{h.hit.Ng_x[k], h.hit.Ng_y[k], h.hit.Ng_z[k]};
@@ -285,8 +284,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
                 Vec3f& gp = g.p[i];
                 gp.x = p.x, gp.y = p.y, gp.z = p.z;
-                Vec3f& gn = g.n[i];
-                gn.x = nf.x, gn.y = nf.y, gn.z = nf.z;
+                if (keep_light) {  // the right eye's claims test the side it sees
+                    Vec3f& gn = g.n[i];
+                    gn.x = nf.x, gn.y = nf.y, gn.z = nf.z;
+                }
                 LightQuery& q = queries[m];
                 q.geom = geom, q.prim = prim, q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
                 q.p.x = p.x, q.p.y = p.y, q.p.z = p.z;

@@ -133,12 +133,12 @@ private:
     // the level, and for the left eye what a reused right pixel needs (its texel and light).
     struct GBuffer {
         std::uint32_t width = 0, height = 0;
-        std::vector<unsigned> geom, prim;  // RTC_INVALID_GEOMETRY_ID: no hit
-        std::vector<Vec3f> p, n;           // n faces the eye
+        std::vector<unsigned> geom;        // RTC_INVALID_GEOMETRY_ID: no hit
+        std::vector<Vec3f> p;
         std::vector<float> lod;            // NaN off paintings
-        // Left eye only (keep_light): per painting pixel the texel as sampled (0..255) and
-        // radiance = linear albedo x scale + add.
-        std::vector<Vec3f> texel, scale, add;
+        // Left eye only (keep_light): the normal facing the eye, and per painting pixel the
+        // texel as sampled (0..255) and radiance = linear albedo x scale + add.
+        std::vector<Vec3f> n, texel, scale, add;
         void resize(std::uint32_t w, std::uint32_t h, bool keep_light);
     };
     // The fused pass over one eye: per row, 16-ray packets traced, their hits lit in one
