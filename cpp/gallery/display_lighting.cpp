@@ -54,11 +54,15 @@ void GalleryLighting::light_batch(const LightQuery* queries, std::size_t count,
             b1[k] = q.b1, b2[k] = q.b2;
         }
         gallery_.irradiance_baked_batch(tri, front, b1, b2, n, E);
+        // A packet's hits mostly share a triangle: its albedo and emission read once.
+        std::uint32_t last = ~0u;
+        Vec3f albedo, emission;
         for (std::size_t k = 0; k < n; ++k) {
+            if (tri[k] != last) last = tri[k], albedo = scene.albedo(last), emission = scene.emission(last);
             SurfaceLight& o = out[k0 + k];
             o.irradiance = E[k];
-            o.albedo = scene.albedo(tri[k]);
-            o.emission = front[k] ? scene.emission(tri[k]) : Vec3f(0, 0, 0);
+            o.albedo = albedo;
+            o.emission = front[k] ? emission : Vec3f(0, 0, 0);
         }
     }
 }

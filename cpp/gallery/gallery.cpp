@@ -333,8 +333,10 @@ inline Vec3f lattice_lerp(const Vec3f* E, std::uint32_t n, float b1, float b2) {
         const float s = 1.0f / (fx + fy);
         fx *= s, fy *= s;
     }
-    const std::uint64_t right = lattice_index(i + 1, j, n), up = lattice_index(i, j + 1, n);
-    const std::uint64_t k0 = upper ? lattice_index(i + 1, j + 1, n) : lattice_index(i, j, n);
+    // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i.
+    const std::uint64_t row_i = lattice_index(i, 0, n), row_next = row_i + (n + 1 - i);
+    const std::uint64_t right = row_next + j, up = row_i + j + 1;
+    const std::uint64_t k0 = upper ? row_next + j + 1 : row_i + j;
     const std::uint64_t k1 = upper ? up : right, k2 = upper ? right : up;
     const float w0 = upper ? fx + fy - 1 : 1 - fx - fy;
     const float w1 = upper ? 1 - fx : fx, w2 = upper ? 1 - fy : fy;
