@@ -75,6 +75,9 @@ public:
         out = SurfaceLight{};
         out.albedo = albedo_;
     }
+    void light_batch(const LightQuery*, std::size_t count, SurfaceLight* out) const override {
+        for (std::size_t i = 0; i < count; ++i) light(0, 0, {}, {}, out[i]);
+    }
 
 private:
     Vec3f albedo_;
