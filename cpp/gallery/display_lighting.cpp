@@ -1,5 +1,6 @@
 #include "gallery/display_lighting.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/error.h"
@@ -31,6 +32,39 @@ void GalleryLighting::light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, Surf
     }
     out.albedo = scene.albedo(hit.tri);
     out.emission = hit.front ? scene.emission(hit.tri) : Vec3f(0, 0, 0);
+}
+
+void GalleryLighting::light_batch(const LightQuery* queries, std::size_t count,
+                                  SurfaceLight* out) const {
+    if (lighting_ != Lighting::Baked) {
+        DisplayLighting::light_batch(queries, count, out);
+        return;
+    }
+    const Scene& scene = gallery_.scene();
+    std::uint32_t tri[16];
+    bool front[16];
+    float b1[16], b2[16];
+    Vec3f E[16];
+    for (std::size_t k0 = 0; k0 < count; k0 += 16) {
+        const std::size_t n = std::min<std::size_t>(16, count - k0);
+        for (std::size_t k = 0; k < n; ++k) {
+            const LightQuery& q = queries[k0 + k];
+            tri[k] = scene.triangle_of(q.geom, q.prim);
+            front[k] = dot(scene.normal(tri[k]), q.n) > 0;  // q.n faces the eye
+            b1[k] = q.b1, b2[k] = q.b2;
+        }
+        gallery_.irradiance_baked_batch(tri, front, b1, b2, n, E);
+        // A packet's hits mostly share a triangle: its albedo and emission read once.
+        std::uint32_t last = ~0u;
+        Vec3f albedo, emission;
+        for (std::size_t k = 0; k < n; ++k) {
+            if (tri[k] != last) last = tri[k], albedo = scene.albedo(last), emission = scene.emission(last);
+            SurfaceLight& o = out[k0 + k];
+            o.irradiance = E[k];
+            o.albedo = albedo;
+            o.emission = front[k] ? emission : Vec3f(0, 0, 0);
+        }
+    }
 }
 
 DisplayOptions GalleryLighting::options(unsigned threads) {

@@ -1,6 +1,7 @@
 // The Gallery's light as the full-resolution display pass asks it (sampling/stereo_display.h):
 // per hit, the room surface's albedo and emission and the irradiance there, baked or full,
-// exactly as Gallery::render_display computes them. Holds the gallery's read lock while it
+// as Gallery::render_display computes them (baked: at Embree's barycentrics rather than the
+// ones solved from the point, equal to float rounding). Holds the gallery's read lock while it
 // lives, so light() and bake() cannot change what a frame reads.
 #pragma once
 #include <shared_mutex>
@@ -15,6 +16,9 @@ public:
     // InvalidArgument when the lighting needs light() or bake() that has not been done.
     GalleryLighting(const Gallery& gallery, Lighting lighting);
     void light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const override;
+    // Baked: the lattice at Embree's barycentrics, one call per packet (no point-to-barycentric
+    // solve in double per pixel); unlit and full as light().
+    void light_batch(const LightQuery* queries, std::size_t count, SurfaceLight* out) const override;
     // The display options that match the gallery's display (painting reflectance, sRGB).
     static DisplayOptions options(unsigned threads = 0);
 

@@ -306,27 +306,57 @@ Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
 }
 
 Vec3f Gallery::irradiance_baked(const Hit& hit) const {
-    const std::uint32_t t = hit.tri, n = bake_n_[t];
-    const Vec3f b = barycentric(t, hit.p);
-    const std::vector<Vec3f>& side = hit.front ? bake_front_ : bake_back_;
-    const Vec3f* E = side.data() + bake_offset_[t];
-    const float x = b.x * float(n), y = b.y * float(n);  // x + y <= n
+    const Vec3f b = barycentric(hit.tri, hit.p);
+    return irradiance_baked_at(hit.tri, hit.front, b.x, b.y);
+}
+
+namespace {
+// Linear interpolation on triangle t's lattice of n segments (points E) at barycentrics
+// (b1, b2), clamped onto the triangle.
+inline Vec3f lattice_lerp(const Vec3f* E, std::uint32_t n, float b1, float b2) {
+    // Clamped onto the triangle as barycentric() does (Embree's u, v may round just outside).
+    b1 = std::clamp(b1, 0.0f, 1.0f), b2 = std::clamp(b2, 0.0f, 1.0f);
+    if (b1 + b2 > 1.0f) {
+        const float s = b1 + b2;
+        b1 /= s, b2 /= s;
+    }
+    const float x = b1 * float(n), y = b2 * float(n);  // x + y <= n
     const std::uint32_t i = std::min(std::uint32_t(x), n - 1);
     const std::uint32_t j = std::min(std::uint32_t(y), n - 1 - i);
     float fx = std::max(x - float(i), 0.0f), fy = std::max(y - float(j), 0.0f);
-    if (fx + fy <= 1.0f || i + j + 2 > n) {
-        // The lower sub-triangle (i, j), (i+1, j), (i, j+1); on the far edge (no upper one)
-        // rounding can put the point just past it: scale back onto the edge.
-        if (fx + fy > 1.0f) {
-            const float s = 1.0f / (fx + fy);
-            fx *= s, fy *= s;
-        }
-        return E[lattice_index(i, j, n)] * (1 - fx - fy) + E[lattice_index(i + 1, j, n)] * fx +
-               E[lattice_index(i, j + 1, n)] * fy;
+    // The lower sub-triangle (i, j), (i+1, j), (i, j+1) or the upper one (i+1, j+1),
+    // (i, j+1), (i+1, j), chosen by selects: which one a pixel falls in is a coin toss, and
+    // a branch on it mispredicted half the time. On the far edge (no upper one) rounding
+    // can put the point just past the lower one: scale back onto the edge.
+    const bool upper = fx + fy > 1.0f && i + j + 2 <= n;
+    if (!upper && fx + fy > 1.0f) {
+        const float s = 1.0f / (fx + fy);
+        fx *= s, fy *= s;
     }
-    // The upper sub-triangle (i+1, j+1), (i, j+1), (i+1, j).
-    return E[lattice_index(i + 1, j + 1, n)] * (fx + fy - 1) + E[lattice_index(i, j + 1, n)] * (1 - fx) +
-           E[lattice_index(i + 1, j, n)] * (1 - fy);
+    // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i.
+    const std::uint64_t row_i = lattice_index(i, 0, n), row_next = row_i + (n + 1 - i);
+    const std::uint64_t right = row_next + j, up = row_i + j + 1;
+    const std::uint64_t k0 = upper ? row_next + j + 1 : row_i + j;
+    const std::uint64_t k1 = upper ? up : right, k2 = upper ? right : up;
+    const float w0 = upper ? fx + fy - 1 : 1 - fx - fy;
+    const float w1 = upper ? 1 - fx : fx, w2 = upper ? 1 - fy : fy;
+    return E[k0] * w0 + E[k1] * w1 + E[k2] * w2;
+}
+}  // namespace
+
+Vec3f Gallery::irradiance_baked_at(std::uint32_t t, bool front, float b1, float b2) const {
+    const std::vector<Vec3f>& side = front ? bake_front_ : bake_back_;
+    return lattice_lerp(side.data() + bake_offset_[t], bake_n_[t], b1, b2);
+}
+
+void Gallery::irradiance_baked_batch(const std::uint32_t* tri, const bool* front, const float* b1,
+                                     const float* b2, std::size_t count, Vec3f* out) const {
+    const Vec3f* front_E = bake_front_.data();
+    const Vec3f* back_E = bake_back_.data();
+    for (std::size_t k = 0; k < count; ++k) {
+        const std::uint32_t t = tri[k];
+        out[k] = lattice_lerp((front[k] ? front_E : back_E) + bake_offset_[t], bake_n_[t], b1[k], b2[k]);
+    }
 }
 
 void Gallery::bake(const BakeSettings& s) {

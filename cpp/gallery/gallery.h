@@ -159,6 +159,14 @@ public:
     // viewer), as lighting "full" / "baked" compute it. For tests and reprojection.
     Vec3f irradiance_full(const Hit& hit) const;
     Vec3f irradiance_baked(const Hit& hit) const;
+    // The baked lattice at barycentrics (b1, b2) of triangle tri (p = v0 + b1 e1 + b2 e2,
+    // Embree's hit u, v), on the front or back side: irradiance_baked without recomputing the
+    // barycentrics from the point. The caller holds read_lock() and the gallery is baked.
+    Vec3f irradiance_baked_at(std::uint32_t tri, bool front, float b1, float b2) const;
+    // The same for count points at once (the display pass's packets): out[i] for
+    // (tri[i], front[i], b1[i], b2[i]).
+    void irradiance_baked_batch(const std::uint32_t* tri, const bool* front, const float* b1,
+                                const float* b2, std::size_t count, Vec3f* out) const;
     // Held by a display pass that calls the irradiance functions itself (gallery/display_lighting.h):
     // light() and bake() wait for it.
     std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock(mutex_); }

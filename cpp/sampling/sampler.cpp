@@ -25,6 +25,10 @@ namespace {
 void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
 template <TexelFormat F>
 void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
+template <TexelFormat F>
+void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
+void sample_trilinear_serial(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin,
+                             std::size_t end);
 
 void check_request(const VirtualTexture& vt, const SampleRequest& r) {
     require(r.painting < vt.layout().paintings.size(), "painting out of range");
@@ -43,6 +47,11 @@ void sample(const VirtualTexture& vt, const SampleRequest& r) {
 void sample_serial(const VirtualTexture& vt, const SampleRequest& r) {
     check_request(vt, r);
     const auto lock = vt.read_lock();
+    sample_range(vt, r, 0, r.count);
+}
+
+void sample_serial_locked(const VirtualTexture& vt, const SampleRequest& r) {
+    check_request(vt, r);
     sample_range(vt, r, 0, r.count);
 }
 
@@ -207,6 +216,16 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
             sample_bilinear<TexelFormat::Rgb8>(vt, r, begin, end);
         return;
     }
+    if (vt.format() == TexelFormat::Bc1)
+        sample_trilinear<TexelFormat::Bc1>(vt, r, begin, end);
+    else
+        sample_trilinear<TexelFormat::Rgb8>(vt, r, begin, end);
+}
+
+// The per-sample trilinear path: the reference that sample_trilinear's batches reproduce
+// (tests compare the two).
+void sample_trilinear_serial(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin,
+                             std::size_t end) {
     const PaintingGeometry& pt = vt.layout().paintings[r.painting];
     const std::uint32_t L = pt.levels();
     const LevelAxes axes(pt.width(), pt.height(), L);
@@ -344,5 +363,49 @@ void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size
     }
 }
 
+// Trilinear as two batched bilinear passes (sample_bilinear's prefetching batches) at
+// floor(lod) and floor(lod) + 1, blended as the per-sample path blends them: the same taps,
+// the same fallback, the same blend, so the same results.
+template <TexelFormat F>
+void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
+    const std::uint32_t L = vt.layout().paintings[r.painting].levels();
+    constexpr std::size_t kChunk = 256;
+    float fine[kChunk], coarse[kChunk], blend[kChunk], second[3 * kChunk];
+    for (std::size_t b = begin; b < end; b += kChunk) {
+        const std::size_t n = std::min(kChunk, end - b);
+        bool any = false;
+        for (std::size_t k = 0; k < n; ++k) {
+            float lod = r.lod ? r.lod[b + k] : r.lod_scalar;
+            lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
+            const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
+            const float f = lod - float(l0);
+            const bool two = f > 0 && l0 + 1 < L;
+            fine[k] = float(l0), coarse[k] = float(two ? l0 + 1 : l0), blend[k] = two ? f : 0.0f;
+            any |= two;
+        }
+        SampleRequest q = r;
+        q.u = r.u + b * r.uv_stride, q.v = r.v + b * r.uv_stride;
+        q.lod = fine, q.count = n, q.filter = Filter::Bilinear;
+        q.out = r.out + 3 * b;
+        q.level_out = r.level_out ? r.level_out + b : nullptr;
+        sample_bilinear<F>(vt, q, 0, n);
+        if (!any) continue;
+        q.lod = coarse, q.out = second, q.level_out = nullptr;
+        sample_bilinear<F>(vt, q, 0, n);
+        float* out = r.out + 3 * b;
+        for (std::size_t k = 0; k < n; ++k)
+            if (blend[k] > 0)
+                for (int c = 0; c < 3; ++c)
+                    out[3 * k + c] += blend[k] * (second[3 * k + c] - out[3 * k + c]);
+    }
+}
+
 }  // namespace
+
+void sample_trilinear_reference(const VirtualTexture& vt, const SampleRequest& r) {
+    check_request(vt, r);
+    const auto lock = vt.read_lock();
+    sample_trilinear_serial(vt, r, 0, r.count);
+}
+
 }  // namespace gigascroll

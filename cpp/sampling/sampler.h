@@ -37,5 +37,11 @@ void sample(const VirtualTexture& vt, const SampleRequest& r);
 // The same on the calling thread only (r.threads ignored): for callers that already run one
 // task per core, such as the display pass.
 void sample_serial(const VirtualTexture& vt, const SampleRequest& r);
+// The same for a caller that already holds vt.read_lock() for all its calls (the display
+// pass takes it once per frame instead of once per run of samples).
+void sample_serial_locked(const VirtualTexture& vt, const SampleRequest& r);
+// Trilinear on the calling thread one sample at a time (r.filter ignored): the plain path
+// that sample()'s batched trilinear must reproduce, for tests.
+void sample_trilinear_reference(const VirtualTexture& vt, const SampleRequest& r);
 
 }  // namespace gigascroll

@@ -4,9 +4,13 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 #include "common/timing.h"
 #include "common/error.h"
@@ -45,11 +49,11 @@ const SrgbTable& srgb_table() {
 }
 
 // Casts the primary rays of rows [row_begin, row_end) in 16-ray packets along each row; a
-// pixel with skip[i] != 0 is left out of its packet. on_packet(row, i0, n, packet) sees
-// each packet after Embree filled it.
-template <typename OnPacket>
+// pixel with skip[i] != 0 is left out of its packet. on_packet(row, i0, n, valid, packet)
+// sees each packet after Embree filled it, on_row(row) each row after its last packet.
+template <typename OnPacket, typename OnRow>
 void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::size_t row_end,
-               const std::uint8_t* skip, OnPacket&& on_packet) {
+               const std::uint8_t* skip, OnPacket&& on_packet, OnRow&& on_row) {
     const std::uint32_t w = eye.width;
     const std::size_t padded = (std::size_t(w) + 15) / 16 * 16;
     std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
@@ -93,7 +97,59 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
             rtcIntersect16(valid, scene, &context, &packet);
             on_packet(row, i0, n, valid, packet);
         }
+        on_row(row);
     }
+}
+
+// A painting's plane as one eye sees it, so that a pixel's painting coordinates and level of
+// detail are a few multiply-adds on its ray direction D (unnormalised, D . forward = 1):
+// t = h / (D . n), uv = ((eye - origin) . axis + t D . axis) / size, and the footprint of
+// feedback.h's texel_footprint, dP/dx = t (dD/dx - (dD/dx . n) / (D . n) D), expanded on the
+// axes. The same arithmetic as texel_footprint in another order (double throughout: a 12 m
+// scroll of 150k texels needs more than float for uv).
+struct PlaneMap {
+    Vec3d n, u_axis, v_axis;
+    double h = 0, cu = 0, cv = 0, inv_width = 0, inv_height = 0;
+    double xn = 0, xu = 0, xv = 0, yn = 0, yu = 0, yv = 0;  // ddx, ddy . (n, u, v)
+    double su = 0, sv = 0;                                  // texels per metre along u, v
+
+    PlaneMap(const PaintingPlacement& pp, const Camera& eye)
+        : n(pp.normal()), u_axis(pp.u_axis), v_axis(pp.v_axis) {
+        h = dot(pp.origin - eye.position, n);
+        cu = dot(eye.position - pp.origin, u_axis), cv = dot(eye.position - pp.origin, v_axis);
+        inv_width = 1.0 / pp.width_m, inv_height = 1.0 / pp.height_m;
+        const Vec3d dx = eye.ddx(), dy = eye.ddy();
+        xn = dot(dx, n), xu = dot(dx, u_axis), xv = dot(dx, v_axis);
+        yn = dot(dy, n), yu = dot(dy, u_axis), yv = dot(dy, v_axis);
+        su = pp.tiles.width() / pp.width_m, sv = pp.tiles.height() / pp.height_m;
+    }
+
+    // uv clamped to [0, 1] and lambda = log2(footprint in texels).
+    __attribute__((always_inline)) void map(Vec3d D, double& u, double& v, float& lod) const {
+        const double dn = dot(D, n), du = dot(D, u_axis), dv = dot(D, v_axis);
+        const double k = 1.0 / dn, t = h * k;
+        u = std::clamp((cu + t * du) * inv_width, 0.0, 1.0);
+        v = std::clamp((cv + t * dv) * inv_height, 0.0, 1.0);
+        const double ax = t * su * (xu - xn * k * du), bx = t * sv * (xv - xn * k * dv);
+        const double ay = t * su * (yu - yn * k * du), by = t * sv * (yv - yn * k * dv);
+        const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
+        const float r = float(rho2);
+        // float log2 where rho^2 is a normal float (the level needs no more), double beyond.
+        lod = r > std::numeric_limits<float>::min() && r < std::numeric_limits<float>::max()
+                  ? 0.5f * std::log2(r)
+                  : float(0.5 * std::log2(rho2));
+    }
+};
+
+// 1 / sqrt(x) for x > 0 to about 1e-7 relative: the hardware estimate and one Newton step
+// (a square root and a division per pixel were a tenth of the fused loop).
+inline float inverse_sqrt(float x) {
+#if defined(__SSE__)
+    const float r = _mm_cvtss_f32(_mm_rsqrt_ss(_mm_set_ss(x)));
+    return r * (1.5f - 0.5f * x * r * r);
+#else
+    return 1.0f / std::sqrt(x);
+#endif
 }
 
 void check_camera(const Camera& eye) {
@@ -103,181 +159,264 @@ void check_camera(const Camera& eye) {
 }
 }  // namespace
 
-void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h) {
-    width = w, height = h;
-    const std::size_t n = std::size_t(w) * h;
-    geom.resize(n), prim.resize(n), p.resize(n);
-    this->n.resize(n), uv.resize(2 * n), lod.resize(n), placement.resize(n), albedo.resize(3 * n);
-    light.resize(n), copied.resize(n);
+void DisplayLighting::light_batch(const LightQuery* queries, std::size_t count,
+                                  SurfaceLight* out) const {
+    for (std::size_t i = 0; i < count; ++i) {
+        const LightQuery& q = queries[i];
+        light(q.geom, q.prim, q.p, q.n, out[i]);
+    }
 }
 
-void DisplayPass::trace(const PaintingSceneView& scene, const Camera& eye, GBuffer& g,
-                        const std::uint8_t* skip, unsigned threads, EyeStats& st) {
+void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_light) {
+    width = w, height = h;
+    const std::size_t n = std::size_t(w) * h;
+    geom.resize(n), p.resize(n), lod.resize(n);
+    if (keep_light) this->n.resize(n), texel.resize(n), scale.resize(n), add.resize(n);
+}
+
+namespace {
+// A painting pixel of the row waiting for its texel: radiance = linear albedo x scale + add.
+// source >= 0: the left pixel whose texel it takes (the levels agree), else it is sampled.
+struct PendingPixel {
+    std::uint32_t x;
+    int placement;
+    std::int32_t source;
+    Vec3f scale, add;
+};
+}  // namespace
+
+void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
+                             const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
+                             GBuffer& g, bool keep_light, const float* left_rgb, float* rgb,
+                             EyeStats& st) {
     const auto t0 = Clock::now();
     const std::uint32_t w = eye.width;
-    const Vec3f o(eye.position);
-    std::atomic<std::uint64_t> traced{0};
+    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+    const std::size_t paintings = vt.layout().paintings.size();
+    std::vector<PlaneMap> maps;
+    maps.reserve(scene.paintings.size());
+    for (const PaintingPlacement& pp : scene.paintings) maps.emplace_back(pp, eye);
+    const GBuffer* left = reusing_ ? &g_[0] : nullptr;
+    const std::int32_t* sources = reusing_ ? sources_.data() : nullptr;
+    const std::uint8_t* skip = reusing_ ? claimed_.data() : nullptr;
+    GS_CHECK(!left || left_rgb != nullptr);
+    const Vec3f origin(eye.position);
+    const SrgbTable& srgb_decode = srgb_table();
+    std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
+    std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0};
+    // One read lock for the frame: the workers' sampler calls run under it.
+    const auto vt_lock = vt.read_lock();
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
-        std::uint64_t count = 0;
-        cast_rows(scene.handle, eye, rb, re, skip, [&](std::size_t row, std::uint32_t i0,
-                                                       std::uint32_t n, const int* valid,
-                                                       const RTCRayHit16& h) {
+        std::vector<PendingPixel> pending, copied;
+        pending.reserve(w);
+        std::vector<double> us, vs, column_sx(w);  // u and v apart: the sampler's batches read them densely
+        std::vector<float> lods, texels;
+        us.reserve(w), vs.reserve(w), lods.reserve(w);
+        for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
+        std::size_t current_row = ~std::size_t(0);
+        Vec3d row_dir;
+        std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0;
+        // Thread time per stage: laps between the stages of the fused loop, taken on every
+        // kTimedRow-th row only (a clock read per stage and packet costs a few percent).
+        constexpr std::size_t kTimedRow = 8;
+        std::chrono::nanoseconds t_rays{0}, t_vt{0}, t_shade{0};
+        bool timed = rb % kTimedRow == 0;
+        auto mark = Clock::now();
+        auto lap = [&](std::chrono::nanoseconds& acc) {
+            if (!timed) return;
+            const auto now = Clock::now();
+            acc += now - mark;
+            mark = now;
+        };
+        auto start_row = [&](std::size_t row) {
+            if (row == current_row) return;
+            current_row = row;
+            row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
+            pending.clear(), copied.clear(), us.clear(), vs.clear(), lods.clear();
+        };
+        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
+                                  std::int32_t source, Vec3f scale, Vec3f add)
+                                  __attribute__((always_inline)) {
+            double u, v;
+            float lod;
+            maps[std::size_t(pl)].map(D, u, v, lod);
+            lod += o.lod_bias;
+            if (!std::isfinite(lod)) lod = 0.0f;
+            g.lod[i] = lod;
+            // A reused point whose level here is the left eye's to within the tolerance keeps
+            // the left eye's sample (the trilinear blend would move by less than that
+            // fraction of the two levels' difference).
+            if (source >= 0 && std::abs(left->lod[std::size_t(source)] - lod) <= o.reuse_lod_tolerance) {
+                copied.push_back({x, pl, source, scale, add});
+                return;
+            }
+            pending.push_back({x, pl, -1, scale, add});
+            us.push_back(u), vs.push_back(v);
+            lods.push_back(lod);
+        };
+        std::array<LightQuery, 16> queries;
+        std::array<SurfaceLight, 16> lights;
+        std::array<std::uint32_t, 16> lane;
+
+        auto on_packet = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
+                             const RTCRayHit16& h) {
+            lap(t_rays);
+            start_row(row);
+            std::uint32_t m = 0;
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (!valid[k]) continue;
-                ++count;
+                ++traced_count;
                 const std::size_t i = row * w + i0 + k;
                 const unsigned geom = h.hit.geomID[k];
                 g.geom[i] = geom;
-                if (geom == kNoHit) continue;
-                g.prim[i] = h.hit.primID[k];
+                if (geom == kNoHit) {
+                    rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.0f;
+                    g.lod[i] = kNaN;
+                    continue;
+                }
+                const unsigned prim = h.hit.primID[k];
                 const Vec3f d{h.ray.dir_x[k], h.ray.dir_y[k], h.ray.dir_z[k]};
-                g.p[i] = o + d * h.ray.tfar[k];
+                const Vec3f p = origin + d * h.ray.tfar[k];
                 Vec3f ng{h.hit.Ng_x[k], h.hit.Ng_y[k], h.hit.Ng_z[k]};
-                ng = ng / std::sqrt(dot(ng, ng));
-                g.n[i] = dot(ng, d) > 0 ? -ng : ng;  // two-sided: the side the eye sees
+                ng = ng * inverse_sqrt(dot(ng, ng));
+                const Vec3f nf = dot(ng, d) > 0 ? -ng : ng;  // two-sided: the side the eye sees
+                // Component stores: a Vec3f copied through the stack stalled on store
+                // forwarding (a 12-byte object read back as 8 + 4 bytes).
+                Vec3f& gp = g.p[i];
+                gp.x = p.x, gp.y = p.y, gp.z = p.z;
+                if (keep_light) {  // the right eye's claims test the side it sees
+                    Vec3f& gn = g.n[i];
+                    gn.x = nf.x, gn.y = nf.y, gn.z = nf.z;
+                }
+                LightQuery& q = queries[m];
+                q.geom = geom, q.prim = prim, q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
+                q.p.x = p.x, q.p.y = p.y, q.p.z = p.z;
+                q.n.x = nf.x, q.n.y = nf.y, q.n.z = nf.z;
+                lane[m++] = k;
             }
-        });
-        traced.fetch_add(count, std::memory_order_relaxed);
-    }, threads);
-    st.traced = traced.load();
-    st.rays_seconds = seconds_since(t0);
-}
-
-void DisplayPass::sample(const PaintingSceneView& scene, const VirtualTexture& vt,
-                         const Camera& eye, GBuffer& g, const GBuffer* source,
-                         const std::int32_t* reused, const DisplayOptions& o, EyeStats& st) {
-    const auto t0 = Clock::now();
-    const std::uint32_t w = g.width;
-    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-    const std::size_t paintings = vt.layout().paintings.size();
-    std::atomic<std::uint64_t> on_paintings{0}, hits{0};
-    parallel_for(g.height, 8, [&](std::size_t rb, std::size_t re) {
-        std::uint64_t count = 0, hit_count = 0;
-        for (std::size_t row = rb; row < re; ++row) {
-            // Level of detail and painting coordinates from the hit point, so a reused
-            // point gets the level of the eye that displays it.
-            for (std::uint32_t x = 0; x < w; ++x) {
+            hit_count += m;
+            if (m) lighting.light_batch(queries.data(), m, lights.data());
+            lap(t_shade);
+            for (std::uint32_t j = 0; j < m; ++j) {
+                const std::uint32_t x = i0 + lane[j];
                 const std::size_t i = row * w + x;
-                g.placement[i] = -1;
-                g.lod[i] = kNaN;
-                g.copied[i] = 0;
-                if (g.geom[i] == kNoHit) continue;
-                ++hit_count;
-                const int pl = scene.placement_of(g.geom[i]);
-                if (pl < 0) continue;
-                const PaintingPlacement& pp = scene.paintings[std::size_t(pl)];
-                // A traced pixel: the plane point of its centre's ray in double (a 12 m scroll
-                // of 150k texels needs more than float); a reused one: the left eye's point,
-                // seen from this eye.
-                Vec3d dd;
-                double t;
-                if (reused && reused[i] >= 0) {
-                    const Vec3d to_p = Vec3d(g.p[i]) - eye.position;
-                    t = dot(to_p, eye.forward);
-                    if (!(t > 0)) continue;
-                    dd = to_p / t;
-                } else {
-                    dd = eye.direction(x + 0.5, row + 0.5);
-                    t = dot(pp.origin - eye.position, pp.normal()) / dot(dd, pp.normal());
+                const SurfaceLight& sl = lights[j];
+                const int pl = scene.placement_of(queries[j].geom);
+                if (pl < 0) {
+                    const Vec3f L = sl.albedo * sl.irradiance * kInvPi + sl.emission;
+                    rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
+                    g.lod[i] = kNaN;
+                    continue;
                 }
-                const Vec3d rel = eye.position + t * dd - pp.origin;
-                const double u = std::clamp(dot(rel, pp.u_axis) / pp.width_m, 0.0, 1.0);
-                const double v = std::clamp(dot(rel, pp.v_axis) / pp.height_m, 0.0, 1.0);
-                const double rho = texel_footprint(pp, eye, dd, t);
-                g.placement[i] = pl;
-                g.uv[2 * i] = u, g.uv[2 * i + 1] = v;
-                g.lod[i] = float(std::log2(rho)) + o.lod_bias;
-                if (!std::isfinite(g.lod[i])) g.lod[i] = 0.0f;
-                ++count;
-                // A reused point whose level here is the left eye's to within the tolerance
-                // keeps the left eye's sample (the trilinear blend would move by less than
-                // that fraction of the two levels' difference).
-                if (source && reused && reused[i] >= 0) {
-                    const std::size_t s = std::size_t(reused[i]);
-                    if (source->placement[s] == pl &&
-                        std::abs(source->lod[s] - g.lod[i]) <= o.reuse_lod_tolerance) {
-                        std::copy_n(&source->albedo[3 * s], 3, &g.albedo[3 * i]);
-                        g.copied[i] = 1;
-                    }
-                }
+                const Vec3f scale = sl.irradiance * kInvPi;
+                if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
+                painting_pixel(i, x, pl, row_dir + column_sx[x] * eye.right, -1, scale, sl.emission);
             }
-            // Runs of one painting sampled in one call (copied samples end a run).
-            for (std::uint32_t j0 = 0; j0 < w;) {
-                const std::size_t i0 = row * w + j0;
-                const int pl = g.copied[i0] ? -1 : g.placement[i0];
-                std::uint32_t j1 = j0 + 1;
-                while (j1 < w && !g.copied[row * w + j1] && g.placement[row * w + j1] == pl) ++j1;
-                if (pl >= 0) {
-                    const std::size_t i = row * w + j0;
-                    SampleRequest r;
-                    r.painting = scene.paintings[std::size_t(pl)].painting;
-                    require(r.painting < paintings, "display: a painting of the scene is not in "
-                                                    "the virtual texture");
-                    r.u = &g.uv[2 * i], r.v = r.u + 1, r.uv_stride = 2;
-                    r.lod = &g.lod[i];
-                    r.count = j1 - j0;
-                    r.filter = Filter::Trilinear;
-                    r.out = &g.albedo[3 * i];
-                    sample_serial(vt, r);
-                }
-                j0 = j1;
-            }
-        }
-        on_paintings.fetch_add(count, std::memory_order_relaxed);
-        hits.fetch_add(hit_count, std::memory_order_relaxed);
-    }, o.threads);
-    st.painting_pixels = on_paintings.load();
-    st.hits = hits.load();
-    st.vt_seconds = seconds_since(t0);
-}
+            lap(t_vt);
+        };
 
-void DisplayPass::shade(const DisplayLighting& lighting, GBuffer& g, const GBuffer* source,
-                        const std::int32_t* reused, const DisplayOptions& o, float* rgb,
-                        EyeStats& st) {
-    const auto t0 = Clock::now();
-    const std::size_t n = std::size_t(g.width) * g.height;
-    const SrgbTable& srgb_decode = srgb_table();
-    parallel_for(n, 4096, [&](std::size_t b, std::size_t e) {
-        SurfaceLight sl;
-        for (std::size_t i = b; i < e; ++i) {
-            float* out = rgb + 3 * i;
-            if (g.geom[i] == kNoHit) {
-                out[0] = out[1] = out[2] = 0.0f;
-                continue;
+        auto on_row = [&](std::size_t row) {
+            lap(t_rays);
+            start_row(row);
+            // The right eye's claimed pixels: the left hit and its light, the level of this eye
+            // (the point seen along this eye's ray through it).
+            if (left) {
+                for (std::uint32_t x = 0; x < w; ++x) {
+                    const std::size_t i = row * w + x;
+                    const std::int32_t s = sources[i];
+                    if (s < 0) continue;
+                    const std::size_t si = std::size_t(s);
+                    const unsigned geom = left->geom[si];
+                    g.geom[i] = geom;  // the point stays in the left buffer (hit_points)
+                    ++hit_count;
+                    const int pl = scene.placement_of(geom);
+                    if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
+                        std::copy_n(left_rgb + 3 * si, 3, rgb + 3 * i);
+                        g.lod[i] = kNaN;
+                        continue;
+                    }
+                    const Vec3d to_p = Vec3d(left->p[si]) - eye.position;
+                    painting_pixel(i, x, pl, to_p / dot(to_p, eye.forward), s, left->scale[si],
+                                   left->add[si]);
+                }
             }
-            // A reused point's light is the left eye's: irradiance, albedo and emission do
-            // not depend on the eye (Lambertian surfaces, same side).
-            if (source && reused && reused[i] >= 0) {
-                sl = source->light[std::size_t(reused[i])];
-            } else {
-                lighting.light(g.geom[i], g.prim[i], g.p[i], g.n[i], sl);
+            // Runs of one painting sampled in one call.
+            texels.resize(3 * pending.size());
+            for (std::size_t k0 = 0; k0 < pending.size();) {
+                const int pl = pending[k0].placement;
+                std::size_t k1 = k0 + 1;
+                while (k1 < pending.size() && pending[k1].placement == pl) ++k1;
+                SampleRequest r;
+                r.painting = scene.paintings[std::size_t(pl)].painting;
+                require(r.painting < paintings, "display: a painting of the scene is not in "
+                                                "the virtual texture");
+                r.u = us.data() + k0, r.v = vs.data() + k0, r.uv_stride = 1;
+                r.lod = lods.data() + k0;
+                r.count = k1 - k0;
+                r.filter = Filter::Trilinear;
+                r.out = texels.data() + 3 * k0;
+                sample_serial_locked(vt, r);
+                k0 = k1;
             }
-            g.light[i] = sl;
+            lap(t_vt);
             // The Gallery's order of operations (its sRGB curve is exact, ours tabulated).
-            Vec3f L;
-            if (g.placement[i] >= 0) {
-                const float* a = &g.albedo[3 * i];
+            auto shade = [&](const PendingPixel& q, const float* a) {
+                const std::size_t i = row * w + q.x;
                 const Vec3f albedo =
                     (o.srgb_albedo ? Vec3f{srgb_decode(a[0]), srgb_decode(a[1]), srgb_decode(a[2])}
                                    : Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f)) *
                     o.painting_reflectance;
-                L = albedo * (sl.irradiance * kInvPi) + sl.emission;
-            } else {
-                L = sl.albedo * sl.irradiance * kInvPi + sl.emission;
+                const Vec3f L = albedo * q.scale + q.add;
+                rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
+                if (keep_light) g.texel[i] = Vec3f{a[0], a[1], a[2]};
+            };
+            for (std::size_t k = 0; k < pending.size(); ++k) shade(pending[k], &texels[3 * k]);
+            for (const PendingPixel& q : copied) {
+                const Vec3f& a = left->texel[std::size_t(q.source)];
+                const float t[3] = {a.x, a.y, a.z};
+                shade(q, t);
             }
-            out[0] = L.x, out[1] = L.y, out[2] = L.z;
-        }
+            painting_count += pending.size() + copied.size();
+            lap(t_shade);
+            timed = (row + 1) % kTimedRow == 0;
+            if (timed) mark = Clock::now();
+        };
+
+        cast_rows(scene.handle, eye, rb, re, skip, on_packet, on_row);
+        traced.fetch_add(traced_count, std::memory_order_relaxed);
+        hits.fetch_add(hit_count, std::memory_order_relaxed);
+        on_paintings.fetch_add(painting_count, std::memory_order_relaxed);
+        rays_ns.fetch_add(t_rays.count(), std::memory_order_relaxed);
+        vt_ns.fetch_add(t_vt.count(), std::memory_order_relaxed);
+        shade_ns.fetch_add(t_shade.count(), std::memory_order_relaxed);
     }, o.threads);
-    st.shade_seconds = seconds_since(t0);
+    st.traced = traced.load();
+    st.hits = hits.load();
+    st.painting_pixels = on_paintings.load();
+    // The stages interleave in each thread: the pass's wall time is split in the proportion
+    // of the timed rows' time in each.
+    const double wall = seconds_since(t0);
+    const double sum = double(rays_ns.load() + vt_ns.load() + shade_ns.load());
+    const double f = sum > 0 ? wall / sum : 0.0;
+    st.rays_seconds = f * double(rays_ns.load());
+    st.vt_seconds = f * double(vt_ns.load());
+    st.shade_seconds = f * double(shade_ns.load());
 }
 
 void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& st) {
     const auto t0 = Clock::now();
     const GBuffer& L = g_[0];
-    GBuffer& R = g_[1];
-    const std::size_t n = std::size_t(R.width) * R.height;
-    claims_.assign(n, kUnclaimed);
-    const Vec3f eye(right.position), fwd(right.forward);
+    const std::size_t n = std::size_t(right.width) * right.height;
+    // The last frame's release pass left every claim unclaimed again (no 8-byte fill of the
+    // image per frame); after a resize or an interrupted frame they are filled here.
+    if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
+    claims_clear_ = false;
+    const Vec3f eye(right.position), fwd(right.forward), rgt(right.right), up(right.up);
+    // Camera::project (seed 001 eqs. 3-5) with its constants hoisted and one division per
+    // point: pixel = floor((x / (z tan_x) + 1) w / 2), floor((1 - y / (z tan_y)) h / 2).
+    const float fw = float(right.width), fh = float(right.height);
+    const float sx = 0.5f * fw / float(right.tan_half_x), sy = 0.5f * fh / float(right.tan_half_y);
+    const std::uint32_t rw = right.width;
     // Claims: the nearest left hit per right pixel wins (depth in the high word, so the
     // smaller 64-bit value is the nearer claim; positive floats order as their bits).
     parallel_for(L.geom.size(), 4096, [&](std::size_t b, std::size_t e) {
@@ -285,56 +424,72 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
             if (L.geom[i] == kNoHit) continue;
             const Vec3f p = L.p[i], to_eye = eye - p;
             if (dot(to_eye, L.n[i]) <= 0) continue;  // the right eye sees the other side
-            int rx, ry;
-            if (!right.project(p, rx, ry)) continue;
+            const Vec3f d = p - eye;
+            const Vec3f dir{dot(d, rgt), dot(d, up), dot(d, fwd)};
+            if (!(dir.z > 0.0f)) continue;
+            const float inv_z = 1.0f / dir.z;
+            const float fx = std::floor(0.5f * fw + dir.x * inv_z * sx);
+            const float fy = std::floor(0.5f * fh - dir.y * inv_z * sy);
+            if (!(fx >= 0.0f && fx < fw && fy >= 0.0f && fy < fh)) continue;
             const float depth = dot(p - eye, fwd);
             if (!(depth > 0)) continue;
             const std::uint64_t claim =
                 (std::uint64_t(std::bit_cast<std::uint32_t>(depth)) << 32) | std::uint64_t(i);
-            std::atomic_ref<std::uint64_t> slot(claims_[std::size_t(ry) * R.width + std::size_t(rx)]);
+            std::atomic_ref<std::uint64_t> slot(claims_[std::size_t(fy) * rw + std::size_t(fx)]);
             std::uint64_t seen = slot.load(std::memory_order_relaxed);
             while (claim < seen &&
                    !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
             }
         }
     }, o.threads);
-    // Release claims on depth edges, then copy the surviving left hits into the right
-    // G-buffer. parallel_for's join orders the claims before these reads.
-    claimed_.assign(n, 0);
-    sources_.assign(n, -1);
+    // Release claims on depth edges; the surviving claims are the right eye's reused pixels.
+    // A claim is on an edge when its depth exceeds an 8-neighbour's claimed depth x ratio,
+    // i.e. the 3 x 3 minimum of claimed depths (itself included: ratio >= 1) x ratio: the
+    // minimum is taken separably, along rows into row_min_, then across three rows.
+    // parallel_for's join orders the claims before these reads.
+    claimed_.resize(n);
+    sources_.resize(n);
+    row_min_.resize(n);
     const float ratio = 1.0f + o.edge_depth_ratio;
-    const std::int64_t w = R.width, h = R.height;
-    std::atomic<std::uint64_t> reused{0};
-    parallel_for(std::size_t(h), 8, [&](std::size_t rb, std::size_t re) {
-        std::uint64_t count = 0;
-        for (std::int64_t y = std::int64_t(rb); y < std::int64_t(re); ++y)
-            for (std::int64_t x = 0; x < w; ++x) {
-                const std::size_t i = std::size_t(y * w + x);
-                const std::uint64_t c = claims_[i];
-                if (c == kUnclaimed) continue;
-                const float depth = std::bit_cast<float>(std::uint32_t(c >> 32));
-                bool edge = false;
-                for (std::int64_t dy = -1; dy <= 1 && !edge; ++dy)
-                    for (std::int64_t dx = -1; dx <= 1; ++dx) {
-                        const std::int64_t nx = x + dx, ny = y + dy;
-                        if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-                        const std::uint64_t nc = claims_[std::size_t(ny * w + nx)];
-                        if (nc == kUnclaimed) continue;
-                        if (depth > std::bit_cast<float>(std::uint32_t(nc >> 32)) * ratio) {
-                            edge = true;
-                            break;
-                        }
-                    }
-                if (edge) continue;
-                const std::size_t src = std::size_t(c & 0xffffffffu);
-                claimed_[i] = 1;
-                sources_[i] = std::int32_t(src);
-                R.geom[i] = L.geom[src], R.prim[i] = L.prim[src];
-                R.p[i] = L.p[src], R.n[i] = L.n[src];
-                ++count;
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    const std::size_t w = right.width, h = right.height;
+    auto depth_of = [](std::uint64_t c) {
+        return c == kUnclaimed ? kInf : std::bit_cast<float>(std::uint32_t(c >> 32));
+    };
+    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
+        for (std::size_t y = rb; y < re; ++y) {
+            const std::uint64_t* c = claims_.data() + y * w;
+            float* m = row_min_.data() + y * w;
+            float prev = kInf, here = depth_of(c[0]);
+            for (std::size_t x = 0; x < w; ++x) {
+                const float next = x + 1 < w ? depth_of(c[x + 1]) : kInf;
+                m[x] = std::min(std::min(prev, here), next);
+                prev = here, here = next;
             }
+        }
+    }, o.threads);
+    std::atomic<std::uint64_t> reused{0};
+    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
+        std::uint64_t count = 0;
+        for (std::size_t y = rb; y < re; ++y) {
+            const float* up = row_min_.data() + (y > 0 ? y - 1 : y) * w;
+            const float* mid = row_min_.data() + y * w;
+            const float* down = row_min_.data() + (y + 1 < h ? y + 1 : y) * w;
+            std::uint64_t* c = claims_.data() + y * w;
+            std::uint8_t* claimed = claimed_.data() + y * w;
+            std::int32_t* source = sources_.data() + y * w;
+            for (std::size_t x = 0; x < w; ++x) {
+                const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
+                const bool keep = c[x] != kUnclaimed && !(depth_of(c[x]) > nearest * ratio);
+                claimed[x] = keep;
+                source[x] = keep ? std::int32_t(c[x] & 0xffffffffu) : -1;
+                count += keep;
+                c[x] = kUnclaimed;  // ready for the next frame (row_min_ holds what neighbours need)
+            }
+        }
         reused.fetch_add(count, std::memory_order_relaxed);
     }, o.threads);
+    claims_clear_ = true;
     st.reused = reused.load();
     st.reuse_seconds = seconds_since(t0);
 }
@@ -346,12 +501,11 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     require(rgb != nullptr, "display: no output image");
     check_camera(eye);
     GBuffer& g = g_[0];
-    g.resize(eye.width, eye.height);
+    g.resize(eye.width, eye.height, false);
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
-    trace(scene, eye, g, nullptr, o.threads, st);
-    sample(scene, vt, eye, g, nullptr, nullptr, o, st);
-    shade(lighting, g, nullptr, nullptr, o, rgb, st);
+    reusing_ = false;
+    render_eye(scene, lighting, vt, eye, o, g, false, nullptr, rgb, st);
     sources_.clear();
 }
 
@@ -367,29 +521,45 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
             "display: both eyes need the same resolution");
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
             "display: edge_depth_ratio must be finite and >= 0");
-    render(scene, lighting, vt, left, o, left_rgb);
+    reusing_ = false;
+    {
+        GBuffer& g = g_[0];
+        g.resize(left.width, left.height, use_reuse);
+        EyeStats& st = stats_[0] = EyeStats{};
+        st.pixels = std::uint64_t(left.width) * left.height;
+        render_eye(scene, lighting, vt, left, o, g, use_reuse, nullptr, left_rgb, st);
+    }
     GBuffer& g = g_[1];
-    g.resize(right.width, right.height);
+    g.resize(right.width, right.height, false);
     EyeStats& st = stats_[1] = EyeStats{};
     st.pixels = std::uint64_t(right.width) * right.height;
     if (use_reuse) {
         reuse(right, o, st);
-        trace(scene, right, g, claimed_.data(), o.threads, st);
+        reusing_ = true;
+        try {
+            render_eye(scene, lighting, vt, right, o, g, false, left_rgb, right_rgb, st);
+        } catch (...) {
+            reusing_ = false;
+            throw;
+        }
+        reusing_ = false;
     } else {
         sources_.clear();
-        trace(scene, right, g, nullptr, o.threads, st);
+        render_eye(scene, lighting, vt, right, o, g, false, nullptr, right_rgb, st);
     }
-    const std::int32_t* reused = use_reuse ? sources_.data() : nullptr;
-    sample(scene, vt, right, g, &g_[0], reused, o, st);
-    shade(lighting, g, &g_[0], reused, o, right_rgb, st);
 }
 
 std::vector<float> DisplayPass::hit_points(int eye) const {
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
     const GBuffer& g = g_[eye];
     std::vector<float> out(3 * g.geom.size(), std::numeric_limits<float>::quiet_NaN());
-    for (std::size_t i = 0; i < g.geom.size(); ++i)
-        if (g.geom[i] != kNoHit) out[3 * i] = g.p[i].x, out[3 * i + 1] = g.p[i].y, out[3 * i + 2] = g.p[i].z;
+    // A reused right pixel's point is its left source's.
+    const bool reused = eye == 1 && sources_.size() == g.geom.size();
+    for (std::size_t i = 0; i < g.geom.size(); ++i) {
+        if (g.geom[i] == kNoHit) continue;
+        const Vec3f& p = reused && sources_[i] >= 0 ? g_[0].p[std::size_t(sources_[i])] : g.p[i];
+        out[3 * i] = p.x, out[3 * i + 1] = p.y, out[3 * i + 2] = p.z;
+    }
     return out;
 }
 
@@ -408,7 +578,7 @@ double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, st
         cast_rows(scene, eye, rb, re, nullptr, [&](std::size_t, std::uint32_t, std::uint32_t n,
                                                    const int*, const RTCRayHit16& h) {
             for (std::uint32_t k = 0; k < n; ++k) count += h.hit.geomID[k] != kNoHit;
-        });
+        }, [](std::size_t) {});
         total.fetch_add(count, std::memory_order_relaxed);
     }, threads);
     if (hits) *hits = total.load();

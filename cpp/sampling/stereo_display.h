@@ -13,11 +13,20 @@
 // the right eye's level of detail (the left eye's sample when the levels agree to within
 // reuse_lod_tolerance), so the reused pixel is what the right eye computes for that point.
 //
+// One fused sweep per eye (issue 14 §5): per row, 16-ray packets are traced and, while their
+// hits are in cache, lit in one DisplayLighting::light_batch call (with Embree's
+// barycentrics) and mapped to painting coordinates and level of detail (a per-eye plane map
+// of each painting, double precision); the row's painting pixels are then sampled in runs of
+// one painting (trilinear, under one VT read lock for the frame) and shaded. Per pixel the
+// pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
+// eye reuses, its texel and light.
+//
 // The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
 // is not reentrant.
 #pragma once
 #include <embree3/rtcore.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -38,12 +47,24 @@ struct SurfaceLight {
     static constexpr float kPiF = float(3.14159265358979323846);
 };
 
+// One hit as the display pass hands it to the lighting: Embree geometry and primitive, the
+// hit's barycentrics (Embree's u, v: p = (1 - b1 - b2) v0 + b1 v1 + b2 v2), the point and
+// the unit normal facing the viewer.
+struct LightQuery {
+    unsigned geom = 0, prim = 0;
+    float b1 = 0, b2 = 0;
+    Vec3f p, n;
+};
+
 // The scene's lighting as the display pass asks it, per hit: Embree geometry and primitive,
 // the point and the unit normal facing the viewer. Must be safe to call from many threads.
 class DisplayLighting {
 public:
     virtual ~DisplayLighting() = default;
     virtual void light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const = 0;
+    // A packet of hits in one call (the display pass asks once per 16 rays, so the virtual
+    // call is not paid per pixel). The default calls light() for each.
+    virtual void light_batch(const LightQuery* queries, std::size_t count, SurfaceLight* out) const;
 };
 
 // Today's unlit views: radiance = albedo (irradiance pi), grey occluders.
@@ -53,6 +74,9 @@ public:
     void light(unsigned, unsigned, Vec3f, Vec3f, SurfaceLight& out) const override {
         out = SurfaceLight{};
         out.albedo = albedo_;
+    }
+    void light_batch(const LightQuery*, std::size_t count, SurfaceLight* out) const override {
+        for (std::size_t i = 0; i < count; ++i) light(0, 0, {}, {}, out[i]);
     }
 
 private:
@@ -75,7 +99,9 @@ struct DisplayOptions {
     unsigned threads = 0;  // 0 = all cores
 };
 
-// Per-eye times and counts of the last render().
+// Per-eye times and counts of the last render(). The stages interleave row by row, so
+// rays, vt and shade are the pass's wall time split in the proportion the threads spent in
+// each on every 8th row (their sum is the pass's wall time).
 struct EyeStats {
     double rays_seconds = 0;     // primary rays (the right eye: only the unclaimed pixels)
     double reuse_seconds = 0;    // right eye: projection, claims and edge release
@@ -106,33 +132,35 @@ public:
     std::vector<float> lods(int eye) const;
 
 private:
+    // What a frame keeps per pixel: the hit (for hit_points and the right eye's projection),
+    // the level, and for the left eye what a reused right pixel needs (its texel and light).
     struct GBuffer {
         std::uint32_t width = 0, height = 0;
-        std::vector<unsigned> geom, prim;  // RTC_INVALID_GEOMETRY_ID: no hit
-        std::vector<Vec3f> p, n;           // n faces the eye
-        std::vector<double> uv;            // 2 per pixel (paintings)
-        std::vector<float> lod;
-        std::vector<int> placement;        // -1: not a painting
-        std::vector<float> albedo;         // 3 per pixel, 0..255 as sampled (paintings)
-        std::vector<SurfaceLight> light;   // what the lighting gave (reused by the right eye)
-        std::vector<std::uint8_t> copied;  // albedo copied from the left eye
-        void resize(std::uint32_t w, std::uint32_t h);
+        std::vector<unsigned> geom;        // RTC_INVALID_GEOMETRY_ID: no hit
+        std::vector<Vec3f> p;
+        std::vector<float> lod;            // NaN off paintings
+        // Left eye only (keep_light): the normal facing the eye, and per painting pixel the
+        // texel as sampled (0..255) and radiance = linear albedo x scale + add.
+        std::vector<Vec3f> n, texel, scale, add;
+        void resize(std::uint32_t w, std::uint32_t h, bool keep_light);
     };
-    void trace(const PaintingSceneView& scene, const Camera& eye, GBuffer& g,
-               const std::uint8_t* skip, unsigned threads, EyeStats& st);
-    // reused: per pixel the reused pixel of `source` (the left eye's buffer) or -1
-    // (nullptr: every pixel traced).
-    void sample(const PaintingSceneView& scene, const VirtualTexture& vt, const Camera& eye,
-                GBuffer& g, const GBuffer* source, const std::int32_t* reused,
-                const DisplayOptions& o, EyeStats& st);
-    void shade(const DisplayLighting& lighting, GBuffer& g, const GBuffer* source,
-               const std::int32_t* reused, const DisplayOptions& o, float* rgb, EyeStats& st);
+    // The fused pass over one eye: per row, 16-ray packets traced, their hits lit in one
+    // lighting call and mapped to painting coordinates while they are in cache, then the
+    // row's painting pixels sampled in runs and shaded. With `left` (the right eye after
+    // reuse()), pixels claimed from the left eye are not traced: they take the left hit and
+    // light, and their texel at this eye's level.
+    void render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
+                    const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
+                    GBuffer& g, bool keep_light, const float* left_rgb, float* rgb, EyeStats& st);
     void reuse(const Camera& right, const DisplayOptions& o, EyeStats& st);
 
     GBuffer g_[2];
     EyeStats stats_[2];
     std::vector<std::uint64_t> claims_;
+    bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last reuse())
     std::vector<std::uint8_t> claimed_;
+    std::vector<float> row_min_;  // per right pixel: the nearest claimed depth of its row's 3 neighbours
+    bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     std::vector<std::int32_t> sources_;
 };
 

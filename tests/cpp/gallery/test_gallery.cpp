@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <random>
 #include <cstdint>
 #include <vector>
 
@@ -92,6 +94,57 @@ TEST(Gallery, BakedIrradianceEqualsFullAtLatticeCorners) {
     Hit back;
     back.tri = 0, back.p = Vec3f(0.1f, 0, 0.2f), back.n = Vec3f(0, -1, 0), back.front = false;
     EXPECT_EQ(room.gallery.irradiance_baked(back).x, 0.0f);
+}
+
+// The display pass looks the baked lattice up at Embree's hit barycentrics instead of
+// solving for them from the point: both must give the same irradiance (the old path, through
+// the point, is the reference), on both sides, and the batched lookup equals the single one.
+TEST(Gallery, BakedIrradianceAtEmbreeBarycentricsEqualsThePointsLookup) {
+    Room room;
+    LightingSettings ls;
+    ls.photons = 20000;
+    room.gallery.light(room.vt, ls);
+    BakeSettings bs;
+    bs.spacing = 0.15;
+    room.gallery.bake(bs);
+    const Scene& scene = room.gallery.scene();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> coord(-0.99f, 0.99f);
+    std::vector<std::uint32_t> tris;
+    std::vector<bool> sides;
+    std::vector<float> b1s, b2s;
+    std::vector<Vec3f> singles;
+    float spread = 0;
+    for (int k = 0; k < 400; ++k) {
+        const bool from_above = k % 2 == 0;  // the floor's front (up) and back side
+        RTCRayHit rh{};
+        rh.ray.org_x = coord(rng), rh.ray.org_y = from_above ? 1.0f : -1.0f, rh.ray.org_z = coord(rng);
+        rh.ray.dir_x = 0, rh.ray.dir_y = from_above ? -1.0f : 1.0f, rh.ray.dir_z = 0;
+        rh.ray.tnear = 0, rh.ray.tfar = 1.5f, rh.ray.mask = ~0u;  // the floor at t = 1, never the light
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        rtcIntersect1(scene.handle(), &context, &rh);
+        ASSERT_NE(rh.hit.geomID, RTC_INVALID_GEOMETRY_ID);
+        Hit h;
+        h.tri = scene.triangle_of(rh.hit.geomID, rh.hit.primID);
+        h.p = Vec3f(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z) + Vec3f(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z) * rh.ray.tfar;
+        h.front = from_above;
+        h.n = from_above ? scene.normal(h.tri) : -scene.normal(h.tri);
+        const Vec3f ref = room.gallery.irradiance_baked(h);
+        const Vec3f got = room.gallery.irradiance_baked_at(h.tri, h.front, rh.hit.u, rh.hit.v);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], ref[c], 2e-4f * std::max(ref[c], 1e-3f)) << k;
+        spread = std::max(spread, ref.x);
+        tris.push_back(h.tri), sides.push_back(h.front), b1s.push_back(rh.hit.u), b2s.push_back(rh.hit.v);
+        singles.push_back(got);
+    }
+    EXPECT_GT(spread, 0.0f);
+    std::unique_ptr<bool[]> front(new bool[sides.size()]);
+    for (std::size_t k = 0; k < sides.size(); ++k) front[k] = sides[k];
+    std::vector<Vec3f> batch(tris.size());
+    room.gallery.irradiance_baked_batch(tris.data(), front.get(), b1s.data(), b2s.data(), tris.size(), batch.data());
+    for (std::size_t k = 0; k < tris.size(); ++k)
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(batch[k][c], singles[k][c]) << k;
 }
 
 TEST(Gallery, RefusesBadInput) {

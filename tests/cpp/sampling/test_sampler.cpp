@@ -188,10 +188,10 @@ TEST(VirtualTexture, MissingTilesFallBackToTheFinestResidentAncestor) {
     EXPECT_GT(fell_back, 0u);
 }
 
-// The bilinear filter runs batched (taps vectorised, texel reads prefetched); the trilinear
-// path still samples one point at a time with the same arithmetic, and at an integer lod it
-// is one bilinear sample. So the two must agree bit for bit, fallbacks to ancestors
-// included, whatever the batch and thread boundaries.
+// The bilinear filter runs batched (taps vectorised, texel reads prefetched); the per-sample
+// trilinear reference (sample_trilinear_reference) samples one point at a time with the same
+// arithmetic, and at an integer lod it is one bilinear sample. So the two must agree bit for
+// bit, fallbacks to ancestors included, whatever the batch and thread boundaries.
 TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
     const CutPainting painting(901, 411, 32, 3, 17);
     const std::uint32_t L = painting.level_count();
@@ -218,14 +218,65 @@ TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
         r.out = out.data(), r.level_out = answered.data(), r.threads = threads;
         serial ? sample_serial(vt, r) : sample(vt, r);
     };
-    std::vector<float> ref, got;
-    std::vector<std::int8_t> ref_level, got_level;
-    run(Filter::Trilinear, 1, true, ref, ref_level);
+    std::vector<float> ref(3 * n, -1.0f), got;
+    std::vector<std::int8_t> ref_level(n, -1), got_level;
+    {
+        SampleRequest r;
+        r.u = u.data(), r.v = v.data(), r.lod = lod.data(), r.count = n;
+        r.out = ref.data(), r.level_out = ref_level.data();
+        sample_trilinear_reference(vt, r);
+    }
     std::size_t fell_back = 0;
     for (std::size_t i = 0; i < n; ++i) fell_back += ref_level[i] > std::clamp(lod[i], 0.0f, float(L - 1));
     EXPECT_GT(fell_back, n / 10) << "the fallback path must be exercised";
     for (unsigned threads : {1u, 2u, 3u}) {
         run(Filter::Bilinear, threads, threads == 1, got, got_level);
+        ASSERT_EQ(got_level, ref_level) << threads << " threads";
+        for (std::size_t i = 0; i < 3 * n; ++i)
+            ASSERT_EQ(got[i], ref[i]) << "value " << i << ", " << threads << " threads";
+    }
+}
+
+// Trilinear runs as two batched bilinear passes and a blend; it must equal the per-sample
+// trilinear reference bit for bit at fractional levels (both levels answered, one of them
+// or both by a resident ancestor), at the top level and at NaN, whatever the batch and
+// thread boundaries and with interleaved (u, v).
+TEST(VirtualTexture, BatchedTrilinearEqualsPerSampleArithmetic) {
+    const CutPainting painting(1203, 377, 32, 3, 23);
+    const std::uint32_t L = painting.level_count();
+    VirtualTexture vt(painting.layout, 14, 14, painting.source());
+    std::mt19937 rng(29);
+    painting.insert_random(vt, 0.4, rng);
+    std::uniform_real_distribution<double> unit(-0.05, 1.05);
+    const std::size_t n = 2 * 4096 + 300;
+    std::vector<double> uv(2 * n);
+    std::vector<float> lod(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool jump = i % 70 == 0;
+        uv[2 * i] = jump || i == 0 ? unit(rng) : uv[2 * i - 2] + 0.0005;
+        uv[2 * i + 1] = jump || i == 0 ? unit(rng) : uv[2 * i - 1] + 0.0002;
+        lod[i] = float(unit(rng) * (L + 1)) - 0.5f;  // fractional, below 0 and above the top
+        if (i % 97 == 0) lod[i] = std::floor(lod[i]);
+        if (i % 331 == 0) lod[i] = std::numeric_limits<float>::quiet_NaN();
+    }
+    auto request = [&](std::vector<float>& out, std::vector<std::int8_t>& answered) {
+        out.assign(3 * n, -1.0f);
+        answered.assign(n, -1);
+        SampleRequest r;
+        r.u = uv.data(), r.v = uv.data() + 1, r.uv_stride = 2, r.lod = lod.data(), r.count = n;
+        r.filter = Filter::Trilinear, r.out = out.data(), r.level_out = answered.data();
+        return r;
+    };
+    std::vector<float> ref, got;
+    std::vector<std::int8_t> ref_level, got_level;
+    sample_trilinear_reference(vt, request(ref, ref_level));
+    std::size_t blended = 0;
+    for (std::size_t i = 0; i < n; ++i) blended += lod[i] > 0 && lod[i] < float(L - 1) && lod[i] != std::floor(lod[i]);
+    EXPECT_GT(blended, n / 2);
+    for (unsigned threads : {0u, 1u, 2u, 3u}) {
+        SampleRequest r = request(got, got_level);
+        r.threads = threads;
+        threads == 0 ? sample_serial(vt, r) : sample(vt, r);
         ASSERT_EQ(got_level, ref_level) << threads << " threads";
         for (std::size_t i = 0; i < 3 * n; ++i)
             ASSERT_EQ(got[i], ref[i]) << "value " << i << ", " << threads << " threads";
