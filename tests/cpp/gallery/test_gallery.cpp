@@ -216,6 +216,45 @@ TEST(Gallery, SkippingUnlitSidesChangesNoLatticeValue) {
     EXPECT_GT(lit, hits.size() / 4);
 }
 
+TEST(Gallery, GatherStrideTwoInterpolatesTheGathersOfTheEvenPoints) {
+    Room room;
+    LightingSettings ls;
+    ls.photons = 50000;
+    room.gallery.light(room.vt, ls);
+    // The floor's longest edge 2 sqrt(2) in 16 segments (even: both strides agree on n).
+    const std::uint32_t n = 16;
+    BakeSettings bs;
+    bs.spacing = 2 * std::sqrt(2.0) / n + 1e-6;
+    std::vector<Vec3f> one, two;
+    const Vec3f v0(-1, 0, -1), e1(0, 0, 2), e2(2, 0, 2);  // floor triangle 0
+    for (int stride : {1, 2}) {
+        bs.gather_stride = stride;
+        room.gallery.bake(bs);
+        for (std::uint32_t i = 0; i <= n; ++i)
+            for (std::uint32_t j = 0; i + j <= n; ++j) {
+                Hit h;
+                h.tri = 0, h.p = v0 + e1 * (float(i) / float(n)) + e2 * (float(j) / float(n));
+                h.n = Vec3f(0, 1, 0), h.front = true;
+                (stride == 1 ? one : two).push_back(room.gallery.irradiance_baked(h));
+            }
+    }
+    double diff = 0, sum = 0;
+    std::size_t k = 0;
+    for (std::uint32_t i = 0; i <= n; ++i)
+        for (std::uint32_t j = 0; i + j <= n; ++j, ++k) {
+            if (i % 2 == 0 && j % 2 == 0) {  // the same direct light and the same gather
+                EXPECT_NEAR(two[k].x, one[k].x, 1e-5f * one[k].x);
+                continue;
+            }
+            diff += std::abs(two[k].x - one[k].x), sum += one[k].x;
+        }
+    // Elsewhere the interpolated gather differs from the point's own by its noise only.
+    EXPECT_GT(diff, 0);
+    EXPECT_LT(diff, 0.03 * sum);
+    bs.gather_stride = 3;
+    EXPECT_THROW(room.gallery.bake(bs), InvalidArgument);
+}
+
 TEST(Gallery, RefusesBadInput) {
     Room room;
     EXPECT_THROW(room.gallery.commit(), InvalidArgument);
