@@ -457,7 +457,8 @@ void Gallery::bake(const BakeSettings& s) {
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
     require_lit();
-    require(s.gather_stride == 1 || s.gather_stride == 2, "Gallery.bake: gather_stride must be 1 or 2");
+    require(s.gather_stride == 1 || s.gather_stride == 2 || s.gather_stride == 4 || s.gather_stride == 8,
+            "Gallery.bake: gather_stride must be 1, 2, 4 or 8");
     const std::uint32_t stride = std::uint32_t(s.gather_stride);
     const double spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
     const std::size_t tris = tri_v0_.size();
@@ -470,7 +471,7 @@ void Gallery::bake(const BakeSettings& s) {
         require(segments < 65536, "Gallery.bake: spacing too fine for the room (more than 65535 "
                                   "lattice segments along a triangle edge)");
         n[t] = std::max(1u, std::uint32_t(segments));
-        if (stride == 2) n[t] += n[t] & 1;  // the gathers' sub-lattice needs an even n
+        n[t] = (n[t] + stride - 1) / stride * stride;  // the gathers' sub-lattice: n / stride
         offset[t + 1] = offset[t] + lattice_points(n[t]);
         require(offset[t + 1] <= s.max_points,
                 "Gallery.bake: spacing too fine: more than " + std::to_string(s.max_points) +
@@ -478,11 +479,11 @@ void Gallery::bake(const BakeSettings& s) {
     }
     const std::uint64_t total = offset[tris];
     std::vector<Vec3f> front(total), back(total);
-    // gather_stride 2: the gathers on the sub-lattice of the even points (n / 2 segments),
-    // interpolated onto the others after the direct light.
+    // gather_stride s > 1: the gathers on the sub-lattice of the points whose i and j are
+    // multiples of s (n / s segments), interpolated onto the others after the direct light.
     std::vector<std::uint64_t> sub_offset(tris + 1, 0);
-    if (stride == 2)
-        for (std::size_t t = 0; t < tris; ++t) sub_offset[t + 1] = sub_offset[t] + lattice_points(n[t] / 2);
+    if (stride > 1)
+        for (std::size_t t = 0; t < tris; ++t) sub_offset[t + 1] = sub_offset[t] + lattice_points(n[t] / stride);
     std::vector<Vec3f> gather_front(sub_offset[tris]), gather_back(sub_offset[tris]);
     // Work items are lattice rows (triangle t, row i): a room is a few large triangles, so
     // splitting by triangle would leave one core with a whole wall.
@@ -500,7 +501,7 @@ void Gallery::bake(const BakeSettings& s) {
             skipped += (reachable[t] & 1 ? 0 : 1) + (reachable[t] & 2 ? 0 : 1);
         }
     bake_done_ = 0;
-    bake_total_ = rows.size() * stride;
+    bake_total_ = rows.size() * (stride > 1 ? 2 : 1);
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -521,8 +522,9 @@ void Gallery::bake(const BakeSettings& s) {
                     Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
                     if (stride == 1) E += indirect(h.p, h.n, heap);
-                    else if (i % 2 == 0 && j % 2 == 0)
-                        (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / 2, j / 2, nt / 2)] =
+                    else if (i % stride == 0 && j % stride == 0)
+                        (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
+                                                                                             nt / stride)] =
                             indirect(h.p, h.n, heap);
                     (h.front ? front : back)[k] = E;
                 }
@@ -530,24 +532,30 @@ void Gallery::bake(const BakeSettings& s) {
         }
         bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
     }, s.threads ? s.threads : lighting_.threads);
-    if (stride == 2)
+    if (stride > 1)
         parallel_for(rows.size(), 16, [&](std::size_t rb, std::size_t re) {
             for (std::size_t r = rb; r < re; ++r) {
                 const auto [t, i] = rows[r];
-                const std::uint32_t nt = n[t], m = nt / 2, a = i / 2, di = i & 1;
+                const std::uint32_t nt = n[t], m = nt / stride, a = i / stride;
+                const float fx = float(i % stride) / float(stride);
                 if (!(max_component(scene_.albedo(t)) > 0)) continue;
                 for (int side = 0; side < 2; ++side) {
                     if (!(reachable[t] >> side & 1)) continue;
                     const Vec3f* G = (side == 0 ? gather_front : gather_back).data() + sub_offset[t];
                     Vec3f* E = (side == 0 ? front : back).data() + offset[t];
                     for (std::uint32_t j = 0; i + j <= nt; ++j) {
-                        // Every odd point is the midpoint of a sub-lattice edge.
-                        const std::uint32_t b = j / 2, dj = j & 1;
-                        Vec3f g;
-                        if (!di && !dj) g = G[lattice_index(a, b, m)];
-                        else if (di && !dj) g = (G[lattice_index(a, b, m)] + G[lattice_index(a + 1, b, m)]) * 0.5f;
-                        else if (!di) g = (G[lattice_index(a, b, m)] + G[lattice_index(a, b + 1, m)]) * 0.5f;
-                        else g = (G[lattice_index(a + 1, b, m)] + G[lattice_index(a, b + 1, m)]) * 0.5f;
+                        // Linear on the sub-lattice's triangles, as irradiance_baked reads the
+                        // lattice. i + j <= n keeps every corner with a non-zero weight on it.
+                        const std::uint32_t b = j / stride;
+                        const float fy = float(j % stride) / float(stride);
+                        Vec3f g = G[lattice_index(a, b, m)] * (1 - fx - fy);
+                        if (fx + fy <= 1) {
+                            if (fx > 0) g += G[lattice_index(a + 1, b, m)] * fx;
+                            if (fy > 0) g += G[lattice_index(a, b + 1, m)] * fy;
+                        } else {
+                            g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
+                                G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
+                        }
                         E[lattice_index(i, j, nt)] += g;
                     }
                 }

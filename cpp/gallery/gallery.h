@@ -92,10 +92,11 @@ struct BakeSettings {
     // whose normal the gather accepts lies within the gather radius of the triangle (tested
     // against the bounding boxes of the photons grouped by normal, so it is conservative).
     bool skip_unlit = true;
-    // 2: the photon gathers only at the lattice's even points (a sub-lattice of twice the
-    // spacing; n is rounded up to even), linearly interpolated onto the others: a quarter of
-    // the gathers. The gather already blurs indirect light over its radius, so this loses
-    // little where the spacing is below the radius. 1: a gather at every point.
+    // s = 2, 4 or 8: the photon gathers only at the points whose lattice coordinates are
+    // multiples of s (a sub-lattice of s times the spacing; n is rounded up to a multiple of
+    // s), linearly interpolated onto the others: 1 / s^2 of the gathers. The gather already
+    // blurs indirect light over its radius, so this loses little while s x spacing stays
+    // below the radius. 1: a gather at every point.
     int gather_stride = 1;
 };
 

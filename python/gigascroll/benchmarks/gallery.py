@@ -13,6 +13,7 @@ Times are single runs on a shared machine (noisy); ratios are within the same ru
 
 from __future__ import annotations
 
+import argparse
 import math
 import time
 from pathlib import Path
@@ -41,6 +42,9 @@ def add_arguments(parser) -> None:
                         help="emitter samples per lattice point (default 1,4,16,64)")
     parser.add_argument("--gather-strides", default="1,2",
                         help="bake gather strides tried at spacings of diag/100 and finer (default 1,2)")
+    parser.add_argument("--disc", action=argparse.BooleanOptionalAction, default=True,
+                        help="also try the surface-disc gather at twice the auto radius (spacings diag/100 "
+                             "and finer, gathers / 4, 1-16 samples; default on)")
     parser.add_argument("--supersamples", default="1,3",
                         help="rays per pixel per axis of the configurations' stills (default 1,3)")
     parser.add_argument("--default-photons", type=int, default=20,
@@ -158,7 +162,7 @@ def run(args) -> int:
     if args.quick:
         args.width, args.height, args.supersample = 32, 18, 2
         args.photons, args.spacings, args.bake_samples, args.default_photons = "14,16", "25,50", "4,16", 16
-        args.supersamples = "1,2"
+        args.supersamples, args.disc = "1,2", False
         args.full_samples, args.reference_spp, args.mitsuba_spp = 16, 64, "1,4,16"
     if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples) < 1:
         raise UserError("--width, --height, --supersample, --full-samples and --reference-spp must be >= 1")
@@ -169,8 +173,10 @@ def run(args) -> int:
     strides = _ints(args.gather_strides, "--gather-strides")
     if not set(strides) <= {1, 2}:
         raise UserError("--gather-strides takes 1 and/or 2")
-    grid = [(n, ls, stride) for n in spacings for ls in bake_samples
+    grid = [(False, n, ls, stride) for n in spacings for ls in bake_samples
             for stride in (strides if n >= 100 else [1])]
+    if args.disc:
+        grid += [(True, n, ls, 2) for n in spacings if n >= 100 for ls in bake_samples if ls <= 16]
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
     if max(photons + [args.default_photons]) > 30:
         raise UserError("--photons and --default-photons are powers of two up to 2^30")
@@ -189,11 +195,11 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "photons", "spacings", "bake_samples", "default_photons",
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "photons", "spacings", "bake_samples", "default_photons",
                    "full_samples", "reference_spp", "mitsuba_spp")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
-    per_room = 4 + len(ladder) + len(photons) * len(grid) + len(spacings)
+    per_room = 2 + len(ladder) + len(photons) * len(grid) + len(set(spacings) | {200})
     steps = tqdm(total=len(rooms) * per_room, desc="gallery bench", unit="step")
     for name in rooms:
         spec = builtin_room(name, pack)
@@ -216,21 +222,28 @@ def run(args) -> int:
         del mscene
         diag = math.dist(*gal.bounds)
         # Our configurations, each timed end to end.
-        configs = []
+        configs, auto_radius = [], {}
         # Wall-clock times of the calls: "map" is everything light() does besides tracing
         # (the painting albedo read, dropping hidden photons, the hash grid).
-        for p in photons:
-            t0 = time.perf_counter()
-            st = gal.light(vt, photons=1 << p)
+        for p, disc in [(p, d) for p in photons for d in sorted({d for d, *_ in grid})]:
+            if disc:  # the disc at twice the auto radius (read from the sphere's run before)
+                t0 = time.perf_counter()
+                st = gal.light(vt, photons=1 << p, radius=2 * auto_radius[p], disc=True)
+            else:
+                t0 = time.perf_counter()
+                st = gal.light(vt, photons=1 << p)
+                auto_radius[p] = st["radius"]
             light_seconds = time.perf_counter() - t0
-            for n, ls, stride in grid:
+            for d, n, ls, stride in grid:
+                if d != disc:
+                    continue
                 t0 = time.perf_counter()
                 bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride)
                 bake_seconds = time.perf_counter() - t0
                 for ss in supersamples:
                     img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
                     c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
-                         "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
+                         "disc": disc, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
                          "gather_stride": stride, "supersample": ss, "bake_points": bst["bake_points"],
                          "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
                          "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
@@ -318,7 +331,8 @@ def _time_to_error(ladder: list[dict], error: float) -> float | None:
 
 def _config_name(c: dict) -> str:
     stride = ", gathers / 4" if c.get("gather_stride", 1) == 2 else ""
-    return (f"2^{c['photons_log2']} photons, diag/{c['diagonal_over']}, {c['bake_samples']} samples{stride}, "
+    disc = ", disc r x 2" if c.get("disc") else ""
+    return (f"2^{c['photons_log2']}{disc}, diag/{c['diagonal_over']}, {c['bake_samples']} samples{stride}, "
             f"{c['supersample']}x{c['supersample']} rays")
 
 

@@ -172,16 +172,16 @@ class Gallery(_core._Gallery):
         emitter samples come from a randomly shifted low-discrepancy lattice (unbiased, less
         noise; False: independent samples, lighting "full"'s estimator). skip_unlit: a side
         that no emitter faces and no photon reaches is zero without being computed (its
-        stats["bake_sides_skipped"]). gather_stride=2: photon gathers at every other lattice
-        point only (a quarter of them), interpolated between. progress=True shows a tqdm bar over the lattice rows.
+        stats["bake_sides_skipped"]). gather_stride=s (2, 4, 8): photon gathers on every
+        s-th lattice point only (1 / s^2 of them), interpolated between. progress=True shows a tqdm bar over the lattice rows.
         Returns `stats`."""
         s = 0.0 if spacing is None else float(spacing)
         if not math.isfinite(s) or s < 0 or (spacing is not None and s == 0):
             raise ValueError(f"spacing must be positive and finite, got {spacing!r}")
         if isinstance(light_samples, bool) or not isinstance(light_samples, (int, np.integer)):
             raise ValueError(f"light_samples must be an integer, got {light_samples!r}")
-        if isinstance(gather_stride, bool) or gather_stride not in (1, 2):
-            raise ValueError(f"gather_stride must be 1 or 2, got {gather_stride!r}")
+        if isinstance(gather_stride, bool) or gather_stride not in (1, 2, 4, 8):
+            raise ValueError(f"gather_stride must be 1, 2, 4 or 8, got {gather_stride!r}")
         if not progress:
             self._bake(s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit), int(gather_stride))
             return self.stats

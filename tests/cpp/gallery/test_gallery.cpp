@@ -216,7 +216,7 @@ TEST(Gallery, SkippingUnlitSidesChangesNoLatticeValue) {
     EXPECT_GT(lit, hits.size() / 4);
 }
 
-TEST(Gallery, GatherStrideTwoInterpolatesTheGathersOfTheEvenPoints) {
+TEST(Gallery, GatherStrideInterpolatesTheGathersOfItsSubLattice) {
     Room room;
     LightingSettings ls;
     ls.photons = 50000;
@@ -251,6 +251,21 @@ TEST(Gallery, GatherStrideTwoInterpolatesTheGathersOfTheEvenPoints) {
     // Elsewhere the interpolated gather differs from the point's own by its noise only.
     EXPECT_GT(diff, 0);
     EXPECT_LT(diff, 0.03 * sum);
+    // Stride 4 on the same lattice (16 is a multiple of 4): exact on its sub-lattice.
+    bs.gather_stride = 4;
+    room.gallery.bake(bs);
+    k = 0;
+    double diff4 = 0;
+    for (std::uint32_t i = 0; i <= n; ++i)
+        for (std::uint32_t j = 0; i + j <= n; ++j, ++k) {
+            Hit h;
+            h.tri = 0, h.p = v0 + e1 * (float(i) / float(n)) + e2 * (float(j) / float(n));
+            h.n = Vec3f(0, 1, 0), h.front = true;
+            const Vec3f e = room.gallery.irradiance_baked(h);
+            if (i % 4 == 0 && j % 4 == 0) EXPECT_NEAR(e.x, one[k].x, 1e-5f * one[k].x);
+            else diff4 += std::abs(e.x - one[k].x);
+        }
+    EXPECT_LT(diff4, 0.05 * sum);
     bs.gather_stride = 3;
     EXPECT_THROW(room.gallery.bake(bs), InvalidArgument);
 }
