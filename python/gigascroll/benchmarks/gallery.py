@@ -276,9 +276,37 @@ def run(args) -> int:
     steps.close()
     del pack
     scratch.cleanup()
-    write_json(out / "results.json", results, indent=1)
-    print(f"\nwrote {out / 'results.json'}")
+    write_results(out, results)
+    print(f"\nwrote {out / 'results.json'} and {out / 'configs.csv'}")
     return 0
+
+
+CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "diagonal_over", "spacing_m",
+                  "bake_samples", "gather_stride", "supersample", "bake_points", "sides_skipped",
+                  "photon_seconds", "build_seconds", "bake_seconds", "still_seconds", "total_seconds",
+                  "relmse", "psnr", "flip")
+
+
+def write_results(out: Path, results: dict) -> None:
+    """results.json without the grid (front, targets, ladder, defaults), and every
+    configuration of the grid as one row of configs.csv."""
+    import csv
+    import io
+
+    rows = []
+    slim = {**results, "rooms": {}}
+    for name, r in results["rooms"].items():
+        rows += [{"room": name, **c} for c in r["configs"]]
+        slim["rooms"][name] = {k: v for k, v in r.items() if k != "configs"}
+    text = io.StringIO()
+    w = csv.DictWriter(text, CONFIG_COLUMNS, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for row in rows:
+        w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in row.items()})
+    tmp = out / "configs.csv.tmp"
+    tmp.write_text(text.getvalue())
+    tmp.replace(out / "configs.csv")
+    write_json(out / "results.json", slim, indent=1)
 
 
 def pareto_front(configs: list[dict]) -> list[dict]:
