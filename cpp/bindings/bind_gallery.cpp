@@ -69,12 +69,15 @@ void bind_gallery(nb::module_& m) {
             nb::gil_scoped_release release;
             g.light(vt, s);
         }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a, "disc"_a)
-        .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads) {
+        .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads, bool stratified,
+                         bool skip_unlit, int gather_stride) {
             BakeSettings s;
             s.spacing = spacing, s.light_samples = light_samples, s.threads = threads;
+            s.stratified = stratified, s.skip_unlit = skip_unlit, s.gather_stride = gather_stride;
             nb::gil_scoped_release release;
             g.bake(s);
-        }, "spacing"_a, "light_samples"_a, "threads"_a)
+        }, "spacing"_a, "light_samples"_a, "threads"_a, "stratified"_a = true, "skip_unlit"_a = true,
+           "gather_stride"_a = 1)
         .def("_bake_progress", &Gallery::bake_progress)
         .def_prop_ro("stats", [](const Gallery& g) {
             const LightingStats& s = g.stats();
@@ -84,6 +87,7 @@ void bind_gallery(nb::module_& m) {
             d["bake_seconds"] = s.bake_seconds;
             d["photons_stored"] = s.photons_stored;
             d["bake_points"] = s.bake_points;
+            d["bake_sides_skipped"] = s.bake_sides_skipped;
             d["radius"] = s.radius;
             d["spacing"] = s.spacing;
             d["albedo_levels"] = s.albedo_levels;

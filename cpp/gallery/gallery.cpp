@@ -1,13 +1,17 @@
 #include "gallery/gallery.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <unordered_map>
 
 #include "common/timing.h"
 #include "common/error.h"
 #include "common/parallel.h"
+#include "photon/gather.h"
+#include "photon/rng.h"
 #include "pack/tile_key.h"
 #include "sampling/sampler.h"
 #include "views/feedback.h"
@@ -15,6 +19,23 @@
 namespace gigascroll {
 
 namespace {
+
+// srgb_to_linear(c / 255) of a sampled component c in [0, 255], from a table: exact at whole
+// 8-bit values (a uniform painting), linear between them otherwise (within 6e-6: the curve's
+// second derivative is below 3). pow per texel was a quarter of a small light() call.
+float linear_of(float c) {
+    static const auto table = [] {
+        std::array<float, 257> t{};
+        for (int k = 0; k < 256; ++k) t[k] = srgb_to_linear(float(k) / 255.0f);
+        t[256] = t[255];
+        return t;
+    }();
+    if (!(c >= 0)) return 0;
+    if (!(c < 255)) return table[255];
+    const auto k = std::size_t(c);
+    const float f = c - float(k);
+    return table[k] + (table[k + 1] - table[k]) * f;
+}
 
 // A painting's albedo where photons bounce off it, read once per lighting through the virtual
 // texture at the painting's finest pinned level: the pinned tail (cache/page_table.h) is
@@ -64,9 +85,7 @@ public:
             sample_serial(vt, r);
             im.texels.resize(n);
             for (std::size_t i = 0; i < n; ++i)
-                im.texels[i] = Vec3f(srgb_to_linear(rgb[3 * i] / 255.0f),
-                                     srgb_to_linear(rgb[3 * i + 1] / 255.0f),
-                                     srgb_to_linear(rgb[3 * i + 2] / 255.0f)) *
+                im.texels[i] = Vec3f(linear_of(rgb[3 * i]), linear_of(rgb[3 * i + 1]), linear_of(rgb[3 * i + 2])) *
                                kPaintingReflectance;
             images_.push_back(std::move(im));
         }
@@ -107,7 +126,7 @@ private:
 // wall it hangs on, seen from the gap). Either side counts, so the rule does not depend on
 // which way u x v points. The painting's own photons (on its plane) stay.
 void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<PaintingPlacement>& paintings,
-                         float depth) {
+                         float depth, unsigned threads) {
     if (paintings.empty()) return;
     auto hidden = [&](const Photon& ph) {
         for (const PaintingPlacement& p : paintings) {
@@ -122,8 +141,28 @@ void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<Paintin
         }
         return false;
     };
-    photons.erase(std::remove_if(photons.begin(), photons.end(), hidden), photons.end());
+    // The test on both cores, the (memory-bound) compaction in order on one.
+    std::vector<std::uint8_t> drop(photons.size());
+    parallel_for(photons.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) drop[i] = hidden(photons[i]);
+    }, threads);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < photons.size(); ++i)
+        if (!drop[i]) photons[kept++] = photons[i];
+    photons.resize(kept);
 }
+
+// Normals are quantised to 1/256 per component: a photon's normal lies within
+// sqrt(3) / 512 < 0.004 of its group's, so kGroupSlack covers the rounding.
+constexpr float kNormalQuantum = 256.0f;
+constexpr float kGroupSlack = 0.01f;
+constexpr std::size_t kMaxPhotonGroups = 4096;
+
+// Roberts' R2 sequence (the plastic number's additive recurrence): point i of any count is
+// frac(shift + i alpha), well spread in the unit square, and so is every run of consecutive
+// points (the samples that pick one emitter below).
+constexpr double kPhi2 = 1.3247179572447460;
+constexpr double kR2[2] = {1.0 / kPhi2, 1.0 / (kPhi2 * kPhi2)};
 
 // Lattice point (i, j), i + j <= n, of a triangle with n segments per edge.
 inline std::uint64_t lattice_index(std::uint32_t i, std::uint32_t j, std::uint32_t n) {
@@ -262,12 +301,110 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, s.threads);
     stats_.photon_seconds = seconds_since(t0);
     t0 = Clock::now();
-    drop_hidden_photons(photons, placements_, radius);
+    drop_hidden_photons(photons, placements_, radius, s.threads);
     gather_.radius = radius;
-    map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
+    // The hash grid's build is serial: the photon groups for the bake's skip_unlit are
+    // computed on the other core meanwhile.
+    parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t job = b; job < e; ++job) {
+            if (job == 0) map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
+            else group_photons(photons);
+        }
+    }, s.threads);
     stats_.build_seconds = seconds_since(t0);
     stats_.photons_stored = photons.size();
     stats_.radius = radius;
+}
+
+void Gallery::group_photons(const std::vector<Photon>& photons) {
+    photon_groups_.clear();
+    photon_groups_overflow_ = false;
+    std::unordered_map<std::uint64_t, std::size_t> index;
+    for (const Photon& ph : photons) {
+        std::uint64_t key = 0;
+        for (int a = 0; a < 3; ++a)
+            key = key << 16 | std::uint64_t(std::int64_t(std::floor(ph.n[a] * kNormalQuantum + 0.5f)) & 0xffff);
+        auto [it, inserted] = index.try_emplace(key, photon_groups_.size());
+        if (inserted) {
+            if (photon_groups_.size() == kMaxPhotonGroups) {
+                photon_groups_.clear();
+                photon_groups_overflow_ = true;
+                return;
+            }
+            photon_groups_.push_back({ph.n, ph.p, ph.p});
+        }
+        PhotonGroup& g = photon_groups_[it->second];
+        g.lo = vmin(g.lo, ph.p), g.hi = vmax(g.hi, ph.p);
+    }
+}
+
+bool Gallery::side_reachable(std::uint32_t t, Vec3f n) const {
+    const float tol = 4 * scene_.epsilon();  // well above float rounding of plane distances
+    const Vec3f v[3] = {tri_v0_[t], tri_v0_[t] + tri_e1_[t], tri_v0_[t] + tri_e2_[t]};
+    // Direct light: Renderer::direct_irradiance counts a sample only when the emitter point
+    // lies in front of the side (cos_x > 0) and the side's point in front of the emitter
+    // (cos_l > 0). Both are linear in the points, so the triangles' vertices decide.
+    for (std::size_t e = 0; e < tri_v0_.size(); ++e) {
+        if (!(max_component(scene_.emission(e)) > 0)) continue;
+        const Vec3f ev[3] = {tri_v0_[e], tri_v0_[e] + tri_e1_[e], tri_v0_[e] + tri_e2_[e]};
+        const Vec3f ne = scene_.normal(std::uint32_t(e));
+        float in_front = -std::numeric_limits<float>::infinity(), facing = in_front;
+        for (int k = 0; k < 3; ++k) {
+            in_front = std::max(in_front, dot(n, ev[k] - v[0]));
+            facing = std::max(facing, dot(ne, v[k] - ev[0]));
+        }
+        if (in_front > tol && facing > tol) return true;
+    }
+    // Indirect light: the gather (sphere or disc) counts photons within the radius whose
+    // normals agree with n (gather.h, surface_disc.h).
+    if (photon_groups_overflow_) return true;
+    const float r = gather_.radius + tol;
+    const Vec3f lo = vmin(vmin(v[0], v[1]), v[2]) - Vec3f(r, r, r);
+    const Vec3f hi = vmax(vmax(v[0], v[1]), v[2]) + Vec3f(r, r, r);
+    for (const PhotonGroup& g : photon_groups_) {
+        if (!(dot(g.n, n) > kNormalAgreement - kGroupSlack)) continue;
+        if (g.lo.x <= hi.x && g.hi.x >= lo.x && g.lo.y <= hi.y && g.hi.y >= lo.y && g.lo.z <= hi.z &&
+            g.hi.z >= lo.z)
+            return true;
+    }
+    return false;
+}
+
+Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c) const {
+    if (scene_.emitter_count() == 0 || samples <= 0) return {0, 0, 0};
+    const float eps = scene_.epsilon();
+    // Keyed by position like Renderer::direct_irradiance, on its own stream.
+    Rng rng(lighting_.seed, stream_id(StreamKind::Light, 0, 1), scene_.position_key(hit.p));
+    const double shift[3] = {rng.uniform(), rng.uniform(), rng.uniform()};
+    Vec3f E{0, 0, 0};
+    for (int i = 0; i < samples; ++i) {
+        // The emitter choice stratified in `samples` strata (one jittered lattice: emitter
+        // triangles get their share of samples, in order), the point on it from R2. Every
+        // coordinate is uniform on [0, 1) for a uniform shift: unbiased.
+        float u[3];
+        u[0] = std::min(float((double(i) + shift[0]) / double(samples)), 0x1.fffffep-1f);
+        for (int a = 1; a < 3; ++a) {
+            const double x = shift[a] + double(i) * kR2[a - 1];
+            u[a] = float(x - std::floor(x));
+        }
+        // Onto the triangle by the square-root map (continuous, area-preserving: the points
+        // stay as well spread as in the square), not by folding the square's upper half.
+        const float su = std::sqrt(u[1]);
+        const LightSample ls = scene_.sample_emitter(u[0], 1.0f - su, u[2] * su);
+        const Vec3f w = ls.p - hit.p;
+        const float d2 = dot(w, w);
+        const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
+        if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {
+            ++c.shadow_rays_skipped;
+            continue;
+        }
+        ++c.shadow_rays;
+        const float d = std::sqrt(d2);
+        const Vec3f o = hit.p + hit.n * eps;
+        if (scene_.occluded(o, ls.p - o, 1.0f - 2.0f * eps / d)) continue;
+        E += ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+    }
+    return E * (1.0f / float(samples));
 }
 
 void Gallery::require_lit() const {
@@ -366,6 +503,9 @@ void Gallery::bake(const BakeSettings& s) {
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
     require_lit();
+    require(s.gather_stride == 1 || s.gather_stride == 2 || s.gather_stride == 4 || s.gather_stride == 8,
+            "Gallery.bake: gather_stride must be 1, 2, 4 or 8");
+    const std::uint32_t stride = std::uint32_t(s.gather_stride);
     const double spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
     const std::size_t tris = tri_v0_.size();
     std::vector<std::uint32_t> n(tris);
@@ -377,6 +517,7 @@ void Gallery::bake(const BakeSettings& s) {
         require(segments < 65536, "Gallery.bake: spacing too fine for the room (more than 65535 "
                                   "lattice segments along a triangle edge)");
         n[t] = std::max(1u, std::uint32_t(segments));
+        n[t] = (n[t] + stride - 1) / stride * stride;  // the gathers' sub-lattice: n / stride
         offset[t + 1] = offset[t] + lattice_points(n[t]);
         require(offset[t + 1] <= s.max_points,
                 "Gallery.bake: spacing too fine: more than " + std::to_string(s.max_points) +
@@ -384,13 +525,29 @@ void Gallery::bake(const BakeSettings& s) {
     }
     const std::uint64_t total = offset[tris];
     std::vector<Vec3f> front(total), back(total);
+    // gather_stride s > 1: the gathers on the sub-lattice of the points whose i and j are
+    // multiples of s (n / s segments), interpolated onto the others after the direct light.
+    std::vector<std::uint64_t> sub_offset(tris + 1, 0);
+    if (stride > 1)
+        for (std::size_t t = 0; t < tris; ++t) sub_offset[t + 1] = sub_offset[t] + lattice_points(n[t] / stride);
+    std::vector<Vec3f> gather_front(sub_offset[tris]), gather_back(sub_offset[tris]);
     // Work items are lattice rows (triangle t, row i): a room is a few large triangles, so
     // splitting by triangle would leave one core with a whole wall.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;
     for (std::size_t t = 0; t < tris; ++t)
         for (std::uint32_t i = 0; i <= n[t]; ++i) rows.emplace_back(std::uint32_t(t), i);
+    // Per triangle, bit 0 / 1: the front / back side can receive light.
+    std::vector<std::uint8_t> reachable(tris, 3);
+    std::uint64_t skipped = 0;
+    if (s.skip_unlit)
+        for (std::size_t t = 0; t < tris; ++t) {
+            const Vec3f N = scene_.normal(std::uint32_t(t));
+            reachable[t] = std::uint8_t(int(side_reachable(std::uint32_t(t), N)) |
+                                        int(side_reachable(std::uint32_t(t), -N)) << 1);
+            skipped += (reachable[t] & 1 ? 0 : 1) + (reachable[t] & 2 ? 0 : 1);
+        }
     bake_done_ = 0;
-    bake_total_ = rows.size();
+    bake_total_ = rows.size() * (stride > 1 ? 2 : 1);
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -405,22 +562,59 @@ void Gallery::bake(const BakeSettings& s) {
                 h.tri = t;
                 h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
                 for (int side = 0; side < 2; ++side) {
+                    if (!(reachable[t] >> side & 1)) continue;  // stays zero
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
-                    Vec3f E = renderer_->direct_irradiance(h, s.light_samples, c);
-                    E += indirect(h.p, h.n, heap);
+                    Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c)
+                                           : renderer_->direct_irradiance(h, s.light_samples, c);
+                    if (stride == 1) E += indirect(h.p, h.n, heap);
+                    else if (i % stride == 0 && j % stride == 0)
+                        (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
+                                                                                             nt / stride)] =
+                            indirect(h.p, h.n, heap);
                     (h.front ? front : back)[k] = E;
                 }
             }
         }
         bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
     }, s.threads ? s.threads : lighting_.threads);
+    if (stride > 1)
+        parallel_for(rows.size(), 16, [&](std::size_t rb, std::size_t re) {
+            for (std::size_t r = rb; r < re; ++r) {
+                const auto [t, i] = rows[r];
+                const std::uint32_t nt = n[t], m = nt / stride, a = i / stride;
+                const float fx = float(i % stride) / float(stride);
+                if (!(max_component(scene_.albedo(t)) > 0)) continue;
+                for (int side = 0; side < 2; ++side) {
+                    if (!(reachable[t] >> side & 1)) continue;
+                    const Vec3f* G = (side == 0 ? gather_front : gather_back).data() + sub_offset[t];
+                    Vec3f* E = (side == 0 ? front : back).data() + offset[t];
+                    for (std::uint32_t j = 0; i + j <= nt; ++j) {
+                        // Linear on the sub-lattice's triangles, as irradiance_baked reads the
+                        // lattice. i + j <= n keeps every corner with a non-zero weight on it.
+                        const std::uint32_t b = j / stride;
+                        const float fy = float(j % stride) / float(stride);
+                        Vec3f g = G[lattice_index(a, b, m)] * (1 - fx - fy);
+                        if (fx + fy <= 1) {
+                            if (fx > 0) g += G[lattice_index(a + 1, b, m)] * fx;
+                            if (fy > 0) g += G[lattice_index(a, b + 1, m)] * fy;
+                        } else {
+                            g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
+                                G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
+                        }
+                        E[lattice_index(i, j, nt)] += g;
+                    }
+                }
+            }
+            bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
+        }, s.threads ? s.threads : lighting_.threads);
     bake_n_ = std::move(n);
     offset.pop_back();
     bake_offset_ = std::move(offset);
     bake_front_ = std::move(front), bake_back_ = std::move(back);
     stats_.bake_seconds = seconds_since(t0);
     stats_.bake_points = total;
+    stats_.bake_sides_skipped = skipped;
     stats_.spacing = spacing;
 }
 

@@ -1,5 +1,6 @@
 #include "photon/photon_tracer.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <string>
@@ -62,6 +63,9 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
     parallel_for(chunks, 1, [&](std::size_t cb, std::size_t ce) {
         for (std::size_t c = cb; c < ce; ++c) {
             auto& part = parts[c];
+            // A closed room of albedo ~0.6 stores ~1.5 photons per emitted one: one
+            // allocation per chunk in the common case instead of a chain of regrowths.
+            part.reserve(2 * kChunk);
             std::uint64_t unsynced = 0;
             const std::uint64_t end = std::min<std::uint64_t>(count, (c + 1) * kChunk);
             for (std::uint64_t i = c * kChunk; i < end; ++i) {
@@ -90,13 +94,16 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
             over_budget(unsynced);
         }
     }, threads);
-    std::size_t total = 0;
-    for (const auto& p : parts) total += p.size();
-    out.reserve(total);
-    for (auto& p : parts) {
-        out.insert(out.end(), p.begin(), p.end());
-        std::vector<Photon>().swap(p);
-    }
+    // Concatenated in photon order, the copy (and its page faults) on every core.
+    std::vector<std::size_t> start(chunks + 1, 0);
+    for (std::size_t c = 0; c < chunks; ++c) start[c + 1] = start[c] + parts[c].size();
+    out.resize(start[chunks]);
+    parallel_for(chunks, 1, [&](std::size_t cb, std::size_t ce) {
+        for (std::size_t c = cb; c < ce; ++c) {
+            std::copy(parts[c].begin(), parts[c].end(), out.begin() + std::ptrdiff_t(start[c]));
+            std::vector<Photon>().swap(parts[c]);
+        }
+    }, threads);
     st.stored = out.size();
     if (stats) *stats = st;
     return out;

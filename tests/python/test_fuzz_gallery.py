@@ -93,6 +93,27 @@ def test_hostile_render_arguments(lit, pack):
             gal.light(vt, **kw)
 
 
+@FUZZ
+@given(spacing=st.one_of(st.none(), floats), light_samples=st.one_of(st.integers(-2, 64), st.sampled_from([65537, 1 << 40]), floats),
+       gather_stride=st.one_of(st.integers(-1, 4), floats, st.booleans()),
+       stratified=st.booleans(), skip_unlit=st.booleans())
+def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, gather_stride, stratified,
+                                                  skip_unlit):
+    gal = Gallery.from_room(box_room(), pack)
+    vt = g.VirtualTexture(pack)
+    gal.light(vt, photons=2000)
+    if spacing is not None and isinstance(spacing, float) and math.isfinite(spacing) and spacing > 0:
+        spacing = max(spacing, 0.05)  # finer lattices only cost time
+    try:
+        gal.bake(spacing=spacing, light_samples=light_samples, gather_stride=gather_stride,
+                 stratified=stratified, skip_unlit=skip_unlit)
+    except ValueError:
+        assert not gal.baked
+        return
+    img = gal.render_display(gal.camera((6, 4)), vt, lighting="baked")
+    assert np.isfinite(img).all() and (img >= 0).all() and img.max() > 0
+
+
 def test_relighting_while_rendering_from_another_thread(pack):
     """light() and bake() exclude render_display: frames rendered meanwhile are whole frames of
     one lighting or the other, never a crash or NaN."""

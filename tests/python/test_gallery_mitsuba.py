@@ -104,6 +104,41 @@ def test_still_matches_mitsuba(gradient_room, lighting, bound):
     assert errors["flip"] < 0.08
 
 
+@pytest.mark.parametrize("options", [
+    {"light_samples": 4},                            # few stratified samples
+    {"light_samples": 32, "stratified": False},      # lighting "full"'s independent samples
+    {"gather_stride": 2},                            # gathers at every other lattice point
+    {"skip_unlit": False},                           # every side computed
+])
+def test_bake_options_match_mitsuba(gradient_room, options):
+    gal, vt = gradient_room
+    ref = mitsuba_still(gal, gal.camera((W, H), fov=70), "box_gradient")
+    try:
+        gal.bake(spacing=0.1, **options)
+        errors = image_errors(supersampled(gal, vt, "baked"), ref)
+    finally:
+        gal.bake(spacing=0.1)  # the module's default bake for the other tests
+    assert errors["relmse"] < 4e-3, errors
+    assert errors["psnr"] > 28 and errors["flip"] < 0.08, errors
+
+
+def test_skipping_unlit_sides_changes_no_pixel(gradient_room):
+    # Outer sides of the closed box and the painting's back are skipped: zero either way.
+    gal, vt = gradient_room
+    cams = [gal.camera((W, H), fov=70), g.Camera([0.3, 0.2, -0.4], [-0.5, 0.5, 0.9], [0, 1, 0], 80,
+                                                 resolution=(W, H))]
+    try:
+        gal.bake(spacing=0.1, skip_unlit=False)
+        assert gal.stats["bake_sides_skipped"] == 0
+        every = [gal.render_display(c, vt, lighting="baked") for c in cams]
+    finally:
+        gal.bake(spacing=0.1)
+    assert gal.stats["bake_sides_skipped"] >= 6  # measured: 8
+    for c, img in zip(cams, every):
+        assert np.array_equal(gal.render_display(c, vt, lighting="baked"), img)
+        assert img.max() > 0
+
+
 def test_red_painting_bleeds_onto_the_white_floor_as_in_mitsuba(tmp_path):
     """A large red painting low on the back wall: the floor in front of it turns red in both
     renderers by the same amount, and stays neutral with a white painting."""

@@ -1,8 +1,10 @@
 """`gigascroll bench gallery`: the built-in `scroll` and `hall` rooms with a pack of smooth
-synthetic paintings: photon pass, bake, and a still per lighting mode, with each still's error
-against Mitsuba 3's path tracer (relMSE, PSNR, HDR-FLIP) beside its time, the error that baking
-adds over full lighting as a curve against bake spacing and bake time, and Mitsuba's own time
-to reach the baked still's error on the same cores.
+synthetic paintings. For each room: Mitsuba 3's path tracer on a spp ladder against a
+high-spp reference (computed once and cached), and a grid of our baked-still configurations
+(photons x bake spacing x bake light samples), each timed end to end: photon pass + photon
+map build + bake + the still itself. The error-time Pareto front of those configurations is
+compared with Mitsuba's time to the same error (log-log interpolation along its ladder), on
+the same cores. At the default settings, the error that baking adds over full lighting.
 
 Our stills cast --supersample^2 rays per pixel (pixel centres of a finer grid, box-filtered)
 because Mitsuba's box pixel filter averages over the pixel; times are for that many rays.
@@ -11,6 +13,7 @@ Times are single runs on a shared machine (noisy); ratios are within the same ru
 
 from __future__ import annotations
 
+import argparse
 import math
 import time
 from pathlib import Path
@@ -29,13 +32,30 @@ def add_arguments(parser) -> None:
                         help="pack of paintings (default: smooth synthetic paintings, built in a temporary directory)")
     parser.add_argument("--width", type=int, default=96, help="still width (default 96)")
     parser.add_argument("--height", type=int, default=54, help="still height (default 54)")
-    parser.add_argument("--supersample", type=int, default=3, help="rays per pixel per axis (default 3)")
-    parser.add_argument("--photons", type=int, default=1 << 20, help="photons emitted (default 2^20)")
-    parser.add_argument("--spacings", default="400,200,100,50",
-                        help="bake spacings as fractions 1/N of the room's diagonal (default 400,200,100,50)")
-    parser.add_argument("--reference-spp", type=int, default=1024, help="Mitsuba reference spp (default 1024)")
-    parser.add_argument("--mitsuba-spp", default="1,2,4,8,16,32,64,128,256",
-                        help="Mitsuba spp ladder for its time to the same error")
+    parser.add_argument("--supersample", type=int, default=3,
+                        help="rays per pixel per axis of the default-settings stills (default 3)")
+    parser.add_argument("--photons", default="10,12,14,16,18,20",
+                        help="photons emitted, as comma-separated powers of two (default 10,12,14,16,18,20)")
+    parser.add_argument("--spacings", default="12,25,50,100,200",
+                        help="bake spacings as fractions 1/N of the room's diagonal (default 12,25,50,100,200)")
+    parser.add_argument("--bake-samples", default="1,4,16,64",
+                        help="emitter samples per lattice point (default 1,4,16,64)")
+    parser.add_argument("--gather-strides", default="1,2",
+                        help="bake gather strides tried at spacings of diag/100 and finer (default 1,2)")
+    parser.add_argument("--disc", action=argparse.BooleanOptionalAction, default=True,
+                        help="also try the surface-disc gather at twice the auto radius (spacings diag/100 "
+                             "and finer, gathers / 4, 1-16 samples; default on)")
+    parser.add_argument("--supersamples", default="1,3",
+                        help="rays per pixel per axis of the configurations' stills (default 1,3)")
+    parser.add_argument("--default-photons", type=int, default=20,
+                        help="log2 photons of the default-settings comparison of baked against full (default 20)")
+    parser.add_argument("--full-samples", type=int, default=64,
+                        help="emitter samples per pixel of the full-lighting oracle (default 64)")
+    parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
+    parser.add_argument("--reference-cache", default="build/gallery-reference",
+                        help="directory where the reference images are kept between runs")
+    parser.add_argument("--mitsuba-spp", default="1,4,16,64,256,1024",
+                        help="Mitsuba spp ladder for its time to each error")
     parser.add_argument("--quick", action="store_true", help="small settings, for a smoke test")
     parser.add_argument("--out", default="bench/gallery", help="directory for results.json and plots")
 
@@ -79,6 +99,56 @@ def _mitsuba(mi, scene, spp: int, seed: int):
     return img, time.perf_counter() - t0
 
 
+def reference_key(gal, cam, spp: int, seed: int) -> str:
+    """A digest of everything the Mitsuba reference depends on: the room's surfaces and
+    paintings (their Mitsuba-level texels), the camera, spp and seed, and Mitsuba's version."""
+    import hashlib
+
+    import mitsuba as mi
+
+    from ..gallery.gallery import _check_slot, _check_surface
+    from ..pack import read_level
+
+    h = hashlib.sha256()
+    h.update(repr((mi.__version__, spp, seed, cam.width, cam.height, float(cam.fov), tuple(cam.position),
+                   tuple(cam.forward), tuple(cam.up))).encode())
+    for s in gal.spec.surfaces:
+        v, t, albedo, emission = _check_surface(s)
+        h.update(np.ascontiguousarray(v, np.float32).tobytes() + np.ascontiguousarray(t, np.int64).tobytes())
+        h.update(repr((tuple(albedo), tuple(emission))).encode())
+    for i, slot in enumerate(gal.spec.paintings):
+        h.update(repr(_check_slot(slot)).encode())
+        h.update(read_level(gal.pack, gal.slot_paintings[i], gal.mitsuba_level(i)).tobytes())
+    return h.hexdigest()[:16]
+
+
+def cached_reference(mi, gal, cam, spp: int, cache: Path, seed: int = 0) -> tuple[np.ndarray, float]:
+    """Mitsuba's image of the room at `spp` (the reference), computed once and kept in `cache`
+    (keyed by reference_key): a 4096-spp reference takes minutes."""
+    cache.mkdir(parents=True, exist_ok=True)
+    path = cache / f"reference_{reference_key(gal, cam, spp, seed)}.npz"
+    if path.exists():
+        with np.load(path) as z:
+            return z["image"], float(z["seconds"])
+    scene = mi.load_dict(gal.to_mitsuba_dict(cam))
+    img, seconds = _mitsuba(mi, scene, spp, seed)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, image=img, seconds=seconds)
+    tmp.replace(path)
+    return img, seconds
+
+
+
+def _ints(text: str, what: str) -> list[int]:
+    try:
+        values = [int(x) for x in text.split(",") if x]
+    except ValueError:
+        raise UserError(f"{what} is a comma-separated list of integers, got {text!r}") from None
+    if not values or min(values) < 1:
+        raise UserError(f"{what} needs positive integers, got {text!r}")
+    return values
+
+
 def run(args) -> int:
     from .. import TilePack, VirtualTexture
     from ..gallery import Gallery, builtin_room
@@ -90,15 +160,26 @@ def run(args) -> int:
         if r not in ROOMS:
             raise UserError(f"unknown room {r!r} (benchmarked: {', '.join(ROOMS)})")
     if args.quick:
-        args.width, args.height, args.supersample, args.photons = 32, 18, 2, 1 << 17
-        args.spacings, args.reference_spp, args.mitsuba_spp = "100,50", 64, "1,4,16"
-    if min(args.width, args.height, args.supersample, args.photons, args.reference_spp) < 1:
-        raise UserError("--width, --height, --supersample, --photons and --reference-spp must be >= 1")
-    try:
-        spacings = [int(s) for s in args.spacings.split(",") if s]
-        ladder = [int(s) for s in args.mitsuba_spp.split(",") if s]
-    except ValueError:
-        raise UserError("--spacings and --mitsuba-spp are comma-separated integers") from None
+        args.width, args.height, args.supersample = 32, 18, 2
+        args.photons, args.spacings, args.bake_samples, args.default_photons = "14,16", "25,50", "4,16", 16
+        args.supersamples, args.disc = "1,2", False
+        args.full_samples, args.reference_spp, args.mitsuba_spp = 16, 64, "1,4,16"
+    if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples) < 1:
+        raise UserError("--width, --height, --supersample, --full-samples and --reference-spp must be >= 1")
+    photons = _ints(args.photons, "--photons")
+    spacings = _ints(args.spacings, "--spacings")
+    bake_samples = _ints(args.bake_samples, "--bake-samples")
+    supersamples = _ints(args.supersamples, "--supersamples")
+    strides = _ints(args.gather_strides, "--gather-strides")
+    if not set(strides) <= {1, 2}:
+        raise UserError("--gather-strides takes 1 and/or 2")
+    grid = [(False, n, ls, stride) for n in spacings for ls in bake_samples
+            for stride in (strides if n >= 100 else [1])]
+    if args.disc:
+        grid += [(True, n, ls, 2) for n in spacings if n >= 100 for ls in bake_samples if ls <= 16]
+    ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
+    if max(photons + [args.default_photons]) > 30:
+        raise UserError("--photons and --default-photons are powers of two up to 2^30")
     try:
         import mitsuba as mi
     except ImportError:
@@ -108,69 +189,157 @@ def run(args) -> int:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    import os
     import tempfile
 
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
-    results = {"settings": {k: getattr(args, k) for k in ("width", "height", "supersample", "photons",
-                                                         "spacings", "reference_spp", "mitsuba_spp")},
-               "rooms": {}}
+    results = {"settings": {k: getattr(args, k) for k in (
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "photons", "spacings", "bake_samples", "default_photons",
+                   "full_samples", "reference_spp", "mitsuba_spp")},
+               "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
-    steps = tqdm(total=len(rooms) * (4 + len(spacings) + len(ladder)), desc="gallery bench", unit="step")
+    per_room = 2 + len(ladder) + len(photons) * len(grid) + len(set(spacings) | {200})
+    steps = tqdm(total=len(rooms) * per_room, desc="gallery bench", unit="step")
     for name in rooms:
         spec = builtin_room(name, pack)
         gal = Gallery.from_room(spec, pack)
-        vt_side = 48
-        vt = VirtualTexture(pack, (vt_side, vt_side))
+        vt = VirtualTexture(pack, (48, 48))
         cam = gal.camera((args.width * args.supersample, args.height * args.supersample), fov=fov)
         tiles = gal.stream(cam, vt)
         r = {"triangles": gal.triangle_count, "paintings": gal.painting_count, "tiles_streamed": tiles}
-        gal.light(vt, photons=args.photons)
-        st = gal.stats
-        r.update(photon_seconds=st["photon_seconds"], grid_seconds=st["build_seconds"],
-                 photons_stored=st["photons_stored"], radius_m=st["radius"], albedo_levels=st["albedo_levels"])
-        steps.update()
-        # The reference, and Mitsuba's ladder (another seed) for its time to each error.
-        mscene = mi.load_dict(gal.to_mitsuba_dict(gal.camera((args.width, args.height), fov=fov)))
-        ref, ref_seconds = _mitsuba(mi, mscene, args.reference_spp, seed=0)
+        mcam = gal.camera((args.width, args.height), fov=fov)
+        ref, ref_seconds = cached_reference(mi, gal, mcam, args.reference_spp, Path(args.reference_cache))
         r["reference"] = {"spp": args.reference_spp, "seconds": ref_seconds}
         steps.update()
-        full, full_seconds = _still(gal, vt, "full", args.width, args.height, args.supersample, fov)
-        r["full"] = {"seconds": full_seconds, **image_errors(full, ref)}
-        steps.update()
-        curve = []
-        diag = math.dist(*gal.bounds)
-        for n in spacings:
-            gal.bake(spacing=diag / n)
-            bst = gal.stats
-            baked, baked_seconds = _still(gal, vt, "baked", args.width, args.height, args.supersample, fov)
-            curve.append({"spacing_m": bst["spacing"], "diagonal_over": n, "bake_points": bst["bake_points"],
-                          "bake_seconds": bst["bake_seconds"], "still_seconds": baked_seconds,
-                          "relmse_vs_full": relmse(baked, full), **image_errors(baked, ref)})
-            steps.update()
-        r["baked"] = curve
-        ladder_results = []
+        # Mitsuba's ladder (another seed than the reference's).
+        mscene = mi.load_dict(gal.to_mitsuba_dict(mcam))
+        r["mitsuba"] = []
         for spp in ladder:
             img, seconds = _mitsuba(mi, mscene, spp, seed=1)
-            ladder_results.append({"spp": spp, "seconds": seconds, **image_errors(img, ref)})
+            r["mitsuba"].append({"spp": spp, "seconds": seconds, **image_errors(img, ref)})
             steps.update()
-        r["mitsuba"] = ladder_results
-        # Mitsuba's time to the baked still's error (the finest bake), interpolated in log-log.
-        best = min(curve, key=lambda c: c["relmse"])
-        r["mitsuba_seconds_to_baked_error"] = _time_to_error(ladder_results, best["relmse"])
-        r["speedup_baked_still"] = (r["mitsuba_seconds_to_baked_error"] / best["still_seconds"]
-                                    if r["mitsuba_seconds_to_baked_error"] else None)
-        r["mitsuba_seconds_to_full_error"] = _time_to_error(ladder_results, r["full"]["relmse"])
+        del mscene
+        diag = math.dist(*gal.bounds)
+        # Our configurations, each timed end to end.
+        configs, auto_radius = [], {}
+        # Wall-clock times of the calls: "map" is everything light() does besides tracing
+        # (the painting albedo read, dropping hidden photons, the hash grid).
+        for p, disc in [(p, d) for p in photons for d in sorted({d for d, *_ in grid})]:
+            if disc:  # the disc at twice the auto radius (read from the sphere's run before)
+                t0 = time.perf_counter()
+                st = gal.light(vt, photons=1 << p, radius=2 * auto_radius[p], disc=True)
+            else:
+                t0 = time.perf_counter()
+                st = gal.light(vt, photons=1 << p)
+                auto_radius[p] = st["radius"]
+            light_seconds = time.perf_counter() - t0
+            for d, n, ls, stride in grid:
+                if d != disc:
+                    continue
+                t0 = time.perf_counter()
+                bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride)
+                bake_seconds = time.perf_counter() - t0
+                for ss in supersamples:
+                    img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
+                    c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
+                         "disc": disc, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
+                         "gather_stride": stride, "supersample": ss, "bake_points": bst["bake_points"],
+                         "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
+                         "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
+                         "still_seconds": still_seconds, **image_errors(img, ref)}
+                    c["total_seconds"] = light_seconds + bake_seconds + still_seconds
+                    configs.append(c)
+                steps.update()
+        r["configs"] = configs
+        r["front"] = pareto_front(configs)
+        r["targets"] = compare_with_mitsuba(configs, r["mitsuba"])
+        # The default settings: baked (16 stratified samples) against full lighting on the
+        # same photon map, both against the reference, and the bake-spacing curve.
+        st = gal.light(vt, photons=1 << args.default_photons, light_samples=args.full_samples)
+        full, full_seconds = _still(gal, vt, "full", args.width, args.height, args.supersample, fov)
+        r["default"] = {"photons_log2": args.default_photons, "photon_seconds": st["photon_seconds"],
+                        "build_seconds": st["build_seconds"], "full_samples": args.full_samples,
+                        "full": {"seconds": full_seconds, **image_errors(full, ref)}, "baked": []}
         steps.update()
+        for n in sorted(set(spacings) | {200}):
+            bst = gal.bake(spacing=diag / n)
+            baked, baked_seconds = _still(gal, vt, "baked", args.width, args.height, args.supersample, fov)
+            r["default"]["baked"].append({
+                "diagonal_over": n, "spacing_m": bst["spacing"], "bake_points": bst["bake_points"],
+                "bake_seconds": bst["bake_seconds"], "still_seconds": baked_seconds,
+                "relmse_vs_full": relmse(baked, full), **image_errors(baked, ref)})
+            steps.update()
         results["rooms"][name] = r
         _plot(name, r, out)
         _print(name, r)
     steps.close()
     del pack
     scratch.cleanup()
-    write_json(out / "results.json", results, indent=1)
-    print(f"\nwrote {out / 'results.json'}")
+    write_results(out, results)
+    print(f"\nwrote {out / 'results.json'} and {out / 'configs.csv'}")
     return 0
+
+
+CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "diagonal_over", "spacing_m",
+                  "bake_samples", "gather_stride", "supersample", "bake_points", "sides_skipped",
+                  "photon_seconds", "build_seconds", "bake_seconds", "still_seconds", "total_seconds",
+                  "relmse", "psnr", "flip")
+
+
+def write_results(out: Path, results: dict) -> None:
+    """results.json without the grid (front, targets, ladder, defaults), and every
+    configuration of the grid as one row of configs.csv."""
+    import csv
+    import io
+
+    rows = []
+    slim = {**results, "rooms": {}}
+    for name, r in results["rooms"].items():
+        rows += [{"room": name, **c} for c in r["configs"]]
+        slim["rooms"][name] = {k: v for k, v in r.items() if k != "configs"}
+    text = io.StringIO()
+    w = csv.DictWriter(text, CONFIG_COLUMNS, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    for row in rows:
+        w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in row.items()})
+    tmp = out / "configs.csv.tmp"
+    tmp.write_text(text.getvalue())
+    tmp.replace(out / "configs.csv")
+    write_json(out / "results.json", slim, indent=1)
+
+
+def pareto_front(configs: list[dict]) -> list[dict]:
+    """The configurations no other one beats in both total time and relMSE, fastest first."""
+    front = []
+    for c in sorted(configs, key=lambda c: (c["total_seconds"], c["relmse"])):
+        if not front or c["relmse"] < front[-1]["relmse"]:
+            front.append(c)
+    return front
+
+
+def fastest_reaching(configs: list[dict], error: float) -> dict | None:
+    """Our fastest configuration whose relMSE is at most `error`, None when none reaches it."""
+    ok = [c for c in configs if c["relmse"] <= error]
+    return min(ok, key=lambda c: c["total_seconds"]) if ok else None
+
+
+def compare_with_mitsuba(configs: list[dict], ladder: list[dict]) -> list[dict]:
+    """For each of Mitsuba's ladder errors (its time measured) and the errors of our front
+    (its time interpolated along the ladder): our fastest configuration reaching that error and
+    the ratio of times. Errors our front does not reach are listed with `ours` None."""
+    targets = [(l["relmse"], l["seconds"], l["spp"]) for l in ladder]
+    targets += [(c["relmse"], _time_to_error(ladder, c["relmse"]), None) for c in pareto_front(configs)]
+    rows = []
+    for error, mitsuba_seconds, spp in sorted(targets, key=lambda t: -t[0]):
+        best = fastest_reaching(configs, error)
+        # Below Mitsuba's ladder its time is more than its largest run's: a lower bound.
+        bound = max(l["seconds"] for l in ladder) if mitsuba_seconds is None else None
+        rows.append({"relmse": error, "mitsuba_spp": spp, "mitsuba_seconds": mitsuba_seconds,
+                     "ours": best, "speedup": (mitsuba_seconds / best["total_seconds"]
+                                               if best is not None and mitsuba_seconds else None),
+                     "speedup_at_least": (bound / best["total_seconds"] if best is not None and bound else None)})
+    return rows
 
 
 def _time_to_error(ladder: list[dict], error: float) -> float | None:
@@ -188,41 +357,60 @@ def _time_to_error(ladder: list[dict], error: float) -> float | None:
     return pts[-1][1]  # our error is above the ladder's worst: its cheapest run already beats it
 
 
+def _config_name(c: dict) -> str:
+    stride = ", gathers / 4" if c.get("gather_stride", 1) == 2 else ""
+    disc = ", disc r x 2" if c.get("disc") else ""
+    return (f"2^{c['photons_log2']}{disc}, diag/{c['diagonal_over']}, {c['bake_samples']} samples{stride}, "
+            f"{c['supersample']}x{c['supersample']} rays")
+
+
 def _print(name: str, r: dict) -> None:
     print(f"\n{name}: {r['triangles']} triangles, {r['paintings']} paintings, {r['tiles_streamed']} tiles streamed")
-    print(f"  photon pass {r['photon_seconds']:.2f} s ({r['photons_stored']} stored, radius {r['radius_m']:.3f} m), "
-          f"grid {r['grid_seconds']:.2f} s")
-    f = r["full"]
-    print(f"  full still  {f['seconds']:.2f} s   relMSE {f['relmse']:.2e}  PSNR {f['psnr']:.1f} dB  FLIP {f['flip']:.3f}")
-    for c in r["baked"]:
-        print(f"  bake 1/{c['diagonal_over']:<4} {c['bake_seconds']:6.2f} s ({c['bake_points']} points)  still "
-              f"{c['still_seconds']:.3f} s   relMSE {c['relmse']:.2e} (vs full {c['relmse_vs_full']:.1e})  "
-              f"PSNR {c['psnr']:.1f} dB  FLIP {c['flip']:.3f}")
     for l in r["mitsuba"]:
-        print(f"  mitsuba {l['spp']:4d} spp {l['seconds']:7.2f} s   relMSE {l['relmse']:.2e}  FLIP {l['flip']:.3f}")
-    t = r["mitsuba_seconds_to_baked_error"]
-    print(f"  Mitsuba to the baked still's error: {t:.2f} s" if t else
-          "  Mitsuba does not reach the baked still's error on its ladder")
+        print(f"  mitsuba {l['spp']:5d} spp {l['seconds']:7.2f} s   relMSE {l['relmse']:.2e}  FLIP {l['flip']:.3f}")
+    print("  our front (photon + build + bake + still = total):")
+    for c in r["front"]:
+        print(f"    {_config_name(c):68s} {c['photon_seconds']:.2f} + {c['build_seconds']:.2f} + "
+              f"{c['bake_seconds']:.2f} + {c['still_seconds']:.3f} = {c['total_seconds']:.2f} s   "
+              f"relMSE {c['relmse']:.2e}  FLIP {c['flip']:.3f}")
+    print("  target relMSE -> Mitsuba s -> ours s -> speedup:")
+    for t in r["targets"]:
+        m = f"{t['mitsuba_seconds']:.2f} s" if t["mitsuba_seconds"] else "not reached"
+        o = f"{t['ours']['total_seconds']:.2f} s" if t["ours"] else "not reached"
+        sp = (f"{t['speedup']:.1f}x" if t["speedup"] else
+              f">{t['speedup_at_least']:.1f}x" if t["speedup_at_least"] else "-")
+        print(f"    {t['relmse']:.2e}  ({t['mitsuba_spp'] or 'interp.'} spp) {m:>12s} {o:>12s} {sp:>7s}")
+    d = r["default"]
+    print(f"  default settings, 2^{d['photons_log2']} photons: full ({d['full_samples']} samples) relMSE "
+          f"{d['full']['relmse']:.2e}")
+    for b in d["baked"]:
+        print(f"    bake diag/{b['diagonal_over']:<4d} {b['bake_seconds']:.2f} s  relMSE {b['relmse']:.2e} "
+              f"(vs full {b['relmse_vs_full']:.1e})")
 
 
 def _plot(name: str, r: dict, out: Path) -> None:
     plt = pyplot()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
-    c = r["baked"]
-    a.loglog([x["spacing_m"] for x in c], [x["relmse_vs_full"] for x in c], "o-", label="baked vs full")
-    a.loglog([x["spacing_m"] for x in c], [x["relmse"] for x in c], "s-", label="baked vs Mitsuba")
-    a.axhline(r["full"]["relmse"], color="k", ls="--", label="full vs Mitsuba")
-    a.set_xlabel("bake spacing (m)")
-    a.set_ylabel("relMSE")
-    a.legend()
-    a.set_title(f"{name}: error against bake spacing")
-    b.loglog([x["bake_seconds"] for x in c], [x["relmse_vs_full"] for x in c], "o-", label="bake: error vs full")
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
     m = r["mitsuba"]
-    b.loglog([x["seconds"] for x in m], [x["relmse"] for x in m], "^-", label="Mitsuba path tracer")
-    b.loglog([x["still_seconds"] for x in c], [x["relmse"] for x in c], "s", label="baked still vs Mitsuba")
-    b.set_xlabel("seconds")
+    a.loglog([x["seconds"] for x in m], [x["relmse"] for x in m], "^-", color="C0", label="Mitsuba path tracer")
+    a.loglog([x["seconds"] / 10 for x in m], [x["relmse"] for x in m], ":", color="C0", label="Mitsuba time / 10")
+    cs = r["configs"]
+    a.loglog([c["total_seconds"] for c in cs], [c["relmse"] for c in cs], ".", color="0.6",
+             label="baked still, each configuration")
+    f = r["front"]
+    a.step([c["total_seconds"] for c in f], [c["relmse"] for c in f], "o-", where="post", color="C3",
+           label="baked still, Pareto front")
+    a.set_xlabel("seconds (photon pass + map + bake + still)")
+    a.set_ylabel("relMSE against the reference")
+    a.legend(fontsize=8)
+    a.set_title(f"{name}: time to error")
+    d = r["default"]["baked"]
+    b.loglog([x["spacing_m"] for x in d], [x["relmse_vs_full"] for x in d], "o-", label="baked vs full")
+    b.loglog([x["spacing_m"] for x in d], [x["relmse"] for x in d], "s-", label="baked vs reference")
+    b.axhline(r["default"]["full"]["relmse"], color="k", ls="--", label="full vs reference")
+    b.set_xlabel("bake spacing (m)")
     b.set_ylabel("relMSE")
-    b.legend()
-    b.set_title(f"{name}: error against time")
+    b.legend(fontsize=8)
+    b.set_title(f"{name}: baking at the default settings")
     fig.tight_layout()
-    save_figure(fig, out / f"{name}_error.png", dpi=110)
+    save_figure(fig, out / f"{name}_front.png", dpi=110)
