@@ -25,6 +25,7 @@ namespace gigascroll {
 struct SurfaceDisc {
     static constexpr int kSectors = 8;      // octants of the tangent plane
     static constexpr int kDepthProbes = 2;  // surface probes per sector, at 1/2 and 1 of its reach
+    static constexpr int kRefinements = 3;  // bisection steps where a probe finds the surface ends
     Vec3f x, n, t, b;
     float r = 0;
     float thickness = 0;

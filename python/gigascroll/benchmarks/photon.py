@@ -295,20 +295,36 @@ def _runtime_vs_error(args, out: Path) -> dict:
     return {name: _error_study(name, args, out) for name in ERROR_SCENES}
 
 
-def _reference(name: str, size: int, spp: int, integrator: str) -> np.ndarray:
-    """The scene's Mitsuba reference, cached under build/photon-reference (rendered once)."""
+def _reference_half(name: str, size: int, spp: int, integrator: str, seed: int) -> np.ndarray:
+    """One Mitsuba render, cached under build/photon-reference (rendered once)."""
     import mitsuba as mi
 
-    path = Path("build") / "photon-reference" / f"bench_{name}{size}_{integrator}{spp}spp_seed12345.npy"
+    path = Path("build") / "photon-reference" / f"bench_{name}{size}_{integrator}{spp}spp_seed{seed}.npy"
     if path.exists():
         return np.load(path)
     t0 = time.perf_counter()
-    ref = np.array(mi.render(mi.load_dict(_mitsuba_dict(name, size, integrator)), spp=spp, seed=12345),
+    ref = np.array(mi.render(mi.load_dict(_mitsuba_dict(name, size, integrator)), spp=spp, seed=seed),
                    dtype=np.float32)
-    print(f"reference {name}: Mitsuba {integrator}, {size}x{size}, {spp} spp, {time.perf_counter() - t0:.1f} s")
+    print(f"reference {name}: Mitsuba {integrator}, {size}x{size}, {spp} spp, seed {seed}, "
+          f"{time.perf_counter() - t0:.1f} s")
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.save(path, ref)
+    tmp = path.with_suffix(".tmp.npy")
+    np.save(tmp, ref)
+    tmp.replace(path)
     return ref
+
+
+def _reference(name: str, size: int, spp: int, integrator: str) -> tuple[np.ndarray, float]:
+    """The scene's Mitsuba reference of spp samples per pixel as the mean of two independent
+    halves (seeds 12345 and 54321), and its own noise: the expected relMSE of the mean against
+    the truth, relMSE(a, b) / 4 (a - b has twice a half's variance, the mean half of it)."""
+    half = max(spp // 2, 1)
+    a = _reference_half(name, size, half, integrator, 12345)
+    b = _reference_half(name, size, half, integrator, 54321)
+    ref = 0.5 * (a + b)
+    from .. import photon as P
+
+    return ref, P.relmse(a, b) / 4
 
 
 def _error_study(name: str, args, out: Path) -> dict:
@@ -320,7 +336,8 @@ def _error_study(name: str, args, out: Path) -> dict:
     size = args.error_size
     # The particle tracer converges ~3x faster than the path tracer in the indirectly lit room.
     ref_integrator = "ptracer" if name == "room_indirect" else "path"
-    ref = _reference(name, size, args.reference_spp, ref_integrator)
+    ref, ref_noise = _reference(name, size, args.reference_spp, ref_integrator)
+    print(f"{name}: reference {ref_integrator} {args.reference_spp} spp, its noise (relMSE) {ref_noise:.2e}")
     spps = [1, 4, 16, 64, 256] if args.quick else [1, 4, 16, 64, 256, 1024]
     curves: dict[str, list[dict]] = {}
     for integrator in ("path", "ptracer") if name == "room_indirect" else ("path",):
