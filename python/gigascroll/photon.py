@@ -267,7 +267,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
            passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
-           snapshots: Sequence[int] = (), disc: bool | None = None, lighting: str = "baked"):
+           snapshots: Sequence[int] = (), disc: bool | None = None, lighting: str = "baked",
+           final_gather: bool = False):
     """Render linear radiance, float32 (H, W, 3).
 
     `scene` may be a `gigascroll.Gallery`: its still (`Gallery.still`) with `lighting`
@@ -292,7 +293,9 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
     takes one camera sample per pixel and `photons` new photons; `radius` is the initial radius,
     shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
-    in stats['snapshots'] as (passes, seconds, image).
+    in stats['snapshots'] as (passes, seconds, image). final_gather=True (progressive only)
+    gathers the photons where one diffuse bounce from the first hit lands, with that point's
+    direct light, instead of at the first hit.
     """
     from .gallery import Gallery
 
@@ -307,6 +310,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     if not progressive:
         if snapshots:
             raise ValueError("snapshots need progressive=True")
+        if final_gather:
+            raise ValueError("final_gather needs progressive=True")
         image, stats = _core._render(scene, camera, **s)
         return (image, stats) if return_stats else image
     if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or not 1 <= passes <= 1 << 24:
@@ -321,7 +326,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     if any(x < 1 for x in shots):
         raise ValueError("snapshots must be positive pass counts")
     image, stats = _core._render_progressive(scene, camera, **s, passes=int(passes), time_budget=budget,
-                                             alpha=alpha, snapshots=shots)
+                                             alpha=alpha, snapshots=shots, final_gather=bool(final_gather))
     return (image, stats) if return_stats else image
 
 
