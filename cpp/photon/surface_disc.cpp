@@ -38,11 +38,14 @@ SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
     // below it and nothing overhangs it within r: a painting hung 2 cm in front of a wall
     // covers the wall behind its rim, which the in-plane ray (3 mm up) passes under but which
     // its shadow keeps dark, as a lamp's shade keeps the ceiling above it.
+    // One ray down from r above q tells both: the first thing it meets above q's height covers
+    // q; else q is on the surface if the ray meets it within the tolerance below q.
     enum class Probe { On, Off, Covered };
     auto probe = [&](Vec3f q) {
         Hit hit;
-        if (!(scene.intersect(q, -n, hit, lift + d.thickness) && dot(hit.n, n) > 0.5f)) return Probe::Off;
-        return scene.intersect(q, n, hit, r) ? Probe::Covered : Probe::On;
+        if (!scene.intersect(q + n * r, -n, hit, r + lift + d.thickness)) return Probe::Off;
+        if (hit.t < r) return Probe::Covered;
+        return dot(hit.n, n) > 0.5f ? Probe::On : Probe::Off;
     };
     float covered = r;  // nearest covered point over the sectors
     d.area = 0;
