@@ -6,14 +6,17 @@
 //  - keeps only photons within a thickness tolerance of the query's tangent plane (and with
 //    agreeing normals, as before);
 //  - clips the disc, per angular sector, to the part reachable on the surface: a ray in the
-//    tangent plane (just above the surface) stops at the first wall or partition, and short
-//    probe rays down onto the plane stop the sector where the surface ends;
+//    tangent plane (just above the surface) stops at the first wall or partition, and probe
+//    rays down onto the plane (from r above it) stop the sector where the surface ends or
+//    where something overhangs it (the wall behind a painting's rim), bisected to r / 16;
+//  - next to an overhang shrinks the disc to twice the distance to it (at least r / 8): the
+//    irradiance changes within that distance (the painting's shadow on its wall);
 //  - divides by the clipped area instead of pi r^2.
 // It is a ray-traced variant of the clipped-kernel boundary corrections of density estimation
 // (e.g. the "boundary bias" discussion in Jensen's Realistic Image Synthesis Using Photon
 // Mapping, §7.5, and Hey & Purgathofer 2002, who estimate the disc area actually covered);
-// the cost is kSectors * (1 + kDepthProbes) rays per gather, paid only near other surfaces
-// (gather_surface_disc).
+// the cost is kSectors * (1 + kDepthProbes + kRefinements) rays at most per gather, paid only
+// near other surfaces (gather_surface_disc).
 #pragma once
 #include <cmath>
 
@@ -84,7 +87,7 @@ struct DiscEstimate {
     float area = 0;        // the disc's (clipped) area
 };
 
-// The surface-disc gather at x. The disc is clipped (24 rays) only where the sphere holds a
+// The surface-disc gather at x. The disc is clipped (up to 48 rays) only where the sphere holds a
 // photon of another surface: a wall, partition, box face or the wall behind a painting always
 // receives some. Where every photon within r lies on the query's own plane the full disc
 // stands, with no rays. (A surface that ends with no lit surface within r keeps the full
