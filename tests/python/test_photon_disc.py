@@ -37,10 +37,10 @@ def _regions(name: str, pts: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-# |bias| bounds of the disc per region, at seed 0. Measured there: edges -0.4% (lit), -0.3%
-# (indirect); the partition's leak +0.4%; the painting's border +1.5% and the wall around it
-# -1.7% (-2.9% and -3.0%, mean of seeds 0-3, before the disc's sectors were bisected and
-# probed for overhangs; +1.7% and -0.7% after).
+# |bias| bounds of the disc per region, at seed 0. Measured there: edges -0.3% (lit), +0.2%
+# (indirect); the partition's leak +0.6%; the painting's border +1.9% and the wall around it
+# -1.5% (-2.9% and -3.0%, mean of seeds 0-3, with the previous disc of 8 sectors without
+# bisection or overhang probes; +2.1% and -0.6% now).
 DISC_BOUNDS = {"edge": 0.01, "leak": 0.01, "painting border": 0.02, "wall around the painting": 0.02}
 
 

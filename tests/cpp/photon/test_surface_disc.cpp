@@ -1,4 +1,4 @@
-// The surface disc: octant lookup against atan2, and the clipped area against geometry with
+// The surface disc: sector lookup against atan2, and the clipped area against geometry with
 // known answers (open floor, floor against a wall, the floor's own border).
 #include <gtest/gtest.h>
 
@@ -9,14 +9,14 @@
 
 using namespace gigascroll;
 
-TEST(SurfaceDisc, SectorIsTheOctantOfTheAngle) {
+TEST(SurfaceDisc, SectorIsTheSixteenthOfTheAngle) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(-1, 1);
     for (int i = 0; i < 10000; ++i) {
         const float x = u(rng), y = u(rng);
         float a = std::atan2(y, x);
         if (a < 0) a += 2 * float(M_PI);
-        const int expected = std::min(7, int(a / (float(M_PI) / 4)));
+        const int expected = std::min(SurfaceDisc::kSectors - 1, int(a / (2 * float(M_PI) / SurfaceDisc::kSectors)));
         ASSERT_EQ(SurfaceDisc::sector(x, y), expected) << x << " " << y;
     }
 }
