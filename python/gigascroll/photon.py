@@ -308,6 +308,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
         disc = kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
                   cooperative, direct, indirect, threads, hash_mode, disc)
+    if not isinstance(final_gather, (bool, np.bool_)):
+        raise ValueError(f"final_gather must be True or False, got {final_gather!r}")
     if not progressive:
         if snapshots:
             raise ValueError("snapshots need progressive=True")

@@ -132,3 +132,5 @@ def test_final_gather_needs_progressive(cornell32):
     scene, cam = cornell32
     with pytest.raises(ValueError, match="final_gather"):
         g.render(scene, cam, photons=1000, final_gather=True)
+    with pytest.raises(ValueError, match="final_gather"):
+        g.render(scene, cam, photons=1000, progressive=True, passes=1, final_gather="yes")
