@@ -93,10 +93,25 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                     s.direct += R.emitted_and_direct(hit, c, &unused, pass);
                     const Vec3f albedo = scene.albedo(hit.tri);
                     if (!photons_needed || !(max_component(albedo) > 0)) continue;
+                    Vec3f f = albedo * float(1.0 / M_PI);
+                    if (prog.final_gather) {
+                        // Cosine sampling: f_r cos / pdf = albedo. The bounce's emission is the
+                        // first hit's direct light, already sampled; its direct light is added
+                        // here and its photons are gathered below.
+                        const Vec3f d = sample_cosine(hit.n, rng.uniform(), rng.uniform());
+                        const Vec3f o = hit.p + hit.n * scene.epsilon();
+                        Hit next;
+                        if (!scene.intersect(o, d, next)) continue;
+                        const Vec3f next_albedo = scene.albedo(next.tri);
+                        if (!(max_component(next_albedo) > 0)) continue;
+                        f = albedo * next_albedo * float(1.0 / M_PI);
+                        if (settings.direct) s.direct += f * R.direct_irradiance(next, settings.light_samples, c, pass);
+                        hit = next;
+                    }
                     s.has_point = true;
                     s.p = hit.p;
                     s.normal = hit.n;
-                    s.f = albedo * float(1.0 / M_PI);
+                    s.f = f;
                 }
             std::lock_guard lock(m);
             Renderer::add(stats.render, c);

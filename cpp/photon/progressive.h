@@ -27,6 +27,10 @@ struct ProgressiveSettings {
     int passes = 16;                // at most this many passes
     double time_budget = 0;         // seconds; > 0 stops after the pass that exceeds it
     float alpha = 2.0f / 3.0f;      // share of new photons kept per pass (pbrt-v4's default)
+    // Final gather: the visible point is where one cosine-sampled diffuse bounce from the first
+    // hit lands (with that point's direct light), so the photon map's error reaches the image
+    // averaged over the bounce's directions instead of as blotches of radius R.
+    bool final_gather = false;
     void validate() const;
 };
 

@@ -6,14 +6,17 @@
 //  - keeps only photons within a thickness tolerance of the query's tangent plane (and with
 //    agreeing normals, as before);
 //  - clips the disc, per angular sector, to the part reachable on the surface: a ray in the
-//    tangent plane (just above the surface) stops at the first wall or partition, and short
-//    probe rays down onto the plane stop the sector where the surface ends;
+//    tangent plane (just above the surface) stops at the first wall or partition, and probe
+//    rays down onto the plane (from r above it) stop the sector where the surface ends or
+//    where something overhangs it (the wall behind a painting's rim), bisected to r / 16;
+//  - next to an overhang shrinks the disc to twice the distance to it (at least r / 8): the
+//    irradiance changes within that distance (the painting's shadow on its wall);
 //  - divides by the clipped area instead of pi r^2.
 // It is a ray-traced variant of the clipped-kernel boundary corrections of density estimation
 // (e.g. the "boundary bias" discussion in Jensen's Realistic Image Synthesis Using Photon
 // Mapping, §7.5, and Hey & Purgathofer 2002, who estimate the disc area actually covered);
-// the cost is kSectors * (1 + kDepthProbes) rays per gather, paid only near other surfaces
-// (gather_surface_disc).
+// the cost is kSectors * (1 + kDepthProbes + kRefinements) rays at most per gather, paid only
+// near other surfaces (gather_surface_disc).
 #pragma once
 #include <cmath>
 
@@ -23,8 +26,9 @@
 namespace gigascroll {
 
 struct SurfaceDisc {
-    static constexpr int kSectors = 8;      // octants of the tangent plane
+    static constexpr int kSectors = 16;     // sixteenths of the tangent plane
     static constexpr int kDepthProbes = 2;  // surface probes per sector, at 1/2 and 1 of its reach
+    static constexpr int kRefinements = 3;  // bisection steps where a probe finds the surface ends
     Vec3f x, n, t, b;
     float r = 0;
     float thickness = 0;
@@ -39,8 +43,14 @@ struct SurfaceDisc {
         const float u = dot(d, t), v = dot(d, b);
         return u * u + v * v <= reach2[sector(u, v)];
     }
-    // Octant of (u, v) without trigonometry: signs, then which coordinate dominates.
+    // Sector of (u, v) without trigonometry: the octant, then which half of it (the octant of
+    // (u, v) turned back by 22.5 degrees is the same octant in its upper half).
     static int sector(float u, float v) {
+        constexpr float c = 0.92387953f, s = 0.38268343f;  // cos, sin of 22.5 degrees
+        const int k = octant(u, v);
+        return 2 * k + (octant(u * c + v * s, v * c - u * s) == k ? 1 : 0);
+    }
+    static int octant(float u, float v) {
         const bool pu = u >= 0, pv = v >= 0, steep = std::fabs(v) > std::fabs(u);
         // Counter-clockwise from +u: 0 [0, 45), 1 [45, 90), ..., 7 [315, 360).
         static constexpr int table[2][2][2] = {{{4, 5}, {3, 2}}, {{7, 6}, {0, 1}}};  // [pu][pv][steep]
@@ -83,7 +93,7 @@ struct DiscEstimate {
     float area = 0;        // the disc's (clipped) area
 };
 
-// The surface-disc gather at x. The disc is clipped (24 rays) only where the sphere holds a
+// The surface-disc gather at x. The disc is clipped (up to 96 rays) only where the sphere holds a
 // photon of another surface: a wall, partition, box face or the wall behind a painting always
 // receives some. Where every photon within r lies on the query's own plane the full disc
 // stands, with no rays. (A surface that ends with no lit surface within r keeps the full

@@ -272,7 +272,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
            passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
-           snapshots: Sequence[int] = (), disc: bool | None = None, lighting: str = "baked"):
+           snapshots: Sequence[int] = (), disc: bool | None = None, lighting: str = "baked",
+           final_gather: bool = False):
     """Render linear radiance, float32 (H, W, 3).
 
     `scene` may be a `gigascroll.Gallery`: its still (`Gallery.still`) with `lighting`
@@ -287,17 +288,20 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     dict of pass times (seconds) and counts.
 
     disc=True gathers over the surface disc instead of the sphere: photons within 0.1 r of the
-    tangent plane only, the disc clipped per octant by rays to where walls stand or the surface
-    ends, and divided by the clipped area (removes the darkening at edges and corners, the leak
-    along a floor under a thin partition and a wall's light on a painting in front of it; costs
-    24 rays per gather where another surface is within r). Default (None): on wherever the options
+    tangent plane only, the disc clipped per sector (16) by rays to where walls stand, the surface
+    ends or something overhangs it (and shrunk next to an overhang), and divided by the clipped
+    area (removes the darkening at edges and corners, the leak along a floor under a thin
+    partition and a wall's light on a painting in front of it; costs up to 96 rays per gather
+    where another surface is within r). Default (None): on wherever the options
     allow it (box kernel, radius gather, not cooperative), for one-shot and progressive renders.
 
     progressive=True: stochastic progressive photon mapping (consistent: converges to the exact
     image as passes grow). Each of `passes` passes (or fewer when `time_budget` seconds run out)
     takes one camera sample per pixel and `photons` new photons; `radius` is the initial radius,
     shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
-    in stats['snapshots'] as (passes, seconds, image).
+    in stats['snapshots'] as (passes, seconds, image). final_gather=True (progressive only)
+    gathers the photons where one diffuse bounce from the first hit lands, with that point's
+    direct light, instead of at the first hit.
     """
     from .gallery import Gallery
 
@@ -309,9 +313,13 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
         disc = kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,
                   cooperative, direct, indirect, threads, hash_mode, disc)
+    if not isinstance(final_gather, (bool, np.bool_)):
+        raise ValueError(f"final_gather must be True or False, got {final_gather!r}")
     if not progressive:
         if snapshots:
             raise ValueError("snapshots need progressive=True")
+        if final_gather:
+            raise ValueError("final_gather needs progressive=True")
         image, stats = _core._render(scene, camera, **s)
         return (image, stats) if return_stats else image
     if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or not 1 <= passes <= 1 << 24:
@@ -326,7 +334,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     if any(x < 1 for x in shots):
         raise ValueError("snapshots must be positive pass counts")
     image, stats = _core._render_progressive(scene, camera, **s, passes=int(passes), time_budget=budget,
-                                             alpha=alpha, snapshots=shots)
+                                             alpha=alpha, snapshots=shots, final_gather=bool(final_gather))
     return (image, stats) if return_stats else image
 
 

@@ -42,7 +42,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--repeat", type=int, default=3, help="runs per timing (median)")
     parser.add_argument("-k", type=int, default=100, help="heap size of the k-nearest gathers")
     parser.add_argument("--error-size", type=int, default=64, help="image size of the run-time/error study")
-    parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp")
+    parser.add_argument("--reference-spp", type=int, default=4096,
+                        help="Mitsuba reference spp (two halves of different seeds, whose difference gives the "
+                             "reference's own noise)")
+    parser.add_argument("--error-scenes", default=",".join(ERROR_SCENES),
+                        help="comma-separated scenes of the run-time/error study (default: all four)")
     parser.add_argument("--quick", action="store_true", help="small settings, for a smoke test")
     parser.add_argument("--skip", default="", help="comma-separated parts to skip: tables, nanoflann, error")
     parser.add_argument("--part", choices=("all", "tables", "nanoflann", "error"), default="all",
@@ -56,6 +60,9 @@ def run(args) -> int:
     for s in scenes:
         if s not in SCALE:
             raise UserError(f"unknown scene {s!r} (benchmarked: {', '.join(SCALE)})")
+    bad = set(args.error_scenes.split(",")) - set(ERROR_SCENES)
+    if bad:
+        raise UserError(f"unknown error-study scene(s) {', '.join(sorted(bad))} (known: {', '.join(ERROR_SCENES)})")
     if args.repeat < 1 or args.width < 8 or args.error_size < 8 or args.reference_spp < 1:
         raise UserError("--repeat must be >= 1, --width and --error-size >= 8, --reference-spp >= 1")
     out = Path(args.out)
@@ -263,6 +270,7 @@ def _print_bench_photon(data: dict) -> dict:
 
 
 ERROR_SCENES = ("cornell", "room_lit", "room_indirect", "room_partition")
+TARGET_RELMSE = 1e-4  # issue 12 §5: no error floor above it within the time Mitsuba needs to reach it
 
 
 def _mitsuba_dict(name: str, size: int, integrator: str) -> dict:
@@ -292,23 +300,39 @@ def _runtime_vs_error(args, out: Path) -> dict:
         print("\n(mitsuba not installed: skipping run time against error)")
         return {}
     mi.set_variant("scalar_rgb")
-    return {name: _error_study(name, args, out) for name in ERROR_SCENES}
+    return {name: _error_study(name, args, out) for name in ERROR_SCENES if name in args.error_scenes.split(",")}
 
 
-def _reference(name: str, size: int, spp: int, integrator: str) -> np.ndarray:
-    """The scene's Mitsuba reference, cached under build/photon-reference (rendered once)."""
+def _reference_half(name: str, size: int, spp: int, integrator: str, seed: int) -> np.ndarray:
+    """One Mitsuba render, cached under build/photon-reference (rendered once)."""
     import mitsuba as mi
 
-    path = Path("build") / "photon-reference" / f"bench_{name}{size}_{integrator}{spp}spp_seed12345.npy"
+    path = Path("build") / "photon-reference" / f"bench_{name}{size}_{integrator}{spp}spp_seed{seed}.npy"
     if path.exists():
         return np.load(path)
     t0 = time.perf_counter()
-    ref = np.array(mi.render(mi.load_dict(_mitsuba_dict(name, size, integrator)), spp=spp, seed=12345),
+    ref = np.array(mi.render(mi.load_dict(_mitsuba_dict(name, size, integrator)), spp=spp, seed=seed),
                    dtype=np.float32)
-    print(f"reference {name}: Mitsuba {integrator}, {size}x{size}, {spp} spp, {time.perf_counter() - t0:.1f} s")
+    print(f"reference {name}: Mitsuba {integrator}, {size}x{size}, {spp} spp, seed {seed}, "
+          f"{time.perf_counter() - t0:.1f} s")
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.save(path, ref)
+    tmp = path.with_suffix(".tmp.npy")
+    np.save(tmp, ref)
+    tmp.replace(path)
     return ref
+
+
+def _reference(name: str, size: int, spp: int, integrator: str) -> tuple[np.ndarray, float]:
+    """The scene's Mitsuba reference of spp samples per pixel as the mean of two independent
+    halves (seeds 12345 and 54321), and its own noise: the expected relMSE of the mean against
+    the truth, relMSE(a, b) / 4 (a - b has twice a half's variance, the mean half of it)."""
+    half = max(spp // 2, 1)
+    a = _reference_half(name, size, half, integrator, 12345)
+    b = _reference_half(name, size, half, integrator, 54321)
+    ref = 0.5 * (a + b)
+    from .. import photon as P
+
+    return ref, P.relmse(a, b) / 4
 
 
 def _error_study(name: str, args, out: Path) -> dict:
@@ -320,16 +344,27 @@ def _error_study(name: str, args, out: Path) -> dict:
     size = args.error_size
     # The particle tracer converges ~3x faster than the path tracer in the indirectly lit room.
     ref_integrator = "ptracer" if name == "room_indirect" else "path"
-    ref = _reference(name, size, args.reference_spp, ref_integrator)
+    ref, ref_noise = _reference(name, size, args.reference_spp, ref_integrator)
+    print(f"{name}: reference {ref_integrator} {args.reference_spp} spp, its noise (relMSE) {ref_noise:.2e}")
     spps = [1, 4, 16, 64, 256] if args.quick else [1, 4, 16, 64, 256, 1024]
     curves: dict[str, list[dict]] = {}
     for integrator in ("path", "ptracer") if name == "room_indirect" else ("path",):
         mscene = mi.load_dict(_mitsuba_dict(name, size, integrator))
         pts = []
-        for spp in tqdm(spps, desc=f"{name}: mitsuba {integrator}", unit="run"):
+        ladder = list(spps)
+        bar = tqdm(desc=f"{name}: mitsuba {integrator}", unit="run")
+        while ladder:
+            spp = ladder.pop(0)
             t0 = time.perf_counter()
             img = np.array(mi.render(mscene, spp=spp, seed=spp), dtype=np.float32)
             pts.append(dict(spp=spp, seconds=time.perf_counter() - t0, relmse=P.relmse(img, ref)))
+            bar.update()
+            # The reference's integrator (the faster one) doubles its spp beyond the ladder until
+            # it reaches TARGET_RELMSE (at most a quarter of the reference's spp).
+            if (not ladder and not args.quick and integrator == ref_integrator and pts[-1]["relmse"] > TARGET_RELMSE
+                    and 2 * spp <= args.reference_spp // 4):
+                ladder.append(2 * spp)
+        bar.close()
         curves[f"mitsuba {integrator}"] = pts
     scene, cam = P.builtin_scene(name, resolution=(size, size))
     r0 = P.default_radius(scene)
@@ -346,24 +381,70 @@ def _error_study(name: str, args, out: Path) -> dict:
                              relmse=P.relmse(img, ref)))
     curves["one-shot (Pareto front)"] = _pareto([p for p in one_shot if not p["disc"]])
     curves["one-shot disc (Pareto front)"] = _pareto([p for p in one_shot if p["disc"]])
-    # Progressive: 4 photons per pixel and pass from 4x the default radius (a sweep at 32x32
-    # found it ahead of 1 per pixel and of 2^15 per pass), for as long as Mitsuba's longest run
-    # plus half; the curve is the image after each power-of-two pass count.
-    budget = 1.5 * max(p["seconds"] for pts in curves.values() for p in pts)
-    shots = [1 << i for i in range(21)]
-    for disc in (False, True):
-        _, st = P.render(scene, cam, photons=4 * size * size, radius=4 * r0, progressive=True, passes=1 << 20,
-                         time_budget=budget, snapshots=shots, disc=disc, seed=7, return_stats=True)
-        curves["progressive" + (" disc" if disc else "")] = [
-            dict(passes=k, seconds=sec, relmse=P.relmse(im, ref)) for k, sec, im in st["snapshots"]]
+    # Progressive: 2 photons per pixel and pass from 8x the default radius with alpha 0.8 (a
+    # sweep at 32x32 in the lit and indirect rooms found it ahead of 4 per pixel from 4x with
+    # alpha 2/3, of 1 and of 8 per pixel, and of 16x), for 1.2x as long as Mitsuba needs to
+    # reach TARGET_RELMSE (or its longest run); with the sphere and with a final gather for a
+    # quarter of that. The curve is the image after pass counts 2^(i/4).
+    mitsuba_runs = [p for pts in curves.values() for p in pts]
+    reached = [p["seconds"] for p in mitsuba_runs if p["relmse"] <= TARGET_RELMSE]
+    budget = 1.2 * (min(reached) if reached else max(p["seconds"] for p in mitsuba_runs))
+    shots = sorted({round(2 ** (i / 4)) for i in range(81)})
+    # The sphere keeps the earlier settings (4 photons per pixel and pass, 4x the radius, alpha
+    # 2/3): from 8x it gathers a wall's photons for the floor.
+    default = dict(photons=2 * size * size, radius=8 * r0, alpha=0.8)
+    sphere = dict(photons=4 * size * size, radius=4 * r0, alpha=2 / 3, disc=False)
+    for label, kw, share in (("progressive disc", default, 1.0), ("progressive sphere", sphere, 0.25),
+                             ("progressive disc + final gather", dict(default, final_gather=True), 0.25)):
+        _, st = P.render(scene, cam, progressive=True, passes=1 << 20, time_budget=share * budget, snapshots=shots,
+                         seed=7, return_stats=True, **kw)
+        curves[label] = [dict(passes=k, seconds=sec, relmse=P.relmse(im, ref)) for k, sec, im in st["snapshots"]]
     _print_error_table(name, curves)
+    _print_times_to_targets(name, curves)
     _plot(name, curves, out / f"runtime_vs_error_{name}.png", size, args.reference_spp, ref_integrator)
-    return dict(size=size, reference=f"{ref_integrator} {args.reference_spp} spp", one_shot=one_shot, curves=curves)
+    return dict(size=size, reference=f"{ref_integrator} {args.reference_spp} spp", reference_noise=ref_noise,
+                one_shot=one_shot, curves=curves)
 
 
 def _time_to(curve: list[dict], target: float) -> float | None:
     """Seconds the curve needs to reach relMSE <= target (its fastest such point)."""
     return min((p["seconds"] for p in curve if p["relmse"] <= target), default=None)
+
+
+def _interpolated_time_to(curve: list[dict], target: float) -> float | None:
+    """Seconds at which the curve first crosses relMSE = target, log-log interpolated between
+    its neighbouring points (None if it never gets there)."""
+    pts = sorted(curve, key=lambda p: p["seconds"])
+    for i, p in enumerate(pts):
+        if p["relmse"] <= target:
+            if i == 0:
+                return p["seconds"]
+            q = pts[i - 1]
+            if q["relmse"] <= p["relmse"] or q["seconds"] <= 0:
+                return p["seconds"]
+            f = math.log(q["relmse"] / target) / math.log(q["relmse"] / p["relmse"])
+            return math.exp(math.log(q["seconds"]) + f * math.log(p["seconds"] / q["seconds"]))
+    return None
+
+
+def _print_times_to_targets(name: str, curves: dict) -> None:
+    targets = (3e-3, 2e-3, 1.5e-3, 1e-3, 7e-4, 5e-4, 3e-4, 2e-4, 1e-4)
+    print(f"\n{name}: seconds to reach relMSE (log-log interpolated; speedup = the fastest Mitsuba curve's / ours)")
+    print("| curve | " + " | ".join(f"{t:g}" for t in targets) + " |")
+    print("|---|" + "---|" * len(targets))
+    best = {t: min((x for k, c in curves.items() if k.startswith("mitsuba")
+                    for x in [_interpolated_time_to(c, t)] if x is not None), default=None) for t in targets}
+    for key, c in curves.items():
+        cells = []
+        for t in targets:
+            x = _interpolated_time_to(c, t)
+            if x is None:
+                cells.append("-")
+            elif key.startswith("mitsuba") or best[t] is None:
+                cells.append(f"{x:.2f}")
+            else:
+                cells.append(f"{x:.2f} ({best[t] / x:.1f}x)")
+        print(f"| {key} | " + " | ".join(cells) + " |")
 
 
 def _print_error_table(name: str, curves: dict) -> None:

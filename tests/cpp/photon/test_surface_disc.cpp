@@ -1,4 +1,4 @@
-// The surface disc: octant lookup against atan2, and the clipped area against geometry with
+// The surface disc: sector lookup against atan2, and the clipped area against geometry with
 // known answers (open floor, floor against a wall, the floor's own border).
 #include <gtest/gtest.h>
 
@@ -9,14 +9,14 @@
 
 using namespace gigascroll;
 
-TEST(SurfaceDisc, SectorIsTheOctantOfTheAngle) {
+TEST(SurfaceDisc, SectorIsTheSixteenthOfTheAngle) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(-1, 1);
     for (int i = 0; i < 10000; ++i) {
         const float x = u(rng), y = u(rng);
         float a = std::atan2(y, x);
         if (a < 0) a += 2 * float(M_PI);
-        const int expected = std::min(7, int(a / (float(M_PI) / 4)));
+        const int expected = std::min(SurfaceDisc::kSectors - 1, int(a / (2 * float(M_PI) / SurfaceDisc::kSectors)));
         ASSERT_EQ(SurfaceDisc::sector(x, y), expected) << x << " " << y;
     }
 }
@@ -50,4 +50,28 @@ TEST(SurfaceDisc, AreaIsTheFullDiscOnOpenFloorAndHalfAtAWallOrBorder) {
     EXPECT_TRUE(d.contains({0.40f, 0, 0.02f}));
     EXPECT_FALSE(d.contains({0.52f, 0, 0.0f}));
     EXPECT_FALSE(d.contains({0.40f, 0.02f, 0.0f}));
+}
+
+TEST(SurfaceDisc, APlateOverTheFloorCoversItAndCapsTheRadius) {
+    // A floor [-1, 1]^2 at y = 0 and a plate 2 cm above it over x > 0.5 (a painting off its
+    // wall): in-plane rays pass under the plate, the probes find it overhead. At 1 cm from its
+    // rim the disc keeps nothing under the plate and shrinks to about twice that distance
+    // (at least r / 8); far from the plate it stays whole.
+    Scene s;
+    const float floor_v[] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
+    const float plate_v[] = {0.5f, 0.02f, -1, 0.5f, 0.02f, 1, 1, 0.02f, 1, 1, 0.02f, -1};
+    const std::int64_t quad[] = {0, 1, 2, 2, 3, 0};
+    const float albedo[] = {0.5f, 0.5f, 0.5f};
+    s.add_mesh(floor_v, 4, quad, 2, albedo, false, {0, 0, 0});
+    s.add_mesh(plate_v, 4, quad, 2, albedo, false, {0, 0, 0});
+    s.commit();
+    const float r = 0.2f, full = float(M_PI) * r * r;
+    const Vec3f up{0, 1, 0};
+    const SurfaceDisc near = make_surface_disc(s, {0.49f, 0, 0}, up, r);
+    EXPECT_FALSE(near.contains({0.52f, 0, 0}));   // under the plate
+    EXPECT_FALSE(near.contains({0.49f, 0, 0.1f}));  // beyond the cap, along the rim
+    EXPECT_TRUE(near.contains({0.48f, 0, 0.005f}));
+    EXPECT_LT(near.area, float(M_PI) * 0.05f * 0.05f);  // capped near max(2 * 1 cm, r / 8) = 2.5 cm
+    EXPECT_GT(near.area, 0.2f * float(M_PI) * 0.025f * 0.025f);
+    EXPECT_NEAR(make_surface_disc(s, {-0.5f, 0, 0}, up, r).area / full, 1.0, 1e-4);
 }
