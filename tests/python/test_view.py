@@ -64,9 +64,15 @@ def run_view(env, pack, tmp_path, options, actions):
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     shots = []
     try:
-        wid = subprocess.run(["xdotool", "search", "--sync", "--name", "gigascroll view"],
+        # --onlyvisible: the window is mapped, else XSetInputFocus fails (BadMatch) and the
+        # keys go nowhere; focusing is retried until it succeeds (a loaded machine maps late).
+        wid = subprocess.run(["xdotool", "search", "--sync", "--onlyvisible", "--name", "gigascroll view"],
                              env=env, capture_output=True, text=True, timeout=120).stdout.split()[0]
-        subprocess.run(["xdotool", "windowfocus", "--sync", wid], env=env, timeout=30)
+        for _ in range(60):
+            if subprocess.run(["xdotool", "windowfocus", "--sync", wid], env=env, timeout=30,
+                              capture_output=True).returncode == 0:
+                break
+            time.sleep(0.5)
 
         def key(*args):
             subprocess.run(["xdotool", *args], env=env, check=True, timeout=30)
@@ -75,6 +81,20 @@ def run_view(env, pack, tmp_path, options, actions):
             key("key", "p")
             shots.append(read(tmp_path / f"shot-{len(shots)}.png"))
             return shots[-1]
+        def settled(limit=90.0):
+            """Frames until two in a row are equal below the overlay (every tile the view asks
+            for resident), at most `limit` seconds: waits as long as a loaded machine needs
+            instead of a fixed sleep."""
+            below_overlay = slice(96, None)  # the overlay (rows 10-88) changes every frame
+            last, t0 = shot(), time.monotonic()
+            while time.monotonic() - t0 < limit:
+                time.sleep(1.0)
+                now = shot()
+                if np.array_equal(now[below_overlay], last[below_overlay]):
+                    return now
+                last = now
+            return last
+        key.settled = settled
         result = actions(key, shot)
         key("key", "Escape")
         out, err = app.communicate(timeout=60)
@@ -93,8 +113,7 @@ def test_window_walks_and_sharpens(display, tmp_path, small_scroll_pack):
         time.sleep(0.5)
         key("keyup", "s")
         moved = shot()
-        time.sleep(8)          # standing still: the loader streams the finer tiles in
-        later = shot()
+        later = key.settled()  # standing still: the loader streams the finer tiles in
         key("key", "m")        # the magnifier off
         time.sleep(1)
         return first, moved, later, shot()
@@ -129,11 +148,9 @@ def test_window_toggles_the_foveation(display, tmp_path, small_scroll_pack):
 
     def toggle(key, shot):
         key("key", "m")        # the magnifier off: its lens would cover the fovea
-        time.sleep(6)          # standing still: every tile the frame asks for streams in
-        foveated = shot()
+        foveated = key.settled()  # standing still: every tile the frame asks for streams in
         key("key", "v")        # the foveation off: the periphery's finer tiles stream in
-        time.sleep(6)
-        return foveated, shot()
+        return foveated, key.settled()
     (foveated, full), out = run_view(
         display, small_scroll_pack, tmp_path,
         ["--target-fps", "0.1", "--fovea", "40", "--fovea-factor", "4"], toggle)

@@ -197,7 +197,11 @@ class Viewer:
         import pyglet
         name = self.args.screenshot.format(n=self.shots)
         self.shots += 1
-        pyglet.image.get_buffer_manager().get_color_buffer().save(name)
+        # Written aside and renamed: whoever waits for the file never reads half a PNG.
+        root, ext = os.path.splitext(name)
+        partial = f"{root}.partial{ext or '.png'}"
+        pyglet.image.get_buffer_manager().get_color_buffer().save(partial)
+        os.replace(partial, name)
         print(f"screenshot: {name}", flush=True)
 
     def tick(self, dt):
