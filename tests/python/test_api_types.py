@@ -47,3 +47,15 @@ def test_the_right_types_still_pass(tmp_path):
     scene, _camera = g.builtin_scene("cornell")
     lo, hi = scene.bounds
     assert g.default_radius(scene) == pytest.approx(0.01 * math.dist(lo, hi))
+
+
+def test_run_processor_accepts_every_processing_method():
+    # Each of make_processor's methods (cpu-async has submit/poll instead of process) passes
+    # the type check: the same requests as the basic processor on one frame of feedback.
+    import numpy as np
+    keys = np.full((4, 4), g.NO_REQUEST, np.uint64)
+    for method in g.PROCESSING_METHODS:
+        try:
+            g.run_processor(g.make_processor(method), keys, g.ResidencyLookup(), 0)
+        except TypeError as e:
+            assert "processor must be" not in str(e), (method, e)

@@ -52,7 +52,7 @@ def make_processor(method: str, tiles: list[PaintingGeometry], threads: int = 0,
 def run_processor(processor, buffers, lookup: ResidencyLookup, frame: int) -> dict:
     """One frame through any processor; cpu-async waits for its own result (to compare sets;
     frame loops poll instead and measure the latency)."""
-    if not callable(getattr(processor, "process", None)):
+    if not isinstance(processor, AsyncProcessor) and not callable(getattr(processor, "process", None)):
         raise TypeError(f"run_processor: processor must be one of the request processors "
                         f"(make_processor), not {type(processor).__name__}")
     if isinstance(processor, AsyncProcessor):
