@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
 #if defined(__SSE__)
 #include <xmmintrin.h>
 #endif
@@ -566,6 +567,25 @@ std::vector<float> DisplayPass::hit_points(int eye) const {
 std::vector<float> DisplayPass::lods(int eye) const {
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
     return g_[eye].lod;
+}
+
+float* check_output_image(const OutputImage& image, const Camera& eye, const char* what) {
+    const std::string shape = "(" + std::to_string(eye.height) + ", " + std::to_string(eye.width) + ", 3)";
+    require(image.data != nullptr, std::string(what) + ": no array");
+    require(image.float32, std::string(what) + ": must be float32");
+    require(image.writable, std::string(what) + ": must be writable");
+    require(image.ndim == 3 && image.shape[0] == std::int64_t(eye.height) &&
+                image.shape[1] == std::int64_t(eye.width) && image.shape[2] == 3,
+            std::string(what) + ": must have shape " + shape);
+    if (image.strides)
+        require(image.strides[2] == 1 && image.strides[1] == 3 &&
+                    image.strides[0] == 3 * std::int64_t(eye.width),
+                std::string(what) + ": must be C-contiguous");
+    return static_cast<float*>(image.data);
+}
+
+void check_disjoint_images(const float* a, const float* b, std::size_t floats) {
+    require(a + floats <= b || b + floats <= a, "display: the two eyes' images share memory");
 }
 
 double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, std::uint64_t* hits) {

@@ -250,3 +250,59 @@ def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup):
     # float32 in the pass, float64 here: a few claims at pixel and depth-tie boundaries differ.
     assert np.mean(got == want) > 0.99
     assert abs(int((got >= 0).sum()) - int(keep.sum())) < 0.01 * keep.sum()
+
+
+def test_gallery_display_into_caller_arrays_equals_fresh_ones(lit_gallery, small_scroll_pack):
+    """Rendering into arrays the caller keeps (reused between frames) gives the pixels of
+    the fresh arrays, for one eye and a stereo pair, and returns the caller's arrays."""
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    fresh = src.display(d, vt, left)
+    out = np.full((72, 64, 3), np.nan, np.float32)
+    for _ in range(2):  # the second frame overwrites the first's pixels
+        got = src.display(d, vt, left, out=out)
+        assert got is out
+        np.testing.assert_array_equal(out, fresh)
+    fl, fr = src.display_stereo(d, vt, left, right, True)
+    ol, orr = np.full_like(out, np.nan), np.full_like(out, np.nan)
+    gl, gr = src.display_stereo(d, vt, left, right, True, out_left=ol, out_right=orr)
+    assert gl is ol and gr is orr
+    np.testing.assert_array_equal(ol, fl)
+    np.testing.assert_array_equal(orr, fr)
+
+
+@pytest.mark.parametrize("bad", [
+    np.zeros((72, 64, 3), np.float64),          # dtype
+    np.zeros((72, 64, 4), np.float32),          # shape
+    np.zeros((64, 72, 3), np.float32),          # transposed size
+    np.zeros((72, 128, 3), np.float32)[:, ::2],  # not contiguous
+    np.zeros((72 * 64 * 3,), np.float32),       # rank
+    "not an array",
+])
+def test_gallery_display_refuses_bad_output_arrays(lit_gallery, small_scroll_pack, bad):
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    with pytest.raises(ValueError):
+        src.display(d, vt, left, out=bad)
+    with pytest.raises(ValueError):
+        src.display_stereo(d, vt, left, right, True, out_left=np.zeros((72, 64, 3), np.float32),
+                           out_right=bad)
+
+
+def test_gallery_display_refuses_read_only_and_shared_output_arrays(lit_gallery,
+                                                                   small_scroll_pack):
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    ro = np.zeros((72, 64, 3), np.float32)
+    ro.flags.writeable = False
+    with pytest.raises(ValueError):
+        src.display(d, vt, left, out=ro)
+    both = np.zeros((72, 64, 3), np.float32)
+    with pytest.raises(ValueError):
+        src.display_stereo(d, vt, left, right, True, out_left=both, out_right=both)
