@@ -127,18 +127,73 @@ struct PlaneMap {
 
     // uv clamped to [0, 1] and lambda = log2(footprint in texels).
     __attribute__((always_inline)) void map(Vec3d D, double& u, double& v, float& lod) const {
-        const double dn = dot(D, n), du = dot(D, u_axis), dv = dot(D, v_axis);
-        const double k = 1.0 / dn, t = h * k;
-        u = std::clamp((cu + t * du) * inv_width, 0.0, 1.0);
-        v = std::clamp((cv + t * dv) * inv_height, 0.0, 1.0);
-        const double ax = t * su * (xu - xn * k * du), bx = t * sv * (xv - xn * k * dv);
-        const double ay = t * su * (yu - yn * k * du), by = t * sv * (yv - yn * k * dv);
-        const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
-        const float r = float(rho2);
-        // float log2 where rho^2 is a normal float (the level needs no more), double beyond.
-        lod = r > std::numeric_limits<float>::min() && r < std::numeric_limits<float>::max()
-                  ? 0.5f * std::log2(r)
-                  : float(0.5 * std::log2(rho2));
+        map_lanes(1, &D.x, &D.y, &D.z, &u, &v, &lod);
+    }
+
+    // The same for n rays at once (D as three arrays): a loop the compiler vectorises (the
+    // packet's painting pixels in SIMD lanes), with log2 by fast_log2 and its rare
+    // non-normal footprints patched after the loop.
+    __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
+                                                  const double* __restrict Dy,
+                                                  const double* __restrict Dz, double* __restrict u,
+                                                  double* __restrict v, float* __restrict lod) const {
+        std::uint32_t odd = 0;
+        for (std::size_t k = 0; k < count; ++k) {
+            const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
+            const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
+            const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+            const double kk = 1.0 / dn, t = h * kk;
+            u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
+            v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
+            const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
+            const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
+            const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
+            std::uint32_t normal;
+            lod[k] = float(0.5 * fast_log2(rho2, normal));
+            odd |= normal ^ 1u;
+        }
+        if (odd) [[unlikely]] {  // zero, subnormal, infinite or NaN footprints: the libm value
+            for (std::size_t k = 0; k < count; ++k) {
+                const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
+                const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
+                const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+                const double kk = 1.0 / dn, t = h * kk;
+                const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
+                const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
+                const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
+                std::uint32_t normal;
+                fast_log2(rho2, normal);
+                if (!normal) lod[k] = float(0.5 * std::log2(rho2));
+            }
+        }
+    }
+
+    // log2(x) for a positive normal double to about 3e-11 absolute, without a libm call so the
+    // lanes' loop vectorises: the exponent from the bits, the mantissa m in [sqrt(1/2),
+    // sqrt(2)) by log2(m) = 2 atanh(s) / ln 2 with s = (m - 1) / (m + 1), |s| < 0.172, to s^11.
+    // normal = false for zero, subnormal, infinite or NaN x (the value is then meaningless).
+    static __attribute__((always_inline)) double fast_log2(double x, std::uint32_t& normal) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &x, sizeof bits);
+        const std::uint64_t biased = (bits >> 52) & 0x7ff;
+        normal = std::uint32_t(biased != 0) & std::uint32_t(biased != 0x7ff) &
+                 std::uint32_t((bits >> 63) == 0);
+        // Mantissa in [1, 2); above sqrt(2) it is halved and the exponent raised by one
+        // (integer operations only: a compare on doubles here kept the loop scalar).
+        const std::uint64_t field = bits & 0x000fffffffffffffull;
+        const std::uint64_t high =
+            std::uint64_t(std::int64_t(field) > std::int64_t(0x6a09e667f3bcdull));
+        const std::uint64_t mant = (field | 0x3ff0000000000000ull) - (high << 52);
+        double m;
+        std::memcpy(&m, &mant, sizeof m);
+        const std::uint64_t eb = (biased + high) | 0x4330000000000000ull;  // 2^52 + exponent + 1023
+        double e;
+        std::memcpy(&e, &eb, sizeof e);
+        e -= 4503599627370496.0 + 1023.0;
+        const double s = (m - 1.0) / (m + 1.0), s2 = s * s;
+        const double series =
+            1.0 + s2 * (1.0 / 3 + s2 * (1.0 / 5 + s2 * (1.0 / 7 + s2 * (1.0 / 9 + s2 * (1.0 / 11)))));
+        return e + s * series * 2.8853900817779268;  // 2 / ln 2
     }
 };
 
@@ -235,12 +290,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending.clear(), copied.clear(), us.clear(), vs.clear(), lods.clear();
         };
-        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
-                                  std::int32_t source, Vec3f scale, Vec3f add)
-                                  __attribute__((always_inline)) {
-            double u, v;
-            float lod;
-            maps[std::size_t(pl)].map(D, u, v, lod);
+        // A painting pixel whose uv and level are known: its level stored, its texel queued.
+        auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
+                                float lod, std::int32_t source, Vec3f scale, Vec3f add)
+                                __attribute__((always_inline)) {
             lod += o.lod_bias;
             if (!std::isfinite(lod)) lod = 0.0f;
             g.lod[i] = lod;
@@ -254,6 +307,14 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             pending.push_back({x, pl, -1, scale, add});
             us.push_back(u), vs.push_back(v);
             lods.push_back(lod);
+        };
+        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
+                                  std::int32_t source, Vec3f scale, Vec3f add)
+                                  __attribute__((always_inline)) {
+            double u, v;
+            float lod;
+            maps[std::size_t(pl)].map(D, u, v, lod);
+            mapped_pixel(i, x, pl, u, v, lod, source, scale, add);
         };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
@@ -298,6 +359,13 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             hit_count += m;
             if (m) lighting.light_batch(queries.data(), m, lights.data());
             lap(t_shade);
+            // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
+            // to uv and level in runs of one painting, in SIMD lanes (PlaneMap::map_lanes).
+            alignas(64) double Dx[16], Dy[16], Dz[16], pu[16], pv[16];
+            alignas(64) float plod[16];
+            std::array<std::uint32_t, 16> pj;
+            std::array<int, 16> ppl;
+            std::uint32_t np = 0;
             for (std::uint32_t j = 0; j < m; ++j) {
                 const std::uint32_t x = i0 + lane[j];
                 const std::size_t i = row * w + x;
@@ -309,9 +377,28 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     g.lod[i] = kNaN;
                     continue;
                 }
+                const double c = column_sx[x];
+                Dx[np] = row_dir.x + c * eye.right.x;
+                Dy[np] = row_dir.y + c * eye.right.y;
+                Dz[np] = row_dir.z + c * eye.right.z;
+                pj[np] = j, ppl[np] = pl;
+                ++np;
+            }
+            for (std::uint32_t r0 = 0; r0 < np;) {
+                const int pl = ppl[r0];
+                std::uint32_t r1 = r0 + 1;
+                while (r1 < np && ppl[r1] == pl) ++r1;
+                maps[std::size_t(pl)].map_lanes(r1 - r0, Dx + r0, Dy + r0, Dz + r0, pu + r0,
+                                                pv + r0, plod + r0);
+                r0 = r1;
+            }
+            for (std::uint32_t q = 0; q < np; ++q) {
+                const std::uint32_t j = pj[q], x = i0 + lane[j];
+                const std::size_t i = row * w + x;
+                const SurfaceLight& sl = lights[j];
                 const Vec3f scale = sl.irradiance * kInvPi;
                 if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
-                painting_pixel(i, x, pl, row_dir + column_sx[x] * eye.right, -1, scale, sl.emission);
+                mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1, scale, sl.emission);
             }
             lap(t_vt);
         };
