@@ -9,7 +9,9 @@
 #include <cstring>
 #include <limits>
 #include <string>
-#if defined(__SSE__)
+#if defined(__AVX__)
+#include <immintrin.h>
+#elif defined(__SSE__)
 #include <xmmintrin.h>
 #endif
 
@@ -208,6 +210,19 @@ inline float inverse_sqrt(float x) {
 #endif
 }
 
+// inverse_sqrt of 16 values in place, in SIMD lanes (the same estimate and Newton step).
+inline void inverse_sqrt_16(float* x) {
+#if defined(__AVX__)
+    for (int k = 0; k < 16; k += 8) {
+        const __m256 v = _mm256_load_ps(x + k), r = _mm256_rsqrt_ps(v);
+        const __m256 half_v_r2 = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), v), r), r);
+        _mm256_store_ps(x + k, _mm256_mul_ps(r, _mm256_sub_ps(_mm256_set1_ps(1.5f), half_v_r2)));
+    }
+#else
+    for (int k = 0; k < 16; ++k) x[k] = inverse_sqrt(x[k]);
+#endif
+}
+
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
     require(std::uint64_t(eye.width) * eye.height < (std::uint64_t(1) << 31),
@@ -324,6 +339,24 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                              const RTCRayHit16& h) {
             lap(t_rays);
             start_row(row);
+            // The packet's hit points and eye-facing unit normals in SIMD lanes (all 16, hit
+            // or not: the lanes are independent), then the hits compacted into the queries.
+            alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16], inv_len[16];
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float gx = h.hit.Ng_x[k], gy = h.hit.Ng_y[k], gz = h.hit.Ng_z[k];
+                inv_len[k] = gx * gx + gy * gy + gz * gz;
+            }
+            inverse_sqrt_16(inv_len);
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float dx = h.ray.dir_x[k], dy = h.ray.dir_y[k], dz = h.ray.dir_z[k];
+                const float t = h.ray.tfar[k];
+                hx[k] = origin.x + dx * t, hy[k] = origin.y + dy * t, hz[k] = origin.z + dz * t;
+                const float gx = h.hit.Ng_x[k] * inv_len[k], gy = h.hit.Ng_y[k] * inv_len[k],
+                            gz = h.hit.Ng_z[k] * inv_len[k];
+                // Two-sided: the side the eye sees.
+                const bool back = gx * dx + gy * dy + gz * dz > 0;
+                nx[k] = back ? -gx : gx, ny[k] = back ? -gy : gy, nz[k] = back ? -gz : gz;
+            }
             std::uint32_t m = 0;
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (!valid[k]) continue;
@@ -336,24 +369,18 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     g.lod[i] = kNaN;
                     continue;
                 }
-                const unsigned prim = h.hit.primID[k];
-                const Vec3f d{h.ray.dir_x[k], h.ray.dir_y[k], h.ray.dir_z[k]};
-                const Vec3f p = origin + d * h.ray.tfar[k];
-                Vec3f ng{h.hit.Ng_x[k], h.hit.Ng_y[k], h.hit.Ng_z[k]};
-                ng = ng * inverse_sqrt(dot(ng, ng));
-                const Vec3f nf = dot(ng, d) > 0 ? -ng : ng;  // two-sided: the side the eye sees
                 // Component stores: a Vec3f copied through the stack stalled on store
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
                 Vec3f& gp = g.p[i];
-                gp.x = p.x, gp.y = p.y, gp.z = p.z;
+                gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
                 if (keep_light) {  // the right eye's claims test the side it sees
                     Vec3f& gn = g.n[i];
-                    gn.x = nf.x, gn.y = nf.y, gn.z = nf.z;
+                    gn.x = nx[k], gn.y = ny[k], gn.z = nz[k];
                 }
                 LightQuery& q = queries[m];
-                q.geom = geom, q.prim = prim, q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
-                q.p.x = p.x, q.p.y = p.y, q.p.z = p.z;
-                q.n.x = nf.x, q.n.y = nf.y, q.n.z = nf.z;
+                q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
+                q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
+                q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
                 lane[m++] = k;
             }
             hit_count += m;
