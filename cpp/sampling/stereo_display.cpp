@@ -357,24 +357,32 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const bool back = gx * dx + gy * dy + gz * dz > 0;
                 nx[k] = back ? -gx : gx, ny[k] = back ? -gy : gy, nz[k] = back ? -gz : gz;
             }
-            std::uint32_t m = 0;
+            // The buffers and the count in locals: through the captured references, every
+            // store forced their reload (it might alias them).
+            unsigned* const geom_out = g.geom.data();
+            Vec3f* const p_out = g.p.data();
+            Vec3f* const n_out = keep_light ? g.n.data() : nullptr;
+            float* const lod_out = g.lod.data();
+            float* const rgb_out = rgb;
+            const std::size_t row_start = row * w + i0;
+            std::uint32_t m = 0, traced_here = 0;
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (!valid[k]) continue;
-                ++traced_count;
-                const std::size_t i = row * w + i0 + k;
+                ++traced_here;
+                const std::size_t i = row_start + k;
                 const unsigned geom = h.hit.geomID[k];
-                g.geom[i] = geom;
+                geom_out[i] = geom;
                 if (geom == kNoHit) {
-                    rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.0f;
-                    g.lod[i] = kNaN;
+                    rgb_out[3 * i] = rgb_out[3 * i + 1] = rgb_out[3 * i + 2] = 0.0f;
+                    lod_out[i] = kNaN;
                     continue;
                 }
                 // Component stores: a Vec3f copied through the stack stalled on store
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
-                Vec3f& gp = g.p[i];
+                Vec3f& gp = p_out[i];
                 gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
-                if (keep_light) {  // the right eye's claims test the side it sees
-                    Vec3f& gn = g.n[i];
+                if (n_out) {  // the right eye's claims test the side it sees
+                    Vec3f& gn = n_out[i];
                     gn.x = nx[k], gn.y = ny[k], gn.z = nz[k];
                 }
                 LightQuery& q = queries[m];
@@ -383,6 +391,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
                 lane[m++] = k;
             }
+            traced_count += traced_here;
             hit_count += m;
             if (m) lighting.light_batch(queries.data(), m, lights.data());
             lap(t_shade);
