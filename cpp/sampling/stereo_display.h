@@ -17,7 +17,9 @@
 // hits are in cache, lit in one DisplayLighting::light_batch call (with Embree's
 // barycentrics) and mapped to painting coordinates and level of detail (a per-eye plane map
 // of each painting, double precision); the row's painting pixels are then sampled in runs of
-// one painting (trilinear, under one VT read lock for the frame) and shaded. Per pixel the
+// one painting (trilinear, under one VT read lock for the frame) and shaded. Within a packet
+// the per-pixel arithmetic runs in SIMD lanes: hit points and eye-facing normals for all 16
+// rays, and the painting pixels' uv and level (a libm-free log2) per run of one painting. Per pixel the
 // pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
 // eye reuses, its texel and light.
 //
