@@ -693,17 +693,28 @@ std::vector<float> DisplayPass::lods(int eye) const {
 }
 
 float* check_output_image(const OutputImage& image, const Camera& eye, const char* what) {
-    const std::string shape = "(" + std::to_string(eye.height) + ", " + std::to_string(eye.width) + ", 3)";
-    require(image.data != nullptr, std::string(what) + ": no array");
-    require(image.float32, std::string(what) + ": must be float32");
-    require(image.writable, std::string(what) + ": must be writable");
-    require(image.ndim == 3 && image.shape[0] == std::int64_t(eye.height) &&
-                image.shape[1] == std::int64_t(eye.width) && image.shape[2] == 3,
-            std::string(what) + ": must have shape " + shape);
+    // Messages appended piecewise (GCC 12 warns falsely on literal + std::string&&).
+    auto message = [&](const char* problem) {
+        std::string m(what);
+        m += problem;
+        return m;
+    };
+    require(image.data != nullptr, message(": no array"));
+    require(image.float32, message(": must be float32"));
+    require(image.writable, message(": must be writable"));
+    if (!(image.ndim == 3 && image.shape[0] == std::int64_t(eye.height) &&
+          image.shape[1] == std::int64_t(eye.width) && image.shape[2] == 3)) {
+        std::string m = message(": must have shape (");
+        m += std::to_string(eye.height);
+        m += ", ";
+        m += std::to_string(eye.width);
+        m += ", 3)";
+        throw InvalidArgument(m);
+    }
     if (image.strides)
         require(image.strides[2] == 1 && image.strides[1] == 3 &&
                     image.strides[0] == 3 * std::int64_t(eye.width),
-                std::string(what) + ": must be C-contiguous");
+                message(": must be C-contiguous"));
     return static_cast<float*>(image.data);
 }
 
