@@ -25,6 +25,29 @@ using FloatArray = nb::ndarray<const float, nb::c_contig, nb::device::cpu>;
 using IndexArray = nb::ndarray<const std::int64_t, nb::c_contig, nb::device::cpu>;
 using ImageOut = nb::ndarray<float, nb::ndim<3>, nb::c_contig, nb::device::cpu>;
 
+using AnyArray = nb::ndarray<nb::device::cpu>;
+
+// The caller's image (checked by the core) or a fresh one: (the array to return, its floats).
+std::pair<nb::object, float*> output_image(const nb::object& out, const Camera& eye,
+                                           const char* what) {
+    if (out.is_none()) {
+        FreshArray<float, nb::ndim<3>> fresh({eye.height, eye.width, 3});
+        return {nb::cast(fresh.array), fresh.data};
+    }
+    AnyArray a;
+    OutputImage image;
+    std::int64_t shape[3] = {0, 0, 0}, strides[3] = {0, 0, 0};
+    if (nb::try_cast(out, a, false)) {
+        image.ndim = a.ndim();
+        for (std::size_t i = 0; i < image.ndim && i < 3; ++i) shape[i] = a.shape(i), strides[i] = a.stride(i);
+        image.data = a.data(), image.shape = shape, image.strides = strides;
+        image.float32 = a.dtype() == nb::dtype<float>();
+        // A read-only numpy array (nanobind hands its data to a non-const view regardless).
+        image.writable = !nb::hasattr(out, "flags") || nb::cast<bool>(out.attr("flags").attr("writeable"));
+    }
+    return {out, check_output_image(image, eye, what)};
+}
+
 Vec3d vec3(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 Vec3f vec3f(const std::array<float, 3>& a) { return {a[0], a[1], a[2]}; }
 
@@ -152,22 +175,28 @@ void bind_gallery(nb::module_& m) {
 
     // The full-resolution display pass (sampling/stereo_display.h) on the gallery's scene and
     // light, one eye or a stereo pair with the right eye reusing the left eye's hits.
+    // out / out_left, out_right: arrays the caller keeps between frames (None: fresh ones).
     m.def("_gallery_display", [](DisplayPass& d, const Gallery& g, const VirtualTexture& vt,
-                                 const Camera& eye, const std::string& lighting, unsigned threads) {
-        FreshArray<float, nb::ndim<3>> out({eye.height, eye.width, 3});
+                                 const Camera& eye, const std::string& lighting, unsigned threads,
+                                 nb::object out) {
+        auto [array, rgb] = output_image(out, eye, "display: out");
         {
             nb::gil_scoped_release release;
             const GalleryLighting light(g, parse_lighting(lighting));
-            d.render(g.feedback_view(), light, vt, eye, GalleryLighting::options(threads), out.data);
+            d.render(g.feedback_view(), light, vt, eye, GalleryLighting::options(threads), rgb);
         }
-        return out.array;
-    }, "display"_a, "gallery"_a, "vt"_a, "eye"_a, "lighting"_a, "threads"_a = 0);
+        return array;
+    }, "display"_a, "gallery"_a, "vt"_a, "eye"_a, "lighting"_a, "threads"_a = 0,
+       "out"_a.noconvert() = nb::none());
     m.def("_gallery_display_stereo", [](DisplayPass& d, const Gallery& g, const VirtualTexture& vt,
                                         const Camera& left, const Camera& right,
                                         const std::string& lighting, bool reuse,
-                                        float edge_depth_ratio, unsigned threads) {
-        FreshArray<float, nb::ndim<3>> l({left.height, left.width, 3});
-        FreshArray<float, nb::ndim<3>> r({right.height, right.width, 3});
+                                        float edge_depth_ratio, unsigned threads,
+                                        nb::object out_left,
+                                        nb::object out_right) {
+        auto [l, l_rgb] = output_image(out_left, left, "display: out_left");
+        auto [r, r_rgb] = output_image(out_right, right, "display: out_right");
+        check_disjoint_images(l_rgb, r_rgb, std::size_t(left.width) * left.height * 3);
         require(std::isfinite(edge_depth_ratio) && edge_depth_ratio >= 0,
                 "display: edge_depth_ratio must be finite and >= 0");
         {
@@ -175,11 +204,12 @@ void bind_gallery(nb::module_& m) {
             const GalleryLighting light(g, parse_lighting(lighting));
             DisplayOptions o = GalleryLighting::options(threads);
             o.edge_depth_ratio = edge_depth_ratio;
-            d.render_stereo(g.feedback_view(), light, vt, left, right, reuse, o, l.data, r.data);
+            d.render_stereo(g.feedback_view(), light, vt, left, right, reuse, o, l_rgb, r_rgb);
         }
-        return nb::make_tuple(l.array, r.array);
+        return nb::make_tuple(l, r);
     }, "display"_a, "gallery"_a, "vt"_a, "left"_a, "right"_a, "lighting"_a, "reuse"_a = true,
-       "edge_depth_ratio"_a = 0.05f, "threads"_a = 0);
+       "edge_depth_ratio"_a = 0.05f, "threads"_a = 0, "out_left"_a.noconvert() = nb::none(),
+       "out_right"_a.noconvert() = nb::none());
     m.def("_gallery_primary_rays", [](const Gallery& g, const Camera& eye, unsigned threads) {
         std::uint64_t hits = 0;
         double s;

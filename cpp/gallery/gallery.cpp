@@ -486,13 +486,78 @@ Vec3f Gallery::irradiance_baked_at(std::uint32_t t, bool front, float b1, float 
     return lattice_lerp(side.data() + bake_offset_[t], bake_n_[t], b1, b2);
 }
 
+namespace {
+// lattice_lerp's float arithmetic for m <= 16 hits: the cell (i, j), the sub-triangle and
+// the three weights.
+struct LatticeCells {
+    alignas(64) std::int32_t cell_i[16], cell_j[16], upper_of[16];
+    alignas(64) float w0_of[16], w1_of[16], w2_of[16];
+};
+// No trapping math: with it GCC keeps the selects as branches (it will not evaluate a float
+// compare or division unconditionally) and the loop scalar; no value changes. Out of line:
+// the attribute keeps callees from inlining (Vec3f's operators were calls in it).
+[[gnu::optimize("no-trapping-math"), gnu::noinline]]
+void lattice_cells(std::size_t m, const std::uint32_t* __restrict segments,
+                   const std::uint32_t* __restrict t_in, const float* __restrict b1_in,
+                   const float* __restrict b2_in, LatticeCells& __restrict c) {
+    std::int32_t* __restrict cell_i = c.cell_i;
+    std::int32_t* __restrict cell_j = c.cell_j;
+    std::int32_t* __restrict upper_of = c.upper_of;
+    float* __restrict w0_of = c.w0_of;
+    float* __restrict w1_of = c.w1_of;
+    float* __restrict w2_of = c.w2_of;
+        for (std::size_t k = 0; k < m; ++k) {
+            const std::int32_t n = std::int32_t(segments[t_in[k]]);
+            float c1 = b1_in[k], c2 = b2_in[k];
+            c1 = c1 < 0.0f ? 0.0f : (1.0f < c1 ? 1.0f : c1);  // std::clamp
+            c2 = c2 < 0.0f ? 0.0f : (1.0f < c2 ? 1.0f : c2);
+            const float s = c1 + c2;
+            const bool over = s > 1.0f;
+            const float q1 = c1 / s, q2 = c2 / s;
+            c1 = over ? q1 : c1, c2 = over ? q2 : c2;
+            const float x = c1 * float(n), y = c2 * float(n);
+            const std::int32_t xi = std::int32_t(x), yi = std::int32_t(y);
+            const std::int32_t i = xi < n - 1 ? xi : n - 1;
+            const std::int32_t j = yi < n - 1 - i ? yi : n - 1 - i;
+            const float ex = x - float(i), ey = y - float(j);
+            float fx = ex < 0.0f ? 0.0f : ex, fy = ey < 0.0f ? 0.0f : ey;
+            const float sum = fx + fy;
+            const bool upper = sum > 1.0f && i + j + 2 <= n;
+            const bool rescale = !upper && sum > 1.0f;
+            const float inv = 1.0f / sum;
+            const float sx = fx * inv, sy = fy * inv;
+            fx = rescale ? sx : fx, fy = rescale ? sy : fy;
+            cell_i[k] = i, cell_j[k] = j, upper_of[k] = upper;
+            w0_of[k] = upper ? fx + fy - 1 : 1 - fx - fy;
+            w1_of[k] = upper ? 1 - fx : fx, w2_of[k] = upper ? 1 - fy : fy;
+        }
+}
+}  // namespace
+
 void Gallery::irradiance_baked_batch(const std::uint32_t* tri, const bool* front, const float* b1,
                                      const float* b2, std::size_t count, Vec3f* out) const {
     const Vec3f* front_E = bake_front_.data();
     const Vec3f* back_E = bake_back_.data();
-    for (std::size_t k = 0; k < count; ++k) {
-        const std::uint32_t t = tri[k];
-        out[k] = lattice_lerp((front[k] ? front_E : back_E) + bake_offset_[t], bake_n_[t], b1[k], b2[k]);
+    const std::uint32_t* segments = bake_n_.data();
+    // lattice_lerp in two passes per 16 hits: its float arithmetic (the clamps, the cell, the
+    // sub-triangle and weights) with selects in SIMD lanes, then per hit the lattice indices
+    // (64-bit) and the blend: the same operations, so the same values.
+    LatticeCells cells;
+    for (std::size_t k0 = 0; k0 < count; k0 += 16) {
+        const std::size_t m = std::min<std::size_t>(16, count - k0);
+        const std::uint32_t* t_in = tri + k0;
+        lattice_cells(m, segments, t_in, b1 + k0, b2 + k0, cells);
+        for (std::size_t k = 0; k < m; ++k) {
+            const std::uint32_t t = t_in[k], n = segments[t];
+            const Vec3f* E = (front[k0 + k] ? front_E : back_E) + bake_offset_[t];
+            const auto i = std::uint32_t(cells.cell_i[k]), j = std::uint32_t(cells.cell_j[k]);
+            const bool upper = cells.upper_of[k];
+            const std::uint64_t row_i = lattice_index(i, 0, n), row_next = row_i + (n + 1 - i);
+            const std::uint64_t right = row_next + j, up = row_i + j + 1;
+            const std::uint64_t e0 = upper ? row_next + j + 1 : row_i + j;
+            const std::uint64_t e1 = upper ? up : right, e2 = upper ? right : up;
+            out[k0 + k] = E[e0] * cells.w0_of[k] + E[e1] * cells.w1_of[k] + E[e2] * cells.w2_of[k];
+        }
     }
 }
 

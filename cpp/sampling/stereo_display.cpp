@@ -8,7 +8,10 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#if defined(__SSE__)
+#include <string>
+#if defined(__AVX__)
+#include <immintrin.h>
+#elif defined(__SSE__)
 #include <xmmintrin.h>
 #endif
 
@@ -126,18 +129,73 @@ struct PlaneMap {
 
     // uv clamped to [0, 1] and lambda = log2(footprint in texels).
     __attribute__((always_inline)) void map(Vec3d D, double& u, double& v, float& lod) const {
-        const double dn = dot(D, n), du = dot(D, u_axis), dv = dot(D, v_axis);
-        const double k = 1.0 / dn, t = h * k;
-        u = std::clamp((cu + t * du) * inv_width, 0.0, 1.0);
-        v = std::clamp((cv + t * dv) * inv_height, 0.0, 1.0);
-        const double ax = t * su * (xu - xn * k * du), bx = t * sv * (xv - xn * k * dv);
-        const double ay = t * su * (yu - yn * k * du), by = t * sv * (yv - yn * k * dv);
-        const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
-        const float r = float(rho2);
-        // float log2 where rho^2 is a normal float (the level needs no more), double beyond.
-        lod = r > std::numeric_limits<float>::min() && r < std::numeric_limits<float>::max()
-                  ? 0.5f * std::log2(r)
-                  : float(0.5 * std::log2(rho2));
+        map_lanes(1, &D.x, &D.y, &D.z, &u, &v, &lod);
+    }
+
+    // The same for n rays at once (D as three arrays): a loop the compiler vectorises (the
+    // packet's painting pixels in SIMD lanes), with log2 by fast_log2 and its rare
+    // non-normal footprints patched after the loop.
+    __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
+                                                  const double* __restrict Dy,
+                                                  const double* __restrict Dz, double* __restrict u,
+                                                  double* __restrict v, float* __restrict lod) const {
+        std::uint32_t odd = 0;
+        for (std::size_t k = 0; k < count; ++k) {
+            const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
+            const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
+            const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+            const double kk = 1.0 / dn, t = h * kk;
+            u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
+            v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
+            const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
+            const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
+            const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
+            std::uint32_t normal;
+            lod[k] = float(0.5 * fast_log2(rho2, normal));
+            odd |= normal ^ 1u;
+        }
+        if (odd) [[unlikely]] {  // zero, subnormal, infinite or NaN footprints: the libm value
+            for (std::size_t k = 0; k < count; ++k) {
+                const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
+                const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
+                const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+                const double kk = 1.0 / dn, t = h * kk;
+                const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
+                const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
+                const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
+                std::uint32_t normal;
+                fast_log2(rho2, normal);
+                if (!normal) lod[k] = float(0.5 * std::log2(rho2));
+            }
+        }
+    }
+
+    // log2(x) for a positive normal double to about 3e-11 absolute, without a libm call so the
+    // lanes' loop vectorises: the exponent from the bits, the mantissa m in [sqrt(1/2),
+    // sqrt(2)) by log2(m) = 2 atanh(s) / ln 2 with s = (m - 1) / (m + 1), |s| < 0.172, to s^11.
+    // normal = false for zero, subnormal, infinite or NaN x (the value is then meaningless).
+    static __attribute__((always_inline)) double fast_log2(double x, std::uint32_t& normal) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &x, sizeof bits);
+        const std::uint64_t biased = (bits >> 52) & 0x7ff;
+        normal = std::uint32_t(biased != 0) & std::uint32_t(biased != 0x7ff) &
+                 std::uint32_t((bits >> 63) == 0);
+        // Mantissa in [1, 2); above sqrt(2) it is halved and the exponent raised by one
+        // (integer operations only: a compare on doubles here kept the loop scalar).
+        const std::uint64_t field = bits & 0x000fffffffffffffull;
+        const std::uint64_t high =
+            std::uint64_t(std::int64_t(field) > std::int64_t(0x6a09e667f3bcdull));
+        const std::uint64_t mant = (field | 0x3ff0000000000000ull) - (high << 52);
+        double m;
+        std::memcpy(&m, &mant, sizeof m);
+        const std::uint64_t eb = (biased + high) | 0x4330000000000000ull;  // 2^52 + exponent + 1023
+        double e;
+        std::memcpy(&e, &eb, sizeof e);
+        e -= 4503599627370496.0 + 1023.0;
+        const double s = (m - 1.0) / (m + 1.0), s2 = s * s;
+        const double series =
+            1.0 + s2 * (1.0 / 3 + s2 * (1.0 / 5 + s2 * (1.0 / 7 + s2 * (1.0 / 9 + s2 * (1.0 / 11)))));
+        return e + s * series * 2.8853900817779268;  // 2 / ln 2
     }
 };
 
@@ -149,6 +207,19 @@ inline float inverse_sqrt(float x) {
     return r * (1.5f - 0.5f * x * r * r);
 #else
     return 1.0f / std::sqrt(x);
+#endif
+}
+
+// inverse_sqrt of 16 values in place, in SIMD lanes (the same estimate and Newton step).
+inline void inverse_sqrt_16(float* x) {
+#if defined(__AVX__)
+    for (int k = 0; k < 16; k += 8) {
+        const __m256 v = _mm256_load_ps(x + k), r = _mm256_rsqrt_ps(v);
+        const __m256 half_v_r2 = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), v), r), r);
+        _mm256_store_ps(x + k, _mm256_mul_ps(r, _mm256_sub_ps(_mm256_set1_ps(1.5f), half_v_r2)));
+    }
+#else
+    for (int k = 0; k < 16; ++k) x[k] = inverse_sqrt(x[k]);
 #endif
 }
 
@@ -234,12 +305,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending.clear(), copied.clear(), us.clear(), vs.clear(), lods.clear();
         };
-        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
-                                  std::int32_t source, Vec3f scale, Vec3f add)
-                                  __attribute__((always_inline)) {
-            double u, v;
-            float lod;
-            maps[std::size_t(pl)].map(D, u, v, lod);
+        // A painting pixel whose uv and level are known: its level stored, its texel queued.
+        auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
+                                float lod, std::int32_t source, Vec3f scale, Vec3f add)
+                                __attribute__((always_inline)) {
             lod += o.lod_bias;
             if (!std::isfinite(lod)) lod = 0.0f;
             g.lod[i] = lod;
@@ -254,6 +323,14 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             us.push_back(u), vs.push_back(v);
             lods.push_back(lod);
         };
+        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
+                                  std::int32_t source, Vec3f scale, Vec3f add)
+                                  __attribute__((always_inline)) {
+            double u, v;
+            float lod;
+            maps[std::size_t(pl)].map(D, u, v, lod);
+            mapped_pixel(i, x, pl, u, v, lod, source, scale, add);
+        };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
         std::array<std::uint32_t, 16> lane;
@@ -262,41 +339,69 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                              const RTCRayHit16& h) {
             lap(t_rays);
             start_row(row);
-            std::uint32_t m = 0;
+            // The packet's hit points and eye-facing unit normals in SIMD lanes (all 16, hit
+            // or not: the lanes are independent), then the hits compacted into the queries.
+            alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16], inv_len[16];
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float gx = h.hit.Ng_x[k], gy = h.hit.Ng_y[k], gz = h.hit.Ng_z[k];
+                inv_len[k] = gx * gx + gy * gy + gz * gz;
+            }
+            inverse_sqrt_16(inv_len);
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float dx = h.ray.dir_x[k], dy = h.ray.dir_y[k], dz = h.ray.dir_z[k];
+                const float t = h.ray.tfar[k];
+                hx[k] = origin.x + dx * t, hy[k] = origin.y + dy * t, hz[k] = origin.z + dz * t;
+                const float gx = h.hit.Ng_x[k] * inv_len[k], gy = h.hit.Ng_y[k] * inv_len[k],
+                            gz = h.hit.Ng_z[k] * inv_len[k];
+                // Two-sided: the side the eye sees.
+                const bool back = gx * dx + gy * dy + gz * dz > 0;
+                nx[k] = back ? -gx : gx, ny[k] = back ? -gy : gy, nz[k] = back ? -gz : gz;
+            }
+            // The buffers and the count in locals: through the captured references, every
+            // store forced their reload (it might alias them).
+            unsigned* const geom_out = g.geom.data();
+            Vec3f* const p_out = g.p.data();
+            Vec3f* const n_out = keep_light ? g.n.data() : nullptr;
+            float* const lod_out = g.lod.data();
+            float* const rgb_out = rgb;
+            const std::size_t row_start = row * w + i0;
+            std::uint32_t m = 0, traced_here = 0;
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (!valid[k]) continue;
-                ++traced_count;
-                const std::size_t i = row * w + i0 + k;
+                ++traced_here;
+                const std::size_t i = row_start + k;
                 const unsigned geom = h.hit.geomID[k];
-                g.geom[i] = geom;
+                geom_out[i] = geom;
                 if (geom == kNoHit) {
-                    rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = 0.0f;
-                    g.lod[i] = kNaN;
+                    rgb_out[3 * i] = rgb_out[3 * i + 1] = rgb_out[3 * i + 2] = 0.0f;
+                    lod_out[i] = kNaN;
                     continue;
                 }
-                const unsigned prim = h.hit.primID[k];
-                const Vec3f d{h.ray.dir_x[k], h.ray.dir_y[k], h.ray.dir_z[k]};
-                const Vec3f p = origin + d * h.ray.tfar[k];
-                Vec3f ng{h.hit.Ng_x[k], h.hit.Ng_y[k], h.hit.Ng_z[k]};
-                ng = ng * inverse_sqrt(dot(ng, ng));
-                const Vec3f nf = dot(ng, d) > 0 ? -ng : ng;  // two-sided: the side the eye sees
                 // Component stores: a Vec3f copied through the stack stalled on store
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
-                Vec3f& gp = g.p[i];
-                gp.x = p.x, gp.y = p.y, gp.z = p.z;
-                if (keep_light) {  // the right eye's claims test the side it sees
-                    Vec3f& gn = g.n[i];
-                    gn.x = nf.x, gn.y = nf.y, gn.z = nf.z;
+                Vec3f& gp = p_out[i];
+                gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
+                if (n_out) {  // the right eye's claims test the side it sees
+                    Vec3f& gn = n_out[i];
+                    gn.x = nx[k], gn.y = ny[k], gn.z = nz[k];
                 }
                 LightQuery& q = queries[m];
-                q.geom = geom, q.prim = prim, q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
-                q.p.x = p.x, q.p.y = p.y, q.p.z = p.z;
-                q.n.x = nf.x, q.n.y = nf.y, q.n.z = nf.z;
+                q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
+                q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
+                q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
                 lane[m++] = k;
             }
+            traced_count += traced_here;
             hit_count += m;
             if (m) lighting.light_batch(queries.data(), m, lights.data());
             lap(t_shade);
+            // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
+            // to uv and level in runs of one painting, in SIMD lanes (PlaneMap::map_lanes).
+            alignas(64) double Dx[16], Dy[16], Dz[16], pu[16], pv[16];
+            alignas(64) float plod[16];
+            std::array<std::uint32_t, 16> pj;
+            std::array<int, 16> ppl;
+            std::uint32_t np = 0;
             for (std::uint32_t j = 0; j < m; ++j) {
                 const std::uint32_t x = i0 + lane[j];
                 const std::size_t i = row * w + x;
@@ -308,9 +413,28 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     g.lod[i] = kNaN;
                     continue;
                 }
+                const double c = column_sx[x];
+                Dx[np] = row_dir.x + c * eye.right.x;
+                Dy[np] = row_dir.y + c * eye.right.y;
+                Dz[np] = row_dir.z + c * eye.right.z;
+                pj[np] = j, ppl[np] = pl;
+                ++np;
+            }
+            for (std::uint32_t r0 = 0; r0 < np;) {
+                const int pl = ppl[r0];
+                std::uint32_t r1 = r0 + 1;
+                while (r1 < np && ppl[r1] == pl) ++r1;
+                maps[std::size_t(pl)].map_lanes(r1 - r0, Dx + r0, Dy + r0, Dz + r0, pu + r0,
+                                                pv + r0, plod + r0);
+                r0 = r1;
+            }
+            for (std::uint32_t q = 0; q < np; ++q) {
+                const std::uint32_t j = pj[q], x = i0 + lane[j];
+                const std::size_t i = row * w + x;
+                const SurfaceLight& sl = lights[j];
                 const Vec3f scale = sl.irradiance * kInvPi;
                 if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
-                painting_pixel(i, x, pl, row_dir + column_sx[x] * eye.right, -1, scale, sl.emission);
+                mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1, scale, sl.emission);
             }
             lap(t_vt);
         };
@@ -566,6 +690,36 @@ std::vector<float> DisplayPass::hit_points(int eye) const {
 std::vector<float> DisplayPass::lods(int eye) const {
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
     return g_[eye].lod;
+}
+
+float* check_output_image(const OutputImage& image, const Camera& eye, const char* what) {
+    // Messages appended piecewise (GCC 12 warns falsely on literal + std::string&&).
+    auto message = [&](const char* problem) {
+        std::string m(what);
+        m += problem;
+        return m;
+    };
+    require(image.data != nullptr, message(": no array"));
+    require(image.float32, message(": must be float32"));
+    require(image.writable, message(": must be writable"));
+    if (!(image.ndim == 3 && image.shape[0] == std::int64_t(eye.height) &&
+          image.shape[1] == std::int64_t(eye.width) && image.shape[2] == 3)) {
+        std::string m = message(": must have shape (");
+        m += std::to_string(eye.height);
+        m += ", ";
+        m += std::to_string(eye.width);
+        m += ", 3)";
+        throw InvalidArgument(m);
+    }
+    if (image.strides)
+        require(image.strides[2] == 1 && image.strides[1] == 3 &&
+                    image.strides[0] == 3 * std::int64_t(eye.width),
+                message(": must be C-contiguous"));
+    return static_cast<float*>(image.data);
+}
+
+void check_disjoint_images(const float* a, const float* b, std::size_t floats) {
+    require(a + floats <= b || b + floats <= a, "display: the two eyes' images share memory");
 }
 
 double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, std::uint64_t* hits) {

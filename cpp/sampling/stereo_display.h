@@ -17,7 +17,9 @@
 // hits are in cache, lit in one DisplayLighting::light_batch call (with Embree's
 // barycentrics) and mapped to painting coordinates and level of detail (a per-eye plane map
 // of each painting, double precision); the row's painting pixels are then sampled in runs of
-// one painting (trilinear, under one VT read lock for the frame) and shaded. Per pixel the
+// one painting (trilinear, under one VT read lock for the frame) and shaded. Within a packet
+// the per-pixel arithmetic runs in SIMD lanes: hit points and eye-facing normals for all 16
+// rays, and the painting pixels' uv and level (a libm-free log2) per run of one painting. Per pixel the
 // pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
 // eye reuses, its texel and light.
 //
@@ -163,6 +165,22 @@ private:
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     std::vector<std::int32_t> sources_;
 };
+
+// A caller's output image for one eye as the binding sees it (any array), checked by
+// check_output_image to be height x width x 3 float32, C-contiguous and writable, so that
+// frames of a stream can be rendered into the same memory (no fresh pages, no page faults).
+struct OutputImage {
+    void* data = nullptr;
+    std::size_t ndim = 0;
+    const std::int64_t* shape = nullptr;
+    const std::int64_t* strides = nullptr;  // in elements (nullptr: C-contiguous)
+    bool float32 = false;
+    bool writable = true;
+};
+// The checked image's floats; what names the argument in the message (ValueError).
+float* check_output_image(const OutputImage& image, const Camera& eye, const char* what);
+// Two output images of a stereo pair must not share memory (the right eye reads the left's).
+void check_disjoint_images(const float* a, const float* b, std::size_t floats);
 
 // The baseline of the display's cost: the same primary rays (16-ray packets along rows, as
 // the pass casts them) with nothing done at the hits. Returns the seconds taken; *hits gets

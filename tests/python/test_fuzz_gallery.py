@@ -6,7 +6,7 @@ import threading
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import gigascroll as g
@@ -153,3 +153,36 @@ def test_huge_feedback_pass_is_refused_before_allocating(lit):
     with pytest.raises(ValueError, match="display_step"):
         gal.render_view(cam, width=4, height=4, display_step=0)
     assert gal.render_view(cam, width=4, height=2)["keys"].shape == (2, 4)
+
+
+@FUZZ
+@given(shape=st.lists(st.integers(0, 12), min_size=0, max_size=4),
+       dtype=st.sampled_from([np.float32, np.float64, np.int32, np.uint8, np.float16]),
+       step=st.integers(1, 2), readonly=st.booleans(), stereo=st.booleans())
+@example(shape=[6, 8, 3], dtype=np.float32, step=1, readonly=False, stereo=False)
+@example(shape=[6, 8, 3], dtype=np.float32, step=1, readonly=False, stereo=True)
+@example(shape=[6, 8, 3], dtype=np.float32, step=2, readonly=False, stereo=True)
+def test_display_output_arrays_are_checked(lit, shape, dtype, step, readonly, stereo):
+    """Any caller array for the display pass's output: rendered into when it is exactly the
+    eye's (h, w, 3) C-contiguous writable float32 image, else ValueError, never a write out
+    of bounds."""
+    from gigascroll import _core
+    gal, vt = lit
+    cam = g.Camera((0.5, 1.5, 0.5), (0.5, 1.5, 2.0), (0.0, 1.0, 0.0), 60.0, resolution=(8, 6))
+    a = np.zeros([s * (step if i == len(shape) - 1 else 1) for i, s in enumerate(shape)], dtype)
+    if shape and step > 1:
+        a = a[..., ::step]
+    a.flags.writeable = not readonly
+    ok = (list(a.shape) == [6, 8, 3] and a.dtype == np.float32 and a.flags.c_contiguous
+          and not readonly)
+    d = _core.DisplayPass()
+    try:
+        if stereo:
+            _core._gallery_display_stereo(d, gal, vt, cam, cam, "baked",
+                                          out_left=np.zeros((6, 8, 3), np.float32), out_right=a)
+        else:
+            _core._gallery_display(d, gal, vt, cam, "baked", out=a)
+    except ValueError:
+        assert not ok
+        return
+    assert ok and np.isfinite(a).all() and (a >= 0).all()

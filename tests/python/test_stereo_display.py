@@ -250,3 +250,77 @@ def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup):
     # float32 in the pass, float64 here: a few claims at pixel and depth-tie boundaries differ.
     assert np.mean(got == want) > 0.99
     assert abs(int((got >= 0).sum()) - int(keep.sum())) < 0.01 * keep.sum()
+
+
+def test_gallery_display_into_caller_arrays_equals_fresh_ones(lit_gallery, small_scroll_pack):
+    """Rendering into arrays the caller keeps (reused between frames) gives the pixels of
+    the fresh arrays, for one eye and a stereo pair, and returns the caller's arrays."""
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    fresh = src.display(d, vt, left)
+    out = np.full((72, 64, 3), np.nan, np.float32)
+    for _ in range(2):  # the second frame overwrites the first's pixels
+        got = src.display(d, vt, left, out=out)
+        assert got is out
+        np.testing.assert_array_equal(out, fresh)
+    fl, fr = src.display_stereo(d, vt, left, right, True)
+    ol, orr = np.full_like(out, np.nan), np.full_like(out, np.nan)
+    gl, gr = src.display_stereo(d, vt, left, right, True, out_left=ol, out_right=orr)
+    assert gl is ol and gr is orr
+    np.testing.assert_array_equal(ol, fl)
+    np.testing.assert_array_equal(orr, fr)
+
+
+@pytest.mark.parametrize("bad", [
+    np.zeros((72, 64, 3), np.float64),          # dtype
+    np.zeros((72, 64, 4), np.float32),          # shape
+    np.zeros((64, 72, 3), np.float32),          # transposed size
+    np.zeros((72, 128, 3), np.float32)[:, ::2],  # not contiguous
+    np.zeros((72 * 64 * 3,), np.float32),       # rank
+    "not an array",
+])
+def test_gallery_display_refuses_bad_output_arrays(lit_gallery, small_scroll_pack, bad):
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    with pytest.raises(ValueError):
+        src.display(d, vt, left, out=bad)
+    with pytest.raises(ValueError):
+        src.display_stereo(d, vt, left, right, True, out_left=np.zeros((72, 64, 3), np.float32),
+                           out_right=bad)
+
+
+def test_gallery_display_refuses_read_only_and_shared_output_arrays(lit_gallery,
+                                                                   small_scroll_pack):
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    ro = np.zeros((72, 64, 3), np.float32)
+    ro.flags.writeable = False
+    with pytest.raises(ValueError):
+        src.display(d, vt, left, out=ro)
+    both = np.zeros((72, 64, 3), np.float32)
+    with pytest.raises(ValueError):
+        src.display_stereo(d, vt, left, right, True, out_left=both, out_right=both)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.9])
+def test_left_eye_levels_equal_the_feedback_pass(setup, yaw):
+    """The display's levels (per packet in SIMD lanes, log2 without libm) against the
+    feedback pass's (texel_footprint and std::log2, one pixel at a time), head-on and at a
+    grazing angle where the level changes fast across a packet."""
+    ex, vt = setup
+    hs = v.HEADSET
+    cam = v.Camera((0.3 - 0.3 * yaw, 1.5, -0.25), (np.sin(yaw), 0.0, np.cos(yaw)), (0.0, 1.0, 0.0),
+                   hs.tan_half_x, hs.tan_half_x, 97, 90)
+    d = _core.DisplayPass()
+    d.render(ex.scene, _core.UnlitLighting(), vt, cam)
+    fb = v.render_view(ex.scene, cam, 97, 90)
+    ours = np.asarray(d.lods(0)).reshape(90, 97)
+    sees = fb["keys"] != v.NO_REQUEST
+    assert sees.sum() > 1000
+    assert np.allclose(ours[sees], fb["lod"][sees], atol=1e-4)

@@ -51,10 +51,13 @@ class FrameSource:
     def feedback(self, camera, width: int, height: int, threads: int = 0) -> np.ndarray:
         raise NotImplementedError
 
-    def display(self, dpass, vt, camera, threads: int = 0) -> np.ndarray:
+    # out, out_left, out_right: arrays the source may render into and return (a stream of
+    # frames keeps them); a source that cannot returns fresh arrays.
+    def display(self, dpass, vt, camera, threads: int = 0, out=None) -> np.ndarray:
         raise NotImplementedError
 
-    def display_stereo(self, dpass, vt, left, right, reuse: bool, threads: int = 0):
+    def display_stereo(self, dpass, vt, left, right, reuse: bool, threads: int = 0,
+                       out_left=None, out_right=None):
         raise NotImplementedError
 
     def primary_rays(self, camera, threads: int = 0) -> tuple[float, int]:
@@ -96,10 +99,11 @@ class ExhibitionSource(FrameSource):
         return v.render_view(self.scene, camera, width, height, threads=threads,
                              display=False)["keys"]
 
-    def display(self, dpass, vt, camera, threads=0):
+    def display(self, dpass, vt, camera, threads=0, out=None):
         return dpass.render(self.scene, self.lighting, vt, camera, threads=threads)
 
-    def display_stereo(self, dpass, vt, left, right, reuse, threads=0):
+    def display_stereo(self, dpass, vt, left, right, reuse, threads=0, out_left=None,
+                       out_right=None):
         return dpass.render_stereo(self.scene, self.lighting, vt, left, right, reuse=reuse,
                                    threads=threads)
 
@@ -143,12 +147,17 @@ class GallerySource(FrameSource):
     def feedback(self, camera, width, height, threads=0):
         return self.gallery.render_view(camera, width, height, threads=threads)["keys"]
 
-    def display(self, dpass, vt, camera, threads=0):
-        return _core._gallery_display(dpass, self.gallery, vt, camera, self.lighting, threads)
+    # out / out_left, out_right: float32 (height, width, 3) arrays to render into (a stream of
+    # frames reuses them: no fresh pages to fault in per frame); None: fresh arrays.
+    def display(self, dpass, vt, camera, threads=0, out=None):
+        return _core._gallery_display(dpass, self.gallery, vt, camera, self.lighting, threads,
+                                      out)
 
-    def display_stereo(self, dpass, vt, left, right, reuse, threads=0):
+    def display_stereo(self, dpass, vt, left, right, reuse, threads=0, out_left=None,
+                       out_right=None):
         return _core._gallery_display_stereo(dpass, self.gallery, vt, left, right,
-                                             self.lighting, reuse, threads=threads)
+                                             self.lighting, reuse, threads=threads,
+                                             out_left=out_left, out_right=out_right)
 
     def primary_rays(self, camera, threads=0):
         return _core._gallery_primary_rays(self.gallery, camera, threads)
@@ -268,7 +277,8 @@ class GalleryWalk:
     pace: sleep to the path's frame boundaries (False: flat out).
     wait_loads: block each frame until that frame's loads arrived (deterministic tests).
     on_frame(frame, record, images): called with the frame's record and its display images
-    (left, right, magnifier or None, lenses) before the next frame starts.
+    (left, right, magnifier or None, lenses) before the next frame starts (the next frame
+    renders into the same arrays: copy what you keep).
     foveation: a gallery.foveation.Foveation (None: off): each eye's fovea traced at full
     density, its periphery at a lower one, and both requested by their own cameras."""
     source: FrameSource
@@ -352,7 +362,8 @@ class GalleryWalk:
 
     def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None,
              foveate: bool = True):
-        """One frame: (record, (left, right, magnifier or None, lenses)). views: the frame's
+        """One frame: (record, (left, right, magnifier or None, lenses)); the images are the
+        state's, overwritten by the next step. views: the frame's
         (camera, feedback w, feedback h) list (default: the path's frame); moving: whether the
         pose changes after this frame (default: from the path); foveate=False: this frame
         without the walk's foveation (an interactive viewer's toggle)."""
@@ -394,12 +405,14 @@ class GalleryWalk:
         t0 = time.perf_counter()
         (lc, _, _), (rc, _, _) = views[0], views[1]
         if foveated is None:
-            left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr)
+            left, right = src.display_stereo(dpass, vt, lc, rc, self.reuse, thr,
+                                             state.image("left", lc), state.image("right", rc))
             ls, rs = dpass.left_stats, dpass.right_stats
         else:
             left, right = foveated[0].display_stereo(src, vt, lc, rc, self.reuse, thr)
             ls, rs = foveated[0].left_stats, foveated[0].right_stats
-        mag = src.display(mpass, vt, views[2][0], thr) if len(views) > 2 else None
+        mag = (src.display(mpass, vt, views[2][0], thr, state.image("magnifier", views[2][0]))
+               if len(views) > 2 else None)
         t["display"] = time.perf_counter() - t0
         ms = mpass.left_stats if mag is not None else None
         parts = {}
@@ -431,10 +444,14 @@ class GalleryWalk:
                 for key in zip(*(a.tolist() for a in v.unpack_requests(missing))):
                     oracle_vt.insert(key, self.pack.read_tile(*key))
             if foveated is None:
-                ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr)
+                ol, orr = src.display_stereo(opass, oracle_vt, lc, rc, self.reuse, thr,
+                                             state.image("oracle_left", lc),
+                                             state.image("oracle_right", rc))
             else:  # the oracle of a foveated frame is the same foveated frame, all resident
                 ol, orr = foveated[1].display_stereo(src, oracle_vt, lc, rc, self.reuse, thr)
-            om = src.display(ompass, oracle_vt, views[2][0], thr) if mag is not None else None
+            om = (src.display(ompass, oracle_vt, views[2][0], thr,
+                              state.image("oracle_magnifier", views[2][0]))
+                  if mag is not None else None)
             shown = [left, right] + ([mag] if mag is not None else [])
             truth_imgs = [ol, orr] + ([om] if om is not None else [])
             e = src.exposure
@@ -478,6 +495,16 @@ class _LoopState:
     oracle_vt: object
     passes: list
     foveated: list | None = None  # with foveation: the displays of the frame and its oracle
+    # The display images, kept between frames (a frame's images are valid until the next
+    # step: on_frame and viewers copy what they keep).
+    images: dict = field(default_factory=dict)
+
+    def image(self, name: str, camera) -> np.ndarray:
+        w, h = camera.resolution
+        a = self.images.get(name)
+        if a is None or a.shape != (h, w, 3):
+            a = self.images[name] = np.empty((h, w, 3), np.float32)
+        return a
 
 
 def _foveated_displays(foveation) -> list:
