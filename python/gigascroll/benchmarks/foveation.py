@@ -87,9 +87,9 @@ def region_errors(reference: np.ndarray, test: np.ndarray, masks: dict, exposure
     return out, flip_map
 
 
-def _pack(arg):
-    from .walk import _pack as walk_pack
-    return walk_pack(arg)
+def lit_scroll_walk(args):
+    from .walk import lit_scroll_walk as walk_scene
+    return walk_scene(args)
 
 
 def run(args) -> int:
@@ -98,9 +98,8 @@ def run(args) -> int:
     from .. import _core, runtime
     from .. import views as v
     from ..errors import UserError
-    from ..gallery import builtin_room
     from ..gallery.foveation import FoveatedDisplay, Foveation
-    from ..gallery.walk import GallerySource, parent_keys, walk_path
+    from ..gallery.walk import parent_keys
     from ..views.exhibition import Headset
 
     if not 32 <= args.width <= 8192:
@@ -109,12 +108,7 @@ def run(args) -> int:
         raise UserError("--repeats must be >= 1")
     sizes = [(w, round(w * 1920 / 1800)) for w in (args.width // 2, args.width)]
     fov = Foveation(args.fovea, args.factor)
-    pack = _pack(args.pack)
-    room = builtin_room("scroll", pack)
-    t0 = time.perf_counter()
-    src = GallerySource(room, pack, "baked", photons=args.photons, threads=args.threads)
-    print(f"scroll room lit and baked in {time.perf_counter() - t0:.1f} s")
-    path = walk_path(room, seconds=4.0)
+    pack, room, src, path = lit_scroll_walk(args)
     n = len(path)
     # the walk, the first stop and the close look (walk_path's shares: 30 % walk, 15 % stop,
     # 10 % approach, 15 % close look)

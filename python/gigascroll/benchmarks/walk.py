@@ -38,20 +38,27 @@ def _pack(arg):
     return TilePack(demo) if (demo / "manifest.json").is_file() else builtin_pack()
 
 
-def run(args) -> int:
-    from .. import runtime
-    from .. import views as v
-    from .._core import DisplayPass
+def lit_scroll_walk(args):
+    """(pack, room, source, path): the --pack (or demo) painting in the built-in scroll room,
+    lit and baked with --photons, and its 4 s default walk; the walk benchmarks' common scene."""
     from ..gallery import builtin_room
-    from ..gallery.walk import GallerySource, GalleryWalk, walk_path
-    from ..views.exhibition import Headset
-
+    from ..gallery.walk import GallerySource, walk_path
     pack = _pack(args.pack)
     room = builtin_room("scroll", pack)
     t0 = time.perf_counter()
     src = GallerySource(room, pack, "baked", photons=args.photons, threads=args.threads)
     print(f"scroll room lit and baked in {time.perf_counter() - t0:.1f} s")
-    path = walk_path(room, seconds=4.0)
+    return pack, room, src, walk_path(room, seconds=4.0)
+
+
+def run(args) -> int:
+    from .. import runtime
+    from .. import views as v
+    from .._core import DisplayPass
+    from ..gallery.walk import GalleryWalk, walk_path
+    from ..views.exhibition import Headset
+
+    pack, room, src, path = lit_scroll_walk(args)
     thr = args.threads
     results = {"pack": str(pack.path), "machine": "2 cores, shared", "date": time.strftime("%Y-%m-%d")}
 
