@@ -35,6 +35,12 @@ struct SurfaceDisc {
     float reach2[kSectors];  // squared in-plane reach per sector
     float area = 0;          // clipped disc area
 
+    // How finely make_surface_disc clips. Fine: 16 sectors, probes at 1/2 and 1 of the reach
+    // and 3 bisection steps (up to 96 rays). Coarse: 8 sectors (each sets both of its halves),
+    // one probe at the reach and 2 bisection steps (up to 32 rays), for a progressive render's
+    // first passes, whose bias weighs 1 / passes in the final image.
+    enum class Detail { Fine, Coarse };
+
     // True when photon position p lies in the clipped disc.
     bool contains(Vec3f p) const {
         const Vec3f d = p - x;
@@ -59,7 +65,8 @@ struct SurfaceDisc {
 };
 
 // The surface disc of radius r at hit point x with normal n (facing the viewer).
-SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r);
+SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r,
+                              SurfaceDisc::Detail detail = SurfaceDisc::Detail::Fine);
 // The same disc unclipped (the thickness tolerance only), without rays.
 SurfaceDisc full_surface_disc(Vec3f x, Vec3f n, float r);
 
@@ -99,7 +106,8 @@ struct DiscEstimate {
 // stands, with no rays. (A surface that ends with no lit surface within r keeps the full
 // disc, as the sphere gather does.)
 template <typename Map>
-DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Vec3f n, float r) {
+DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Vec3f n, float r,
+                                 SurfaceDisc::Detail detail = SurfaceDisc::Detail::Fine) {
     DiscEstimate e;
     SurfaceDisc d = full_surface_disc(x, n, r);
     float foreign = 0;
@@ -109,7 +117,7 @@ DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Ve
         e.power = gather_disc(map, d, &e.count, &foreign);
     e.area = d.area;
     if (foreign > 0) {
-        d = make_surface_disc(scene, x, n, r);
+        d = make_surface_disc(scene, x, n, r, detail);
         e.power = gather_disc(map, d, &e.count);
         e.area = d.area;
     }
