@@ -286,7 +286,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     tangent plane only, the disc clipped per sector (16) by rays to where walls stand, the surface
     ends or something overhangs it (and shrunk next to an overhang), and divided by the clipped
     area (removes the darkening at edges and corners, the leak along a floor under a thin
-    partition and a wall's light on a painting in front of it; costs up to 96 rays per gather
+    partition and a wall's light on a painting in front of it; costs up to 128 rays per gather
     where another surface is within r). Default (None): on wherever the options
     allow it (box kernel, radius gather, not cooperative), for one-shot and progressive renders.
 
