@@ -221,7 +221,8 @@ void bind_photon(nb::module_& m) {
                                     const std::string& kernel, int spp, int light_samples, std::uint64_t seed,
                                     const std::string& pipeline, bool cooperative, bool direct, bool indirect,
                                     unsigned threads, const std::string& mode, bool disc, int passes, double time_budget,
-                                    float alpha, const std::vector<int>& snapshots, bool final_gather) {
+                                    float alpha, const std::vector<int>& snapshots, bool final_gather,
+                                    int coarse_passes) {
         const RenderSettings s = make_settings(photons, radius, grid, gather, k, kernel, spp, light_samples, seed,
                                                pipeline, cooperative, direct, indirect, threads, mode, disc);
         ProgressiveSettings p;
@@ -229,6 +230,7 @@ void bind_photon(nb::module_& m) {
         p.time_budget = time_budget;
         p.alpha = alpha;
         p.final_gather = final_gather;
+        p.coarse_passes = coarse_passes;
         p.validate();
         ProgressiveStats st;
         std::vector<float> img;
@@ -258,7 +260,8 @@ void bind_photon(nb::module_& m) {
         d["snapshots"] = l;
         return nb::make_tuple(to_numpy(std::move(img), {h, w, 3}), d);
     }, "scene"_a, "camera"_a, RENDER_ARGS, "passes"_a = 16, "time_budget"_a = 0.0, "alpha"_a = 2.0f / 3.0f,
-       "snapshots"_a = std::vector<int>{}, "final_gather"_a = false);
+       "snapshots"_a = std::vector<int>{}, "final_gather"_a = false,
+       "coarse_passes"_a = ProgressiveSettings{}.coarse_passes);
 
     m.def("_render_stereo", [](const Scene& scene, const StereoCamera& eyes, bool reuse, std::uint64_t photons,
                                float radius, const std::string& grid, const std::string& gather, int k,

@@ -32,6 +32,7 @@ void ProgressiveSettings::validate() const {
     require(passes >= 1 && std::uint32_t(passes) <= kMaxPasses, "render: passes must be in [1, 2^24]");
     require(std::isfinite(time_budget) && time_budget >= 0, "render: time_budget must be finite and >= 0");
     require(std::isfinite(alpha) && alpha > 0 && alpha < 1, "render: alpha must be in (0, 1)");
+    require(coarse_passes >= 0, "render: coarse_passes must be >= 0");
 }
 
 std::vector<float> render_progressive(const Scene& scene, const Camera& cam, const RenderSettings& settings,
@@ -135,6 +136,7 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                 stats.render.build_seconds += seconds_since(t0);
                 t0 = Clock::now();
                 const float alpha = prog.alpha;
+                const auto detail = k < prog.coarse_passes ? SurfaceDisc::Detail::Coarse : SurfaceDisc::Detail::Fine;
                 std::uint64_t gathers = 0;
                 parallel_for(npix, 256, [&](std::size_t b, std::size_t e) {
                     std::uint64_t g = 0;
@@ -147,7 +149,7 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
                         if (settings.gather.disc) {
                             // The clipped disc's flux, scaled to the full disc's area so the
                             // final tau / (pi R^2) divides by the area actually gathered.
-                            const DiscEstimate d = gather_surface_disc(scene, grid, s.p, s.normal, s.r);
+                            const DiscEstimate d = gather_surface_disc(scene, grid, s.p, s.normal, s.r, detail);
                             const float full = float(M_PI) * s.r * s.r;
                             if (!(d.area > 1e-3f * full)) continue;
                             power = d.power * (full / d.area);

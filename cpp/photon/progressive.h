@@ -31,6 +31,10 @@ struct ProgressiveSettings {
     // hit lands (with that point's direct light), so the photon map's error reaches the image
     // averaged over the bounce's directions instead of as blotches of radius R.
     bool final_gather = false;
+    // Passes that clip the surface disc coarsely (SurfaceDisc::Detail::Coarse, a third of the
+    // rays): each pass weighs 1 / passes in the image, so the early passes' larger edge bias
+    // fades while their cost, at the largest radii where nearly every gather is clipped, drops.
+    int coarse_passes = 64;
     void validate() const;
 };
 

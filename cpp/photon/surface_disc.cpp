@@ -24,7 +24,7 @@ SurfaceDisc full_surface_disc(Vec3f x, Vec3f n, float r) {
     return d;
 }
 
-SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
+SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r, SurfaceDisc::Detail detail) {
     // Nothing lies farther than the scene's diagonal: rays stay within it (and within the
     // range Embree accepts), whatever the radius.
     r = std::min(r, scene.diagonal());
@@ -47,10 +47,14 @@ SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
         if (hit.t < r) return Probe::Covered;
         return dot(hit.n, n) > 0.5f ? Probe::On : Probe::Off;
     };
+    const bool coarse = detail == SurfaceDisc::Detail::Coarse;
+    const int sectors = coarse ? SurfaceDisc::kSectors / 2 : SurfaceDisc::kSectors;
+    const int depth_probes = coarse ? 1 : SurfaceDisc::kDepthProbes;
+    const int refinements = coarse ? 2 : SurfaceDisc::kRefinements;
     float covered = r;  // nearest covered point over the sectors
     d.area = 0;
-    for (int s = 0; s < SurfaceDisc::kSectors; ++s) {
-        const float a = (float(s) + 0.5f) * (2.0f * kPi / SurfaceDisc::kSectors);
+    for (int s = 0; s < sectors; ++s) {
+        const float a = (float(s) + 0.5f) * (2.0f * kPi / float(sectors));
         const Vec3f dir = d.t * std::cos(a) + d.b * std::sin(a);
         Hit hit;
         float reach = r;
@@ -64,8 +68,8 @@ SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
         // sector ends at the last point on it.
         float good = 0, bad = -1;
         Probe bad_kind = Probe::On;
-        for (int k = 1; k <= SurfaceDisc::kDepthProbes; ++k) {
-            const float s_k = reach * float(k) / SurfaceDisc::kDepthProbes * 0.999f;
+        for (int k = 1; k <= depth_probes; ++k) {
+            const float s_k = reach * float(k) / float(depth_probes) * 0.999f;
             const Probe p = probe(o + dir * s_k);
             if (p != Probe::On) {
                 bad = s_k;
@@ -75,7 +79,7 @@ SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
             good = s_k;
         }
         if (bad >= 0) {
-            for (int i = 0; i < SurfaceDisc::kRefinements; ++i) {
+            for (int i = 0; i < refinements; ++i) {
                 const float mid = 0.5f * (good + bad);
                 const Probe p = probe(o + dir * mid);
                 if (p == Probe::On) {
@@ -91,8 +95,12 @@ SurfaceDisc make_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) {
         }
         // A boundary crossing the sector obliquely comes nearer than along its middle ray, by
         // up to cos(pi / K) for a straight one: the sector keeps the near side of it.
-        if (clipped) reach *= std::cos(kPi / SurfaceDisc::kSectors);
-        d.reach2[s] = reach * reach;
+        if (clipped) reach *= std::cos(kPi / float(sectors));
+        if (coarse) {  // an octant: both of its sixteenths
+            d.reach2[2 * s] = d.reach2[2 * s + 1] = reach * reach;
+        } else {
+            d.reach2[s] = reach * reach;
+        }
     }
     // Next to an occluder the irradiance changes within the distance to it (the painting's
     // rim darkens the wall just outside it): the disc shrinks to twice that distance there, so

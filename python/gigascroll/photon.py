@@ -273,7 +273,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
            passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
            snapshots: Sequence[int] = (), disc: bool | None = None, lighting: str = "baked",
-           final_gather: bool = False):
+           final_gather: bool = False, coarse_passes: int = 64):
     """Render linear radiance, float32 (H, W, 3).
 
     `scene` may be a `gigascroll.Gallery`: its still (`Gallery.still`) with `lighting`
@@ -291,7 +291,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     tangent plane only, the disc clipped per sector (16) by rays to where walls stand, the surface
     ends or something overhangs it (and shrunk next to an overhang), and divided by the clipped
     area (removes the darkening at edges and corners, the leak along a floor under a thin
-    partition and a wall's light on a painting in front of it; costs up to 96 rays per gather
+    partition and a wall's light on a painting in front of it; costs up to 128 rays per gather
     where another surface is within r). Default (None): on wherever the options
     allow it (box kernel, radius gather, not cooperative), for one-shot and progressive renders.
 
@@ -301,7 +301,9 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     shrunk per pixel by the alpha rule. `snapshots` lists pass counts whose images are returned
     in stats['snapshots'] as (passes, seconds, image). final_gather=True (progressive only)
     gathers the photons where one diffuse bounce from the first hit lands, with that point's
-    direct light, instead of at the first hit.
+    direct light, instead of at the first hit. The first `coarse_passes` passes clip the disc
+    coarsely (8 sectors, up to 32 rays): a pass weighs 1 / passes in the image, so their larger
+    edge bias fades while the first passes, at the largest radii, get cheap.
     """
     from .gallery import Gallery
 
@@ -330,11 +332,14 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     alpha = float(alpha)
     if not 0 < alpha < 1:
         raise ValueError(f"alpha must be in (0, 1), got {alpha}")
+    if isinstance(coarse_passes, bool) or not isinstance(coarse_passes, (int, np.integer)) or not 0 <= coarse_passes <= 1 << 24:
+        raise ValueError(f"coarse_passes must be an integer in [0, 2^24], got {coarse_passes!r}")
     shots = [int(x) for x in snapshots]
     if any(x < 1 for x in shots):
         raise ValueError("snapshots must be positive pass counts")
     image, stats = _core._render_progressive(scene, camera, **s, passes=int(passes), time_budget=budget,
-                                             alpha=alpha, snapshots=shots, final_gather=bool(final_gather))
+                                             alpha=alpha, snapshots=shots, final_gather=bool(final_gather),
+                                             coarse_passes=int(coarse_passes))
     return (image, stats) if return_stats else image
 
 

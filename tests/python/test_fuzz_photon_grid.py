@@ -1,5 +1,6 @@
 """Fuzz cases for the adaptive photon grid (PhotonMap(grid='adaptive')): random clouds, radii
-and offsets find exactly numpy's brute-force set; hostile input raises ValueError."""
+and offsets find exactly numpy's brute-force set; hostile input raises ValueError. Also the
+progressive render's coarse_passes option."""
 
 from __future__ import annotations
 
@@ -50,3 +51,25 @@ def test_adaptive_grid_rejects_queries_beyond_its_radius():
     with pytest.raises(ValueError, match="radius"):
         pm.query_radius(np.zeros(3, np.float32), 0.2)
     assert len(pm.query_radius(np.float32([np.nan, 0, 0]), 0.1)) == 0
+
+
+_CORNELL16 = g.builtin_scene("cornell", resolution=(16, 16))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(coarse=st.one_of(st.integers(-2**40, 2**40), st.floats(allow_nan=True), st.booleans(), st.none(),
+                        st.text(max_size=3)))
+def test_progressive_coarse_passes_is_validated(coarse):
+    """render(progressive=True, coarse_passes=...): an integer in [0, 2^24] renders a finite
+    image (the same disc as the fine one beyond the passes it names); anything else is a
+    ValueError, never a crash."""
+    scene, cam = _CORNELL16
+    kw = dict(photons=500, radius=0.05, progressive=True, passes=2, coarse_passes=coarse)
+    if isinstance(coarse, int) and not isinstance(coarse, bool) and 0 <= coarse <= 1 << 24:
+        img = g.render(scene, cam, **kw)
+        assert np.isfinite(img).all()
+        if coarse >= 2:  # every pass coarse either way
+            assert np.array_equal(img, g.render(scene, cam, **(kw | dict(coarse_passes=2))))
+    else:
+        with pytest.raises(ValueError, match="coarse_passes"):
+            g.render(scene, cam, **kw)

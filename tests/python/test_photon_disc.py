@@ -37,10 +37,11 @@ def _regions(name: str, pts: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-# |bias| bounds of the disc per region, at seed 0. Measured there: edges -0.3% (lit), +0.2%
-# (indirect); the partition's leak +0.6%; the painting's border +1.9% and the wall around it
-# -1.5% (-2.9% and -3.0%, mean of seeds 0-3, with the previous disc of 8 sectors without
-# bisection or overhang probes; +2.1% and -0.6% now).
+# |bias| bounds of the disc per region, at seed 0. Measured there: edges -0.3% (lit), -0.1%
+# (indirect); the partition's leak +0.6%; the painting's border +1.4% and the wall around it
+# -1.8% (mean of seeds 0-3: +1.7% and -0.8%; +2.1% and -0.6% with sector ends bisected to r / 16
+# instead of r / 64; -2.9% and -3.0% with the first disc of 8 sectors without bisection or
+# overhang probes).
 DISC_BOUNDS = {"edge": 0.01, "leak": 0.01, "painting border": 0.02, "wall around the painting": 0.02}
 
 

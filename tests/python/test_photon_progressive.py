@@ -82,6 +82,8 @@ def test_progressive_without_indirect_light_is_direct_light_averaged(cornell32):
     (dict(alpha=1.0), "alpha"), (dict(alpha=0.0), "alpha"), (dict(alpha=float("nan")), "alpha"),
     (dict(spp=4), "spp"), (dict(kernel="cone"), "progressive"), (dict(gather="knn"), "progressive"),
     (dict(grid="kdtree"), "progressive"), (dict(snapshots=[0]), "snapshots"),
+    (dict(coarse_passes=-1), "coarse_passes"), (dict(coarse_passes=1.5), "coarse_passes"),
+    (dict(coarse_passes=True), "coarse_passes"), (dict(coarse_passes=1 << 40), "coarse_passes"),
     (dict(radius=float("nan")), "radius"), (dict(radius=1e30), None),
 ])
 def test_bad_progressive_arguments(cornell32, kw, match):

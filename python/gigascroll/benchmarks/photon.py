@@ -385,7 +385,8 @@ def _error_study(name: str, args, out: Path) -> dict:
     # sweep at 32x32 in the lit and indirect rooms found it ahead of 4 per pixel from 4x with
     # alpha 2/3, of 1 and of 8 per pixel, and of 16x), for 1.2x as long as Mitsuba needs to
     # reach TARGET_RELMSE (or its longest run); with the sphere and with a final gather for a
-    # quarter of that. The curve is the image after pass counts 2^(i/4).
+    # quarter of that. The curve is the image after pass counts 2^(i/4). The first 64 passes
+    # clip the disc coarsely (render's default coarse_passes): the same error per pass, cheaper.
     mitsuba_runs = [p for pts in curves.values() for p in pts]
     reached = [p["seconds"] for p in mitsuba_runs if p["relmse"] <= TARGET_RELMSE]
     budget = 1.2 * (min(reached) if reached else max(p["seconds"] for p in mitsuba_runs))

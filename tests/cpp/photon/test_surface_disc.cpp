@@ -75,3 +75,22 @@ TEST(SurfaceDisc, APlateOverTheFloorCoversItAndCapsTheRadius) {
     EXPECT_GT(near.area, 0.2f * float(M_PI) * 0.025f * 0.025f);
     EXPECT_NEAR(make_surface_disc(s, {-0.5f, 0, 0}, up, r).area / full, 1.0, 1e-4);
 }
+
+TEST(SurfaceDisc, CoarseDiscClipsLikeTheFineOneWithinItsOctants) {
+    // The coarse disc (8 sectors, fewer probes) of a progressive render's first passes: the
+    // same half disc at the wall and at the floor's border (within its coarser 25%), the same
+    // whole disc in the open, and the same photons rejected beyond the wall.
+    Scene s;
+    floor_and_wall(s);
+    const float r = 0.1f, full = float(M_PI) * r * r;
+    const Vec3f up{0, 1, 0};
+    constexpr auto coarse = SurfaceDisc::Detail::Coarse;
+    EXPECT_NEAR(make_surface_disc(s, {0, 0, 0}, up, r, coarse).area / full, 1.0, 1e-4);
+    EXPECT_NEAR(make_surface_disc(s, {0.495f, 0, 0}, up, r, coarse).area / full, 0.5, 0.125);
+    EXPECT_NEAR(make_surface_disc(s, {-0.995f, 0, 0}, up, r, coarse).area / full, 0.5, 0.125);
+    const SurfaceDisc d = make_surface_disc(s, {0.45f, 0, 0}, up, r, coarse);
+    EXPECT_TRUE(d.contains({0.40f, 0, 0.02f}));
+    EXPECT_FALSE(d.contains({0.52f, 0, 0.0f}));
+    // Both halves of an octant share its reach.
+    for (int k = 0; k < SurfaceDisc::kSectors; k += 2) EXPECT_EQ(d.reach2[k], d.reach2[k + 1]);
+}
