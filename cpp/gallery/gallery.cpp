@@ -372,7 +372,6 @@ bool Gallery::side_reachable(std::uint32_t t, Vec3f n) const {
 
 Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c) const {
     if (scene_.emitter_count() == 0 || samples <= 0) return {0, 0, 0};
-    const float eps = scene_.epsilon();
     // Keyed by position like Renderer::direct_irradiance, on its own stream.
     Rng rng(lighting_.seed, stream_id(StreamKind::Light, 0, 1), scene_.position_key(hit.p));
     const double shift[3] = {rng.uniform(), rng.uniform(), rng.uniform()};
@@ -390,19 +389,7 @@ Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c) 
         // Onto the triangle by the square-root map (continuous, area-preserving: the points
         // stay as well spread as in the square), not by folding the square's upper half.
         const float su = std::sqrt(u[1]);
-        const LightSample ls = scene_.sample_emitter(u[0], 1.0f - su, u[2] * su);
-        const Vec3f w = ls.p - hit.p;
-        const float d2 = dot(w, w);
-        const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
-        if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {
-            ++c.shadow_rays_skipped;
-            continue;
-        }
-        ++c.shadow_rays;
-        const float d = std::sqrt(d2);
-        const Vec3f o = hit.p + hit.n * eps;
-        if (scene_.occluded(o, ls.p - o, 1.0f - 2.0f * eps / d)) continue;
-        E += ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+        E += emitter_sample_irradiance(scene_, hit, scene_.sample_emitter(u[0], 1.0f - su, u[2] * su), c);
     }
     return E * (1.0f / float(samples));
 }

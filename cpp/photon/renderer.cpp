@@ -92,28 +92,32 @@ Vec3f Renderer::emitted_and_direct(const Hit& hit, ShadeCounters& c, bool* needs
 Vec3f Renderer::direct_irradiance(const Hit& hit, int samples, ShadeCounters& c,
                                   std::uint32_t pass) const {
     if (scene_.emitter_count() == 0 || samples <= 0) return {0, 0, 0};
-    const float eps = scene_.epsilon();
     Vec3f E{0, 0, 0};
     // Keyed by position, not pixel: both stereo eyes draw the same samples at one point.
     Rng rng(s_.seed, stream_id(StreamKind::Light, pass), scene_.position_key(hit.p));
     for (int i = 0; i < samples; ++i) {
         const float ut = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-        const LightSample ls = scene_.sample_emitter(ut, u1, u2);
-        const Vec3f w = ls.p - hit.p;
-        const float d2 = dot(w, w);
-        const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
-        if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {  // light behind the surface, or facing away
-            ++c.shadow_rays_skipped;
-            continue;
-        }
-        ++c.shadow_rays;
-        const float d = std::sqrt(d2);
-        const Vec3f o = hit.p + hit.n * eps;
-        if (scene_.occluded(o, ls.p - o, 1.0f - 2.0f * eps / d)) continue;
-        // cos_x cos_l / d^2 with both cosines still scaled by d.
-        E += ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+        E += emitter_sample_irradiance(scene_, hit, scene_.sample_emitter(ut, u1, u2), c);
     }
     return E * (1.0f / float(samples));
+}
+
+Vec3f emitter_sample_irradiance(const Scene& scene, const Hit& hit, const LightSample& ls,
+                                ShadeCounters& c) {
+    const Vec3f w = ls.p - hit.p;
+    const float d2 = dot(w, w);
+    const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
+    if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {  // light behind the surface, or facing away
+        ++c.shadow_rays_skipped;
+        return {0, 0, 0};
+    }
+    ++c.shadow_rays;
+    const float eps = scene.epsilon();
+    const float d = std::sqrt(d2);
+    const Vec3f o = hit.p + hit.n * eps;
+    if (scene.occluded(o, ls.p - o, 1.0f - 2.0f * eps / d)) return {0, 0, 0};
+    // cos_x cos_l / d^2 with both cosines still scaled by d.
+    return ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
 }
 
 Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const {

@@ -71,6 +71,12 @@ struct ShadeCounters {
     std::uint64_t gathers = 0, gathers_skipped = 0, shadow_rays = 0, shadow_rays_skipped = 0;
 };
 
+// One emitter sample's share of the irradiance at `hit` (W / m^2 per channel, before the mean
+// over samples): the sample's radiance x cos at the hit x cos at the light / (d^2 pdf_area), or
+// zero when the light is behind the surface, faces away or a shadow ray finds it occluded.
+Vec3f emitter_sample_irradiance(const Scene& scene, const Hit& hit, const LightSample& ls,
+                                ShadeCounters& c);
+
 class Renderer {
 public:
     // Runs the photon pass (unless skipped) and builds the photon map.
