@@ -21,7 +21,7 @@ def register(sub) -> None:
     p.add_argument("--no-walk", action="store_true", help="skip the gallery walk")
     p.add_argument("--walk-seconds", type=float, default=3.0,
                    help="length of the gallery walk (default 3 s of 90 Hz frames)")
-    p.add_argument("--eye", default="320x352", help="per-eye resolution of the walk (default 320x352)")
+    p.add_argument("--eye", default="720x792", help="per-eye resolution of the walk (default 720x792)")
     p.set_defaults(func=run)
 
 
