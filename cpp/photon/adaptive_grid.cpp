@@ -102,20 +102,7 @@ void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge) {
             c[a] = std::clamp<std::int64_t>(cell_floor((photons[i].p[a] - origin_[a]) * inv_h_, g_[a]), 0, g_[a] - 1);
         key[i] = std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]);
     }
-    // Counting sort by cell; start_ is the exclusive prefix sum of the counts.
-    start_.assign(cells + 1, 0);
-    for (std::uint64_t k : key) ++start_[k + 1];
-    for (std::uint64_t i = 0; i < cells; ++i) start_[i + 1] += start_[i];
-    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-    photons_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) photons_[fill[key[i]]++] = photons[i];
-    for (auto* v : {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_}) v->resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Photon& p = photons_[i];
-        px_[i] = p.p.x; py_[i] = p.p.y; pz_[i] = p.p.z;
-        nx_[i] = p.n.x; ny_[i] = p.n.y; nz_[i] = p.n.z;
-        pr_[i] = p.power.x; pg_[i] = p.power.y; pb_[i] = p.power.z;
-    }
+    sort_photons_by_key(photons, key, cells, start_, photons_, {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_});
 }
 
 int AdaptiveGrid::runs(Vec3f q, float r, PhotonRun* out) const {

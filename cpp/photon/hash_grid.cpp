@@ -50,21 +50,7 @@ HashGrid::HashGrid(const std::vector<Photon>& photons, float radius, Mode mode) 
         cell_of(photons[i].p, c);
         key[i] = dense_ ? std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]) : bucket(c[0], c[1], c[2]);
     }
-    // Counting sort by key; start_ is the exclusive prefix sum of the counts.
-    const std::uint64_t m = dense_ ? cells_ : buckets_;
-    start_.assign(m + 1, 0);
-    for (std::uint64_t k : key) ++start_[k + 1];
-    for (std::uint64_t i = 0; i < m; ++i) start_[i + 1] += start_[i];
-    std::vector<std::uint64_t> fill(start_.begin(), start_.end() - 1);
-    photons_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) photons_[fill[key[i]]++] = photons[i];
-    for (auto* v : {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_}) v->resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Photon& p = photons_[i];
-        px_[i] = p.p.x; py_[i] = p.p.y; pz_[i] = p.p.z;
-        nx_[i] = p.n.x; ny_[i] = p.n.y; nz_[i] = p.n.z;
-        pr_[i] = p.power.x; pg_[i] = p.power.y; pb_[i] = p.power.z;
-    }
+    sort_photons_by_key(photons, key, dense_ ? cells_ : buckets_, start_, photons_, {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_});
 }
 
 Vec3f HashGrid::sum_box(Vec3f q, Vec3f n, float r2, float* count) const {

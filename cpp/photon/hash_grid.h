@@ -8,6 +8,7 @@
 // hashed table of about twice the photon count (as pbrt-v4's SPPM does): cells map to buckets
 // by a spatial hash, and a query visits the distinct buckets of its 27 cells.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -20,6 +21,31 @@ namespace gigascroll {
 struct PhotonRun {
     std::uint64_t begin, end;
 };
+
+// The structure-of-arrays grids' storage: `photons` counting-sorted by key (every key < keys)
+// into `sorted`, start[k] the exclusive prefix sum of the counts (keys + 1 entries), and the
+// sorted photons' position, normal and power components in `lanes` (px, py, pz, nx, ny, nz,
+// pr, pg, pb). One routine, so both grids store photons in the same order.
+template <class Index>
+void sort_photons_by_key(const std::vector<Photon>& photons, const std::vector<std::uint64_t>& key,
+                         std::uint64_t keys, std::vector<Index>& start, std::vector<Photon>& sorted,
+                         const std::array<std::vector<float>*, 9>& lanes) {
+    const std::size_t n = photons.size();
+    start.assign(keys + 1, 0);
+    for (std::uint64_t k : key) ++start[k + 1];
+    for (std::uint64_t i = 0; i < keys; ++i) start[i + 1] += start[i];
+    std::vector<Index> fill(start.begin(), start.end() - 1);
+    sorted.resize(n);
+    for (std::size_t i = 0; i < n; ++i) sorted[fill[key[i]]++] = photons[i];
+    for (auto* v : lanes) v->resize(n);
+    auto& [px, py, pz, nx, ny, nz, pr, pg, pb] = lanes;
+    for (std::size_t i = 0; i < n; ++i) {
+        const Photon& p = sorted[i];
+        (*px)[i] = p.p.x, (*py)[i] = p.p.y, (*pz)[i] = p.p.z;
+        (*nx)[i] = p.n.x, (*ny)[i] = p.n.y, (*nz)[i] = p.n.z;
+        (*pr)[i] = p.power.x, (*pg)[i] = p.power.y, (*pb)[i] = p.power.z;
+    }
+}
 
 // Sum over the runs of weight(j) * power_j, the weights' sum into *count (if not null). The
 // structure-of-arrays grids share it: kLanes independent partial sums make a fixed-width
