@@ -73,3 +73,24 @@ def test_progressive_coarse_passes_is_validated(coarse):
     else:
         with pytest.raises(ValueError, match="coarse_passes"):
             g.render(scene, cam, **kw)
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(final=st.one_of(st.booleans(), st.integers(-3, 3), st.floats(allow_nan=True), st.none(),
+                       st.text(max_size=3)),
+       progressive=st.booleans())
+def test_final_gather_is_validated(final, progressive):
+    """render(final_gather=...): a bool renders a finite, non-negative image; anything else
+    (1, "yes", None, NaN) is a ValueError naming the option, never a crash."""
+    scene, cam = _CORNELL16
+    kw = dict(photons=500, radius=0.05, progressive=progressive, passes=2, final_gather=final)
+    if not progressive:
+        kw.pop("passes")
+    try:
+        img = g.render(scene, cam, **kw)
+    except ValueError as e:
+        assert not isinstance(final, bool) or (final and not progressive), e
+        assert "final_gather" in str(e)
+        return
+    assert isinstance(final, bool)
+    assert np.isfinite(img).all() and (img >= 0).all()
