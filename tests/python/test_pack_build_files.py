@@ -82,8 +82,13 @@ def test_fallback_replacement_keeps_one_pack(tmp_path, monkeypatch):
 
 
 # A child process that builds a big pack slowly (small bands) and reports when it started.
+# The child starts from the default dispositions of SIGINT and SIGHUP whatever this process
+# inherited (a shell's background job ignores SIGINT, nohup ignores SIGHUP, and a build leaves
+# a caller's ignored signal alone by design).
 _SLOW_BUILD = """
-import sys, time, numpy as np, gigascroll
+import signal, sys, time, numpy as np, gigascroll
+signal.signal(signal.SIGINT, signal.default_int_handler)
+signal.signal(signal.SIGHUP, signal.SIG_IGN if sys.argv[2:] == ["nohup"] else signal.SIG_DFL)
 from gigascroll.pack import ArraySource
 class Slow(ArraySource):
     def bands(self):
@@ -113,6 +118,23 @@ def test_signal_during_build_cleans_up(tmp_path, sig):
     assert proc.returncode != 0
     assert "Interrupt" in err  # BuildInterrupted / KeyboardInterrupt, not a default kill
     assert not any(tmp_path.iterdir()), list(tmp_path.iterdir())
+
+
+def test_build_under_nohup_ignores_sighup(tmp_path):
+    """A caller that ignores SIGHUP (nohup) keeps its choice: the build goes on to a whole pack."""
+    out = tmp_path / "p"
+    proc = subprocess.Popen([sys.executable, "-c", _SLOW_BUILD, str(out), "nohup"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "started"
+        proc.send_signal(signal.SIGHUP)
+        rest, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert rest.strip() == "finished"
+    check_pack_against(TilePack(out), 0, np.zeros((4000, 64, 3), np.uint8))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p"]
 
 
 def test_cli_reports_sigterm_with_its_exit_code(tmp_path):
