@@ -127,14 +127,9 @@ struct PlaneMap {
         su = pp.tiles.width() / pp.width_m, sv = pp.tiles.height() / pp.height_m;
     }
 
-    // uv clamped to [0, 1] and lambda = log2(footprint in texels).
-    __attribute__((always_inline)) void map(Vec3d D, double& u, double& v, float& lod) const {
-        map_lanes(1, &D.x, &D.y, &D.z, &u, &v, &lod);
-    }
-
-    // The same for n rays at once (D as three arrays): a loop the compiler vectorises (the
-    // packet's painting pixels in SIMD lanes), with log2 by fast_log2 and its rare
-    // non-normal footprints patched after the loop.
+    // uv clamped to [0, 1] and lambda = log2(footprint in texels) for n rays at once (D as
+    // three arrays): a loop the compiler vectorises (the painting pixels in SIMD lanes), with
+    // log2 by fast_log2 and its rare non-normal footprints patched after the loop.
     __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
@@ -242,16 +237,14 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
     width = w, height = h;
     const std::size_t n = std::size_t(w) * h;
     geom.resize(n), p.resize(n), lod.resize(n);
-    if (keep_light) this->n.resize(n), texel.resize(n), scale.resize(n), add.resize(n);
+    if (keep_light) this->n.resize(n), scale.resize(n), add.resize(n);
 }
 
 namespace {
 // A painting pixel of the row waiting for its texel: radiance = linear albedo x scale + add.
-// source >= 0: the left pixel whose texel it takes (the levels agree), else it is sampled.
 struct PendingPixel {
     std::uint32_t x;
     int placement;
-    std::int32_t source;
     Vec3f scale, add;
 };
 }  // namespace
@@ -278,11 +271,21 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
-        std::vector<PendingPixel> pending, copied;
+        std::vector<PendingPixel> pending;
+        std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
         pending.reserve(w);
         std::vector<double> us, vs, column_sx(w);  // u and v apart: the sampler's batches read them densely
         std::vector<float> lods, texels;
         us.reserve(w), vs.reserve(w), lods.reserve(w);
+        // The right eye's reused painting pixels of the row: column, placement, direction.
+        std::vector<std::uint32_t> rx;
+        std::vector<int> rpl;
+        std::vector<double> rDx, rDy, rDz, ru, rv;
+        std::vector<float> rlod;
+        if (left) {
+            rx.reserve(w), rpl.reserve(w), rDx.reserve(w), rDy.reserve(w), rDz.reserve(w);
+            ru.reserve(w), rv.reserve(w), rlod.reserve(w);
+        }
         for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
@@ -303,7 +306,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (row == current_row) return;
             current_row = row;
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            pending.clear(), copied.clear(), us.clear(), vs.clear(), lods.clear();
+            pending.clear(), us.clear(), vs.clear(), lods.clear();
         };
         // A painting pixel whose uv and level are known: its level stored, its texel queued.
         auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
@@ -314,22 +317,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             g.lod[i] = lod;
             // A reused point whose level here is the left eye's to within the tolerance keeps
             // the left eye's sample (the trilinear blend would move by less than that
-            // fraction of the two levels' difference).
+            // fraction of the two levels' difference); with the left eye's texel, light and
+            // shading its radiance is the left pixel's, copied.
             if (source >= 0 && std::abs(left->lod[std::size_t(source)] - lod) <= o.reuse_lod_tolerance) {
-                copied.push_back({x, pl, source, scale, add});
+                std::copy_n(left_rgb + 3 * std::size_t(source), 3, rgb + 3 * i);
+                ++copied_count;
                 return;
             }
-            pending.push_back({x, pl, -1, scale, add});
+            pending.push_back({x, pl, scale, add});
             us.push_back(u), vs.push_back(v);
             lods.push_back(lod);
-        };
-        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
-                                  std::int32_t source, Vec3f scale, Vec3f add)
-                                  __attribute__((always_inline)) {
-            double u, v;
-            float lod;
-            maps[std::size_t(pl)].map(D, u, v, lod);
-            mapped_pixel(i, x, pl, u, v, lod, source, scale, add);
         };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
@@ -443,8 +440,11 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             lap(t_rays);
             start_row(row);
             // The right eye's claimed pixels: the left hit and its light, the level of this eye
-            // (the point seen along this eye's ray through it).
+            // (the point seen along this eye's ray through it), the painting pixels' uv and
+            // level in SIMD lanes per run of one painting (PlaneMap::map_lanes, as the left
+            // eye's packets).
             if (left) {
+                rx.clear(), rpl.clear(), rDx.clear(), rDy.clear(), rDz.clear();
                 for (std::uint32_t x = 0; x < w; ++x) {
                     const std::size_t i = row * w + x;
                     const std::int32_t s = sources[i];
@@ -460,8 +460,28 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                         continue;
                     }
                     const Vec3d to_p = Vec3d(left->p[si]) - eye.position;
-                    painting_pixel(i, x, pl, to_p / dot(to_p, eye.forward), s, left->scale[si],
-                                   left->add[si]);
+                    const Vec3d D = to_p / dot(to_p, eye.forward);
+                    rx.push_back(x), rpl.push_back(pl);
+                    rDx.push_back(D.x), rDy.push_back(D.y), rDz.push_back(D.z);
+                }
+                const std::size_t nr = rx.size();
+                ru.resize(nr), rv.resize(nr), rlod.resize(nr);
+                for (std::size_t r0 = 0; r0 < nr;) {
+                    const int pl = rpl[r0];
+                    std::size_t r1 = r0 + 1;
+                    while (r1 < nr && rpl[r1] == pl) ++r1;
+                    maps[std::size_t(pl)].map_lanes(r1 - r0, rDx.data() + r0, rDy.data() + r0,
+                                                    rDz.data() + r0, ru.data() + r0,
+                                                    rv.data() + r0, rlod.data() + r0);
+                    r0 = r1;
+                }
+                for (std::size_t k = 0; k < nr; ++k) {
+                    const std::uint32_t x = rx[k];
+                    const std::size_t i = row * w + x;
+                    const std::int32_t s = sources[i];
+                    const std::size_t si = std::size_t(s);
+                    mapped_pixel(i, x, rpl[k], ru[k], rv[k], rlod[k], s, left->scale[si],
+                                 left->add[si]);
                 }
             }
             // Runs of one painting sampled in one call.
@@ -492,15 +512,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     o.painting_reflectance;
                 const Vec3f L = albedo * q.scale + q.add;
                 rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
-                if (keep_light) g.texel[i] = Vec3f{a[0], a[1], a[2]};
             };
             for (std::size_t k = 0; k < pending.size(); ++k) shade(pending[k], &texels[3 * k]);
-            for (const PendingPixel& q : copied) {
-                const Vec3f& a = left->texel[std::size_t(q.source)];
-                const float t[3] = {a.x, a.y, a.z};
-                shade(q, t);
-            }
-            painting_count += pending.size() + copied.size();
+            painting_count += pending.size() + copied_count;
+            copied_count = 0;
             lap(t_shade);
             timed = (row + 1) % kTimedRow == 0;
             if (timed) mark = Clock::now();
