@@ -558,26 +558,101 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
     const std::uint32_t rw = right.width;
     // Claims: the nearest left hit per right pixel wins (depth in the high word, so the
     // smaller 64-bit value is the nearer claim; positive floats order as their bits).
+    // In chunks: the projections in SIMD lanes (a left pixel that claims nothing gets target
+    // kNoTarget), then the compare-and-swaps.
+    constexpr std::uint32_t kNoTarget = ~0u;
     parallel_for(L.geom.size(), 4096, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-            if (L.geom[i] == kNoHit) continue;
-            const Vec3f p = L.p[i], to_eye = eye - p;
-            if (dot(to_eye, L.n[i]) <= 0) continue;  // the right eye sees the other side
-            const Vec3f d = p - eye;
-            const Vec3f dir{dot(d, rgt), dot(d, up), dot(d, fwd)};
-            if (!(dir.z > 0.0f)) continue;
-            const float inv_z = 1.0f / dir.z;
-            const float fx = std::floor(0.5f * fw + dir.x * inv_z * sx);
-            const float fy = std::floor(0.5f * fh - dir.y * inv_z * sy);
-            if (!(fx >= 0.0f && fx < fw && fy >= 0.0f && fy < fh)) continue;
-            const float depth = dot(p - eye, fwd);
-            if (!(depth > 0)) continue;
-            const std::uint64_t claim =
-                (std::uint64_t(std::bit_cast<std::uint32_t>(depth)) << 32) | std::uint64_t(i);
-            std::atomic_ref<std::uint64_t> slot(claims_[std::size_t(fy) * rw + std::size_t(fx)]);
-            std::uint64_t seen = slot.load(std::memory_order_relaxed);
-            while (claim < seen &&
-                   !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
+        constexpr std::size_t kChunk = 256;
+        alignas(64) std::uint32_t target[kChunk];
+        alignas(64) float depth[kChunk];
+        for (std::size_t c0 = b; c0 < e; c0 += kChunk) {
+            const std::size_t count = std::min(kChunk, e - c0);
+            // Points and normals as SoA first: GCC does not vectorise the 3-strided loads.
+            alignas(64) float px[kChunk], py[kChunk], pz[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
+            for (std::size_t k = 0; k < count; ++k) {
+                const Vec3f& p = L.p[c0 + k];
+                const Vec3f& nk = L.n[c0 + k];
+                px[k] = p.x, py[k] = p.y, pz[k] = p.z, nx[k] = nk.x, ny[k] = nk.y, nz[k] = nk.z;
+            }
+            const unsigned* __restrict geom = L.geom.data() + c0;
+            std::size_t k = 0;
+#if defined(__AVX2__)
+            // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
+            // keeps that loop scalar: "control flow in loop").
+            {
+                const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
+                             ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
+                const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
+                const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
+                const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
+                const __m256i no_hit = _mm256_set1_epi32(int(kNoHit)), vrw = _mm256_set1_epi32(int(rw));
+                auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+                    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                                         _mm256_mul_ps(az, bz));
+                };
+                for (; k + 8 <= count; k += 8) {
+                    const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
+                                 z = _mm256_load_ps(pz + k);
+                    const __m256 facing =
+                        dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
+                             _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
+                    const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
+                                 ez = _mm256_sub_ps(z, ez_);
+                    const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
+                                           _mm256_set1_ps(rgt.z));
+                    const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
+                                           _mm256_set1_ps(up.z));
+                    const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
+                                           _mm256_set1_ps(fwd.z));
+                    const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
+                    const __m256 fx = _mm256_floor_ps(
+                        _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
+                    const __m256 fy = _mm256_floor_ps(
+                        _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
+                    const __m256i hit = _mm256_xor_si256(
+                        _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(geom + k)),
+                                           no_hit),
+                        _mm256_set1_epi32(-1));
+                    __m256 ok = _mm256_and_ps(_mm256_castsi256_ps(hit),
+                                              _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
+                    // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
+                    const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
+                                                       _mm256_cvttps_epi32(fx));
+                    const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
+                                                          _mm256_castps_si256(ok));
+                    _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
+                    _mm256_store_ps(depth + k, dz);
+                }
+            }
+#endif
+            for (; k < count; ++k) {
+                const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
+                const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
+                const Vec3f d = p - eye;
+                const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
+                const float inv_z = 1.0f / dz;
+                const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
+                const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
+                const bool ok = geom[k] != kNoHit && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f &&
+                                fx < fw && fy >= 0.0f && fy < fh;
+                target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
+                depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
+            }
+            for (std::size_t k = 0; k < count; ++k) {
+                if (target[k] == kNoTarget) continue;
+                const std::uint64_t claim =
+                    (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) |
+                    std::uint64_t(c0 + k);
+                std::atomic_ref<std::uint64_t> slot(claims_[target[k]]);
+                std::uint64_t seen = slot.load(std::memory_order_relaxed);
+                while (claim < seen &&
+                       !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
+                }
             }
         }
     }, o.threads);
