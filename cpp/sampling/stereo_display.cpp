@@ -271,21 +271,21 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
-        std::vector<PendingPixel> pending;
+        // The row's painting pixels waiting for their texels (at most one per column, so
+        // arrays of the row's width and a count: no push_back's capacity test per pixel).
+        std::vector<PendingPixel> pending(w);
+        std::size_t pending_count = 0;
         std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
-        pending.reserve(w);
-        std::vector<double> us, vs, column_sx(w);  // u and v apart: the sampler's batches read them densely
-        std::vector<float> lods, texels;
-        us.reserve(w), vs.reserve(w), lods.reserve(w);
-        // The right eye's reused painting pixels of the row: column, placement, direction.
-        std::vector<std::uint32_t> rx;
-        std::vector<int> rpl;
-        std::vector<double> rDx, rDy, rDz, ru, rv;
-        std::vector<float> rlod;
-        if (left) {
-            rx.reserve(w), rpl.reserve(w), rDx.reserve(w), rDy.reserve(w), rDz.reserve(w);
-            ru.reserve(w), rv.reserve(w), rlod.reserve(w);
-        }
+        std::vector<double> us(w), vs(w), column_sx(w);  // u and v apart: the sampler's batches read them densely
+        std::vector<float> lods(w), texels(3 * std::size_t(w));
+        // The right eye's reused painting pixels of the row: column, placement, left source,
+        // point, direction, and uv and level.
+        const std::size_t rn = left ? w : 0;
+        std::vector<std::uint32_t> rx(rn);
+        std::vector<int> rpl(rn);
+        std::vector<std::int32_t> rsrc(rn);
+        std::vector<double> rPx(rn), rPy(rn), rPz(rn), rDx(rn), rDy(rn), rDz(rn), ru(rn), rv(rn);
+        std::vector<float> rlod(rn);
         for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
@@ -306,12 +306,14 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (row == current_row) return;
             current_row = row;
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            pending.clear(), us.clear(), vs.clear(), lods.clear();
+            pending_count = 0;
         };
         // A painting pixel whose uv and level are known: its level stored, its texel queued.
+        // Returns whether it was queued (the caller then sets its light), else its radiance
+        // was copied from the left source.
         auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
-                                float lod, std::int32_t source, Vec3f scale, Vec3f add)
-                                __attribute__((always_inline)) {
+                                float lod, std::int32_t source)
+                                __attribute__((always_inline)) -> PendingPixel* {
             lod += o.lod_bias;
             if (!std::isfinite(lod)) lod = 0.0f;
             g.lod[i] = lod;
@@ -322,11 +324,14 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (source >= 0 && std::abs(left->lod[std::size_t(source)] - lod) <= o.reuse_lod_tolerance) {
                 std::copy_n(left_rgb + 3 * std::size_t(source), 3, rgb + 3 * i);
                 ++copied_count;
-                return;
+                return nullptr;
             }
-            pending.push_back({x, pl, scale, add});
-            us.push_back(u), vs.push_back(v);
-            lods.push_back(lod);
+            const std::size_t k = pending_count++;
+            GS_CHECK(k < pending.size());  // one pixel per column and row
+            PendingPixel& q = pending[k];
+            q.x = x, q.placement = pl;
+            us[k] = u, vs[k] = v, lods[k] = lod;
+            return &q;
         };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
@@ -431,7 +436,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const SurfaceLight& sl = lights[j];
                 const Vec3f scale = sl.irradiance * kInvPi;
                 if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
-                mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1, scale, sl.emission);
+                PendingPixel* pp = mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1);
+                pp->scale = scale, pp->add = sl.emission;
             }
             lap(t_vt);
         };
@@ -444,7 +450,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             // level in SIMD lanes per run of one painting (PlaneMap::map_lanes, as the left
             // eye's packets).
             if (left) {
-                rx.clear(), rpl.clear(), rDx.clear(), rDy.clear(), rDz.clear();
+                std::size_t nr = 0;
                 for (std::uint32_t x = 0; x < w; ++x) {
                     const std::size_t i = row * w + x;
                     const std::int32_t s = sources[i];
@@ -459,13 +465,27 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                         g.lod[i] = kNaN;
                         continue;
                     }
-                    const Vec3d to_p = Vec3d(left->p[si]) - eye.position;
-                    const Vec3d D = to_p / dot(to_p, eye.forward);
-                    rx.push_back(x), rpl.push_back(pl);
-                    rDx.push_back(D.x), rDy.push_back(D.y), rDz.push_back(D.z);
+                    const Vec3f& p = left->p[si];
+                    rx[nr] = x, rpl[nr] = pl, rsrc[nr] = s;
+                    rPx[nr] = p.x, rPy[nr] = p.y, rPz[nr] = p.z;
+                    ++nr;
                 }
-                const std::size_t nr = rx.size();
-                ru.resize(nr), rv.resize(nr), rlod.resize(nr);
+                // D = (p - eye) / ((p - eye) . forward), as Vec3d's operators compute it.
+                {
+                    const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
+                    const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
+                    const double* __restrict px = rPx.data();
+                    const double* __restrict py = rPy.data();
+                    const double* __restrict pz = rPz.data();
+                    double* __restrict dx = rDx.data();
+                    double* __restrict dy = rDy.data();
+                    double* __restrict dz = rDz.data();
+                    for (std::size_t k = 0; k < nr; ++k) {
+                        const double tx = px[k] - ex, ty = py[k] - ey, tz = pz[k] - ez;
+                        const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
+                        dx[k] = tx * inv, dy[k] = ty * inv, dz[k] = tz * inv;
+                    }
+                }
                 for (std::size_t r0 = 0; r0 < nr;) {
                     const int pl = rpl[r0];
                     std::size_t r1 = r0 + 1;
@@ -477,19 +497,18 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 }
                 for (std::size_t k = 0; k < nr; ++k) {
                     const std::uint32_t x = rx[k];
-                    const std::size_t i = row * w + x;
-                    const std::int32_t s = sources[i];
-                    const std::size_t si = std::size_t(s);
-                    mapped_pixel(i, x, rpl[k], ru[k], rv[k], rlod[k], s, left->scale[si],
-                                 left->add[si]);
+                    const std::int32_t s = rsrc[k];
+                    if (PendingPixel* pp = mapped_pixel(row * w + x, x, rpl[k], ru[k], rv[k], rlod[k], s)) {
+                        pp->scale = left->scale[std::size_t(s)];
+                        pp->add = left->add[std::size_t(s)];
+                    }
                 }
             }
             // Runs of one painting sampled in one call.
-            texels.resize(3 * pending.size());
-            for (std::size_t k0 = 0; k0 < pending.size();) {
+            for (std::size_t k0 = 0; k0 < pending_count;) {
                 const int pl = pending[k0].placement;
                 std::size_t k1 = k0 + 1;
-                while (k1 < pending.size() && pending[k1].placement == pl) ++k1;
+                while (k1 < pending_count && pending[k1].placement == pl) ++k1;
                 SampleRequest r;
                 r.painting = scene.paintings[std::size_t(pl)].painting;
                 require(r.painting < paintings, "display: a painting of the scene is not in "
@@ -513,8 +532,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const Vec3f L = albedo * q.scale + q.add;
                 rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
             };
-            for (std::size_t k = 0; k < pending.size(); ++k) shade(pending[k], &texels[3 * k]);
-            painting_count += pending.size() + copied_count;
+            for (std::size_t k = 0; k < pending_count; ++k) shade(pending[k], &texels[3 * k]);
+            painting_count += pending_count + copied_count;
             copied_count = 0;
             lap(t_shade);
             timed = (row + 1) % kTimedRow == 0;
