@@ -249,6 +249,34 @@ struct PendingPixel {
 };
 }  // namespace
 
+namespace {
+// A worker's per-row arrays (see render_eye), kept between calls in each thread.
+struct RowScratch {
+    std::vector<PendingPixel> pending;
+    std::vector<double> us, vs;
+    std::vector<float> lods, texels;
+    std::vector<std::uint32_t> rx;
+    std::vector<int> rpl;
+    std::vector<std::int32_t> rsrc;
+    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz, ru, rv;
+    std::vector<float> rlod;
+
+    void fit(std::size_t w, bool reused) {
+        if (pending.size() < w) pending.resize(w), us.resize(w), vs.resize(w), lods.resize(w);
+        if (texels.size() < 3 * w) texels.resize(3 * w);
+        if (reused && rx.size() < w) {
+            rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
+            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz, &ru, &rv}) a->resize(w);
+        }
+    }
+};
+
+RowScratch& row_scratch() {
+    thread_local RowScratch scratch;
+    return scratch;
+}
+}  // namespace
+
 void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
                              const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
                              GBuffer& g, bool keep_light, const float* left_rgb, float* rgb,
@@ -268,25 +296,30 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     const SrgbTable& srgb_decode = srgb_table();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
     std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0};
+    std::vector<double> column_sx(w);  // screen x of each column's centre
+    for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
         // The row's painting pixels waiting for their texels (at most one per column, so
-        // arrays of the row's width and a count: no push_back's capacity test per pixel).
-        std::vector<PendingPixel> pending(w);
+        // arrays of the row's width and a count: no push_back's capacity test per pixel), in
+        // this thread's scratch (parallel_for calls this body per 4 rows: allocating the
+        // arrays per call cost page faults).
+        RowScratch& sc = row_scratch();
+        sc.fit(w, left != nullptr);
+        std::vector<PendingPixel>& pending = sc.pending;
         std::size_t pending_count = 0;
         std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
-        std::vector<double> us(w), vs(w), column_sx(w);  // u and v apart: the sampler's batches read them densely
-        std::vector<float> lods(w), texels(3 * std::size_t(w));
+        std::vector<double>&us = sc.us, &vs = sc.vs;  // u and v apart: the sampler's batches read them densely
+        std::vector<float>&lods = sc.lods, &texels = sc.texels;
         // The right eye's reused painting pixels of the row: column, placement, left source,
         // point, direction, and uv and level.
-        const std::size_t rn = left ? w : 0;
-        std::vector<std::uint32_t> rx(rn);
-        std::vector<int> rpl(rn);
-        std::vector<std::int32_t> rsrc(rn);
-        std::vector<double> rPx(rn), rPy(rn), rPz(rn), rDx(rn), rDy(rn), rDz(rn), ru(rn), rv(rn);
-        std::vector<float> rlod(rn);
-        for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
+        std::vector<std::uint32_t>& rx = sc.rx;
+        std::vector<int>& rpl = sc.rpl;
+        std::vector<std::int32_t>& rsrc = sc.rsrc;
+        std::vector<double>&rPx = sc.rPx, &rPy = sc.rPy, &rPz = sc.rPz, &rDx = sc.rDx, &rDy = sc.rDy,
+                          &rDz = sc.rDz, &ru = sc.ru, &rv = sc.rv;
+        std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
         std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0;
@@ -327,7 +360,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 return nullptr;
             }
             const std::size_t k = pending_count++;
-            GS_CHECK(k < pending.size());  // one pixel per column and row
+            GS_CHECK(k < w);  // one pixel per column and row
             PendingPixel& q = pending[k];
             q.x = x, q.placement = pl;
             us[k] = u, vs[k] = v, lods[k] = lod;
