@@ -21,6 +21,12 @@ public:
     std::uint32_t by_double(std::uint32_t n) const {
         return static_cast<std::uint32_t>((double(n) + 0.5) * inv_);
     }
+    // by_double for 0 <= n < 2^31 through int32 conversions (x86 has SIMD int32 <-> double
+    // but no uint32 <-> double below AVX-512, which GCC emulates at several instructions
+    // each): the same double, the same quotient (below 2^31), so the same result.
+    std::uint32_t by_double_below_2_31(std::int32_t n) const {
+        return static_cast<std::uint32_t>(static_cast<std::int32_t>((double(n) + 0.5) * inv_));
+    }
     std::uint32_t divisor() const { return d_; }
 
 private:

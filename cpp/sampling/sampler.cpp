@@ -202,8 +202,9 @@ void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
         const float f = static_cast<float>(tx - double(i)), g = static_cast<float>(ty - double(j));
         b.x0[k] = x0, b.y0[k] = y0, b.level[k] = l;
         b.ix[k] = i, b.iy[k] = j, b.fx[k] = f, b.fy[k] = g;
-        b.cx[k] = divide_p.by_double(std::uint32_t(i) + (f >= 0.5f ? 1u : 0u));
-        b.cy[k] = divide_p.by_double(std::uint32_t(j) + (g >= 0.5f ? 1u : 0u));
+        // 0 <= i, j < 2^30 (a painting is at most 2^30 texels a side), so i + 1 < 2^31.
+        b.cx[k] = divide_p.by_double_below_2_31(i + (f >= 0.5f ? 1 : 0));
+        b.cy[k] = divide_p.by_double_below_2_31(j + (g >= 0.5f ? 1 : 0));
     }
 }
 // Seed 000 eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
@@ -376,18 +377,27 @@ template <TexelFormat F>
 void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end) {
     const std::uint32_t L = vt.layout().paintings[r.painting].levels();
     constexpr std::size_t kChunk = 256;
-    float fine[kChunk], coarse[kChunk], blend[kChunk], second[3 * kChunk];
+    float fine[kChunk], coarse[kChunk], blend[kChunk], second[3 * kChunk], lod_scalar[kChunk];
+    std::fill(lod_scalar, lod_scalar + kChunk, r.lod_scalar);
+    const float top = float(L - 1);
+    const std::int32_t levels = std::int32_t(L);
     for (std::size_t b = begin; b < end; b += kChunk) {
         const std::size_t n = std::min(kChunk, end - b);
-        bool any = false;
+        const float* __restrict lod_in = r.lod ? r.lod + b : lod_scalar;
+        // Branch-free so it vectorises, levels as int32 (below 32; x86 has no SIMD uint32
+        // to float below AVX-512).
+        std::int32_t any = 0;
         for (std::size_t k = 0; k < n; ++k) {
-            float lod = r.lod ? r.lod[b + k] : r.lod_scalar;
-            lod = std::isnan(lod) ? 0.0f : std::clamp(lod, 0.0f, float(L - 1));
-            const std::uint32_t l0 = static_cast<std::uint32_t>(lod);
+            float lod = lod_in[k];
+            // isnan ? 0 : clamp(lod, 0, top) as selects ("0 < x ? x : 0" maps NaN to 0; -0
+            // becomes +0, the same level and blend).
+            lod = 0.0f < lod ? lod : 0.0f;
+            lod = lod < top ? lod : top;
+            const std::int32_t l0 = static_cast<std::int32_t>(lod);
             const float f = lod - float(l0);
-            const bool two = f > 0 && l0 + 1 < L;
+            const bool two = (f > 0) & (l0 + 1 < levels);
             fine[k] = float(l0), coarse[k] = float(two ? l0 + 1 : l0), blend[k] = two ? f : 0.0f;
-            any |= two;
+            any |= std::int32_t(two);
         }
         SampleRequest q = r;
         q.u = r.u + b * r.uv_stride, q.v = r.v + b * r.uv_stride;
@@ -398,11 +408,12 @@ void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::siz
         if (!any) continue;
         q.lod = coarse, q.out = second, q.level_out = nullptr;
         sample_bilinear<F>(vt, q, 0, n);
-        float* out = r.out + 3 * b;
+        // Branch-free so it vectorises: where blend is 0 the sum adds a zero (second is the
+        // same level's finite value there), which leaves every value as it was.
+        float* __restrict out = r.out + 3 * b;
         for (std::size_t k = 0; k < n; ++k)
-            if (blend[k] > 0)
-                for (int c = 0; c < 3; ++c)
-                    out[3 * k + c] += blend[k] * (second[3 * k + c] - out[3 * k + c]);
+            for (int c = 0; c < 3; ++c)
+                out[3 * k + c] += blend[k] * (second[3 * k + c] - out[3 * k + c]);
     }
 }
 

@@ -127,14 +127,9 @@ struct PlaneMap {
         su = pp.tiles.width() / pp.width_m, sv = pp.tiles.height() / pp.height_m;
     }
 
-    // uv clamped to [0, 1] and lambda = log2(footprint in texels).
-    __attribute__((always_inline)) void map(Vec3d D, double& u, double& v, float& lod) const {
-        map_lanes(1, &D.x, &D.y, &D.z, &u, &v, &lod);
-    }
-
-    // The same for n rays at once (D as three arrays): a loop the compiler vectorises (the
-    // packet's painting pixels in SIMD lanes), with log2 by fast_log2 and its rare
-    // non-normal footprints patched after the loop.
+    // uv clamped to [0, 1] and lambda = log2(footprint in texels) for n rays at once (D as
+    // three arrays): a loop the compiler vectorises (the painting pixels in SIMD lanes), with
+    // log2 by fast_log2 and its rare non-normal footprints patched after the loop.
     __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
@@ -242,18 +237,44 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
     width = w, height = h;
     const std::size_t n = std::size_t(w) * h;
     geom.resize(n), p.resize(n), lod.resize(n);
-    if (keep_light) this->n.resize(n), texel.resize(n), scale.resize(n), add.resize(n);
+    if (keep_light) this->n.resize(n), scale.resize(n), add.resize(n);
 }
 
 namespace {
 // A painting pixel of the row waiting for its texel: radiance = linear albedo x scale + add.
-// source >= 0: the left pixel whose texel it takes (the levels agree), else it is sampled.
 struct PendingPixel {
     std::uint32_t x;
     int placement;
-    std::int32_t source;
     Vec3f scale, add;
 };
+}  // namespace
+
+namespace {
+// A worker's per-row arrays (see render_eye), kept between calls in each thread.
+struct RowScratch {
+    std::vector<PendingPixel> pending;
+    std::vector<double> us, vs;
+    std::vector<float> lods, texels;
+    std::vector<std::uint32_t> rx;
+    std::vector<int> rpl;
+    std::vector<std::int32_t> rsrc;
+    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz, ru, rv;
+    std::vector<float> rlod;
+
+    void fit(std::size_t w, bool reused) {
+        if (pending.size() < w) pending.resize(w), us.resize(w), vs.resize(w), lods.resize(w);
+        if (texels.size() < 3 * w) texels.resize(3 * w);
+        if (reused && rx.size() < w) {
+            rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
+            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz, &ru, &rv}) a->resize(w);
+        }
+    }
+};
+
+RowScratch& row_scratch() {
+    thread_local RowScratch scratch;
+    return scratch;
+}
 }  // namespace
 
 void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
@@ -275,15 +296,30 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     const SrgbTable& srgb_decode = srgb_table();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
     std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0};
+    std::vector<double> column_sx(w);  // screen x of each column's centre
+    for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
-        std::vector<PendingPixel> pending, copied;
-        pending.reserve(w);
-        std::vector<double> us, vs, column_sx(w);  // u and v apart: the sampler's batches read them densely
-        std::vector<float> lods, texels;
-        us.reserve(w), vs.reserve(w), lods.reserve(w);
-        for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
+        // The row's painting pixels waiting for their texels (at most one per column, so
+        // arrays of the row's width and a count: no push_back's capacity test per pixel), in
+        // this thread's scratch (parallel_for calls this body per 4 rows: allocating the
+        // arrays per call cost page faults).
+        RowScratch& sc = row_scratch();
+        sc.fit(w, left != nullptr);
+        std::vector<PendingPixel>& pending = sc.pending;
+        std::size_t pending_count = 0;
+        std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
+        std::vector<double>&us = sc.us, &vs = sc.vs;  // u and v apart: the sampler's batches read them densely
+        std::vector<float>&lods = sc.lods, &texels = sc.texels;
+        // The right eye's reused painting pixels of the row: column, placement, left source,
+        // point, direction, and uv and level.
+        std::vector<std::uint32_t>& rx = sc.rx;
+        std::vector<int>& rpl = sc.rpl;
+        std::vector<std::int32_t>& rsrc = sc.rsrc;
+        std::vector<double>&rPx = sc.rPx, &rPy = sc.rPy, &rPz = sc.rPz, &rDx = sc.rDx, &rDy = sc.rDy,
+                          &rDz = sc.rDz, &ru = sc.ru, &rv = sc.rv;
+        std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
         std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0;
@@ -303,33 +339,32 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (row == current_row) return;
             current_row = row;
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            pending.clear(), copied.clear(), us.clear(), vs.clear(), lods.clear();
+            pending_count = 0;
         };
         // A painting pixel whose uv and level are known: its level stored, its texel queued.
+        // Returns whether it was queued (the caller then sets its light), else its radiance
+        // was copied from the left source.
         auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
-                                float lod, std::int32_t source, Vec3f scale, Vec3f add)
-                                __attribute__((always_inline)) {
+                                float lod, std::int32_t source)
+                                __attribute__((always_inline)) -> PendingPixel* {
             lod += o.lod_bias;
             if (!std::isfinite(lod)) lod = 0.0f;
             g.lod[i] = lod;
             // A reused point whose level here is the left eye's to within the tolerance keeps
             // the left eye's sample (the trilinear blend would move by less than that
-            // fraction of the two levels' difference).
+            // fraction of the two levels' difference); with the left eye's texel, light and
+            // shading its radiance is the left pixel's, copied.
             if (source >= 0 && std::abs(left->lod[std::size_t(source)] - lod) <= o.reuse_lod_tolerance) {
-                copied.push_back({x, pl, source, scale, add});
-                return;
+                std::copy_n(left_rgb + 3 * std::size_t(source), 3, rgb + 3 * i);
+                ++copied_count;
+                return nullptr;
             }
-            pending.push_back({x, pl, -1, scale, add});
-            us.push_back(u), vs.push_back(v);
-            lods.push_back(lod);
-        };
-        auto painting_pixel = [&](std::size_t i, std::uint32_t x, int pl, Vec3d D,
-                                  std::int32_t source, Vec3f scale, Vec3f add)
-                                  __attribute__((always_inline)) {
-            double u, v;
-            float lod;
-            maps[std::size_t(pl)].map(D, u, v, lod);
-            mapped_pixel(i, x, pl, u, v, lod, source, scale, add);
+            const std::size_t k = pending_count++;
+            GS_CHECK(k < w);  // one pixel per column and row
+            PendingPixel& q = pending[k];
+            q.x = x, q.placement = pl;
+            us[k] = u, vs[k] = v, lods[k] = lod;
+            return &q;
         };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
@@ -434,7 +469,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const SurfaceLight& sl = lights[j];
                 const Vec3f scale = sl.irradiance * kInvPi;
                 if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
-                mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1, scale, sl.emission);
+                PendingPixel* pp = mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1);
+                pp->scale = scale, pp->add = sl.emission;
             }
             lap(t_vt);
         };
@@ -443,8 +479,11 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             lap(t_rays);
             start_row(row);
             // The right eye's claimed pixels: the left hit and its light, the level of this eye
-            // (the point seen along this eye's ray through it).
+            // (the point seen along this eye's ray through it), the painting pixels' uv and
+            // level in SIMD lanes per run of one painting (PlaneMap::map_lanes, as the left
+            // eye's packets).
             if (left) {
+                std::size_t nr = 0;
                 for (std::uint32_t x = 0; x < w; ++x) {
                     const std::size_t i = row * w + x;
                     const std::int32_t s = sources[i];
@@ -459,17 +498,50 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                         g.lod[i] = kNaN;
                         continue;
                     }
-                    const Vec3d to_p = Vec3d(left->p[si]) - eye.position;
-                    painting_pixel(i, x, pl, to_p / dot(to_p, eye.forward), s, left->scale[si],
-                                   left->add[si]);
+                    const Vec3f& p = left->p[si];
+                    rx[nr] = x, rpl[nr] = pl, rsrc[nr] = s;
+                    rPx[nr] = p.x, rPy[nr] = p.y, rPz[nr] = p.z;
+                    ++nr;
+                }
+                // D = (p - eye) / ((p - eye) . forward), as Vec3d's operators compute it.
+                {
+                    const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
+                    const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
+                    const double* __restrict px = rPx.data();
+                    const double* __restrict py = rPy.data();
+                    const double* __restrict pz = rPz.data();
+                    double* __restrict dx = rDx.data();
+                    double* __restrict dy = rDy.data();
+                    double* __restrict dz = rDz.data();
+                    for (std::size_t k = 0; k < nr; ++k) {
+                        const double tx = px[k] - ex, ty = py[k] - ey, tz = pz[k] - ez;
+                        const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
+                        dx[k] = tx * inv, dy[k] = ty * inv, dz[k] = tz * inv;
+                    }
+                }
+                for (std::size_t r0 = 0; r0 < nr;) {
+                    const int pl = rpl[r0];
+                    std::size_t r1 = r0 + 1;
+                    while (r1 < nr && rpl[r1] == pl) ++r1;
+                    maps[std::size_t(pl)].map_lanes(r1 - r0, rDx.data() + r0, rDy.data() + r0,
+                                                    rDz.data() + r0, ru.data() + r0,
+                                                    rv.data() + r0, rlod.data() + r0);
+                    r0 = r1;
+                }
+                for (std::size_t k = 0; k < nr; ++k) {
+                    const std::uint32_t x = rx[k];
+                    const std::int32_t s = rsrc[k];
+                    if (PendingPixel* pp = mapped_pixel(row * w + x, x, rpl[k], ru[k], rv[k], rlod[k], s)) {
+                        pp->scale = left->scale[std::size_t(s)];
+                        pp->add = left->add[std::size_t(s)];
+                    }
                 }
             }
             // Runs of one painting sampled in one call.
-            texels.resize(3 * pending.size());
-            for (std::size_t k0 = 0; k0 < pending.size();) {
+            for (std::size_t k0 = 0; k0 < pending_count;) {
                 const int pl = pending[k0].placement;
                 std::size_t k1 = k0 + 1;
-                while (k1 < pending.size() && pending[k1].placement == pl) ++k1;
+                while (k1 < pending_count && pending[k1].placement == pl) ++k1;
                 SampleRequest r;
                 r.painting = scene.paintings[std::size_t(pl)].painting;
                 require(r.painting < paintings, "display: a painting of the scene is not in "
@@ -492,15 +564,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     o.painting_reflectance;
                 const Vec3f L = albedo * q.scale + q.add;
                 rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
-                if (keep_light) g.texel[i] = Vec3f{a[0], a[1], a[2]};
             };
-            for (std::size_t k = 0; k < pending.size(); ++k) shade(pending[k], &texels[3 * k]);
-            for (const PendingPixel& q : copied) {
-                const Vec3f& a = left->texel[std::size_t(q.source)];
-                const float t[3] = {a.x, a.y, a.z};
-                shade(q, t);
-            }
-            painting_count += pending.size() + copied.size();
+            for (std::size_t k = 0; k < pending_count; ++k) shade(pending[k], &texels[3 * k]);
+            painting_count += pending_count + copied_count;
+            copied_count = 0;
             lap(t_shade);
             timed = (row + 1) % kTimedRow == 0;
             if (timed) mark = Clock::now();
@@ -543,26 +610,101 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
     const std::uint32_t rw = right.width;
     // Claims: the nearest left hit per right pixel wins (depth in the high word, so the
     // smaller 64-bit value is the nearer claim; positive floats order as their bits).
+    // In chunks: the projections in SIMD lanes (a left pixel that claims nothing gets target
+    // kNoTarget), then the compare-and-swaps.
+    constexpr std::uint32_t kNoTarget = ~0u;
     parallel_for(L.geom.size(), 4096, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-            if (L.geom[i] == kNoHit) continue;
-            const Vec3f p = L.p[i], to_eye = eye - p;
-            if (dot(to_eye, L.n[i]) <= 0) continue;  // the right eye sees the other side
-            const Vec3f d = p - eye;
-            const Vec3f dir{dot(d, rgt), dot(d, up), dot(d, fwd)};
-            if (!(dir.z > 0.0f)) continue;
-            const float inv_z = 1.0f / dir.z;
-            const float fx = std::floor(0.5f * fw + dir.x * inv_z * sx);
-            const float fy = std::floor(0.5f * fh - dir.y * inv_z * sy);
-            if (!(fx >= 0.0f && fx < fw && fy >= 0.0f && fy < fh)) continue;
-            const float depth = dot(p - eye, fwd);
-            if (!(depth > 0)) continue;
-            const std::uint64_t claim =
-                (std::uint64_t(std::bit_cast<std::uint32_t>(depth)) << 32) | std::uint64_t(i);
-            std::atomic_ref<std::uint64_t> slot(claims_[std::size_t(fy) * rw + std::size_t(fx)]);
-            std::uint64_t seen = slot.load(std::memory_order_relaxed);
-            while (claim < seen &&
-                   !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
+        constexpr std::size_t kChunk = 256;
+        alignas(64) std::uint32_t target[kChunk];
+        alignas(64) float depth[kChunk];
+        for (std::size_t c0 = b; c0 < e; c0 += kChunk) {
+            const std::size_t count = std::min(kChunk, e - c0);
+            // Points and normals as SoA first: GCC does not vectorise the 3-strided loads.
+            alignas(64) float px[kChunk], py[kChunk], pz[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
+            for (std::size_t k = 0; k < count; ++k) {
+                const Vec3f& p = L.p[c0 + k];
+                const Vec3f& nk = L.n[c0 + k];
+                px[k] = p.x, py[k] = p.y, pz[k] = p.z, nx[k] = nk.x, ny[k] = nk.y, nz[k] = nk.z;
+            }
+            const unsigned* __restrict geom = L.geom.data() + c0;
+            std::size_t k = 0;
+#if defined(__AVX2__)
+            // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
+            // keeps that loop scalar: "control flow in loop").
+            {
+                const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
+                             ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
+                const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
+                const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
+                const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
+                const __m256i no_hit = _mm256_set1_epi32(int(kNoHit)), vrw = _mm256_set1_epi32(int(rw));
+                auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+                    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                                         _mm256_mul_ps(az, bz));
+                };
+                for (; k + 8 <= count; k += 8) {
+                    const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
+                                 z = _mm256_load_ps(pz + k);
+                    const __m256 facing =
+                        dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
+                             _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
+                    const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
+                                 ez = _mm256_sub_ps(z, ez_);
+                    const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
+                                           _mm256_set1_ps(rgt.z));
+                    const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
+                                           _mm256_set1_ps(up.z));
+                    const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
+                                           _mm256_set1_ps(fwd.z));
+                    const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
+                    const __m256 fx = _mm256_floor_ps(
+                        _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
+                    const __m256 fy = _mm256_floor_ps(
+                        _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
+                    const __m256i hit = _mm256_xor_si256(
+                        _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(geom + k)),
+                                           no_hit),
+                        _mm256_set1_epi32(-1));
+                    __m256 ok = _mm256_and_ps(_mm256_castsi256_ps(hit),
+                                              _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
+                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
+                    // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
+                    const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
+                                                       _mm256_cvttps_epi32(fx));
+                    const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
+                                                          _mm256_castps_si256(ok));
+                    _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
+                    _mm256_store_ps(depth + k, dz);
+                }
+            }
+#endif
+            for (; k < count; ++k) {
+                const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
+                const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
+                const Vec3f d = p - eye;
+                const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
+                const float inv_z = 1.0f / dz;
+                const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
+                const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
+                const bool ok = geom[k] != kNoHit && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f &&
+                                fx < fw && fy >= 0.0f && fy < fh;
+                target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
+                depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
+            }
+            for (std::size_t k = 0; k < count; ++k) {
+                if (target[k] == kNoTarget) continue;
+                const std::uint64_t claim =
+                    (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) |
+                    std::uint64_t(c0 + k);
+                std::atomic_ref<std::uint64_t> slot(claims_[target[k]]);
+                std::uint64_t seen = slot.load(std::memory_order_relaxed);
+                while (claim < seen &&
+                       !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
+                }
             }
         }
     }, o.threads);

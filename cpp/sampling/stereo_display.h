@@ -21,7 +21,7 @@
 // the per-pixel arithmetic runs in SIMD lanes: hit points and eye-facing normals for all 16
 // rays, and the painting pixels' uv and level (a libm-free log2) per run of one painting. Per pixel the
 // pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
-// eye reuses, its texel and light.
+// eye reuses, its light.
 //
 // The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
 // is not reentrant.
@@ -141,9 +141,11 @@ private:
         std::vector<unsigned> geom;        // RTC_INVALID_GEOMETRY_ID: no hit
         std::vector<Vec3f> p;
         std::vector<float> lod;            // NaN off paintings
-        // Left eye only (keep_light): the normal facing the eye, and per painting pixel the
-        // texel as sampled (0..255) and radiance = linear albedo x scale + add.
-        std::vector<Vec3f> n, texel, scale, add;
+        // Left eye only (keep_light): the normal facing the eye, and per painting pixel its
+        // light, radiance = linear albedo x scale + add (a reused right pixel whose level
+        // differs samples its own texel under the left light; one whose level agrees copies
+        // the left radiance).
+        std::vector<Vec3f> n, scale, add;
         void resize(std::uint32_t w, std::uint32_t h, bool keep_light);
     };
     // The fused pass over one eye: per row, 16-ray packets traced, their hits lit in one

@@ -2,7 +2,8 @@
 
 - display cost per pixel against a bare Embree primary-ray cast of the same pixels (same
   cameras, alternated, median of --repeats; both timed around their Python call, the display
-  rendering into an image kept between frames);
+  rendering into an image kept between frames): per eye (the left eye alone) and in stereo
+  (both eyes with the right eye's reuse, against the bare cast of both eyes' pixels);
 - the right eye with reuse against the left eye, over poses of the scroll walk;
 - the whole loop's frame rate at 1800 x 1920 per eye, and at smaller sizes down to the largest
   per-eye resolution whose mean frame time fits 90 Hz;
@@ -27,6 +28,8 @@ def add_arguments(p) -> None:
     p.add_argument("--photons", type=int, default=1 << 17)
     p.add_argument("--out", default="bench/walk/results.json")
     p.add_argument("--threads", type=int, default=0)
+    p.add_argument("--parts", default="display,stereo,reuse,loop,stops",
+                   help="comma-separated subset of display (per eye), stereo, reuse, loop, stops")
 
 
 def _pack(arg):
@@ -55,24 +58,41 @@ def run(args) -> int:
     from .. import runtime
     from .. import views as v
     from .._core import DisplayPass
-    from ..gallery.walk import GalleryWalk, walk_path
+    from ..gallery.walk import parent_keys
     from ..views.exhibition import Headset
 
+    parts = {x.strip() for x in args.parts.split(",") if x.strip()}
+    unknown = parts - {"display", "stereo", "reuse", "loop", "stops"}
+    if unknown:
+        raise ValueError(f"--parts: unknown part(s) {', '.join(sorted(unknown))}")
     pack, room, src, path = lit_scroll_walk(args)
     thr = args.threads
     results = {"pack": str(pack.path), "machine": "2 cores, shared", "date": time.strftime("%Y-%m-%d")}
 
-    # A VT warmed with the walk's tiles (the cost of the display, not of missing tiles).
-    vt = runtime.VirtualTexture(pack, (40, 40))
+    # A VT holding every tile the measured frames ask for (the cost of the display, not of
+    # missing tiles): before each pose is timed, its feedback's requests and their parents
+    # (trilinear's second level) are made resident, as the walk's oracle does. Without it
+    # the display sampled the pinned coarse tail only (every lookup a fallback).
+    vt = runtime.VirtualTexture(pack, (64, 64))
+    levels = np.array([t.levels for t in src.tiles], np.int64)
     poses = list(range(0, len(path), max(1, len(path) // 6)))
 
     def eyes(frame, w, h):
         views = v.frame_cameras(path, frame, headset=Headset(width=w, height=h), magnifier=None)
+        needed = np.concatenate([src.feedback(cam, fw, fh, thr).ravel()
+                                 for cam, fw, fh in views[:2]])
+        needed = np.unique(needed[needed != v.NO_REQUEST])
+        needed = np.concatenate([needed, parent_keys(needed, levels)])
+        missing = vt.request(needed)
+        for key in zip(*(a.tolist() for a in v.unpack_requests(missing))):
+            vt.insert(key, pack.read_tile(*key))
+        warm_tiles.append(int(needed.size))
         return views[0][0], views[1][0]
+    warm_tiles = []
 
     # 1. display vs bare primary rays, per pixel, at 900 x 960 (and the headset size).
     rows = []
-    for w, h in ((450, 480), (900, 960), (1800, 1920)):
+    for w, h in ((450, 480), (900, 960), (1800, 1920)) if "display" in parts else ():
         d = DisplayPass()
         out = np.empty((h, w, 3), np.float32)  # kept between frames, as the walk keeps it
         disp, bare, disp_cpu, bare_cpu = [], [], 0.0, 0.0
@@ -96,15 +116,78 @@ def run(args) -> int:
         # The same ratio in CPU time of the process (both threads): less exposed than wall
         # time to the other jobs of a shared machine.
         row["cpu_ratio"] = disp_cpu / bare_cpu if bare_cpu > 0 else None
-        parts = d.left_stats
-        row["split_ms"] = {k: 1e3 * parts[f"{k}_seconds"] for k in ("rays", "vt", "shade")}
+        split = d.left_stats
+        row["split_ms"] = {k: 1e3 * split[f"{k}_seconds"] for k in ("rays", "vt", "shade")}
         rows.append(row)
         print(f"display {w}x{h}: {row['display_ns_per_pixel']:.1f} ns/px, bare rays "
               f"{row['bare_rays_ns_per_pixel']:.1f} ns/px, ratio {row['ratio']:.2f} "
               f"(CPU time {row['cpu_ratio']:.2f}; rays/vt/shade ms {row['split_ms']})")
     results["display_vs_rays"] = rows
 
-    # 2. right eye with reuse vs the left eye, along the walk.
+    # 1b. the same for both eyes: the stereo display with reuse (what the walk runs: the left
+    # eye, the reuse projection and the right eye's remaining pixels) per pixel of both eyes,
+    # against the bare cast of both eyes' pixels (left and right camera), alternated.
+    stereo_rows = []
+    for w, h in ((450, 480), (900, 960), (1800, 1920)) if "stereo" in parts else ():
+        d = DisplayPass()
+        outs = (np.empty((h, w, 3), np.float32), np.empty((h, w, 3), np.float32))
+        disp, bare, disp_cpu, bare_cpu = [], [], 0.0, 0.0
+        for frame in poses[:3]:
+            left, right = eyes(frame, w, h)
+            src.display_stereo(d, vt, left, right, True, thr, *outs)  # warm
+            for _ in range(args.repeats):
+                t, c = time.perf_counter(), time.process_time()
+                src.display_stereo(d, vt, left, right, True, thr, *outs)
+                disp.append(time.perf_counter() - t)
+                disp_cpu += time.process_time() - c
+                t, c = time.perf_counter(), time.process_time()
+                src.primary_rays(left, thr)
+                src.primary_rays(right, thr)
+                bare.append(time.perf_counter() - t)
+                bare_cpu += time.process_time() - c
+        px = 2 * w * h
+        row = {"eye": f"{w}x{h}", "display_ns_per_pixel": 1e9 * statistics.median(disp) / px,
+               "bare_rays_ns_per_pixel": 1e9 * statistics.median(bare) / px,
+               "reused_share": d.right_stats["reused"] / d.right_stats["pixels"]}
+        row["ratio"] = row["display_ns_per_pixel"] / row["bare_rays_ns_per_pixel"]
+        row["cpu_ratio"] = disp_cpu / bare_cpu if bare_cpu > 0 else None
+        stereo_rows.append(row)
+        print(f"stereo display {w}x{h} per eye (both eyes with reuse): "
+              f"{row['display_ns_per_pixel']:.1f} ns/px, bare rays (both eyes) "
+              f"{row['bare_rays_ns_per_pixel']:.1f} ns/px, ratio {row['ratio']:.2f} "
+              f"(CPU time {row['cpu_ratio']:.2f}; {100 * row['reused_share']:.0f} % of the right "
+              f"eye reused)")
+    results["stereo_display_vs_rays"] = stereo_rows
+    results["resident_tiles_per_pose"] = max(warm_tiles, default=0)
+    print(f"tiles made resident per pose (at most): {results['resident_tiles_per_pose']} "
+          f"of {64 * 64} slots")
+    # The two readings of the goal side by side (wall / CPU-time ratio to the bare cast).
+    print("display / bare rays per pixel, wall / CPU:  per eye (left alone)  stereo (both eyes, reuse)")
+
+    def pair(row):
+        return f"{row['ratio']:.2f} / {row['cpu_ratio']:.2f}" if row else "-"
+    per_eye = {r["eye"]: r for r in rows}
+    stereo = {r["eye"]: r for r in stereo_rows}
+    for eye in dict.fromkeys([*per_eye, *stereo]):
+        print(f"  {eye:>10}  {pair(per_eye.get(eye)):>30}  {pair(stereo.get(eye)):>25}")
+
+    if "reuse" in parts:
+        _right_vs_left(src, vt, poses, eyes, thr, args, results)
+    if "loop" in parts:
+        _loop(src, pack, path, thr, args, results)
+    if "stops" in parts:
+        _stops(src, pack, room, thr, results)
+
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=1))
+    print(f"wrote {out}")
+    return 0
+
+
+def _right_vs_left(src, vt, poses, eyes, thr, args, results) -> None:
+    """2. the right eye with reuse against the left eye, along the walk."""
+    from .._core import DisplayPass
     w, h = 900, 960
     d = DisplayPass()
     outs = (np.empty((h, w, 3), np.float32), np.empty((h, w, 3), np.float32))
@@ -129,7 +212,11 @@ def run(args) -> int:
     print(f"right eye with reuse / left eye: {results['right_vs_left']['ratio']:.2f} "
           f"({100 * results['right_vs_left']['reused_share']:.0f} % reused)")
 
-    # 3. the whole loop's frame rate per eye size, with the magnifier and without (oracle off).
+
+def _loop(src, pack, path, thr, args, results) -> None:
+    """3. the whole loop's frame rate per eye size, with the magnifier and without (oracle off)."""
+    from .. import views as v
+    from ..gallery.walk import GalleryWalk
     sizes = [(1800, 1920), (900, 960), (450, 480), (225, 240), (112, 120), (56, 60)]
     short = v.CameraPath(path.position[:args.frames], path.forward[:args.frames],
                          path.up[:args.frames], path.magnifier_target[:args.frames],
@@ -153,16 +240,13 @@ def run(args) -> int:
         results["loop_fps" + suffix] = fps_rows
         results["largest_eye_at_90hz" + suffix] = holding[0]["eye"] if holding else None
 
-    # 4. display latency after stops and convergence to the oracle (the loads of each frame
-    # drained when they arrive: a real loop, not waiting).
+
+def _stops(src, pack, room, thr, results) -> None:
+    """4. display latency after stops and convergence to the oracle (the loads of each frame
+    drained when they arrive: a real loop, not waiting)."""
+    from ..gallery.walk import GalleryWalk, walk_path
     walk = GalleryWalk(src, pack, walk_path(room, seconds=2.0), eye=(225, 240), threads=thr)
     s = walk.run()
     results["stops"] = s["stops"]
     results["error_final"] = s["error_final"]
     print(f"stops: {s['stops']}; last frame's error vs oracle {s['error_final']}")
-
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(results, indent=1))
-    print(f"wrote {out}")
-    return 0
