@@ -52,17 +52,20 @@ const SrgbTable& srgb_table() {
 }
 
 // Casts the primary rays of rows [row_begin, row_end) in 16-ray packets along each row; a
-// pixel with skip[i] != 0 is left out of its packet. on_packet(row, i0, n, valid, packet)
-// sees each packet after Embree filled it, on_row(row) each row after its last packet.
-template <typename OnPacket, typename OnRow>
+// pixel with reused[i] >= 0 (the right eye's pixels that reuse a left hit) is left out of its
+// packet, and a packet left empty is not cast. on_row_start(row) runs before each row's
+// packets, on_packet(row, i0, n, valid, packet) sees each packet after Embree filled it,
+// on_row(row) each row after its last packet.
+template <typename OnRowStart, typename OnPacket, typename OnRow>
 void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::size_t row_end,
-               const std::uint8_t* skip, OnPacket&& on_packet, OnRow&& on_row) {
+               const std::int32_t* reused, OnRowStart&& on_row_start, OnPacket&& on_packet,
+               OnRow&& on_row) {
     const std::uint32_t w = eye.width;
     const std::size_t padded = (std::size_t(w) + 15) / 16 * 16;
-    std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
     std::vector<double> column_sx(padded);
     for (std::uint32_t i = 0; i < w; ++i) column_sx[i] = eye.screen_x(i + 0.5);
     std::fill(column_sx.begin() + w, column_sx.end(), column_sx[w - 1]);
+    const double rx = eye.right.x, ry = eye.right.y, rz = eye.right.z;
     RTCRayHit16 packet;
     for (std::uint32_t k = 0; k < 16; ++k) {
         packet.ray.org_x[k] = float(eye.position.x), packet.ray.org_y[k] = float(eye.position.y);
@@ -72,28 +75,31 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
         packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
     for (std::size_t row = row_begin; row < row_end; ++row) {
+        on_row_start(row);
         const Vec3d row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-        for (std::size_t i = 0; i < padded; ++i) {
-            const double c = column_sx[i];
-            dir_x[i] = float(row_dir.x + c * eye.right.x);
-            dir_y[i] = float(row_dir.y + c * eye.right.y);
-            dir_z[i] = float(row_dir.z + c * eye.right.z);
-        }
-        const std::uint8_t* row_skip = skip ? skip + row * w : nullptr;
+        const std::int32_t* row_reused = reused ? reused + row * w : nullptr;
         for (std::uint32_t i0 = 0; i0 < w; i0 += 16) {
             const std::uint32_t n = std::min<std::uint32_t>(16, w - i0);
             alignas(64) int valid[16];
-            bool any = false;
+            int any = 0;
+            if (row_reused) {
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    valid[k] = k < n && row_reused[i0 + std::min(k, n - 1)] < 0 ? -1 : 0;
+                    any |= valid[k];
+                }
+                if (!any) continue;
+            } else {
+                for (std::uint32_t k = 0; k < 16; ++k) valid[k] = k < n ? -1 : 0;
+            }
+            // The packet's directions (only for packets that are cast).
+            const double* c = column_sx.data() + i0;
             for (std::uint32_t k = 0; k < 16; ++k) {
-                valid[k] = k < n && !(row_skip && row_skip[i0 + k]) ? -1 : 0;
-                any |= valid[k] != 0;
+                packet.ray.dir_x[k] = float(row_dir.x + c[k] * rx);
+                packet.ray.dir_y[k] = float(row_dir.y + c[k] * ry);
+                packet.ray.dir_z[k] = float(row_dir.z + c[k] * rz);
                 packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
                 packet.hit.geomID[k] = kNoHit;
             }
-            if (!any) continue;
-            std::memcpy(packet.ray.dir_x, dir_x.data() + i0, sizeof packet.ray.dir_x);
-            std::memcpy(packet.ray.dir_y, dir_y.data() + i0, sizeof packet.ray.dir_y);
-            std::memcpy(packet.ray.dir_z, dir_z.data() + i0, sizeof packet.ray.dir_z);
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
             context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -134,14 +140,31 @@ struct PlaneMap {
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
                                                   double* __restrict v, float* __restrict lod) const {
+        map<true>(count, Dx, Dy, Dz, u, v, lod);
+    }
+    // The level of detail alone (the same operations: the same bits as map_lanes' lod).
+    __attribute__((always_inline)) void lod_lanes(std::size_t count, const double* __restrict Dx,
+                                                  const double* __restrict Dy,
+                                                  const double* __restrict Dz,
+                                                  float* __restrict lod) const {
+        map<false>(count, Dx, Dy, Dz, nullptr, nullptr, lod);
+    }
+
+    template <bool kUv>
+    __attribute__((always_inline)) void map(std::size_t count, const double* __restrict Dx,
+                                            const double* __restrict Dy, const double* __restrict Dz,
+                                            double* __restrict u, double* __restrict v,
+                                            float* __restrict lod) const {
         std::uint32_t odd = 0;
         for (std::size_t k = 0; k < count; ++k) {
             const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
             const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
             const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
             const double kk = 1.0 / dn, t = h * kk;
-            u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
-            v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
+            if constexpr (kUv) {
+                u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
+                v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
+            }
             const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
             const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
             const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
@@ -258,18 +281,64 @@ struct RowScratch {
     std::vector<std::uint32_t> rx;
     std::vector<int> rpl;
     std::vector<std::int32_t> rsrc;
-    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz, ru, rv;
+    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz;
     std::vector<float> rlod;
+    // The right eye's edge release: one row of claimed depths (with an infinite depth either
+    // side) and the row minima of the last three claim rows (row r in slot r % 3).
+    std::vector<float> depths;
+    std::array<std::vector<float>, 3> row_min;
+    std::array<std::size_t, 3> row_min_of;
 
     void fit(std::size_t w, bool reused) {
         if (pending.size() < w) pending.resize(w), us.resize(w), vs.resize(w), lods.resize(w);
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
-            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz, &ru, &rv}) a->resize(w);
+            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz}) a->resize(w);
+            depths.resize(w + 2);
+            for (auto& m : row_min) m.resize(w);
         }
+        row_min_of.fill(~std::size_t(0));  // another frame's claims
     }
 };
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Rows per chunk of the right eye's pass with reuse: each chunk's first and last claim rows
+// are reset after the pass (2 rows in 16), the others by the chunk itself.
+constexpr std::size_t kReleaseChunkRows = 16;
+
+// Per pixel of one row of claims, the nearest claimed depth among it and its two row
+// neighbours (the separable 3 x 3 minimum's first pass; unclaimed: infinitely far).
+void claimed_row_min(const std::uint64_t* __restrict claims, std::size_t w, float* __restrict depths,
+                     float* __restrict row_min) {
+    depths[0] = depths[w + 1] = kInf;
+    for (std::size_t x = 0; x < w; ++x) {
+        const std::uint64_t c = claims[x];
+        depths[x + 1] = c == kUnclaimed ? kInf : std::bit_cast<float>(std::uint32_t(c >> 32));
+    }
+    for (std::size_t x = 0; x < w; ++x)
+        row_min[x] = std::min(std::min(depths[x], depths[x + 1]), depths[x + 2]);
+}
+
+// The edge release of one row of claims (see DisplayPass::reuse): a claim is kept unless its
+// depth exceeds the 3 x 3 minimum of claimed depths (the row minima of the rows above, at
+// and below) x ratio; source gets the kept claim's left pixel, else -1. Returns the count
+// kept; with reset, the row's claims are left unclaimed for the next frame.
+std::uint64_t release_claims(std::uint64_t* __restrict claims, const float* up, const float* mid,
+                             const float* down, std::size_t w, float ratio,
+                             std::int32_t* __restrict source, bool reset) {
+    std::uint64_t kept = 0;
+    for (std::size_t x = 0; x < w; ++x) {
+        const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
+        const std::uint64_t c = claims[x];
+        const bool keep = c != kUnclaimed &&
+                          !(std::bit_cast<float>(std::uint32_t(c >> 32)) > nearest * ratio);
+        source[x] = keep ? std::int32_t(c & 0xffffffffu) : -1;
+        kept += keep;
+    }
+    if (reset) std::fill_n(claims, w, kUnclaimed);
+    return kept;
+}
 
 RowScratch& row_scratch() {
     thread_local RowScratch scratch;
@@ -289,18 +358,24 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     maps.reserve(scene.paintings.size());
     for (const PaintingPlacement& pp : scene.paintings) maps.emplace_back(pp, eye);
     const GBuffer* left = reusing_ ? &g_[0] : nullptr;
-    const std::int32_t* sources = reusing_ ? sources_.data() : nullptr;
-    const std::uint8_t* skip = reusing_ ? claimed_.data() : nullptr;
+    // The right eye: its claims released row by row just before the row is rendered (the
+    // claims of the rows above and below are read, so a worker resets the claims of its
+    // chunk's inner rows and the chunks' first and last rows are reset after the pass).
+    std::int32_t* const sources = reusing_ ? sources_.data() : nullptr;
+    std::uint64_t* const claims = reusing_ ? claims_.data() : nullptr;
+    const float release_ratio = 1.0f + o.edge_depth_ratio;
+    const std::size_t chunk_rows = reusing_ ? kReleaseChunkRows : 4;
+    std::atomic<std::uint64_t> reused{0};
     GS_CHECK(!left || left_rgb != nullptr);
     const Vec3f origin(eye.position);
     const SrgbTable& srgb_decode = srgb_table();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
-    std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0};
+    std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0}, reuse_ns{0};
     std::vector<double> column_sx(w);  // screen x of each column's centre
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
-    parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
+    parallel_for(eye.height, chunk_rows, [&](std::size_t rb, std::size_t re) {
         // The row's painting pixels waiting for their texels (at most one per column, so
         // arrays of the row's width and a count: no push_back's capacity test per pixel), in
         // this thread's scratch (parallel_for calls this body per 4 rows: allocating the
@@ -318,15 +393,15 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         std::vector<int>& rpl = sc.rpl;
         std::vector<std::int32_t>& rsrc = sc.rsrc;
         std::vector<double>&rPx = sc.rPx, &rPy = sc.rPy, &rPz = sc.rPz, &rDx = sc.rDx, &rDy = sc.rDy,
-                          &rDz = sc.rDz, &ru = sc.ru, &rv = sc.rv;
+                          &rDz = sc.rDz;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
-        std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0;
+        std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0, reused_count = 0;
         // Thread time per stage: laps between the stages of the fused loop, taken on every
         // kTimedRow-th row only (a clock read per stage and packet costs a few percent).
         constexpr std::size_t kTimedRow = 8;
-        std::chrono::nanoseconds t_rays{0}, t_vt{0}, t_shade{0};
+        std::chrono::nanoseconds t_rays{0}, t_vt{0}, t_shade{0}, t_reuse{0};
         bool timed = rb % kTimedRow == 0;
         auto mark = Clock::now();
         auto lap = [&](std::chrono::nanoseconds& acc) {
@@ -475,67 +550,124 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             lap(t_vt);
         };
 
+        // The right eye: the edge release of the row's claims (their sources, the packets'
+        // skip mask) from the row minima of the claim rows above, at and below.
+        const std::size_t h = eye.height;
+        auto on_row_start = [&](std::size_t row) {
+            if (!left) return;
+            const float* m[3];
+            for (int d = 0; d < 3; ++d) {
+                const std::size_t r = std::min(h - 1, std::max(row + d, std::size_t(1)) - 1);
+                std::vector<float>& slot = sc.row_min[r % 3];
+                if (sc.row_min_of[r % 3] != r) {
+                    claimed_row_min(claims + r * w, w, sc.depths.data(), slot.data());
+                    sc.row_min_of[r % 3] = r;
+                }
+                m[d] = slot.data();
+            }
+            // A chunk's first and last claim rows are read by the chunks beside it: reset later.
+            reused_count += release_claims(claims + row * w, m[0], m[1], m[2], w, release_ratio,
+                                           sources + row * w, rb < row && row + 1 < re);
+            lap(t_reuse);
+        };
+
         auto on_row = [&](std::size_t row) {
             lap(t_rays);
             start_row(row);
             // The right eye's claimed pixels: the left hit and its light, the level of this eye
-            // (the point seen along this eye's ray through it), the painting pixels' uv and
-            // level in SIMD lanes per run of one painting (PlaneMap::map_lanes, as the left
-            // eye's packets).
+            // (the point seen along this eye's ray through it), the painting pixels' level in
+            // SIMD lanes per run of one painting (PlaneMap::lod_lanes, as the left eye's
+            // packets). The buffers in restrict locals: through the captured references every
+            // store forced their reload.
             if (left) {
-                std::size_t nr = 0;
+                const std::int32_t* __restrict src = sources + row * w;
+                const unsigned* __restrict lgeom = left->geom.data();
+                const Vec3f* __restrict lp = left->p.data();
+                const float* __restrict llod = left->lod.data();
+                const float* __restrict lrgb = left_rgb;
+                unsigned* __restrict geom_out = g.geom.data() + row * w;
+                float* __restrict lod_out = g.lod.data() + row * w;
+                float* __restrict rgb_out = rgb + 3 * row * w;
+                const int* __restrict placement = scene.geom_placement.data();
+                const std::size_t placements = scene.geom_placement.size();
+                std::uint32_t* __restrict rxs = rx.data();
+                int* __restrict rpls = rpl.data();
+                std::int32_t* __restrict rsrcs = rsrc.data();
+                double* __restrict px = rPx.data();
+                double* __restrict py = rPy.data();
+                double* __restrict pz = rPz.data();
+                std::size_t nr = 0, reused_here = 0;
                 for (std::uint32_t x = 0; x < w; ++x) {
-                    const std::size_t i = row * w + x;
-                    const std::int32_t s = sources[i];
+                    const std::int32_t s = src[x];
                     if (s < 0) continue;
+                    ++reused_here;
                     const std::size_t si = std::size_t(s);
-                    const unsigned geom = left->geom[si];
-                    g.geom[i] = geom;  // the point stays in the left buffer (hit_points)
-                    ++hit_count;
-                    const int pl = scene.placement_of(geom);
+                    const unsigned geom = lgeom[si];
+                    geom_out[x] = geom;  // the point stays in the left buffer (hit_points)
+                    const int pl = geom < placements ? placement[geom] : -1;
                     if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
-                        std::copy_n(left_rgb + 3 * si, 3, rgb + 3 * i);
-                        g.lod[i] = kNaN;
+                        rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
+                        rgb_out[3 * x + 2] = lrgb[3 * si + 2];
+                        lod_out[x] = kNaN;
                         continue;
                     }
-                    const Vec3f& p = left->p[si];
-                    rx[nr] = x, rpl[nr] = pl, rsrc[nr] = s;
-                    rPx[nr] = p.x, rPy[nr] = p.y, rPz[nr] = p.z;
+                    const Vec3f& p = lp[si];
+                    rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s;
+                    px[nr] = p.x, py[nr] = p.y, pz[nr] = p.z;
                     ++nr;
                 }
+                hit_count += reused_here;
                 // D = (p - eye) / ((p - eye) . forward), as Vec3d's operators compute it.
+                double* __restrict dx = rDx.data();
+                double* __restrict dy = rDy.data();
+                double* __restrict dz = rDz.data();
                 {
                     const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
                     const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
-                    const double* __restrict px = rPx.data();
-                    const double* __restrict py = rPy.data();
-                    const double* __restrict pz = rPz.data();
-                    double* __restrict dx = rDx.data();
-                    double* __restrict dy = rDy.data();
-                    double* __restrict dz = rDz.data();
                     for (std::size_t k = 0; k < nr; ++k) {
                         const double tx = px[k] - ex, ty = py[k] - ey, tz = pz[k] - ez;
                         const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
                         dx[k] = tx * inv, dy[k] = ty * inv, dz[k] = tz * inv;
                     }
                 }
+                float* __restrict lods_r = rlod.data();
                 for (std::size_t r0 = 0; r0 < nr;) {
-                    const int pl = rpl[r0];
+                    const int pl = rpls[r0];
                     std::size_t r1 = r0 + 1;
-                    while (r1 < nr && rpl[r1] == pl) ++r1;
-                    maps[std::size_t(pl)].map_lanes(r1 - r0, rDx.data() + r0, rDy.data() + r0,
-                                                    rDz.data() + r0, ru.data() + r0,
-                                                    rv.data() + r0, rlod.data() + r0);
+                    while (r1 < nr && rpls[r1] == pl) ++r1;
+                    maps[std::size_t(pl)].lod_lanes(r1 - r0, dx + r0, dy + r0, dz + r0, lods_r + r0);
                     r0 = r1;
                 }
+                // A reused point whose level here is the left eye's to within the tolerance keeps
+                // the left eye's sample (the trilinear blend would move by less than that fraction
+                // of the two levels' difference); with the left eye's texel, light and shading its
+                // radiance is the left pixel's, copied. The others sample their own texel under
+                // the left light.
+                const float bias = o.lod_bias, tolerance = o.reuse_lod_tolerance;
+                std::size_t copied = 0;
                 for (std::size_t k = 0; k < nr; ++k) {
-                    const std::uint32_t x = rx[k];
-                    const std::int32_t s = rsrc[k];
-                    if (PendingPixel* pp = mapped_pixel(row * w + x, x, rpl[k], ru[k], rv[k], rlod[k], s)) {
-                        pp->scale = left->scale[std::size_t(s)];
-                        pp->add = left->add[std::size_t(s)];
+                    const std::uint32_t x = rxs[k];
+                    const std::size_t si = std::size_t(rsrcs[k]);
+                    float lod = lods_r[k] + bias;
+                    if (!std::isfinite(lod)) lod = 0.0f;
+                    lod_out[x] = lod;
+                    if (std::abs(llod[si] - lod) <= tolerance) {
+                        rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
+                        rgb_out[3 * x + 2] = lrgb[3 * si + 2];
+                        ++copied;
+                        continue;
                     }
+                    double u, v;
+                    float unused;
+                    maps[std::size_t(rpls[k])].map_lanes(1, dx + k, dy + k, dz + k, &u, &v, &unused);
+                    const std::size_t q = pending_count++;
+                    GS_CHECK(q < w);  // one pixel per column and row
+                    PendingPixel& pp = pending[q];
+                    pp.x = x, pp.placement = rpls[k];
+                    us[q] = u, vs[q] = v, lods[q] = lod;
+                    pp.scale = left->scale[si], pp.add = left->add[si];
                 }
+                copied_count += copied;
             }
             // Runs of one painting sampled in one call.
             for (std::size_t k0 = 0; k0 < pending_count;) {
@@ -573,25 +705,37 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (timed) mark = Clock::now();
         };
 
-        cast_rows(scene.handle, eye, rb, re, skip, on_packet, on_row);
+        cast_rows(scene.handle, eye, rb, re, sources, on_row_start, on_packet, on_row);
         traced.fetch_add(traced_count, std::memory_order_relaxed);
         hits.fetch_add(hit_count, std::memory_order_relaxed);
         on_paintings.fetch_add(painting_count, std::memory_order_relaxed);
         rays_ns.fetch_add(t_rays.count(), std::memory_order_relaxed);
         vt_ns.fetch_add(t_vt.count(), std::memory_order_relaxed);
         shade_ns.fetch_add(t_shade.count(), std::memory_order_relaxed);
+        reuse_ns.fetch_add(t_reuse.count(), std::memory_order_relaxed);
+        reused.fetch_add(reused_count, std::memory_order_relaxed);
     }, o.threads);
+    if (left) {  // the chunks' first and last claim rows, left unclaimed for the next frame
+        for (std::size_t r0 = 0; r0 < eye.height; r0 += chunk_rows) {
+            std::fill_n(claims_.data() + r0 * w, w, kUnclaimed);
+            const std::size_t last = std::min<std::size_t>(eye.height, r0 + chunk_rows) - 1;
+            std::fill_n(claims_.data() + last * w, w, kUnclaimed);
+        }
+        claims_clear_ = true;
+        st.reused = reused.load();
+    }
     st.traced = traced.load();
     st.hits = hits.load();
     st.painting_pixels = on_paintings.load();
     // The stages interleave in each thread: the pass's wall time is split in the proportion
     // of the timed rows' time in each.
     const double wall = seconds_since(t0);
-    const double sum = double(rays_ns.load() + vt_ns.load() + shade_ns.load());
+    const double sum = double(rays_ns.load() + vt_ns.load() + shade_ns.load() + reuse_ns.load());
     const double f = sum > 0 ? wall / sum : 0.0;
     st.rays_seconds = f * double(rays_ns.load());
     st.vt_seconds = f * double(vt_ns.load());
     st.shade_seconds = f * double(shade_ns.load());
+    st.reuse_seconds += f * double(reuse_ns.load());  // the right eye's edge release
 }
 
 void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& st) {
@@ -708,55 +852,7 @@ void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& 
             }
         }
     }, o.threads);
-    // Release claims on depth edges; the surviving claims are the right eye's reused pixels.
-    // A claim is on an edge when its depth exceeds an 8-neighbour's claimed depth x ratio,
-    // i.e. the 3 x 3 minimum of claimed depths (itself included: ratio >= 1) x ratio: the
-    // minimum is taken separably, along rows into row_min_, then across three rows.
-    // parallel_for's join orders the claims before these reads.
-    claimed_.resize(n);
-    sources_.resize(n);
-    row_min_.resize(n);
-    const float ratio = 1.0f + o.edge_depth_ratio;
-    constexpr float kInf = std::numeric_limits<float>::infinity();
-    const std::size_t w = right.width, h = right.height;
-    auto depth_of = [](std::uint64_t c) {
-        return c == kUnclaimed ? kInf : std::bit_cast<float>(std::uint32_t(c >> 32));
-    };
-    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
-        for (std::size_t y = rb; y < re; ++y) {
-            const std::uint64_t* c = claims_.data() + y * w;
-            float* m = row_min_.data() + y * w;
-            float prev = kInf, here = depth_of(c[0]);
-            for (std::size_t x = 0; x < w; ++x) {
-                const float next = x + 1 < w ? depth_of(c[x + 1]) : kInf;
-                m[x] = std::min(std::min(prev, here), next);
-                prev = here, here = next;
-            }
-        }
-    }, o.threads);
-    std::atomic<std::uint64_t> reused{0};
-    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
-        std::uint64_t count = 0;
-        for (std::size_t y = rb; y < re; ++y) {
-            const float* up = row_min_.data() + (y > 0 ? y - 1 : y) * w;
-            const float* mid = row_min_.data() + y * w;
-            const float* down = row_min_.data() + (y + 1 < h ? y + 1 : y) * w;
-            std::uint64_t* c = claims_.data() + y * w;
-            std::uint8_t* claimed = claimed_.data() + y * w;
-            std::int32_t* source = sources_.data() + y * w;
-            for (std::size_t x = 0; x < w; ++x) {
-                const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
-                const bool keep = c[x] != kUnclaimed && !(depth_of(c[x]) > nearest * ratio);
-                claimed[x] = keep;
-                source[x] = keep ? std::int32_t(c[x] & 0xffffffffu) : -1;
-                count += keep;
-                c[x] = kUnclaimed;  // ready for the next frame (row_min_ holds what neighbours need)
-            }
-        }
-        reused.fetch_add(count, std::memory_order_relaxed);
-    }, o.threads);
-    claims_clear_ = true;
-    st.reused = reused.load();
+    sources_.resize(n);  // written by the right eye's rows (render_eye: the edge release)
     st.reuse_seconds = seconds_since(t0);
 }
 
@@ -871,7 +967,8 @@ double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, st
     std::atomic<std::uint64_t> total{0};
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
         std::uint64_t count = 0;
-        cast_rows(scene, eye, rb, re, nullptr, [&](std::size_t, std::uint32_t, std::uint32_t n,
+        cast_rows(scene, eye, rb, re, nullptr, [](std::size_t) {},
+                  [&](std::size_t, std::uint32_t, std::uint32_t n,
                                                    const int*, const RTCRayHit16& h) {
             for (std::uint32_t k = 0; k < n; ++k) count += h.hit.geomID[k] != kNoHit;
         }, [](std::size_t) {});

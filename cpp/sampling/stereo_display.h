@@ -161,9 +161,7 @@ private:
     GBuffer g_[2];
     EyeStats stats_[2];
     std::vector<std::uint64_t> claims_;
-    bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last reuse())
-    std::vector<std::uint8_t> claimed_;
-    std::vector<float> row_min_;  // per right pixel: the nearest claimed depth of its row's 3 neighbours
+    bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last right eye)
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     std::vector<std::int32_t> sources_;
 };
