@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 #if defined(__AVX__)
 #include <immintrin.h>
@@ -241,6 +242,107 @@ inline void inverse_sqrt_16(float* x) {
 #endif
 }
 
+// The left eye's hits projected into the right eye, 16 lanes (one packet) at a time, and
+// their claims on the right pixels. The projection is Camera::project (seed 001 eqs. 3-5)
+// with its constants hoisted and one division per point: pixel = floor((x / (z tan_x) + 1)
+// w / 2), floor((1 - y / (z tan_y)) h / 2); a hit claims that pixel if it faces the right eye
+// and projects into its image. The nearest claim per right pixel wins: depth along the right
+// eye's axis in the high word, so the smaller 64-bit value is the nearer claim (positive
+// floats order as their bits), the left pixel in the low word, by compare-and-swap.
+struct ClaimProjection {
+    Vec3f eye, fwd, rgt, up;
+    float fw, fh, sx, sy;
+    std::uint32_t rw;
+    std::uint64_t* claims;
+    static constexpr std::uint32_t kNoTarget = ~0u;
+
+    ClaimProjection(const Camera& right, std::uint64_t* claims_)
+        : eye(right.position), fwd(right.forward), rgt(right.right), up(right.up),
+          fw(float(right.width)), fh(float(right.height)),
+          sx(0.5f * fw / float(right.tan_half_x)), sy(0.5f * fh / float(right.tan_half_y)),
+          rw(right.width), claims(claims_) {}
+
+    // Lanes with hit[k] != 0 (hit points p, eye-facing normals n) claim their right pixel;
+    // lane k is the left pixel first + k.
+    void claim16(const float* px, const float* py, const float* pz, const float* nx,
+                 const float* ny, const float* nz, const int* hit, std::uint32_t first) const {
+        alignas(64) std::uint32_t target[16];
+        alignas(64) float depth[16];
+#if defined(__AVX2__)
+        // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
+        // keeps that loop scalar: "control flow in loop").
+        const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
+                     ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
+        const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
+        const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
+        const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
+        const __m256i vrw = _mm256_set1_epi32(int(rw));
+        auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+            return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                                 _mm256_mul_ps(az, bz));
+        };
+        for (int k = 0; k < 16; k += 8) {
+            const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
+                         z = _mm256_load_ps(pz + k);
+            const __m256 facing =
+                dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
+                     _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
+            const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
+                         ez = _mm256_sub_ps(z, ez_);
+            const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
+                                   _mm256_set1_ps(rgt.z));
+            const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
+                                   _mm256_set1_ps(up.z));
+            const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
+                                   _mm256_set1_ps(fwd.z));
+            const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
+            const __m256 fx = _mm256_floor_ps(
+                _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
+            const __m256 fy = _mm256_floor_ps(
+                _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
+            __m256 ok = _mm256_and_ps(
+                _mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(hit + k))),
+                _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
+            // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
+            const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
+                                               _mm256_cvttps_epi32(fx));
+            const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
+                                                  _mm256_castps_si256(ok));
+            _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
+            _mm256_store_ps(depth + k, dz);
+        }
+#else
+        for (int k = 0; k < 16; ++k) {
+            const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
+            const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
+            const Vec3f d = p - eye;
+            const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
+            const float inv_z = 1.0f / dz;
+            const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
+            const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
+            const bool ok = hit[k] && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f && fx < fw &&
+                            fy >= 0.0f && fy < fh;
+            target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
+            depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
+        }
+#endif
+        for (std::uint32_t k = 0; k < 16; ++k) {
+            if (target[k] == kNoTarget) continue;
+            const std::uint64_t claim =
+                (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) | std::uint64_t(first + k);
+            std::atomic_ref<std::uint64_t> slot(claims[target[k]]);
+            std::uint64_t seen = slot.load(std::memory_order_relaxed);
+            while (claim < seen && !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
+            }
+        }
+    }
+};
+
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
     require(std::uint64_t(eye.width) * eye.height < (std::uint64_t(1) << 31),
@@ -260,7 +362,7 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
     width = w, height = h;
     const std::size_t n = std::size_t(w) * h;
     geom.resize(n), p.resize(n), lod.resize(n);
-    if (keep_light) this->n.resize(n), scale.resize(n), add.resize(n);
+    if (keep_light) scale.resize(n), add.resize(n);
 }
 
 namespace {
@@ -348,8 +450,13 @@ RowScratch& row_scratch() {
 
 void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
                              const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
-                             GBuffer& g, bool keep_light, const float* left_rgb, float* rgb,
-                             EyeStats& st) {
+                             GBuffer& g, const Camera* claim_into, const float* left_rgb,
+                             float* rgb, EyeStats& st) {
+    // A left eye that the right eye reuses: its hits claim right pixels as they are found
+    // (ClaimProjection), and its painting pixels keep their light.
+    const bool keep_light = claim_into != nullptr;
+    std::optional<ClaimProjection> claim;
+    if (claim_into) claim.emplace(*claim_into, claims_.data());
     const auto t0 = Clock::now();
     const std::uint32_t w = eye.width;
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -471,7 +578,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             // store forced their reload (it might alias them).
             unsigned* const geom_out = g.geom.data();
             Vec3f* const p_out = g.p.data();
-            Vec3f* const n_out = keep_light ? g.n.data() : nullptr;
             float* const lod_out = g.lod.data();
             float* const rgb_out = rgb;
             const std::size_t row_start = row * w + i0;
@@ -491,10 +597,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
                 Vec3f& gp = p_out[i];
                 gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
-                if (n_out) {  // the right eye's claims test the side it sees
-                    Vec3f& gn = n_out[i];
-                    gn.x = nx[k], gn.y = ny[k], gn.z = nz[k];
-                }
                 LightQuery& q = queries[m];
                 q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
                 q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
@@ -503,6 +605,13 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             }
             traced_count += traced_here;
             hit_count += m;
+            if (claim && m) {  // the right eye's claims, while the hits are in registers
+                lap(t_shade);
+                alignas(64) int hit[16];
+                for (std::uint32_t k = 0; k < 16; ++k) hit[k] = valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
+                claim->claim16(hx, hy, hz, nx, ny, nz, hit, std::uint32_t(row_start));
+                lap(t_reuse);
+            }
             if (m) lighting.light_batch(queries.data(), m, lights.data());
             lap(t_shade);
             // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
@@ -738,124 +847,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     st.reuse_seconds += f * double(reuse_ns.load());  // the right eye's edge release
 }
 
-void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& st) {
-    const auto t0 = Clock::now();
-    const GBuffer& L = g_[0];
-    const std::size_t n = std::size_t(right.width) * right.height;
-    // The last frame's release pass left every claim unclaimed again (no 8-byte fill of the
-    // image per frame); after a resize or an interrupted frame they are filled here.
-    if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
-    claims_clear_ = false;
-    const Vec3f eye(right.position), fwd(right.forward), rgt(right.right), up(right.up);
-    // Camera::project (seed 001 eqs. 3-5) with its constants hoisted and one division per
-    // point: pixel = floor((x / (z tan_x) + 1) w / 2), floor((1 - y / (z tan_y)) h / 2).
-    const float fw = float(right.width), fh = float(right.height);
-    const float sx = 0.5f * fw / float(right.tan_half_x), sy = 0.5f * fh / float(right.tan_half_y);
-    const std::uint32_t rw = right.width;
-    // Claims: the nearest left hit per right pixel wins (depth in the high word, so the
-    // smaller 64-bit value is the nearer claim; positive floats order as their bits).
-    // In chunks: the projections in SIMD lanes (a left pixel that claims nothing gets target
-    // kNoTarget), then the compare-and-swaps.
-    constexpr std::uint32_t kNoTarget = ~0u;
-    parallel_for(L.geom.size(), 4096, [&](std::size_t b, std::size_t e) {
-        constexpr std::size_t kChunk = 256;
-        alignas(64) std::uint32_t target[kChunk];
-        alignas(64) float depth[kChunk];
-        for (std::size_t c0 = b; c0 < e; c0 += kChunk) {
-            const std::size_t count = std::min(kChunk, e - c0);
-            // Points and normals as SoA first: GCC does not vectorise the 3-strided loads.
-            alignas(64) float px[kChunk], py[kChunk], pz[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
-            for (std::size_t k = 0; k < count; ++k) {
-                const Vec3f& p = L.p[c0 + k];
-                const Vec3f& nk = L.n[c0 + k];
-                px[k] = p.x, py[k] = p.y, pz[k] = p.z, nx[k] = nk.x, ny[k] = nk.y, nz[k] = nk.z;
-            }
-            const unsigned* __restrict geom = L.geom.data() + c0;
-            std::size_t k = 0;
-#if defined(__AVX2__)
-            // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
-            // keeps that loop scalar: "control flow in loop").
-            {
-                const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
-                             ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
-                const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
-                const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
-                const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
-                const __m256i no_hit = _mm256_set1_epi32(int(kNoHit)), vrw = _mm256_set1_epi32(int(rw));
-                auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
-                    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
-                                         _mm256_mul_ps(az, bz));
-                };
-                for (; k + 8 <= count; k += 8) {
-                    const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
-                                 z = _mm256_load_ps(pz + k);
-                    const __m256 facing =
-                        dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
-                             _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
-                    const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
-                                 ez = _mm256_sub_ps(z, ez_);
-                    const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
-                                           _mm256_set1_ps(rgt.z));
-                    const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
-                                           _mm256_set1_ps(up.z));
-                    const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
-                                           _mm256_set1_ps(fwd.z));
-                    const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
-                    const __m256 fx = _mm256_floor_ps(
-                        _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
-                    const __m256 fy = _mm256_floor_ps(
-                        _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
-                    const __m256i hit = _mm256_xor_si256(
-                        _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(geom + k)),
-                                           no_hit),
-                        _mm256_set1_epi32(-1));
-                    __m256 ok = _mm256_and_ps(_mm256_castsi256_ps(hit),
-                                              _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
-                    // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
-                    const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
-                                                       _mm256_cvttps_epi32(fx));
-                    const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
-                                                          _mm256_castps_si256(ok));
-                    _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
-                    _mm256_store_ps(depth + k, dz);
-                }
-            }
-#endif
-            for (; k < count; ++k) {
-                const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
-                const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
-                const Vec3f d = p - eye;
-                const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
-                const float inv_z = 1.0f / dz;
-                const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
-                const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
-                const bool ok = geom[k] != kNoHit && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f &&
-                                fx < fw && fy >= 0.0f && fy < fh;
-                target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
-                depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
-            }
-            for (std::size_t k = 0; k < count; ++k) {
-                if (target[k] == kNoTarget) continue;
-                const std::uint64_t claim =
-                    (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) |
-                    std::uint64_t(c0 + k);
-                std::atomic_ref<std::uint64_t> slot(claims_[target[k]]);
-                std::uint64_t seen = slot.load(std::memory_order_relaxed);
-                while (claim < seen &&
-                       !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
-                }
-            }
-        }
-    }, o.threads);
-    sources_.resize(n);  // written by the right eye's rows (render_eye: the edge release)
-    st.reuse_seconds = seconds_since(t0);
-}
-
 void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& lighting,
                          const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
                          float* rgb) {
@@ -867,7 +858,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
-    render_eye(scene, lighting, vt, eye, o, g, false, nullptr, rgb, st);
+    render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st);
     sources_.clear();
 }
 
@@ -884,22 +875,34 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
             "display: edge_depth_ratio must be finite and >= 0");
     reusing_ = false;
+    const std::size_t n = std::size_t(right.width) * right.height;
+    if (use_reuse) {
+        // The last frame's right eye left every claim unclaimed again (no 8-byte fill of the
+        // image per frame); after a resize or an interrupted frame they are filled here.
+        if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
+        claims_clear_ = false;
+        sources_.resize(n);  // written by the right eye's rows (the edge release)
+    }
+    double claim_seconds = 0;
     {
         GBuffer& g = g_[0];
         g.resize(left.width, left.height, use_reuse);
         EyeStats& st = stats_[0] = EyeStats{};
         st.pixels = std::uint64_t(left.width) * left.height;
-        render_eye(scene, lighting, vt, left, o, g, use_reuse, nullptr, left_rgb, st);
+        render_eye(scene, lighting, vt, left, o, g, use_reuse ? &right : nullptr, nullptr, left_rgb, st);
+        // The left eye's claims on right pixels are the right eye's reuse work.
+        claim_seconds = st.reuse_seconds;
+        st.reuse_seconds = 0;
     }
     GBuffer& g = g_[1];
     g.resize(right.width, right.height, false);
     EyeStats& st = stats_[1] = EyeStats{};
     st.pixels = std::uint64_t(right.width) * right.height;
     if (use_reuse) {
-        reuse(right, o, st);
+        st.reuse_seconds = claim_seconds;
         reusing_ = true;
         try {
-            render_eye(scene, lighting, vt, right, o, g, false, left_rgb, right_rgb, st);
+            render_eye(scene, lighting, vt, right, o, g, nullptr, left_rgb, right_rgb, st);
         } catch (...) {
             reusing_ = false;
             throw;
@@ -907,7 +910,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         reusing_ = false;
     } else {
         sources_.clear();
-        render_eye(scene, lighting, vt, right, o, g, false, nullptr, right_rgb, st);
+        render_eye(scene, lighting, vt, right, o, g, nullptr, nullptr, right_rgb, st);
     }
 }
 
