@@ -523,31 +523,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending_count = 0;
         };
-        // A painting pixel whose uv and level are known: its level stored, its texel queued.
-        // Returns whether it was queued (the caller then sets its light), else its radiance
-        // was copied from the left source.
-        auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
-                                float lod, std::int32_t source)
-                                __attribute__((always_inline)) -> PendingPixel* {
-            lod += o.lod_bias;
-            if (!std::isfinite(lod)) lod = 0.0f;
-            g.lod[i] = lod;
-            // A reused point whose level here is the left eye's to within the tolerance keeps
-            // the left eye's sample (the trilinear blend would move by less than that
-            // fraction of the two levels' difference); with the left eye's texel, light and
-            // shading its radiance is the left pixel's, copied.
-            if (source >= 0 && std::abs(left->lod[std::size_t(source)] - lod) <= o.reuse_lod_tolerance) {
-                std::copy_n(left_rgb + 3 * std::size_t(source), 3, rgb + 3 * i);
-                ++copied_count;
-                return nullptr;
-            }
-            const std::size_t k = pending_count++;
-            GS_CHECK(k < w);  // one pixel per column and row
-            PendingPixel& q = pending[k];
-            q.x = x, q.placement = pl;
-            us[k] = u, vs[k] = v, lods[k] = lod;
-            return &q;
-        };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
         std::array<std::uint32_t, 16> lane;
@@ -574,13 +549,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const bool back = gx * dx + gy * dy + gz * dz > 0;
                 nx[k] = back ? -gx : gx, ny[k] = back ? -gy : gy, nz[k] = back ? -gz : gz;
             }
-            // The buffers and the count in locals: through the captured references, every
-            // store forced their reload (it might alias them).
-            unsigned* const geom_out = g.geom.data();
-            Vec3f* const p_out = g.p.data();
-            float* const lod_out = g.lod.data();
-            float* const rgb_out = rgb;
+            // The buffers and the counts in restrict locals: through the captured references,
+            // every store forced their reload (it might alias them).
+            unsigned* __restrict const geom_out = g.geom.data();
+            Vec3f* __restrict const p_out = g.p.data();
+            float* __restrict const lod_out = g.lod.data();
+            float* __restrict const rgb_out = rgb;
+            const int* __restrict const placement = scene.geom_placement.data();
+            const std::size_t placements = scene.geom_placement.size();
             const std::size_t row_start = row * w + i0;
+            alignas(64) int lane_pl[16];  // per hit: its painting placement, -1 for the room
             std::uint32_t m = 0, traced_here = 0;
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (!valid[k]) continue;
@@ -601,6 +579,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
                 q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
                 q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
+                lane_pl[m] = geom < placements ? placement[geom] : -1;
                 lane[m++] = k;
             }
             traced_count += traced_here;
@@ -618,24 +597,27 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             // to uv and level in runs of one painting, in SIMD lanes (PlaneMap::map_lanes).
             alignas(64) double Dx[16], Dy[16], Dz[16], pu[16], pv[16];
             alignas(64) float plod[16];
-            std::array<std::uint32_t, 16> pj;
-            std::array<int, 16> ppl;
+            alignas(64) std::uint32_t pj[16];
+            alignas(64) int ppl[16];
             std::uint32_t np = 0;
+            const double rdx = eye.right.x, rdy = eye.right.y, rdz = eye.right.z;
+            const double row_x = row_dir.x, row_y = row_dir.y, row_z = row_dir.z;
+            const double* __restrict const col_sx = column_sx.data();
             for (std::uint32_t j = 0; j < m; ++j) {
-                const std::uint32_t x = i0 + lane[j];
-                const std::size_t i = row * w + x;
-                const SurfaceLight& sl = lights[j];
-                const int pl = scene.placement_of(queries[j].geom);
+                const std::uint32_t k = lane[j];
+                const int pl = lane_pl[j];
                 if (pl < 0) {
+                    const SurfaceLight& sl = lights[j];
+                    const std::size_t i = row_start + k;
                     const Vec3f L = sl.albedo * sl.irradiance * kInvPi + sl.emission;
-                    rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
-                    g.lod[i] = kNaN;
+                    rgb_out[3 * i] = L.x, rgb_out[3 * i + 1] = L.y, rgb_out[3 * i + 2] = L.z;
+                    lod_out[i] = kNaN;
                     continue;
                 }
-                const double c = column_sx[x];
-                Dx[np] = row_dir.x + c * eye.right.x;
-                Dy[np] = row_dir.y + c * eye.right.y;
-                Dz[np] = row_dir.z + c * eye.right.z;
+                const double c = col_sx[i0 + k];
+                Dx[np] = row_x + c * rdx;
+                Dy[np] = row_y + c * rdy;
+                Dz[np] = row_z + c * rdz;
                 pj[np] = j, ppl[np] = pl;
                 ++np;
             }
@@ -647,15 +629,37 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                                                 pv + r0, plod + r0);
                 r0 = r1;
             }
+            // The painting pixels' levels (with the bias; a non-finite level samples level 0)
+            // stored, their texels queued, and their light kept for the right eye.
+            Vec3f* __restrict const scale_out = keep_light ? g.scale.data() : nullptr;
+            Vec3f* __restrict const add_out = keep_light ? g.add.data() : nullptr;
+            PendingPixel* __restrict const pend = pending.data();
+            double* __restrict const us_out = us.data();
+            double* __restrict const vs_out = vs.data();
+            float* __restrict const lods_out = lods.data();
+            const float bias = o.lod_bias;
+            std::size_t pc = pending_count;
+            GS_CHECK(pc + np <= w);  // one pixel per column and row
             for (std::uint32_t q = 0; q < np; ++q) {
-                const std::uint32_t j = pj[q], x = i0 + lane[j];
-                const std::size_t i = row * w + x;
+                const std::uint32_t j = pj[q], k = lane[j];
+                const std::size_t i = row_start + k;
                 const SurfaceLight& sl = lights[j];
                 const Vec3f scale = sl.irradiance * kInvPi;
-                if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
-                PendingPixel* pp = mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1);
-                pp->scale = scale, pp->add = sl.emission;
+                if (keep_light) {
+                    scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
+                    add_out[i].x = sl.emission.x, add_out[i].y = sl.emission.y;
+                    add_out[i].z = sl.emission.z;
+                }
+                float lod = plod[q] + bias;
+                if (!std::isfinite(lod)) lod = 0.0f;
+                lod_out[i] = lod;
+                PendingPixel& pp = pend[pc];
+                pp.x = i0 + k, pp.placement = ppl[q];
+                pp.scale = scale, pp.add = sl.emission;
+                us_out[pc] = pu[q], vs_out[pc] = pv[q], lods_out[pc] = lod;
+                ++pc;
             }
+            pending_count = pc;
             lap(t_vt);
         };
 
