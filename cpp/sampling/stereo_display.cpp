@@ -63,10 +63,10 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
                OnRow&& on_row) {
     const std::uint32_t w = eye.width;
     const std::size_t padded = (std::size_t(w) + 15) / 16 * 16;
+    std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
     std::vector<double> column_sx(padded);
     for (std::uint32_t i = 0; i < w; ++i) column_sx[i] = eye.screen_x(i + 0.5);
     std::fill(column_sx.begin() + w, column_sx.end(), column_sx[w - 1]);
-    const double rx = eye.right.x, ry = eye.right.y, rz = eye.right.z;
     RTCRayHit16 packet;
     for (std::uint32_t k = 0; k < 16; ++k) {
         packet.ray.org_x[k] = float(eye.position.x), packet.ray.org_y[k] = float(eye.position.y);
@@ -75,32 +75,41 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
         packet.ray.id[k] = k, packet.ray.flags[k] = 0;
         packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
+    // The ray directions of columns [begin, end) of a row (one loop the compiler vectorises).
+    auto directions = [&](const Vec3d& row_dir, std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const double c = column_sx[i];
+            dir_x[i] = float(row_dir.x + c * eye.right.x);
+            dir_y[i] = float(row_dir.y + c * eye.right.y);
+            dir_z[i] = float(row_dir.z + c * eye.right.z);
+        }
+    };
     for (std::size_t row = row_begin; row < row_end; ++row) {
         on_row_start(row);
         const Vec3d row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
         const std::int32_t* row_reused = reused ? reused + row * w : nullptr;
+        if (!row_reused) directions(row_dir, 0, padded);
         for (std::uint32_t i0 = 0; i0 < w; i0 += 16) {
             const std::uint32_t n = std::min<std::uint32_t>(16, w - i0);
             alignas(64) int valid[16];
-            int any = 0;
             if (row_reused) {
+                int any = 0;
                 for (std::uint32_t k = 0; k < 16; ++k) {
                     valid[k] = k < n && row_reused[i0 + std::min(k, n - 1)] < 0 ? -1 : 0;
                     any |= valid[k];
                 }
                 if (!any) continue;
+                directions(row_dir, i0, i0 + 16);  // only for the packets that are cast
             } else {
                 for (std::uint32_t k = 0; k < 16; ++k) valid[k] = k < n ? -1 : 0;
             }
-            // The packet's directions (only for packets that are cast).
-            const double* c = column_sx.data() + i0;
             for (std::uint32_t k = 0; k < 16; ++k) {
-                packet.ray.dir_x[k] = float(row_dir.x + c[k] * rx);
-                packet.ray.dir_y[k] = float(row_dir.y + c[k] * ry);
-                packet.ray.dir_z[k] = float(row_dir.z + c[k] * rz);
                 packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
                 packet.hit.geomID[k] = kNoHit;
             }
+            std::memcpy(packet.ray.dir_x, dir_x.data() + i0, sizeof packet.ray.dir_x);
+            std::memcpy(packet.ray.dir_y, dir_y.data() + i0, sizeof packet.ray.dir_y);
+            std::memcpy(packet.ray.dir_z, dir_z.data() + i0, sizeof packet.ray.dir_z);
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
             context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -430,7 +439,45 @@ std::uint64_t release_claims(std::uint64_t* __restrict claims, const float* up, 
                              const float* down, std::size_t w, float ratio,
                              std::int32_t* __restrict source, bool reset) {
     std::uint64_t kept = 0;
-    for (std::size_t x = 0; x < w; ++x) {
+    std::size_t x = 0;
+#if defined(__AVX2__)
+    // 8 claims at once, the same comparisons (GCC keeps the loop below scalar). std::min(a, b)
+    // is b < a ? b : a, which _mm256_min_ps(b, a) computes.
+    const __m256 vratio = _mm256_set1_ps(ratio);
+    const __m256i ones = _mm256_set1_epi64x(-1);
+    for (; x + 8 <= w; x += 8) {
+        const __m256 nearest = _mm256_min_ps(
+            _mm256_loadu_ps(down + x),
+            _mm256_min_ps(_mm256_loadu_ps(mid + x), _mm256_loadu_ps(up + x)));
+        const __m256i c0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(claims + x));
+        const __m256i c1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(claims + x + 4));
+        // The claims' high words (depths), low words (left pixels) and unclaimed masks, in
+        // pixel order: per 128-bit lane the odd (even) words of c0 and c1, then the 64-bit
+        // quarters reordered.
+        auto odd_words = [](__m256i a, __m256i b) {
+            return _mm256_castpd_si256(_mm256_permute4x64_pd(
+                _mm256_castps_pd(_mm256_shuffle_ps(_mm256_castsi256_ps(a), _mm256_castsi256_ps(b),
+                                                   _MM_SHUFFLE(3, 1, 3, 1))),
+                _MM_SHUFFLE(3, 1, 2, 0)));
+        };
+        auto even_words = [](__m256i a, __m256i b) {
+            return _mm256_castpd_si256(_mm256_permute4x64_pd(
+                _mm256_castps_pd(_mm256_shuffle_ps(_mm256_castsi256_ps(a), _mm256_castsi256_ps(b),
+                                                   _MM_SHUFFLE(2, 0, 2, 0))),
+                _MM_SHUFFLE(3, 1, 2, 0)));
+        };
+        const __m256 depth = _mm256_castsi256_ps(odd_words(c0, c1));
+        const __m256i index = even_words(c0, c1);
+        const __m256i unclaimed = odd_words(_mm256_cmpeq_epi64(c0, ones), _mm256_cmpeq_epi64(c1, ones));
+        const __m256 far = _mm256_cmp_ps(depth, _mm256_mul_ps(nearest, vratio), _CMP_GT_OQ);
+        const __m256 drop = _mm256_or_ps(far, _mm256_castsi256_ps(unclaimed));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(source + x),
+                            _mm256_castps_si256(_mm256_blendv_ps(
+                                _mm256_castsi256_ps(index), _mm256_castsi256_ps(ones), drop)));
+        kept += 8 - std::uint64_t(std::popcount(unsigned(_mm256_movemask_ps(drop))));
+    }
+#endif
+    for (; x < w; ++x) {
         const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
         const std::uint64_t c = claims[x];
         const bool keep = c != kUnclaimed &&
