@@ -271,12 +271,13 @@ struct ClaimProjection {
           sx(0.5f * fw / float(right.tan_half_x)), sy(0.5f * fh / float(right.tan_half_y)),
           rw(right.width), claims(claims_) {}
 
-    // Lanes with hit[k] != 0 (hit points p, eye-facing normals n) claim their right pixel;
-    // lane k is the left pixel first + k.
-    void claim16(const float* px, const float* py, const float* pz, const float* nx,
-                 const float* ny, const float* nz, const int* hit, std::uint32_t first) const {
-        alignas(64) std::uint32_t target[16];
-        alignas(64) float depth[16];
+    // Lanes with hit[k] != 0 (hit points p, eye-facing normals n): their right pixel in
+    // target (kNoTarget: no claim) and depth, and the claims' cache lines fetched for writing
+    // (claim() comes later, when they have arrived: a locked compare-and-swap waits for its
+    // line).
+    void project16(const float* px, const float* py, const float* pz, const float* nx,
+                   const float* ny, const float* nz, const int* hit, std::uint32_t* target,
+                   float* depth) const {
 #if defined(__AVX2__)
         // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
         // keeps that loop scalar: "control flow in loop").
@@ -340,6 +341,12 @@ struct ClaimProjection {
             depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
         }
 #endif
+        for (std::uint32_t k = 0; k < 16; ++k)
+            if (target[k] != kNoTarget) __builtin_prefetch(claims + target[k], 1);
+    }
+
+    // The projected lanes' claims; lane k is the left pixel first + k.
+    void claim16(const std::uint32_t* target, const float* depth, std::uint32_t first) const {
         for (std::uint32_t k = 0; k < 16; ++k) {
             if (target[k] == kNoTarget) continue;
             const std::uint64_t claim =
@@ -631,15 +638,23 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             }
             traced_count += traced_here;
             hit_count += m;
-            if (claim && m) {  // the right eye's claims, while the hits are in registers
+            // The right eye's claims, projected while the hits are in registers and made after
+            // the lighting call (their cache lines fetched meanwhile).
+            alignas(64) std::uint32_t claim_target[16];
+            alignas(64) float claim_depth[16];
+            if (claim && m) {
                 lap(t_shade);
                 alignas(64) int hit[16];
                 for (std::uint32_t k = 0; k < 16; ++k) hit[k] = valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
-                claim->claim16(hx, hy, hz, nx, ny, nz, hit, std::uint32_t(row_start));
+                claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
                 lap(t_reuse);
             }
             if (m) lighting.light_batch(queries.data(), m, lights.data());
             lap(t_shade);
+            if (claim && m) {
+                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start));
+                lap(t_reuse);
+            }
             // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
             // to uv and level in runs of one painting, in SIMD lanes (PlaneMap::map_lanes).
             alignas(64) double Dx[16], Dy[16], Dz[16], pu[16], pv[16];
