@@ -862,17 +862,35 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 k0 = k1;
             }
             lap(t_vt);
-            // The Gallery's order of operations (its sRGB curve is exact, ours tabulated).
-            auto shade = [&](const PendingPixel& q, const float* a) {
-                const std::size_t i = row * w + q.x;
-                const Vec3f albedo =
-                    (o.srgb_albedo ? Vec3f{srgb_decode(a[0]), srgb_decode(a[1]), srgb_decode(a[2])}
-                                   : Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f)) *
-                    o.painting_reflectance;
-                const Vec3f L = albedo * q.scale + q.add;
-                rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
-            };
-            for (std::size_t k = 0; k < pending_count; ++k) shade(pending[k], &texels[3 * k]);
+            // The Gallery's order of operations (its sRGB curve is exact, ours tabulated); on
+            // restrict locals (stores through rgb might otherwise alias the arrays' pointers).
+            {
+                const PendingPixel* __restrict pend = pending.data();
+                const float* __restrict tex = texels.data();
+                float* __restrict rgb_row = rgb + 3 * row * w;
+                const float reflectance = o.painting_reflectance;
+                const std::size_t count = pending_count;
+                if (o.srgb_albedo) {
+                    for (std::size_t k = 0; k < count; ++k) {
+                        const PendingPixel& q = pend[k];
+                        const float* a = tex + 3 * k;
+                        const Vec3f albedo =
+                            Vec3f{srgb_decode(a[0]), srgb_decode(a[1]), srgb_decode(a[2])} * reflectance;
+                        const Vec3f L = albedo * q.scale + q.add;
+                        float* out = rgb_row + 3 * std::size_t(q.x);
+                        out[0] = L.x, out[1] = L.y, out[2] = L.z;
+                    }
+                } else {
+                    for (std::size_t k = 0; k < count; ++k) {
+                        const PendingPixel& q = pend[k];
+                        const float* a = tex + 3 * k;
+                        const Vec3f albedo = Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f) * reflectance;
+                        const Vec3f L = albedo * q.scale + q.add;
+                        float* out = rgb_row + 3 * std::size_t(q.x);
+                        out[0] = L.x, out[1] = L.y, out[2] = L.z;
+                    }
+                }
+            }
             painting_count += pending_count + copied_count;
             copied_count = 0;
             lap(t_shade);
