@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 #if defined(__AVX__)
 #include <immintrin.h>
@@ -52,11 +53,14 @@ const SrgbTable& srgb_table() {
 }
 
 // Casts the primary rays of rows [row_begin, row_end) in 16-ray packets along each row; a
-// pixel with skip[i] != 0 is left out of its packet. on_packet(row, i0, n, valid, packet)
-// sees each packet after Embree filled it, on_row(row) each row after its last packet.
-template <typename OnPacket, typename OnRow>
+// pixel with reused[i] >= 0 (the right eye's pixels that reuse a left hit) is left out of its
+// packet, and a packet left empty is not cast. on_row_start(row) runs before each row's
+// packets, on_packet(row, i0, n, valid, packet) sees each packet after Embree filled it,
+// on_row(row) each row after its last packet.
+template <typename OnRowStart, typename OnPacket, typename OnRow>
 void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::size_t row_end,
-               const std::uint8_t* skip, OnPacket&& on_packet, OnRow&& on_row) {
+               const std::int32_t* reused, OnRowStart&& on_row_start, OnPacket&& on_packet,
+               OnRow&& on_row) {
     const std::uint32_t w = eye.width;
     const std::size_t padded = (std::size_t(w) + 15) / 16 * 16;
     std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
@@ -71,26 +75,38 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
         packet.ray.id[k] = k, packet.ray.flags[k] = 0;
         packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
-    for (std::size_t row = row_begin; row < row_end; ++row) {
-        const Vec3d row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-        for (std::size_t i = 0; i < padded; ++i) {
+    // The ray directions of columns [begin, end) of a row (one loop the compiler vectorises).
+    auto directions = [&](const Vec3d& row_dir, std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
             const double c = column_sx[i];
             dir_x[i] = float(row_dir.x + c * eye.right.x);
             dir_y[i] = float(row_dir.y + c * eye.right.y);
             dir_z[i] = float(row_dir.z + c * eye.right.z);
         }
-        const std::uint8_t* row_skip = skip ? skip + row * w : nullptr;
+    };
+    for (std::size_t row = row_begin; row < row_end; ++row) {
+        on_row_start(row);
+        const Vec3d row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
+        const std::int32_t* row_reused = reused ? reused + row * w : nullptr;
+        if (!row_reused) directions(row_dir, 0, padded);
         for (std::uint32_t i0 = 0; i0 < w; i0 += 16) {
             const std::uint32_t n = std::min<std::uint32_t>(16, w - i0);
             alignas(64) int valid[16];
-            bool any = false;
+            if (row_reused) {
+                int any = 0;
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    valid[k] = k < n && row_reused[i0 + std::min(k, n - 1)] < 0 ? -1 : 0;
+                    any |= valid[k];
+                }
+                if (!any) continue;
+                directions(row_dir, i0, i0 + 16);  // only for the packets that are cast
+            } else {
+                for (std::uint32_t k = 0; k < 16; ++k) valid[k] = k < n ? -1 : 0;
+            }
             for (std::uint32_t k = 0; k < 16; ++k) {
-                valid[k] = k < n && !(row_skip && row_skip[i0 + k]) ? -1 : 0;
-                any |= valid[k] != 0;
                 packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
                 packet.hit.geomID[k] = kNoHit;
             }
-            if (!any) continue;
             std::memcpy(packet.ray.dir_x, dir_x.data() + i0, sizeof packet.ray.dir_x);
             std::memcpy(packet.ray.dir_y, dir_y.data() + i0, sizeof packet.ray.dir_y);
             std::memcpy(packet.ray.dir_z, dir_z.data() + i0, sizeof packet.ray.dir_z);
@@ -134,14 +150,31 @@ struct PlaneMap {
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
                                                   double* __restrict v, float* __restrict lod) const {
+        map<true>(count, Dx, Dy, Dz, u, v, lod);
+    }
+    // The level of detail alone (the same operations: the same bits as map_lanes' lod).
+    __attribute__((always_inline)) void lod_lanes(std::size_t count, const double* __restrict Dx,
+                                                  const double* __restrict Dy,
+                                                  const double* __restrict Dz,
+                                                  float* __restrict lod) const {
+        map<false>(count, Dx, Dy, Dz, nullptr, nullptr, lod);
+    }
+
+    template <bool kUv>
+    __attribute__((always_inline)) void map(std::size_t count, const double* __restrict Dx,
+                                            const double* __restrict Dy, const double* __restrict Dz,
+                                            double* __restrict u, double* __restrict v,
+                                            float* __restrict lod) const {
         std::uint32_t odd = 0;
         for (std::size_t k = 0; k < count; ++k) {
             const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
             const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
             const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
             const double kk = 1.0 / dn, t = h * kk;
-            u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
-            v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
+            if constexpr (kUv) {
+                u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
+                v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
+            }
             const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
             const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
             const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
@@ -218,6 +251,114 @@ inline void inverse_sqrt_16(float* x) {
 #endif
 }
 
+// The left eye's hits projected into the right eye, 16 lanes (one packet) at a time, and
+// their claims on the right pixels. The projection is Camera::project (seed 001 eqs. 3-5)
+// with its constants hoisted and one division per point: pixel = floor((x / (z tan_x) + 1)
+// w / 2), floor((1 - y / (z tan_y)) h / 2); a hit claims that pixel if it faces the right eye
+// and projects into its image. The nearest claim per right pixel wins: depth along the right
+// eye's axis in the high word, so the smaller 64-bit value is the nearer claim (positive
+// floats order as their bits), the left pixel in the low word, by compare-and-swap.
+struct ClaimProjection {
+    Vec3f eye, fwd, rgt, up;
+    float fw, fh, sx, sy;
+    std::uint32_t rw;
+    std::uint64_t* claims;
+    static constexpr std::uint32_t kNoTarget = ~0u;
+
+    ClaimProjection(const Camera& right, std::uint64_t* claims_)
+        : eye(right.position), fwd(right.forward), rgt(right.right), up(right.up),
+          fw(float(right.width)), fh(float(right.height)),
+          sx(0.5f * fw / float(right.tan_half_x)), sy(0.5f * fh / float(right.tan_half_y)),
+          rw(right.width), claims(claims_) {}
+
+    // Lanes with hit[k] != 0 (hit points p, eye-facing normals n): their right pixel in
+    // target (kNoTarget: no claim) and depth, and the claims' cache lines fetched for writing
+    // (claim() comes later, when they have arrived: a locked compare-and-swap waits for its
+    // line).
+    void project16(const float* px, const float* py, const float* pz, const float* nx,
+                   const float* ny, const float* nz, const int* hit, std::uint32_t* target,
+                   float* depth) const {
+#if defined(__AVX2__)
+        // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
+        // keeps that loop scalar: "control flow in loop").
+        const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
+                     ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
+        const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
+        const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
+        const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
+        const __m256i vrw = _mm256_set1_epi32(int(rw));
+        auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
+            return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                                 _mm256_mul_ps(az, bz));
+        };
+        for (int k = 0; k < 16; k += 8) {
+            const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
+                         z = _mm256_load_ps(pz + k);
+            const __m256 facing =
+                dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
+                     _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
+            const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
+                         ez = _mm256_sub_ps(z, ez_);
+            const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
+                                   _mm256_set1_ps(rgt.z));
+            const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
+                                   _mm256_set1_ps(up.z));
+            const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
+                                   _mm256_set1_ps(fwd.z));
+            const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
+            const __m256 fx = _mm256_floor_ps(
+                _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
+            const __m256 fy = _mm256_floor_ps(
+                _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
+            __m256 ok = _mm256_and_ps(
+                _mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(hit + k))),
+                _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
+            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
+            // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
+            const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
+                                               _mm256_cvttps_epi32(fx));
+            const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
+                                                  _mm256_castps_si256(ok));
+            _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
+            _mm256_store_ps(depth + k, dz);
+        }
+#else
+        for (int k = 0; k < 16; ++k) {
+            const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
+            const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
+            const Vec3f d = p - eye;
+            const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
+            const float inv_z = 1.0f / dz;
+            const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
+            const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
+            const bool ok = hit[k] && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f && fx < fw &&
+                            fy >= 0.0f && fy < fh;
+            target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
+            depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
+        }
+#endif
+        for (std::uint32_t k = 0; k < 16; ++k)
+            if (target[k] != kNoTarget) __builtin_prefetch(claims + target[k], 1);
+    }
+
+    // The projected lanes' claims; lane k is the left pixel first + k.
+    void claim16(const std::uint32_t* target, const float* depth, std::uint32_t first) const {
+        for (std::uint32_t k = 0; k < 16; ++k) {
+            if (target[k] == kNoTarget) continue;
+            const std::uint64_t claim =
+                (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) | std::uint64_t(first + k);
+            std::atomic_ref<std::uint64_t> slot(claims[target[k]]);
+            std::uint64_t seen = slot.load(std::memory_order_relaxed);
+            while (claim < seen && !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
+            }
+        }
+    }
+};
+
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
     require(std::uint64_t(eye.width) * eye.height < (std::uint64_t(1) << 31),
@@ -237,7 +378,7 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
     width = w, height = h;
     const std::size_t n = std::size_t(w) * h;
     geom.resize(n), p.resize(n), lod.resize(n);
-    if (keep_light) this->n.resize(n), scale.resize(n), add.resize(n);
+    if (keep_light) scale.resize(n), add.resize(n);
 }
 
 namespace {
@@ -258,18 +399,102 @@ struct RowScratch {
     std::vector<std::uint32_t> rx;
     std::vector<int> rpl;
     std::vector<std::int32_t> rsrc;
-    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz, ru, rv;
+    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz;
     std::vector<float> rlod;
+    // The right eye's edge release: one row of claimed depths (with an infinite depth either
+    // side) and the row minima of the last three claim rows (row r in slot r % 3).
+    std::vector<float> depths;
+    std::array<std::vector<float>, 3> row_min;
+    std::array<std::size_t, 3> row_min_of;
 
     void fit(std::size_t w, bool reused) {
         if (pending.size() < w) pending.resize(w), us.resize(w), vs.resize(w), lods.resize(w);
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
-            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz, &ru, &rv}) a->resize(w);
+            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz}) a->resize(w);
+            depths.resize(w + 2);
+            for (auto& m : row_min) m.resize(w);
         }
+        row_min_of.fill(~std::size_t(0));  // another frame's claims
     }
 };
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Rows per chunk of the right eye's pass with reuse: each chunk's first and last claim rows
+// are reset after the pass (2 rows in 16), the others by the chunk itself.
+constexpr std::size_t kReleaseChunkRows = 16;
+
+// Per pixel of one row of claims, the nearest claimed depth among it and its two row
+// neighbours (the separable 3 x 3 minimum's first pass; unclaimed: infinitely far).
+void claimed_row_min(const std::uint64_t* __restrict claims, std::size_t w, float* __restrict depths,
+                     float* __restrict row_min) {
+    depths[0] = depths[w + 1] = kInf;
+    for (std::size_t x = 0; x < w; ++x) {
+        const std::uint64_t c = claims[x];
+        depths[x + 1] = c == kUnclaimed ? kInf : std::bit_cast<float>(std::uint32_t(c >> 32));
+    }
+    for (std::size_t x = 0; x < w; ++x)
+        row_min[x] = std::min(std::min(depths[x], depths[x + 1]), depths[x + 2]);
+}
+
+// The edge release of one row of claims (see DisplayPass::reuse): a claim is kept unless its
+// depth exceeds the 3 x 3 minimum of claimed depths (the row minima of the rows above, at
+// and below) x ratio; source gets the kept claim's left pixel, else -1. Returns the count
+// kept; with reset, the row's claims are left unclaimed for the next frame.
+std::uint64_t release_claims(std::uint64_t* __restrict claims, const float* up, const float* mid,
+                             const float* down, std::size_t w, float ratio,
+                             std::int32_t* __restrict source, bool reset) {
+    std::uint64_t kept = 0;
+    std::size_t x = 0;
+#if defined(__AVX2__)
+    // 8 claims at once, the same comparisons (GCC keeps the loop below scalar). std::min(a, b)
+    // is b < a ? b : a, which _mm256_min_ps(b, a) computes.
+    const __m256 vratio = _mm256_set1_ps(ratio);
+    const __m256i ones = _mm256_set1_epi64x(-1);
+    for (; x + 8 <= w; x += 8) {
+        const __m256 nearest = _mm256_min_ps(
+            _mm256_loadu_ps(down + x),
+            _mm256_min_ps(_mm256_loadu_ps(mid + x), _mm256_loadu_ps(up + x)));
+        const __m256i c0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(claims + x));
+        const __m256i c1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(claims + x + 4));
+        // The claims' high words (depths), low words (left pixels) and unclaimed masks, in
+        // pixel order: per 128-bit lane the odd (even) words of c0 and c1, then the 64-bit
+        // quarters reordered.
+        auto odd_words = [](__m256i a, __m256i b) {
+            return _mm256_castpd_si256(_mm256_permute4x64_pd(
+                _mm256_castps_pd(_mm256_shuffle_ps(_mm256_castsi256_ps(a), _mm256_castsi256_ps(b),
+                                                   _MM_SHUFFLE(3, 1, 3, 1))),
+                _MM_SHUFFLE(3, 1, 2, 0)));
+        };
+        auto even_words = [](__m256i a, __m256i b) {
+            return _mm256_castpd_si256(_mm256_permute4x64_pd(
+                _mm256_castps_pd(_mm256_shuffle_ps(_mm256_castsi256_ps(a), _mm256_castsi256_ps(b),
+                                                   _MM_SHUFFLE(2, 0, 2, 0))),
+                _MM_SHUFFLE(3, 1, 2, 0)));
+        };
+        const __m256 depth = _mm256_castsi256_ps(odd_words(c0, c1));
+        const __m256i index = even_words(c0, c1);
+        const __m256i unclaimed = odd_words(_mm256_cmpeq_epi64(c0, ones), _mm256_cmpeq_epi64(c1, ones));
+        const __m256 far = _mm256_cmp_ps(depth, _mm256_mul_ps(nearest, vratio), _CMP_GT_OQ);
+        const __m256 drop = _mm256_or_ps(far, _mm256_castsi256_ps(unclaimed));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(source + x),
+                            _mm256_castps_si256(_mm256_blendv_ps(
+                                _mm256_castsi256_ps(index), _mm256_castsi256_ps(ones), drop)));
+        kept += 8 - std::uint64_t(std::popcount(unsigned(_mm256_movemask_ps(drop))));
+    }
+#endif
+    for (; x < w; ++x) {
+        const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
+        const std::uint64_t c = claims[x];
+        const bool keep = c != kUnclaimed &&
+                          !(std::bit_cast<float>(std::uint32_t(c >> 32)) > nearest * ratio);
+        source[x] = keep ? std::int32_t(c & 0xffffffffu) : -1;
+        kept += keep;
+    }
+    if (reset) std::fill_n(claims, w, kUnclaimed);
+    return kept;
+}
 
 RowScratch& row_scratch() {
     thread_local RowScratch scratch;
@@ -279,8 +504,13 @@ RowScratch& row_scratch() {
 
 void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
                              const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
-                             GBuffer& g, bool keep_light, const float* left_rgb, float* rgb,
-                             EyeStats& st) {
+                             GBuffer& g, const Camera* claim_into, const float* left_rgb,
+                             float* rgb, EyeStats& st) {
+    // A left eye that the right eye reuses: its hits claim right pixels as they are found
+    // (ClaimProjection), and its painting pixels keep their light.
+    const bool keep_light = claim_into != nullptr;
+    std::optional<ClaimProjection> claim;
+    if (claim_into) claim.emplace(*claim_into, claims_.data());
     const auto t0 = Clock::now();
     const std::uint32_t w = eye.width;
     constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -289,18 +519,24 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     maps.reserve(scene.paintings.size());
     for (const PaintingPlacement& pp : scene.paintings) maps.emplace_back(pp, eye);
     const GBuffer* left = reusing_ ? &g_[0] : nullptr;
-    const std::int32_t* sources = reusing_ ? sources_.data() : nullptr;
-    const std::uint8_t* skip = reusing_ ? claimed_.data() : nullptr;
+    // The right eye: its claims released row by row just before the row is rendered (the
+    // claims of the rows above and below are read, so a worker resets the claims of its
+    // chunk's inner rows and the chunks' first and last rows are reset after the pass).
+    std::int32_t* const sources = reusing_ ? sources_.data() : nullptr;
+    std::uint64_t* const claims = reusing_ ? claims_.data() : nullptr;
+    const float release_ratio = 1.0f + o.edge_depth_ratio;
+    const std::size_t chunk_rows = reusing_ ? kReleaseChunkRows : 4;
+    std::atomic<std::uint64_t> reused{0};
     GS_CHECK(!left || left_rgb != nullptr);
     const Vec3f origin(eye.position);
     const SrgbTable& srgb_decode = srgb_table();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
-    std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0};
+    std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0}, reuse_ns{0};
     std::vector<double> column_sx(w);  // screen x of each column's centre
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
-    parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
+    parallel_for(eye.height, chunk_rows, [&](std::size_t rb, std::size_t re) {
         // The row's painting pixels waiting for their texels (at most one per column, so
         // arrays of the row's width and a count: no push_back's capacity test per pixel), in
         // this thread's scratch (parallel_for calls this body per 4 rows: allocating the
@@ -318,15 +554,15 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         std::vector<int>& rpl = sc.rpl;
         std::vector<std::int32_t>& rsrc = sc.rsrc;
         std::vector<double>&rPx = sc.rPx, &rPy = sc.rPy, &rPz = sc.rPz, &rDx = sc.rDx, &rDy = sc.rDy,
-                          &rDz = sc.rDz, &ru = sc.ru, &rv = sc.rv;
+                          &rDz = sc.rDz;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
-        std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0;
+        std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0, reused_count = 0;
         // Thread time per stage: laps between the stages of the fused loop, taken on every
         // kTimedRow-th row only (a clock read per stage and packet costs a few percent).
         constexpr std::size_t kTimedRow = 8;
-        std::chrono::nanoseconds t_rays{0}, t_vt{0}, t_shade{0};
+        std::chrono::nanoseconds t_rays{0}, t_vt{0}, t_shade{0}, t_reuse{0};
         bool timed = rb % kTimedRow == 0;
         auto mark = Clock::now();
         auto lap = [&](std::chrono::nanoseconds& acc) {
@@ -340,31 +576,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             current_row = row;
             row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending_count = 0;
-        };
-        // A painting pixel whose uv and level are known: its level stored, its texel queued.
-        // Returns whether it was queued (the caller then sets its light), else its radiance
-        // was copied from the left source.
-        auto mapped_pixel = [&](std::size_t i, std::uint32_t x, int pl, double u, double v,
-                                float lod, std::int32_t source)
-                                __attribute__((always_inline)) -> PendingPixel* {
-            lod += o.lod_bias;
-            if (!std::isfinite(lod)) lod = 0.0f;
-            g.lod[i] = lod;
-            // A reused point whose level here is the left eye's to within the tolerance keeps
-            // the left eye's sample (the trilinear blend would move by less than that
-            // fraction of the two levels' difference); with the left eye's texel, light and
-            // shading its radiance is the left pixel's, copied.
-            if (source >= 0 && std::abs(left->lod[std::size_t(source)] - lod) <= o.reuse_lod_tolerance) {
-                std::copy_n(left_rgb + 3 * std::size_t(source), 3, rgb + 3 * i);
-                ++copied_count;
-                return nullptr;
-            }
-            const std::size_t k = pending_count++;
-            GS_CHECK(k < w);  // one pixel per column and row
-            PendingPixel& q = pending[k];
-            q.x = x, q.placement = pl;
-            us[k] = u, vs[k] = v, lods[k] = lod;
-            return &q;
         };
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
@@ -392,14 +603,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const bool back = gx * dx + gy * dy + gz * dz > 0;
                 nx[k] = back ? -gx : gx, ny[k] = back ? -gy : gy, nz[k] = back ? -gz : gz;
             }
-            // The buffers and the count in locals: through the captured references, every
-            // store forced their reload (it might alias them).
-            unsigned* const geom_out = g.geom.data();
-            Vec3f* const p_out = g.p.data();
-            Vec3f* const n_out = keep_light ? g.n.data() : nullptr;
-            float* const lod_out = g.lod.data();
-            float* const rgb_out = rgb;
+            // The buffers and the counts in restrict locals: through the captured references,
+            // every store forced their reload (it might alias them).
+            unsigned* __restrict const geom_out = g.geom.data();
+            Vec3f* __restrict const p_out = g.p.data();
+            float* __restrict const lod_out = g.lod.data();
+            float* __restrict const rgb_out = rgb;
+            const int* __restrict const placement = scene.geom_placement.data();
+            const std::size_t placements = scene.geom_placement.size();
             const std::size_t row_start = row * w + i0;
+            alignas(64) int lane_pl[16];  // per hit: its painting placement, -1 for the room
             std::uint32_t m = 0, traced_here = 0;
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (!valid[k]) continue;
@@ -416,42 +629,57 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
                 Vec3f& gp = p_out[i];
                 gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
-                if (n_out) {  // the right eye's claims test the side it sees
-                    Vec3f& gn = n_out[i];
-                    gn.x = nx[k], gn.y = ny[k], gn.z = nz[k];
-                }
                 LightQuery& q = queries[m];
                 q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
                 q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
                 q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
+                lane_pl[m] = geom < placements ? placement[geom] : -1;
                 lane[m++] = k;
             }
             traced_count += traced_here;
             hit_count += m;
+            // The right eye's claims, projected while the hits are in registers and made after
+            // the lighting call (their cache lines fetched meanwhile).
+            alignas(64) std::uint32_t claim_target[16];
+            alignas(64) float claim_depth[16];
+            if (claim && m) {
+                lap(t_shade);
+                alignas(64) int hit[16];
+                for (std::uint32_t k = 0; k < 16; ++k) hit[k] = valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
+                claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
+                lap(t_reuse);
+            }
             if (m) lighting.light_batch(queries.data(), m, lights.data());
             lap(t_shade);
+            if (claim && m) {
+                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start));
+                lap(t_reuse);
+            }
             // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
             // to uv and level in runs of one painting, in SIMD lanes (PlaneMap::map_lanes).
             alignas(64) double Dx[16], Dy[16], Dz[16], pu[16], pv[16];
             alignas(64) float plod[16];
-            std::array<std::uint32_t, 16> pj;
-            std::array<int, 16> ppl;
+            alignas(64) std::uint32_t pj[16];
+            alignas(64) int ppl[16];
             std::uint32_t np = 0;
+            const double rdx = eye.right.x, rdy = eye.right.y, rdz = eye.right.z;
+            const double row_x = row_dir.x, row_y = row_dir.y, row_z = row_dir.z;
+            const double* __restrict const col_sx = column_sx.data();
             for (std::uint32_t j = 0; j < m; ++j) {
-                const std::uint32_t x = i0 + lane[j];
-                const std::size_t i = row * w + x;
-                const SurfaceLight& sl = lights[j];
-                const int pl = scene.placement_of(queries[j].geom);
+                const std::uint32_t k = lane[j];
+                const int pl = lane_pl[j];
                 if (pl < 0) {
+                    const SurfaceLight& sl = lights[j];
+                    const std::size_t i = row_start + k;
                     const Vec3f L = sl.albedo * sl.irradiance * kInvPi + sl.emission;
-                    rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
-                    g.lod[i] = kNaN;
+                    rgb_out[3 * i] = L.x, rgb_out[3 * i + 1] = L.y, rgb_out[3 * i + 2] = L.z;
+                    lod_out[i] = kNaN;
                     continue;
                 }
-                const double c = column_sx[x];
-                Dx[np] = row_dir.x + c * eye.right.x;
-                Dy[np] = row_dir.y + c * eye.right.y;
-                Dz[np] = row_dir.z + c * eye.right.z;
+                const double c = col_sx[i0 + k];
+                Dx[np] = row_x + c * rdx;
+                Dy[np] = row_y + c * rdy;
+                Dz[np] = row_z + c * rdz;
                 pj[np] = j, ppl[np] = pl;
                 ++np;
             }
@@ -463,79 +691,158 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                                                 pv + r0, plod + r0);
                 r0 = r1;
             }
+            // The painting pixels' levels (with the bias; a non-finite level samples level 0)
+            // stored, their texels queued, and their light kept for the right eye.
+            Vec3f* __restrict const scale_out = keep_light ? g.scale.data() : nullptr;
+            Vec3f* __restrict const add_out = keep_light ? g.add.data() : nullptr;
+            PendingPixel* __restrict const pend = pending.data();
+            double* __restrict const us_out = us.data();
+            double* __restrict const vs_out = vs.data();
+            float* __restrict const lods_out = lods.data();
+            const float bias = o.lod_bias;
+            std::size_t pc = pending_count;
+            GS_CHECK(pc + np <= w);  // one pixel per column and row
             for (std::uint32_t q = 0; q < np; ++q) {
-                const std::uint32_t j = pj[q], x = i0 + lane[j];
-                const std::size_t i = row * w + x;
+                const std::uint32_t j = pj[q], k = lane[j];
+                const std::size_t i = row_start + k;
                 const SurfaceLight& sl = lights[j];
                 const Vec3f scale = sl.irradiance * kInvPi;
-                if (keep_light) g.scale[i] = scale, g.add[i] = sl.emission;
-                PendingPixel* pp = mapped_pixel(i, x, ppl[q], pu[q], pv[q], plod[q], -1);
-                pp->scale = scale, pp->add = sl.emission;
+                if (keep_light) {
+                    scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
+                    add_out[i].x = sl.emission.x, add_out[i].y = sl.emission.y;
+                    add_out[i].z = sl.emission.z;
+                }
+                float lod = plod[q] + bias;
+                if (!std::isfinite(lod)) lod = 0.0f;
+                lod_out[i] = lod;
+                PendingPixel& pp = pend[pc];
+                pp.x = i0 + k, pp.placement = ppl[q];
+                pp.scale = scale, pp.add = sl.emission;
+                us_out[pc] = pu[q], vs_out[pc] = pv[q], lods_out[pc] = lod;
+                ++pc;
             }
+            pending_count = pc;
             lap(t_vt);
+        };
+
+        // The right eye: the edge release of the row's claims (their sources, the packets'
+        // skip mask) from the row minima of the claim rows above, at and below.
+        const std::size_t h = eye.height;
+        auto on_row_start = [&](std::size_t row) {
+            if (!left) return;
+            const float* m[3];
+            for (int d = 0; d < 3; ++d) {
+                const std::size_t r = std::min(h - 1, std::max(row + d, std::size_t(1)) - 1);
+                std::vector<float>& slot = sc.row_min[r % 3];
+                if (sc.row_min_of[r % 3] != r) {
+                    claimed_row_min(claims + r * w, w, sc.depths.data(), slot.data());
+                    sc.row_min_of[r % 3] = r;
+                }
+                m[d] = slot.data();
+            }
+            // A chunk's first and last claim rows are read by the chunks beside it: reset later.
+            reused_count += release_claims(claims + row * w, m[0], m[1], m[2], w, release_ratio,
+                                           sources + row * w, rb < row && row + 1 < re);
+            lap(t_reuse);
         };
 
         auto on_row = [&](std::size_t row) {
             lap(t_rays);
             start_row(row);
             // The right eye's claimed pixels: the left hit and its light, the level of this eye
-            // (the point seen along this eye's ray through it), the painting pixels' uv and
-            // level in SIMD lanes per run of one painting (PlaneMap::map_lanes, as the left
-            // eye's packets).
+            // (the point seen along this eye's ray through it), the painting pixels' level in
+            // SIMD lanes per run of one painting (PlaneMap::lod_lanes, as the left eye's
+            // packets). The buffers in restrict locals: through the captured references every
+            // store forced their reload.
             if (left) {
-                std::size_t nr = 0;
+                const std::int32_t* __restrict src = sources + row * w;
+                const unsigned* __restrict lgeom = left->geom.data();
+                const Vec3f* __restrict lp = left->p.data();
+                const float* __restrict llod = left->lod.data();
+                const float* __restrict lrgb = left_rgb;
+                unsigned* __restrict geom_out = g.geom.data() + row * w;
+                float* __restrict lod_out = g.lod.data() + row * w;
+                float* __restrict rgb_out = rgb + 3 * row * w;
+                const int* __restrict placement = scene.geom_placement.data();
+                const std::size_t placements = scene.geom_placement.size();
+                std::uint32_t* __restrict rxs = rx.data();
+                int* __restrict rpls = rpl.data();
+                std::int32_t* __restrict rsrcs = rsrc.data();
+                double* __restrict px = rPx.data();
+                double* __restrict py = rPy.data();
+                double* __restrict pz = rPz.data();
+                std::size_t nr = 0, reused_here = 0;
                 for (std::uint32_t x = 0; x < w; ++x) {
-                    const std::size_t i = row * w + x;
-                    const std::int32_t s = sources[i];
+                    const std::int32_t s = src[x];
                     if (s < 0) continue;
+                    ++reused_here;
                     const std::size_t si = std::size_t(s);
-                    const unsigned geom = left->geom[si];
-                    g.geom[i] = geom;  // the point stays in the left buffer (hit_points)
-                    ++hit_count;
-                    const int pl = scene.placement_of(geom);
+                    const unsigned geom = lgeom[si];
+                    geom_out[x] = geom;  // the point stays in the left buffer (hit_points)
+                    const int pl = geom < placements ? placement[geom] : -1;
                     if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
-                        std::copy_n(left_rgb + 3 * si, 3, rgb + 3 * i);
-                        g.lod[i] = kNaN;
+                        rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
+                        rgb_out[3 * x + 2] = lrgb[3 * si + 2];
+                        lod_out[x] = kNaN;
                         continue;
                     }
-                    const Vec3f& p = left->p[si];
-                    rx[nr] = x, rpl[nr] = pl, rsrc[nr] = s;
-                    rPx[nr] = p.x, rPy[nr] = p.y, rPz[nr] = p.z;
+                    const Vec3f& p = lp[si];
+                    rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s;
+                    px[nr] = p.x, py[nr] = p.y, pz[nr] = p.z;
                     ++nr;
                 }
+                hit_count += reused_here;
                 // D = (p - eye) / ((p - eye) . forward), as Vec3d's operators compute it.
+                double* __restrict dx = rDx.data();
+                double* __restrict dy = rDy.data();
+                double* __restrict dz = rDz.data();
                 {
                     const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
                     const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
-                    const double* __restrict px = rPx.data();
-                    const double* __restrict py = rPy.data();
-                    const double* __restrict pz = rPz.data();
-                    double* __restrict dx = rDx.data();
-                    double* __restrict dy = rDy.data();
-                    double* __restrict dz = rDz.data();
                     for (std::size_t k = 0; k < nr; ++k) {
                         const double tx = px[k] - ex, ty = py[k] - ey, tz = pz[k] - ez;
                         const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
                         dx[k] = tx * inv, dy[k] = ty * inv, dz[k] = tz * inv;
                     }
                 }
+                float* __restrict lods_r = rlod.data();
                 for (std::size_t r0 = 0; r0 < nr;) {
-                    const int pl = rpl[r0];
+                    const int pl = rpls[r0];
                     std::size_t r1 = r0 + 1;
-                    while (r1 < nr && rpl[r1] == pl) ++r1;
-                    maps[std::size_t(pl)].map_lanes(r1 - r0, rDx.data() + r0, rDy.data() + r0,
-                                                    rDz.data() + r0, ru.data() + r0,
-                                                    rv.data() + r0, rlod.data() + r0);
+                    while (r1 < nr && rpls[r1] == pl) ++r1;
+                    maps[std::size_t(pl)].lod_lanes(r1 - r0, dx + r0, dy + r0, dz + r0, lods_r + r0);
                     r0 = r1;
                 }
+                // A reused point whose level here is the left eye's to within the tolerance keeps
+                // the left eye's sample (the trilinear blend would move by less than that fraction
+                // of the two levels' difference); with the left eye's texel, light and shading its
+                // radiance is the left pixel's, copied. The others sample their own texel under
+                // the left light.
+                const float bias = o.lod_bias, tolerance = o.reuse_lod_tolerance;
+                std::size_t copied = 0;
                 for (std::size_t k = 0; k < nr; ++k) {
-                    const std::uint32_t x = rx[k];
-                    const std::int32_t s = rsrc[k];
-                    if (PendingPixel* pp = mapped_pixel(row * w + x, x, rpl[k], ru[k], rv[k], rlod[k], s)) {
-                        pp->scale = left->scale[std::size_t(s)];
-                        pp->add = left->add[std::size_t(s)];
+                    const std::uint32_t x = rxs[k];
+                    const std::size_t si = std::size_t(rsrcs[k]);
+                    float lod = lods_r[k] + bias;
+                    if (!std::isfinite(lod)) lod = 0.0f;
+                    lod_out[x] = lod;
+                    if (std::abs(llod[si] - lod) <= tolerance) {
+                        rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
+                        rgb_out[3 * x + 2] = lrgb[3 * si + 2];
+                        ++copied;
+                        continue;
                     }
+                    double u, v;
+                    float unused;
+                    maps[std::size_t(rpls[k])].map_lanes(1, dx + k, dy + k, dz + k, &u, &v, &unused);
+                    const std::size_t q = pending_count++;
+                    GS_CHECK(q < w);  // one pixel per column and row
+                    PendingPixel& pp = pending[q];
+                    pp.x = x, pp.placement = rpls[k];
+                    us[q] = u, vs[q] = v, lods[q] = lod;
+                    pp.scale = left->scale[si], pp.add = left->add[si];
                 }
+                copied_count += copied;
             }
             // Runs of one painting sampled in one call.
             for (std::size_t k0 = 0; k0 < pending_count;) {
@@ -555,17 +862,35 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 k0 = k1;
             }
             lap(t_vt);
-            // The Gallery's order of operations (its sRGB curve is exact, ours tabulated).
-            auto shade = [&](const PendingPixel& q, const float* a) {
-                const std::size_t i = row * w + q.x;
-                const Vec3f albedo =
-                    (o.srgb_albedo ? Vec3f{srgb_decode(a[0]), srgb_decode(a[1]), srgb_decode(a[2])}
-                                   : Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f)) *
-                    o.painting_reflectance;
-                const Vec3f L = albedo * q.scale + q.add;
-                rgb[3 * i] = L.x, rgb[3 * i + 1] = L.y, rgb[3 * i + 2] = L.z;
-            };
-            for (std::size_t k = 0; k < pending_count; ++k) shade(pending[k], &texels[3 * k]);
+            // The Gallery's order of operations (its sRGB curve is exact, ours tabulated); on
+            // restrict locals (stores through rgb might otherwise alias the arrays' pointers).
+            {
+                const PendingPixel* __restrict pend = pending.data();
+                const float* __restrict tex = texels.data();
+                float* __restrict rgb_row = rgb + 3 * row * w;
+                const float reflectance = o.painting_reflectance;
+                const std::size_t count = pending_count;
+                if (o.srgb_albedo) {
+                    for (std::size_t k = 0; k < count; ++k) {
+                        const PendingPixel& q = pend[k];
+                        const float* a = tex + 3 * k;
+                        const Vec3f albedo =
+                            Vec3f{srgb_decode(a[0]), srgb_decode(a[1]), srgb_decode(a[2])} * reflectance;
+                        const Vec3f L = albedo * q.scale + q.add;
+                        float* out = rgb_row + 3 * std::size_t(q.x);
+                        out[0] = L.x, out[1] = L.y, out[2] = L.z;
+                    }
+                } else {
+                    for (std::size_t k = 0; k < count; ++k) {
+                        const PendingPixel& q = pend[k];
+                        const float* a = tex + 3 * k;
+                        const Vec3f albedo = Vec3f{a[0], a[1], a[2]} * (1.0f / 255.0f) * reflectance;
+                        const Vec3f L = albedo * q.scale + q.add;
+                        float* out = rgb_row + 3 * std::size_t(q.x);
+                        out[0] = L.x, out[1] = L.y, out[2] = L.z;
+                    }
+                }
+            }
             painting_count += pending_count + copied_count;
             copied_count = 0;
             lap(t_shade);
@@ -573,191 +898,37 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             if (timed) mark = Clock::now();
         };
 
-        cast_rows(scene.handle, eye, rb, re, skip, on_packet, on_row);
+        cast_rows(scene.handle, eye, rb, re, sources, on_row_start, on_packet, on_row);
         traced.fetch_add(traced_count, std::memory_order_relaxed);
         hits.fetch_add(hit_count, std::memory_order_relaxed);
         on_paintings.fetch_add(painting_count, std::memory_order_relaxed);
         rays_ns.fetch_add(t_rays.count(), std::memory_order_relaxed);
         vt_ns.fetch_add(t_vt.count(), std::memory_order_relaxed);
         shade_ns.fetch_add(t_shade.count(), std::memory_order_relaxed);
+        reuse_ns.fetch_add(t_reuse.count(), std::memory_order_relaxed);
+        reused.fetch_add(reused_count, std::memory_order_relaxed);
     }, o.threads);
+    if (left) {  // the chunks' first and last claim rows, left unclaimed for the next frame
+        for (std::size_t r0 = 0; r0 < eye.height; r0 += chunk_rows) {
+            std::fill_n(claims_.data() + r0 * w, w, kUnclaimed);
+            const std::size_t last = std::min<std::size_t>(eye.height, r0 + chunk_rows) - 1;
+            std::fill_n(claims_.data() + last * w, w, kUnclaimed);
+        }
+        claims_clear_ = true;
+        st.reused = reused.load();
+    }
     st.traced = traced.load();
     st.hits = hits.load();
     st.painting_pixels = on_paintings.load();
     // The stages interleave in each thread: the pass's wall time is split in the proportion
     // of the timed rows' time in each.
     const double wall = seconds_since(t0);
-    const double sum = double(rays_ns.load() + vt_ns.load() + shade_ns.load());
+    const double sum = double(rays_ns.load() + vt_ns.load() + shade_ns.load() + reuse_ns.load());
     const double f = sum > 0 ? wall / sum : 0.0;
     st.rays_seconds = f * double(rays_ns.load());
     st.vt_seconds = f * double(vt_ns.load());
     st.shade_seconds = f * double(shade_ns.load());
-}
-
-void DisplayPass::reuse(const Camera& right, const DisplayOptions& o, EyeStats& st) {
-    const auto t0 = Clock::now();
-    const GBuffer& L = g_[0];
-    const std::size_t n = std::size_t(right.width) * right.height;
-    // The last frame's release pass left every claim unclaimed again (no 8-byte fill of the
-    // image per frame); after a resize or an interrupted frame they are filled here.
-    if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
-    claims_clear_ = false;
-    const Vec3f eye(right.position), fwd(right.forward), rgt(right.right), up(right.up);
-    // Camera::project (seed 001 eqs. 3-5) with its constants hoisted and one division per
-    // point: pixel = floor((x / (z tan_x) + 1) w / 2), floor((1 - y / (z tan_y)) h / 2).
-    const float fw = float(right.width), fh = float(right.height);
-    const float sx = 0.5f * fw / float(right.tan_half_x), sy = 0.5f * fh / float(right.tan_half_y);
-    const std::uint32_t rw = right.width;
-    // Claims: the nearest left hit per right pixel wins (depth in the high word, so the
-    // smaller 64-bit value is the nearer claim; positive floats order as their bits).
-    // In chunks: the projections in SIMD lanes (a left pixel that claims nothing gets target
-    // kNoTarget), then the compare-and-swaps.
-    constexpr std::uint32_t kNoTarget = ~0u;
-    parallel_for(L.geom.size(), 4096, [&](std::size_t b, std::size_t e) {
-        constexpr std::size_t kChunk = 256;
-        alignas(64) std::uint32_t target[kChunk];
-        alignas(64) float depth[kChunk];
-        for (std::size_t c0 = b; c0 < e; c0 += kChunk) {
-            const std::size_t count = std::min(kChunk, e - c0);
-            // Points and normals as SoA first: GCC does not vectorise the 3-strided loads.
-            alignas(64) float px[kChunk], py[kChunk], pz[kChunk], nx[kChunk], ny[kChunk], nz[kChunk];
-            for (std::size_t k = 0; k < count; ++k) {
-                const Vec3f& p = L.p[c0 + k];
-                const Vec3f& nk = L.n[c0 + k];
-                px[k] = p.x, py[k] = p.y, pz[k] = p.z, nx[k] = nk.x, ny[k] = nk.y, nz[k] = nk.z;
-            }
-            const unsigned* __restrict geom = L.geom.data() + c0;
-            std::size_t k = 0;
-#if defined(__AVX2__)
-            // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
-            // keeps that loop scalar: "control flow in loop").
-            {
-                const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
-                             ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
-                const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
-                const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
-                const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
-                const __m256i no_hit = _mm256_set1_epi32(int(kNoHit)), vrw = _mm256_set1_epi32(int(rw));
-                auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
-                    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
-                                         _mm256_mul_ps(az, bz));
-                };
-                for (; k + 8 <= count; k += 8) {
-                    const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
-                                 z = _mm256_load_ps(pz + k);
-                    const __m256 facing =
-                        dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
-                             _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
-                    const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
-                                 ez = _mm256_sub_ps(z, ez_);
-                    const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
-                                           _mm256_set1_ps(rgt.z));
-                    const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
-                                           _mm256_set1_ps(up.z));
-                    const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
-                                           _mm256_set1_ps(fwd.z));
-                    const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
-                    const __m256 fx = _mm256_floor_ps(
-                        _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
-                    const __m256 fy = _mm256_floor_ps(
-                        _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
-                    const __m256i hit = _mm256_xor_si256(
-                        _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(geom + k)),
-                                           no_hit),
-                        _mm256_set1_epi32(-1));
-                    __m256 ok = _mm256_and_ps(_mm256_castsi256_ps(hit),
-                                              _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
-                    ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
-                    // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
-                    const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
-                                                       _mm256_cvttps_epi32(fx));
-                    const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
-                                                          _mm256_castps_si256(ok));
-                    _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
-                    _mm256_store_ps(depth + k, dz);
-                }
-            }
-#endif
-            for (; k < count; ++k) {
-                const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
-                const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
-                const Vec3f d = p - eye;
-                const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
-                const float inv_z = 1.0f / dz;
-                const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
-                const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
-                const bool ok = geom[k] != kNoHit && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f &&
-                                fx < fw && fy >= 0.0f && fy < fh;
-                target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
-                depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
-            }
-            for (std::size_t k = 0; k < count; ++k) {
-                if (target[k] == kNoTarget) continue;
-                const std::uint64_t claim =
-                    (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) |
-                    std::uint64_t(c0 + k);
-                std::atomic_ref<std::uint64_t> slot(claims_[target[k]]);
-                std::uint64_t seen = slot.load(std::memory_order_relaxed);
-                while (claim < seen &&
-                       !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
-                }
-            }
-        }
-    }, o.threads);
-    // Release claims on depth edges; the surviving claims are the right eye's reused pixels.
-    // A claim is on an edge when its depth exceeds an 8-neighbour's claimed depth x ratio,
-    // i.e. the 3 x 3 minimum of claimed depths (itself included: ratio >= 1) x ratio: the
-    // minimum is taken separably, along rows into row_min_, then across three rows.
-    // parallel_for's join orders the claims before these reads.
-    claimed_.resize(n);
-    sources_.resize(n);
-    row_min_.resize(n);
-    const float ratio = 1.0f + o.edge_depth_ratio;
-    constexpr float kInf = std::numeric_limits<float>::infinity();
-    const std::size_t w = right.width, h = right.height;
-    auto depth_of = [](std::uint64_t c) {
-        return c == kUnclaimed ? kInf : std::bit_cast<float>(std::uint32_t(c >> 32));
-    };
-    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
-        for (std::size_t y = rb; y < re; ++y) {
-            const std::uint64_t* c = claims_.data() + y * w;
-            float* m = row_min_.data() + y * w;
-            float prev = kInf, here = depth_of(c[0]);
-            for (std::size_t x = 0; x < w; ++x) {
-                const float next = x + 1 < w ? depth_of(c[x + 1]) : kInf;
-                m[x] = std::min(std::min(prev, here), next);
-                prev = here, here = next;
-            }
-        }
-    }, o.threads);
-    std::atomic<std::uint64_t> reused{0};
-    parallel_for(h, 16, [&](std::size_t rb, std::size_t re) {
-        std::uint64_t count = 0;
-        for (std::size_t y = rb; y < re; ++y) {
-            const float* up = row_min_.data() + (y > 0 ? y - 1 : y) * w;
-            const float* mid = row_min_.data() + y * w;
-            const float* down = row_min_.data() + (y + 1 < h ? y + 1 : y) * w;
-            std::uint64_t* c = claims_.data() + y * w;
-            std::uint8_t* claimed = claimed_.data() + y * w;
-            std::int32_t* source = sources_.data() + y * w;
-            for (std::size_t x = 0; x < w; ++x) {
-                const float nearest = std::min(std::min(up[x], mid[x]), down[x]);
-                const bool keep = c[x] != kUnclaimed && !(depth_of(c[x]) > nearest * ratio);
-                claimed[x] = keep;
-                source[x] = keep ? std::int32_t(c[x] & 0xffffffffu) : -1;
-                count += keep;
-                c[x] = kUnclaimed;  // ready for the next frame (row_min_ holds what neighbours need)
-            }
-        }
-        reused.fetch_add(count, std::memory_order_relaxed);
-    }, o.threads);
-    claims_clear_ = true;
-    st.reused = reused.load();
-    st.reuse_seconds = seconds_since(t0);
+    st.reuse_seconds += f * double(reuse_ns.load());  // the right eye's edge release
 }
 
 void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& lighting,
@@ -771,7 +942,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
-    render_eye(scene, lighting, vt, eye, o, g, false, nullptr, rgb, st);
+    render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st);
     sources_.clear();
 }
 
@@ -788,22 +959,34 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
             "display: edge_depth_ratio must be finite and >= 0");
     reusing_ = false;
+    const std::size_t n = std::size_t(right.width) * right.height;
+    if (use_reuse) {
+        // The last frame's right eye left every claim unclaimed again (no 8-byte fill of the
+        // image per frame); after a resize or an interrupted frame they are filled here.
+        if (!claims_clear_ || claims_.size() != n) claims_.assign(n, kUnclaimed);
+        claims_clear_ = false;
+        sources_.resize(n);  // written by the right eye's rows (the edge release)
+    }
+    double claim_seconds = 0;
     {
         GBuffer& g = g_[0];
         g.resize(left.width, left.height, use_reuse);
         EyeStats& st = stats_[0] = EyeStats{};
         st.pixels = std::uint64_t(left.width) * left.height;
-        render_eye(scene, lighting, vt, left, o, g, use_reuse, nullptr, left_rgb, st);
+        render_eye(scene, lighting, vt, left, o, g, use_reuse ? &right : nullptr, nullptr, left_rgb, st);
+        // The left eye's claims on right pixels are the right eye's reuse work.
+        claim_seconds = st.reuse_seconds;
+        st.reuse_seconds = 0;
     }
     GBuffer& g = g_[1];
     g.resize(right.width, right.height, false);
     EyeStats& st = stats_[1] = EyeStats{};
     st.pixels = std::uint64_t(right.width) * right.height;
     if (use_reuse) {
-        reuse(right, o, st);
+        st.reuse_seconds = claim_seconds;
         reusing_ = true;
         try {
-            render_eye(scene, lighting, vt, right, o, g, false, left_rgb, right_rgb, st);
+            render_eye(scene, lighting, vt, right, o, g, nullptr, left_rgb, right_rgb, st);
         } catch (...) {
             reusing_ = false;
             throw;
@@ -811,7 +994,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         reusing_ = false;
     } else {
         sources_.clear();
-        render_eye(scene, lighting, vt, right, o, g, false, nullptr, right_rgb, st);
+        render_eye(scene, lighting, vt, right, o, g, nullptr, nullptr, right_rgb, st);
     }
 }
 
@@ -871,7 +1054,8 @@ double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, st
     std::atomic<std::uint64_t> total{0};
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
         std::uint64_t count = 0;
-        cast_rows(scene, eye, rb, re, nullptr, [&](std::size_t, std::uint32_t, std::uint32_t n,
+        cast_rows(scene, eye, rb, re, nullptr, [](std::size_t) {},
+                  [&](std::size_t, std::uint32_t, std::uint32_t n,
                                                    const int*, const RTCRayHit16& h) {
             for (std::uint32_t k = 0; k < n; ++k) count += h.hit.geomID[k] != kNoHit;
         }, [](std::size_t) {});

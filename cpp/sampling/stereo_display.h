@@ -134,36 +134,35 @@ public:
     std::vector<float> lods(int eye) const;
 
 private:
-    // What a frame keeps per pixel: the hit (for hit_points and the right eye's projection),
-    // the level, and for the left eye what a reused right pixel needs (its texel and light).
+    // What a frame keeps per pixel: the hit (for hit_points and the right eye's reused
+    // pixels), the level, and for the left eye what a reused right pixel needs (its light).
     struct GBuffer {
         std::uint32_t width = 0, height = 0;
         std::vector<unsigned> geom;        // RTC_INVALID_GEOMETRY_ID: no hit
         std::vector<Vec3f> p;
         std::vector<float> lod;            // NaN off paintings
-        // Left eye only (keep_light): the normal facing the eye, and per painting pixel its
-        // light, radiance = linear albedo x scale + add (a reused right pixel whose level
-        // differs samples its own texel under the left light; one whose level agrees copies
-        // the left radiance).
-        std::vector<Vec3f> n, scale, add;
+        // Left eye only (keep_light): per painting pixel its light, radiance = linear albedo x
+        // scale + add (a reused right pixel whose level differs samples its own texel under
+        // the left light; one whose level agrees copies the left radiance).
+        std::vector<Vec3f> scale, add;
         void resize(std::uint32_t w, std::uint32_t h, bool keep_light);
     };
     // The fused pass over one eye: per row, 16-ray packets traced, their hits lit in one
     // lighting call and mapped to painting coordinates while they are in cache, then the
-    // row's painting pixels sampled in runs and shaded. With `left` (the right eye after
-    // reuse()), pixels claimed from the left eye are not traced: they take the left hit and
-    // light, and their texel at this eye's level.
+    // row's painting pixels sampled in runs and shaded. With claim_into (the left eye of a
+    // stereo pair with reuse), each packet's hits claim the right eye's pixels they project
+    // to, and the painting pixels keep their light. While reusing_ (the right eye), each row's
+    // claims are released on depth edges just before the row is rendered; claimed pixels are
+    // not traced: they take the left hit and light, and their texel at this eye's level.
     void render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
                     const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
-                    GBuffer& g, bool keep_light, const float* left_rgb, float* rgb, EyeStats& st);
-    void reuse(const Camera& right, const DisplayOptions& o, EyeStats& st);
+                    GBuffer& g, const Camera* claim_into, const float* left_rgb, float* rgb,
+                    EyeStats& st);
 
     GBuffer g_[2];
     EyeStats stats_[2];
     std::vector<std::uint64_t> claims_;
-    bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last reuse())
-    std::vector<std::uint8_t> claimed_;
-    std::vector<float> row_min_;  // per right pixel: the nearest claimed depth of its row's 3 neighbours
+    bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last right eye)
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     std::vector<std::int32_t> sources_;
 };

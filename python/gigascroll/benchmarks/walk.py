@@ -30,6 +30,8 @@ def add_arguments(p) -> None:
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--parts", default="display,stereo,reuse,loop,stops",
                    help="comma-separated subset of display (per eye), stereo, reuse, loop, stops")
+    p.add_argument("--eye", default="450x480,900x960,1800x1920",
+                   help="comma-separated per-eye sizes WxH of the display and stereo parts")
 
 
 def _pack(arg):
@@ -65,6 +67,10 @@ def run(args) -> int:
     unknown = parts - {"display", "stereo", "reuse", "loop", "stops"}
     if unknown:
         raise ValueError(f"--parts: unknown part(s) {', '.join(sorted(unknown))}")
+    from ..commands.gallery import parse_eye
+    display_sizes = [parse_eye(x) for x in args.eye.split(",") if x.strip()]
+    if not display_sizes:
+        raise ValueError("--eye: give at least one per-eye size WxH")
     pack, room, src, path = lit_scroll_walk(args)
     thr = args.threads
     results = {"pack": str(pack.path), "machine": "2 cores, shared", "date": time.strftime("%Y-%m-%d")}
@@ -90,9 +96,9 @@ def run(args) -> int:
         return views[0][0], views[1][0]
     warm_tiles = []
 
-    # 1. display vs bare primary rays, per pixel, at 900 x 960 (and the headset size).
+    # 1. display vs bare primary rays, per pixel, at each --eye size (default up to the headset's).
     rows = []
-    for w, h in ((450, 480), (900, 960), (1800, 1920)) if "display" in parts else ():
+    for w, h in display_sizes if "display" in parts else ():
         d = DisplayPass()
         out = np.empty((h, w, 3), np.float32)  # kept between frames, as the walk keeps it
         disp, bare, disp_cpu, bare_cpu = [], [], 0.0, 0.0
@@ -128,7 +134,7 @@ def run(args) -> int:
     # eye, the reuse projection and the right eye's remaining pixels) per pixel of both eyes,
     # against the bare cast of both eyes' pixels (left and right camera), alternated.
     stereo_rows = []
-    for w, h in ((450, 480), (900, 960), (1800, 1920)) if "stereo" in parts else ():
+    for w, h in display_sizes if "stereo" in parts else ():
         d = DisplayPass()
         outs = (np.empty((h, w, 3), np.float32), np.empty((h, w, 3), np.float32))
         disp, bare, disp_cpu, bare_cpu = [], [], 0.0, 0.0
