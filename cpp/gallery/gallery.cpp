@@ -600,6 +600,13 @@ void Gallery::bake(const BakeSettings& s) {
         }
     bake_done_ = 0;
     bake_total_ = rows.size() * (stride > 1 ? 2 : 1);
+    // BakeSettings::inset_edges: a sixteenth of the triangle's lattice spacing, and clear of
+    // float rounding at the scene's epsilon.
+    std::vector<float> inset(tris);
+    for (std::size_t t = 0; t < tris; ++t) {
+        const float l = std::max({length(tri_e1_[t]), length(tri_e2_[t]), length(tri_e2_[t] - tri_e1_[t])});
+        inset[t] = std::max(l / float(n[t]) / 16.0f, 32.0f * scene_.epsilon());
+    }
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -613,6 +620,13 @@ void Gallery::bake(const BakeSettings& s) {
                 Hit h;
                 h.tri = t;
                 h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
+                if (s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
+                    // Toward the centroid (at most halfway): inside the triangle, off the
+                    // neighbouring surfaces' planes.
+                    const Vec3f c = tri_v0_[t] + (tri_e1_[t] + tri_e2_[t]) * (1.0f / 3.0f);
+                    const float dc = length(c - h.p);
+                    if (dc > 0) h.p += (c - h.p) * std::min(0.5f, inset[t] / dc);
+                }
                 for (int side = 0; side < 2; ++side) {
                     if (!(reachable[t] >> side & 1)) continue;  // stays zero
                     h.front = side == 0;

@@ -98,6 +98,14 @@ struct BakeSettings {
     // blurs indirect light over its radius, so this loses little while s x spacing stays
     // below the radius. 1: a gather at every point.
     int gather_stride = 1;
+    // Lattice points on a triangle's edges and corners are computed a sixteenth of the
+    // lattice spacing inside it (toward its centroid) rather than on the edge itself. The
+    // room's edges are where surfaces meet: a point on the floor's edge also lies on the
+    // wall's plane, so its shadow rays graze the wall (and are occluded by it or not, by
+    // float rounding) and the surface disc's clipping rays start inside the wall. The lattice
+    // interpolates those values over a whole cell next to every corner of the room. false: on
+    // the edge (the value at the lattice point itself, as lighting "full" computes it there).
+    bool inset_edges = true;
 };
 
 struct LightingStats {
