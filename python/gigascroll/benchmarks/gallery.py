@@ -1,7 +1,8 @@
 """`gigascroll bench gallery`: the built-in `scroll` and `hall` rooms with a pack of smooth
 synthetic paintings. For each room: Mitsuba 3's path tracer on a spp ladder against a
 high-spp reference (computed once and cached), and a grid of our baked-still configurations
-(photons x bake spacing x bake light samples), each timed end to end: photon pass + photon
+(photons x gather (the sphere, or the surface disc at multiples of the auto radius) x bake
+spacing x bake light samples x gather stride x rays per pixel), each timed end to end: photon pass + photon
 map build + bake + the still itself. The error-time Pareto front of those configurations is
 compared with Mitsuba's time to the same error (log-log interpolation along its ladder), on
 the same cores. At the default settings, the error that baking adds over full lighting.
@@ -43,10 +44,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gather-strides", default="1,2",
                         help="bake gather strides tried at spacings of diag/100 and finer (default 1,2)")
     parser.add_argument("--disc", action=argparse.BooleanOptionalAction, default=True,
-                        help="also try the surface-disc gather at twice the auto radius (spacings diag/100 "
-                             "and finer, gathers / 4, 1-16 samples; default on)")
-    parser.add_argument("--supersamples", default="1,3",
-                        help="rays per pixel per axis of the configurations' stills (default 1,3)")
+                        help="also try the surface-disc gather at multiples of the auto radius (--disc-radii; "
+                             "spacings diag/25 and finer, 1-16 samples; default on)")
+    parser.add_argument("--disc-radii", default="2,4",
+                        help="the disc's radii as multiples of the auto radius (default 2,4; the larger ones "
+                             "with 4 and 16 samples only)")
+    parser.add_argument("--supersamples", default="1,3,5",
+                        help="rays per pixel per axis of the configurations' stills (default 1,3,5)")
     parser.add_argument("--default-photons", type=int, default=20,
                         help="log2 photons of the default-settings comparison of baked against full (default 20)")
     parser.add_argument("--full-samples", type=int, default=64,
@@ -173,10 +177,16 @@ def run(args) -> int:
     strides = _ints(args.gather_strides, "--gather-strides")
     if not set(strides) <= {1, 2}:
         raise UserError("--gather-strides takes 1 and/or 2")
-    grid = [(False, n, ls, stride) for n in spacings for ls in bake_samples
+    disc_radii = _ints(args.disc_radii, "--disc-radii") if args.disc else []
+    # (disc radius as a multiple of the auto radius, 0 for the sphere; spacing diag/n; samples;
+    # gather stride). The disc's gathers on every (n <= 50) or every other point, or on every
+    # other or fourth (n >= 100; a gather at every point of a fine lattice never pays for
+    # itself), and only where the gathers' sub-lattice stays within the disc's radius.
+    grid = [(0, n, ls, stride) for n in spacings for ls in bake_samples
             for stride in (strides if n >= 100 else [1])]
-    if args.disc:
-        grid += [(True, n, ls, 2) for n in spacings if n >= 100 for ls in bake_samples if ls <= 16]
+    grid += [(m, n, ls, stride) for m in disc_radii for n in spacings if n >= 25
+             for ls in bake_samples if ls <= 16 and (m == min(disc_radii) or ls >= 4)
+             for stride in ((1, 2) if n <= 50 else (2, 4))]
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
     if max(photons + [args.default_photons]) > 30:
         raise UserError("--photons and --default-photons are powers of two up to 2^30")
@@ -195,7 +205,7 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "photons", "spacings", "bake_samples", "default_photons",
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "photons", "spacings", "bake_samples", "default_photons",
                    "full_samples", "reference_spp", "mitsuba_spp")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
@@ -226,9 +236,14 @@ def run(args) -> int:
         # Wall-clock times of the calls: "map" is everything light() does besides tracing
         # (the painting albedo read, dropping hidden photons, the hash grid).
         for p, disc in [(p, d) for p in photons for d in sorted({d for d, *_ in grid})]:
-            if disc:  # the disc at twice the auto radius (read from the sphere's run before)
+            if disc and disc * auto_radius[p] > 0.1 * diag:
+                # Discs wider than twice the auto radius's clamp (few photons): a gather
+                # over a tenth of the room clips against most of it, slow and blurred.
+                steps.update(sum(1 for d, *_ in grid if d == disc))
+                continue
+            if disc:  # the disc at a multiple of the auto radius (read from the sphere's run before)
                 t0 = time.perf_counter()
-                st = gal.light(vt, photons=1 << p, radius=2 * auto_radius[p], disc=True)
+                st = gal.light(vt, photons=1 << p, radius=disc * auto_radius[p], disc=True)
             else:
                 t0 = time.perf_counter()
                 st = gal.light(vt, photons=1 << p)
@@ -237,13 +252,16 @@ def run(args) -> int:
             for d, n, ls, stride in grid:
                 if d != disc:
                     continue
+                if disc and stride > 1 and stride * diag / n > st["radius"]:
+                    steps.update()
+                    continue
                 t0 = time.perf_counter()
                 bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride)
                 bake_seconds = time.perf_counter() - t0
                 for ss in supersamples:
                     img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
                     c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
-                         "disc": disc, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
+                         "disc": bool(disc), "disc_radius_factor": disc, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
                          "gather_stride": stride, "supersample": ss, "bake_points": bst["bake_points"],
                          "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
                          "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
@@ -281,7 +299,8 @@ def run(args) -> int:
     return 0
 
 
-CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "diagonal_over", "spacing_m",
+CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "disc_radius_factor",
+                  "diagonal_over", "spacing_m",
                   "bake_samples", "gather_stride", "supersample", "bake_points", "sides_skipped",
                   "photon_seconds", "build_seconds", "bake_seconds", "still_seconds", "total_seconds",
                   "relmse", "psnr", "flip")
@@ -358,8 +377,9 @@ def _time_to_error(ladder: list[dict], error: float) -> float | None:
 
 
 def _config_name(c: dict) -> str:
-    stride = ", gathers / 4" if c.get("gather_stride", 1) == 2 else ""
-    disc = ", disc r x 2" if c.get("disc") else ""
+    s = c.get("gather_stride", 1)
+    stride = f", gathers / {s * s}" if s > 1 else ""
+    disc = f", disc r x {c.get('disc_radius_factor', 2)}" if c.get("disc") else ""
     return (f"2^{c['photons_log2']}{disc}, diag/{c['diagonal_over']}, {c['bake_samples']} samples{stride}, "
             f"{c['supersample']}x{c['supersample']} rays")
 
