@@ -405,10 +405,10 @@ Vec3f Gallery::irradiance_full(const Hit& hit) const {
     return E + indirect(hit.p, hit.n, heap);
 }
 
-Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap) const {
+Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap, SurfaceDisc::Detail detail) const {
     if (!map_) return {0, 0, 0};
     if (!lighting_.disc) return map_->gather(p, n, gather_, heap);
-    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, gather_.radius);
+    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, gather_.radius, detail);
     // A disc clipped to (almost) nothing carries no usable estimate (as the Renderer does).
     if (!(e.area > 1e-3f * float(M_PI) * gather_.radius * gather_.radius)) return {0, 0, 0};
     return e.power * (1.0f / e.area);
@@ -598,6 +598,7 @@ void Gallery::bake(const BakeSettings& s) {
                                         int(side_reachable(std::uint32_t(t), -N)) << 1);
             skipped += (reachable[t] & 1 ? 0 : 1) + (reachable[t] & 2 ? 0 : 1);
         }
+    const SurfaceDisc::Detail detail = s.coarse_disc ? SurfaceDisc::Detail::Coarse : SurfaceDisc::Detail::Fine;
     bake_done_ = 0;
     bake_total_ = rows.size() * (stride > 1 ? 2 : 1);
     // BakeSettings::inset_edges: a sixteenth of the triangle's lattice spacing, and clear of
@@ -633,11 +634,11 @@ void Gallery::bake(const BakeSettings& s) {
                     h.n = h.front ? N : -N;
                     Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (stride == 1) E += indirect(h.p, h.n, heap);
+                    if (stride == 1) E += indirect(h.p, h.n, heap, detail);
                     else if (i % stride == 0 && j % stride == 0)
                         (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
                                                                                              nt / stride)] =
-                            indirect(h.p, h.n, heap);
+                            indirect(h.p, h.n, heap, detail);
                     (h.front ? front : back)[k] = E;
                 }
             }

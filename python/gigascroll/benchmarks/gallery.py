@@ -49,6 +49,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--disc-radii", default="2,4",
                         help="the disc's radii as multiples of the auto radius (default 2,4; the larger ones "
                              "with 4 and 16 samples only)")
+    parser.add_argument("--disc-details", default="fine,coarse",
+                        help="how finely the bake clips the discs: fine (up to 128 rays) and/or coarse "
+                             "(up to 32; bake(coarse_disc=True)); default fine,coarse")
     parser.add_argument("--supersamples", default="1,3,5",
                         help="rays per pixel per axis of the configurations' stills (default 1,3,5)")
     parser.add_argument("--default-photons", type=int, default=20,
@@ -179,14 +182,19 @@ def run(args) -> int:
         raise UserError("--gather-strides takes 1 and/or 2")
     disc_radii = _ints(args.disc_radii, "--disc-radii") if args.disc else []
     # (disc radius as a multiple of the auto radius, 0 for the sphere; spacing diag/n; samples;
-    # gather stride). The disc's gathers on every (n <= 50) or every other point, or on every
-    # other or fourth (n >= 100; a gather at every point of a fine lattice never pays for
-    # itself), and only where the gathers' sub-lattice stays within the disc's radius.
-    grid = [(0, n, ls, stride) for n in spacings for ls in bake_samples
+    # gather stride; the discs clipped coarsely, bake(coarse_disc=True)). The disc's gathers
+    # on every (n <= 50) or every other point, or on every other or fourth (n >= 100; a gather
+    # at every point of a fine lattice never pays for itself), and only where the gathers'
+    # sub-lattice stays within the disc's radius.
+    details = [d for d in args.disc_details.split(",") if d]
+    if not set(details) <= {"fine", "coarse"} or (args.disc and not details):
+        raise UserError(f"--disc-details takes fine and/or coarse, got {args.disc_details!r}")
+    grid = [(0, n, ls, stride, False) for n in spacings for ls in bake_samples
             for stride in (strides if n >= 100 else [1])]
-    grid += [(m, n, ls, stride) for m in disc_radii for n in spacings if n >= 25
+    grid += [(m, n, ls, stride, coarse) for m in disc_radii for n in spacings if n >= 25
              for ls in bake_samples if ls <= 16 and (m == min(disc_radii) or ls >= 4)
-             for stride in ((1, 2) if n <= 50 else (2, 4))]
+             for stride in ((1, 2) if n <= 50 else (2, 4)) for coarse in
+             sorted({d == "coarse" for d in details})]
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
     if max(photons + [args.default_photons]) > 30:
         raise UserError("--photons and --default-photons are powers of two up to 2^30")
@@ -205,7 +213,7 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "photons", "spacings", "bake_samples", "default_photons",
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "spacings", "bake_samples", "default_photons",
                    "full_samples", "reference_spp", "mitsuba_spp")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
@@ -249,19 +257,19 @@ def run(args) -> int:
                 st = gal.light(vt, photons=1 << p)
                 auto_radius[p] = st["radius"]
             light_seconds = time.perf_counter() - t0
-            for d, n, ls, stride in grid:
+            for d, n, ls, stride, coarse in grid:
                 if d != disc:
                     continue
                 if disc and stride > 1 and stride * diag / n > st["radius"]:
                     steps.update()
                     continue
                 t0 = time.perf_counter()
-                bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride)
+                bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride, coarse_disc=coarse)
                 bake_seconds = time.perf_counter() - t0
                 for ss in supersamples:
                     img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
                     c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
-                         "disc": bool(disc), "disc_radius_factor": disc, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
+                         "disc": bool(disc), "disc_radius_factor": disc, "coarse_disc": coarse, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
                          "gather_stride": stride, "supersample": ss, "bake_points": bst["bake_points"],
                          "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
                          "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
@@ -299,7 +307,7 @@ def run(args) -> int:
     return 0
 
 
-CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "disc_radius_factor",
+CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "disc_radius_factor", "coarse_disc",
                   "diagonal_over", "spacing_m",
                   "bake_samples", "gather_stride", "supersample", "bake_points", "sides_skipped",
                   "photon_seconds", "build_seconds", "bake_seconds", "still_seconds", "total_seconds",
@@ -379,7 +387,8 @@ def _time_to_error(ladder: list[dict], error: float) -> float | None:
 def _config_name(c: dict) -> str:
     s = c.get("gather_stride", 1)
     stride = f", gathers / {s * s}" if s > 1 else ""
-    disc = f", disc r x {c.get('disc_radius_factor', 2)}" if c.get("disc") else ""
+    disc = (f", disc r x {c.get('disc_radius_factor', 2)}{' coarse' if c.get('coarse_disc') else ''}"
+            if c.get("disc") else "")
     return (f"2^{c['photons_log2']}{disc}, diag/{c['diagonal_over']}, {c['bake_samples']} samples{stride}, "
             f"{c['supersample']}x{c['supersample']} rays")
 
