@@ -41,7 +41,9 @@ float linear_of(float c) {
 // texture at the painting's finest pinned level: the pinned tail (cache/page_table.h) is
 // resident whatever the camera has streamed, so the photon map does not depend on the view
 // history, and its texels (a few centimetres on a metre-sized painting) are already finer than
-// the gather radius, which blurs anything finer away. Bilinear between the level's texels.
+// the gather radius, which blurs anything finer away. Coarser still while its texels stay
+// within an eighth of the gather radius (few photons, wide gathers: the read was most of a
+// small light()). Bilinear between the level's texels.
 class PaintingAlbedo final : public AlbedoTexture {
 public:
     struct Image {
@@ -49,7 +51,7 @@ public:
         std::vector<Vec3f> texels;
     };
     PaintingAlbedo(const std::vector<PaintingPlacement>& placements, const std::vector<int>& tri_slot,
-                   const VirtualTexture& vt)
+                   const VirtualTexture& vt, double gather_radius)
         : placements_(placements), tri_slot_(tri_slot) {
         for (const PaintingPlacement& p : placements) {
             const PaintingGeometry& g = p.tiles;
@@ -64,6 +66,10 @@ public:
             while (level + 1 < g.levels() &&
                    std::uint64_t(g.level_width(level)) * g.level_height(level) > (1u << 20))
                 ++level;
+            auto texel_m = [&](std::uint32_t l) {
+                return std::max(p.width_m / g.level_width(l), p.height_m / g.level_height(l));
+            };
+            while (level + 1 < g.levels() && texel_m(level + 1) <= gather_radius / 8) ++level;
             Image im;
             im.level = level;
             im.width = g.level_width(level), im.height = g.level_height(level);
@@ -282,7 +288,7 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     map_.reset();
     bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
     scene_.set_albedo_texture(nullptr);
-    auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt);
+    auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt, radius);
     stats_ = {};
     for (const auto& im : albedo->images()) stats_.albedo_levels.push_back(im.level);
     scene_.set_albedo_texture(albedo.get());

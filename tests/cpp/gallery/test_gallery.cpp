@@ -74,6 +74,47 @@ TEST(Gallery, PhotonsReadThePaintingsColourAtThePinnedLevel) {
     EXPECT_TRUE(level == 0 || !room.vt.is_pinned({0, level - 1, 0, 0}));
 }
 
+// A wide gather reads a coarser level than the finest pinned one: the coarsest whose texels
+// stay within an eighth of the radius (a uniform painting gives its colour at every level).
+TEST(Gallery, WideGathersReadTheirPaintingsAlbedoAtACoarserLevel) {
+    // A scroll-like strip: its pinned tail starts at a level that is still wide.
+    PackGeometry layout = PackGeometry::make(16, 2, {{4096, 32}});
+    VirtualTexture vt{layout, 16, 16, [](const TileKey&, std::uint8_t* out) {
+                          for (std::size_t i = 0; i < 16 * 16; ++i)
+                              out[3 * i] = 200, out[3 * i + 1] = 40, out[3 * i + 2] = 20;
+                      }};
+    Gallery gallery;
+    const float floor[12] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
+    const float light[12] = {-0.25f, 2, -0.25f, 0.25f, 2, -0.25f, 0.25f, 2, 0.25f, -0.25f, 2, 0.25f};
+    const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
+    gallery.add_surface(floor, 4, quad, 2, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
+    gallery.add_surface(light, 4, quad, 2, {0, 0, 0}, {10, 10, 10});
+    const double width_m = 2.0, height_m = width_m * 32 / 4096;
+    gallery.add_painting(0, layout.paintings[0], {-1.0, 1.0, -0.5}, {1, 0, 0}, {0, -1, 0}, width_m, height_m);
+    gallery.commit();
+    const PaintingGeometry& g = layout.paintings[0];
+    auto texel_m = [&](std::uint32_t l) { return std::max(width_m / g.level_width(l), height_m / g.level_height(l)); };
+    LightingSettings ls;
+    ls.photons = 1000, ls.radius = 0.001f;  // narrow: the finest pinned level
+    gallery.light(vt, ls);
+    const std::uint32_t pinned = gallery.stats().albedo_levels.at(0);
+    ASSERT_TRUE(vt.is_pinned({0, pinned, 0, 0}));
+    ASSERT_TRUE(pinned == 0 || !vt.is_pinned({0, pinned - 1, 0, 0}));
+    ASSERT_LT(pinned + 2, g.levels());
+    ASSERT_LT(texel_m(pinned + 1), texel_m(pinned + 2));
+    // Radius 8 texels of level pinned + 1 (and a little): that level, not the next.
+    ls.radius = float(8.0 * texel_m(pinned + 1) * 1.01);
+    gallery.light(vt, ls);
+    EXPECT_EQ(gallery.stats().albedo_levels.at(0), pinned + 1);
+    const float expected[3] = {kPaintingReflectance * srgb_to_linear(200 / 255.0f),
+                               kPaintingReflectance * srgb_to_linear(40 / 255.0f),
+                               kPaintingReflectance * srgb_to_linear(20 / 255.0f)};
+    const Vec3f a = gallery.scene().albedo_at(4, Vec3f(-0.2f, 1.0f - 0.5f * float(height_m), -0.5f));
+    EXPECT_NEAR(a.x, expected[0], 1e-4);
+    EXPECT_NEAR(a.y, expected[1], 1e-4);
+    EXPECT_NEAR(a.z, expected[2], 1e-4);
+}
+
 TEST(Gallery, BakedIrradianceEqualsFullAtLatticeCorners) {
     Room room;
     LightingSettings ls;
