@@ -13,8 +13,9 @@
 // Light on the paintings (issue 13 §2):
 //  - light(): the photon pass (photon/photon_tracer.h, through Scene::albedo_at) over the
 //    whole room into a hash-grid PhotonMap (photon/photon_map.h). A painting's albedo at a
-//    photon's bounce comes from the virtual texture at the painting's finest pinned level (see
-//    PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor. Photons
+//    photon's bounce comes from the virtual texture at the painting's finest pinned level, or
+//    a coarser one for wide gathers (see PaintingAlbedo in gallery.cpp), so a red painting
+//    bleeds red onto the floor. Photons
 //    trapped between a painting and its wall are dropped before the map is built (see
 //    drop_hidden_photons): through a 1 mm gap a gather on the painting would count them.
 //    Direct light is the photon Renderer's emitter sampling (Renderer::direct_irradiance).
