@@ -40,8 +40,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--height", type=int, default=54, help="still height (default 54)")
     parser.add_argument("--supersample", type=int, default=3,
                         help="rays per pixel per axis of the default-settings stills (default 3)")
-    parser.add_argument("--photons", default="10,12,14,16,18,20",
-                        help="photons emitted, as comma-separated powers of two (default 10,12,14,16,18,20)")
+    parser.add_argument("--photons", default="8,10,12,14,16,18,20",
+                        help="photons emitted, as comma-separated powers of two (default 8,10,12,14,16,18,20)")
+    parser.add_argument("--disc-photons", default="19",
+                        help="photon counts (powers of two) tried with the surface disc only (default 19: between "
+                             "the grid's counts near the hall's floor, where only the disc gets; empty: none)")
     parser.add_argument("--spacings", default="12,25,50,100,200",
                         help="bake spacings as fractions 1/N of the room's diagonal (default 12,25,50,100,200)")
     parser.add_argument("--bake-samples", default="1,4,16,64",
@@ -183,6 +186,8 @@ def run(args) -> int:
         raise UserError("--width, --height, --supersample, --full-samples, --reference-spp and --timing-repeats "
                         "must be >= 1")
     photons = _ints(args.photons, "--photons")
+    disc_photons = sorted(set(_ints(args.disc_photons, "--disc-photons")) - set(photons)) if (
+        args.disc and args.disc_photons) else []
     spacings = _ints(args.spacings, "--spacings")
     bake_samples = _ints(args.bake_samples, "--bake-samples")
     supersamples = _ints(args.supersamples, "--supersamples")
@@ -222,11 +227,12 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "spacings", "bake_samples", "default_photons",
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "spacings", "bake_samples", "default_photons",
                    "full_samples", "reference_spp", "mitsuba_spp", "timing_repeats")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
-    per_room = 2 + len(ladder) + len(photons) * len(grid) + len(set(spacings) | {200})
+    per_room = (2 + len(ladder) + len(photons) * len(grid) + len(disc_photons) * sum(1 for d, *_ in grid if d)
+                + len(set(spacings) | {200}))
     steps = tqdm(total=len(rooms) * per_room, desc="gallery bench", unit="step")
     for name in rooms:
         spec = builtin_room(name, pack)
@@ -251,7 +257,11 @@ def run(args) -> int:
         configs, auto_radius = [], {}
         # Wall-clock times of the calls: "map" is everything light() does besides tracing
         # (the painting albedo read, dropping hidden photons, the hash grid).
-        for p, disc in [(p, d) for p in photons for d in sorted({d for d, *_ in grid})]:
+        runs = [(p, d) for p in sorted(photons + disc_photons) for d in sorted({d for d, *_ in grid})
+                if d or p not in disc_photons]
+        for p, disc in runs:
+            if disc and p not in auto_radius:  # a disc-only count: the auto radius from a light() of its own
+                auto_radius[p] = gal.light(vt, photons=1 << p)["radius"]
             if disc and disc * auto_radius[p] > 0.1 * diag:
                 # Discs wider than twice the auto radius's clamp (few photons): a gather
                 # over a tenth of the room clips against most of it, slow and blurred.
