@@ -143,3 +143,13 @@ def test_apply_repeats_gives_ratios_of_medians_against_brute_force():
                            row["relmse"]) / t for t in [max(times)]), rel=1e-9)
         compared += 1
     assert compared > 3
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--timing-repeats", "0"), "--timing-repeats"),
+    (("--disc-photons", "x"), "--disc-photons"),
+    (("--disc-photons", "31"), "powers of two up to 2^30"),
+])
+def test_bad_options_are_one_line_errors(gigascroll_cli, tmp_path, args, message):
+    r = gigascroll_cli("bench", "gallery", "--out", tmp_path, *args)
+    assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr

@@ -210,8 +210,8 @@ def run(args) -> int:
              for stride in ((1, 2) if n <= 50 else (2, 4)) for coarse in
              sorted({d == "coarse" for d in details})]
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
-    if max(photons + [args.default_photons]) > 30:
-        raise UserError("--photons and --default-photons are powers of two up to 2^30")
+    if max(photons + disc_photons + [args.default_photons]) > 30:
+        raise UserError("--photons, --disc-photons and --default-photons are powers of two up to 2^30")
     try:
         import mitsuba as mi
     except ImportError:
