@@ -41,7 +41,12 @@ float linear_of(float c) {
 // texture at the painting's finest pinned level: the pinned tail (cache/page_table.h) is
 // resident whatever the camera has streamed, so the photon map does not depend on the view
 // history, and its texels (a few centimetres on a metre-sized painting) are already finer than
-// the gather radius, which blurs anything finer away. Bilinear between the level's texels.
+// the gather radius, which blurs anything finer away. Coarser still while its texels stay
+// within an eighth of the gather radius (few photons, wide gathers: the read was most of a
+// small light()). Bilinear between the level's texels. A new lighting takes the previous one's
+// image of a painting when it reads the same level of the same pack in the same texel format
+// (the pinned tiles are the pack's, whatever the cache): a light() with few photons spent a
+// third of its time re-reading identical texels.
 class PaintingAlbedo final : public AlbedoTexture {
 public:
     struct Image {
@@ -49,8 +54,13 @@ public:
         std::vector<Vec3f> texels;
     };
     PaintingAlbedo(const std::vector<PaintingPlacement>& placements, const std::vector<int>& tri_slot,
-                   const VirtualTexture& vt)
-        : placements_(placements), tri_slot_(tri_slot) {
+                   const VirtualTexture& vt, double gather_radius, PaintingAlbedo* previous)
+        : placements_(placements), tri_slot_(tri_slot), pack_fingerprint_(vt.pack_fingerprint()),
+          format_(vt.format()) {
+        // Only a cache that remembers its pack identifies the texels (0: built from a layout).
+        if (previous && (pack_fingerprint_ == 0 || previous->pack_fingerprint_ != pack_fingerprint_ ||
+                         previous->format_ != format_ || previous->images_.size() != placements.size()))
+            previous = nullptr;
         for (const PaintingPlacement& p : placements) {
             const PaintingGeometry& g = p.tiles;
             std::uint32_t level = g.levels() - 1;
@@ -64,6 +74,18 @@ public:
             while (level + 1 < g.levels() &&
                    std::uint64_t(g.level_width(level)) * g.level_height(level) > (1u << 20))
                 ++level;
+            auto texel_m = [&](std::uint32_t l) {
+                return std::max(p.width_m / g.level_width(l), p.height_m / g.level_height(l));
+            };
+            while (level + 1 < g.levels() && texel_m(level + 1) <= gather_radius / 8) ++level;
+            if (previous) {
+                Image& old = previous->images_[images_.size()];
+                if (old.level == level && old.width == g.level_width(level) && old.height == g.level_height(level) &&
+                    old.texels.size() == std::size_t(old.width) * old.height && !old.texels.empty()) {
+                    images_.push_back(std::move(old));
+                    continue;
+                }
+            }
             Image im;
             im.level = level;
             im.width = g.level_width(level), im.height = g.level_height(level);
@@ -115,8 +137,18 @@ public:
 private:
     const std::vector<PaintingPlacement>& placements_;
     const std::vector<int>& tri_slot_;
+    std::uint64_t pack_fingerprint_;
+    TexelFormat format_;
     std::vector<Image> images_;
 };
+
+// The thread count of "all cores" (0), asked once: std::thread::hardware_concurrency reads
+// /sys on every call, a few percent of a small bake or still, and the helper pool's size was
+// fixed from it at first use anyway.
+unsigned threads_or_all(unsigned threads) {
+    static const unsigned all = default_threads();
+    return threads ? threads : all;
+}
 
 // Photons on the wall behind a painting, in the gap between them: light trapped there is real
 // but never seen, and a gather on the painting's face (its sphere reaches `depth` = the gather
@@ -282,7 +314,8 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     map_.reset();
     bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
     scene_.set_albedo_texture(nullptr);
-    auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt);
+    auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt, radius,
+                                                   dynamic_cast<PaintingAlbedo*>(albedo_.get()));
     stats_ = {};
     for (const auto& im : albedo->images()) stats_.albedo_levels.push_back(im.level);
     scene_.set_albedo_texture(albedo.get());
@@ -298,10 +331,10 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     rs.indirect = false;
     renderer_ = std::make_unique<Renderer>(scene_, rs);
     auto t0 = Clock::now();
-    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, s.threads);
+    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, threads_or_all(s.threads));
     stats_.photon_seconds = seconds_since(t0);
     t0 = Clock::now();
-    drop_hidden_photons(photons, placements_, radius, s.threads);
+    drop_hidden_photons(photons, placements_, radius, threads_or_all(s.threads));
     gather_.radius = radius;
     // The hash grid's build is serial: the photon groups for the bake's skip_unlit are
     // computed on the other core meanwhile.
@@ -310,7 +343,7 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
             if (job == 0) map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
             else group_photons(photons);
         }
-    }, s.threads);
+    }, threads_or_all(s.threads));
     stats_.build_seconds = seconds_since(t0);
     stats_.photons_stored = photons.size();
     stats_.radius = radius;
@@ -405,10 +438,10 @@ Vec3f Gallery::irradiance_full(const Hit& hit) const {
     return E + indirect(hit.p, hit.n, heap);
 }
 
-Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap) const {
+Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap, SurfaceDisc::Detail detail) const {
     if (!map_) return {0, 0, 0};
     if (!lighting_.disc) return map_->gather(p, n, gather_, heap);
-    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, gather_.radius);
+    const DiscEstimate e = map_->gather_surface_disc(scene_, p, n, gather_.radius, detail);
     // A disc clipped to (almost) nothing carries no usable estimate (as the Renderer does).
     if (!(e.area > 1e-3f * float(M_PI) * gather_.radius * gather_.radius)) return {0, 0, 0};
     return e.power * (1.0f / e.area);
@@ -598,8 +631,16 @@ void Gallery::bake(const BakeSettings& s) {
                                         int(side_reachable(std::uint32_t(t), -N)) << 1);
             skipped += (reachable[t] & 1 ? 0 : 1) + (reachable[t] & 2 ? 0 : 1);
         }
+    const SurfaceDisc::Detail detail = s.coarse_disc ? SurfaceDisc::Detail::Coarse : SurfaceDisc::Detail::Fine;
     bake_done_ = 0;
     bake_total_ = rows.size() * (stride > 1 ? 2 : 1);
+    // BakeSettings::inset_edges: a sixteenth of the triangle's lattice spacing, and clear of
+    // float rounding at the scene's epsilon.
+    std::vector<float> inset(tris);
+    for (std::size_t t = 0; t < tris; ++t) {
+        const float l = std::max({length(tri_e1_[t]), length(tri_e2_[t]), length(tri_e2_[t] - tri_e1_[t])});
+        inset[t] = std::max(l / float(n[t]) / 16.0f, 32.0f * scene_.epsilon());
+    }
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -613,23 +654,30 @@ void Gallery::bake(const BakeSettings& s) {
                 Hit h;
                 h.tri = t;
                 h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
+                if (s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
+                    // Toward the centroid (at most halfway): inside the triangle, off the
+                    // neighbouring surfaces' planes.
+                    const Vec3f c = tri_v0_[t] + (tri_e1_[t] + tri_e2_[t]) * (1.0f / 3.0f);
+                    const float dc = length(c - h.p);
+                    if (dc > 0) h.p += (c - h.p) * std::min(0.5f, inset[t] / dc);
+                }
                 for (int side = 0; side < 2; ++side) {
                     if (!(reachable[t] >> side & 1)) continue;  // stays zero
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
                     Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (stride == 1) E += indirect(h.p, h.n, heap);
+                    if (stride == 1) E += indirect(h.p, h.n, heap, detail);
                     else if (i % stride == 0 && j % stride == 0)
                         (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
                                                                                              nt / stride)] =
-                            indirect(h.p, h.n, heap);
+                            indirect(h.p, h.n, heap, detail);
                     (h.front ? front : back)[k] = E;
                 }
             }
         }
         bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
-    }, s.threads ? s.threads : lighting_.threads);
+    }, threads_or_all(s.threads ? s.threads : lighting_.threads));
     if (stride > 1)
         parallel_for(rows.size(), 16, [&](std::size_t rb, std::size_t re) {
             for (std::size_t r = rb; r < re; ++r) {
@@ -659,7 +707,7 @@ void Gallery::bake(const BakeSettings& s) {
                 }
             }
             bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
-        }, s.threads ? s.threads : lighting_.threads);
+        }, threads_or_all(s.threads ? s.threads : lighting_.threads));
     bake_n_ = std::move(n);
     offset.pop_back();
     bake_offset_ = std::move(offset);
@@ -809,7 +857,7 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 out_row[3 * q.x] = L.x, out_row[3 * q.x + 1] = L.y, out_row[3 * q.x + 2] = L.z;
             }
         }
-    }, threads ? threads : lighting_.threads);
+    }, threads_or_all(threads ? threads : lighting_.threads));
 }
 
 }  // namespace gigascroll

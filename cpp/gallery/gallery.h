@@ -13,8 +13,9 @@
 // Light on the paintings (issue 13 §2):
 //  - light(): the photon pass (photon/photon_tracer.h, through Scene::albedo_at) over the
 //    whole room into a hash-grid PhotonMap (photon/photon_map.h). A painting's albedo at a
-//    photon's bounce comes from the virtual texture at the painting's finest pinned level (see
-//    PaintingAlbedo in gallery.cpp), so a red painting bleeds red onto the floor. Photons
+//    photon's bounce comes from the virtual texture at the painting's finest pinned level, or
+//    a coarser one for wide gathers (see PaintingAlbedo in gallery.cpp), so a red painting
+//    bleeds red onto the floor. Photons
 //    trapped between a painting and its wall are dropped before the map is built (see
 //    drop_hidden_photons): through a 1 mm gap a gather on the painting would count them.
 //    Direct light is the photon Renderer's emitter sampling (Renderer::direct_irradiance).
@@ -45,6 +46,7 @@
 #include "pack/geometry.h"
 #include "photon/renderer.h"
 #include "photon/scene.h"
+#include "photon/surface_disc.h"
 #include "views/camera.h"
 #include "views/exhibition.h"
 
@@ -98,6 +100,18 @@ struct BakeSettings {
     // blurs indirect light over its radius, so this loses little while s x spacing stays
     // below the radius. 1: a gather at every point.
     int gather_stride = 1;
+    // Lattice points on a triangle's edges and corners are computed a sixteenth of the
+    // lattice spacing inside it (toward its centroid) rather than on the edge itself. The
+    // room's edges are where surfaces meet: a point on the floor's edge also lies on the
+    // wall's plane, so its shadow rays graze the wall (and are occluded by it or not, by
+    // float rounding) and the surface disc's clipping rays start inside the wall. The lattice
+    // interpolates those values over a whole cell next to every corner of the room. false: on
+    // the edge (the value at the lattice point itself, as lighting "full" computes it there).
+    bool inset_edges = true;
+    // With light(disc = true): the bake's discs clipped coarsely (8 sectors, one probe and two
+    // bisection steps: at most 32 rays instead of 128, SurfaceDisc::Detail::Coarse). The clipping
+    // rays are most of a disc bake's time; in the hall this halves it for 5-15% more error.
+    bool coarse_disc = false;
 };
 
 struct LightingStats {
@@ -192,7 +206,9 @@ private:
     void require_lit() const;
     void check_texture(const VirtualTexture& vt) const;
     Vec3f barycentric(std::uint32_t tri, Vec3f p) const;  // (b1, b2, 0) on tri's lattice
-    Vec3f indirect(Vec3f p, Vec3f n, KnnHeap& heap) const;  // the photon map's flux density
+    // The photon map's flux density (the surface disc clipped at `detail` with light(disc)).
+    Vec3f indirect(Vec3f p, Vec3f n, KnnHeap& heap,
+                   SurfaceDisc::Detail detail = SurfaceDisc::Detail::Fine) const;
     // Direct irradiance from `samples` stratified emitter samples (BakeSettings::stratified).
     Vec3f direct_stratified(const Hit& hit, int samples, ShadeCounters& c) const;
     // Whether light can reach side n (= +-normal) of triangle t (BakeSettings::skip_unlit).

@@ -58,10 +58,11 @@ public:
     }
 
     // The surface-disc gather (surface_disc.h) at x, radius at most the grid's.
-    DiscEstimate gather_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r) const {
-        if (adaptive_) return gigascroll::gather_surface_disc(scene, *adaptive_, x, n, r);
-        return grid_ ? gigascroll::gather_surface_disc(scene, *grid_, x, n, r)
-                     : gigascroll::gather_surface_disc(scene, *kd_, x, n, r);
+    DiscEstimate gather_surface_disc(const Scene& scene, Vec3f x, Vec3f n, float r,
+                                     SurfaceDisc::Detail detail = SurfaceDisc::Detail::Fine) const {
+        if (adaptive_) return gigascroll::gather_surface_disc(scene, *adaptive_, x, n, r, detail);
+        return grid_ ? gigascroll::gather_surface_disc(scene, *grid_, x, n, r, detail)
+                     : gigascroll::gather_surface_disc(scene, *kd_, x, n, r, detail);
     }
 
     // Indices (into photons()) of every photon within r of q, for tests against brute force.

@@ -96,20 +96,23 @@ def test_hostile_render_arguments(lit, pack):
 @FUZZ
 @given(spacing=st.one_of(st.none(), floats), light_samples=st.one_of(st.integers(-2, 64), st.sampled_from([65537, 1 << 40]), floats),
        gather_stride=st.one_of(st.integers(-1, 4), floats, st.booleans()),
-       stratified=st.booleans(), skip_unlit=st.booleans())
+       stratified=st.booleans(), skip_unlit=st.booleans(),
+       inset_edges=st.one_of(st.booleans(), st.none(), st.integers(-1, 2), st.text(max_size=3)),
+       coarse_disc=st.one_of(st.booleans(), st.none(), st.integers(-1, 2), floats), disc=st.booleans())
 def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, gather_stride, stratified,
-                                                  skip_unlit):
+                                                  skip_unlit, inset_edges, coarse_disc, disc):
     gal = Gallery.from_room(box_room(), pack)
     vt = g.VirtualTexture(pack)
-    gal.light(vt, photons=2000)
+    gal.light(vt, photons=2000, disc=disc)
     if spacing is not None and isinstance(spacing, float) and math.isfinite(spacing) and spacing > 0:
         spacing = max(spacing, 0.05)  # finer lattices only cost time
     try:
         gal.bake(spacing=spacing, light_samples=light_samples, gather_stride=gather_stride,
-                 stratified=stratified, skip_unlit=skip_unlit)
+                 stratified=stratified, skip_unlit=skip_unlit, inset_edges=inset_edges, coarse_disc=coarse_disc)
     except ValueError:
         assert not gal.baked
         return
+    assert isinstance(inset_edges, bool) and isinstance(coarse_disc, bool)  # anything else is refused
     img = gal.render_display(gal.camera((6, 4)), vt, lighting="baked")
     assert np.isfinite(img).all() and (img >= 0).all() and img.max() > 0
 

@@ -254,3 +254,39 @@ def test_render_cli_renders_the_example_room_file(tmp_path, gigascroll_cli):
                        "--photons", 20000, "--lighting", "unlit", "-o", out)
     assert r.returncode == 0, r.stderr
     assert "2 paintings" in r.stdout and out.exists()
+
+
+def test_relighting_reuses_nothing_stale_a_fresh_gallery_would_not_read(tmp_path):
+    """light() takes the previous lighting's painting albedo when it reads the same level of the
+    same pack: a gallery relit at radii that move the level (a scroll-like strip, whose pinned
+    tail starts wide, read coarser for wide gathers) and back renders bit for bit what a fresh
+    gallery lit once renders, and another pack of the same shape (other texels) is read anew."""
+    import dataclasses
+
+    from gallery_checks import gradient_pack
+
+    size = (4096, 32)
+    packs = [gradient_pack(tmp_path / "a.pack", size=size, tile_size=16),
+             uniform_pack(tmp_path / "b.pack", {"gradient": (40, 200, 90)}, size=size, tile_size=16)]
+    room = box_room(painting="gradient", floor=(0.9, 0.9, 0.9))
+    width_m = 3.6
+    room = dataclasses.replace(room, surfaces=[s for s in room.surfaces], paintings=[PaintingSlot(
+        "gradient", origin=(-1.8, 1.0, -1.999), u_axis=(1, 0, 0), v_axis=(0, -1, 0), width_m=width_m,
+        height_m=width_m * size[1] / size[0], name="main")])
+    relit = Gallery.from_room(room, packs[0])
+    cam = relit.camera((24, 18), fov=70)
+    levels = set()
+    for pack, radius in [(0, 0.001), (0, 1.0), (0, 0.001), (0, None), (1, None), (0, None)]:
+        vt = g.VirtualTexture(packs[pack])
+        if pack == 1:
+            relit = Gallery.from_room(room, packs[0])  # lit once from pack a, then given b's texture
+            relit.light(g.VirtualTexture(packs[0]), photons=20_000)
+        st = relit.light(vt, photons=20_000, radius=radius)
+        levels.add(tuple(st["albedo_levels"]))
+        relit.bake(spacing=0.5, light_samples=2)
+        fresh = Gallery.from_room(room, packs[pack])
+        fresh.light(vt, photons=20_000, radius=radius)
+        fresh.bake(spacing=0.5, light_samples=2)
+        assert np.array_equal(relit.render_display(cam, vt, lighting="baked"),
+                              fresh.render_display(cam, vt, lighting="baked"))
+    assert len(levels) > 1  # the radii did move the level read

@@ -109,6 +109,7 @@ def test_still_matches_mitsuba(gradient_room, lighting, bound):
     {"light_samples": 32, "stratified": False},      # lighting "full"'s independent samples
     {"gather_stride": 2},                            # gathers at every other lattice point
     {"skip_unlit": False},                           # every side computed
+    {"inset_edges": False},                          # edge points on the edges themselves
 ])
 def test_bake_options_match_mitsuba(gradient_room, options):
     gal, vt = gradient_room
@@ -184,3 +185,28 @@ def test_surface_disc_gather_removes_edge_darkening(tmp_path):
         gal.light(vt, photons=400_000, disc=disc)
         errors[disc] = image_errors(supersampled(gal, vt, "full"), ref)["relmse"]
     assert errors[True] < 1e-3 and errors[True] < errors[False]
+
+
+def test_inset_edge_points_keep_the_baked_corners_as_in_mitsuba(tmp_path):
+    """bake(inset_edges=True), the default: the lattice points on the room's edges (where
+    walls, floor and ceiling meet) are computed just inside their triangle, not on the
+    neighbour's plane where shadow rays and the disc's clipping rays graze it. With the
+    surface disc the baked still then comes as close to Mitsuba as the full one; on the edges
+    themselves it is four times further off. Measured relMSE: baked 8.1e-4 inset, 3.2e-3 on
+    the edges; full 8.6e-4."""
+    pack = gradient_pack(tmp_path / "g.pack")
+    gal = Gallery.from_room(box_room(painting="gradient"), pack)
+    vt = g.VirtualTexture(pack)
+    ref = mitsuba_still(gal, gal.camera((W, H), fov=70), "box_gradient")
+    gal.light(vt, photons=200_000, disc=True)
+    errors = {"full": image_errors(supersampled(gal, vt, "full"), ref)["relmse"]}
+    for inset in (True, False):
+        gal.bake(spacing=0.1, inset_edges=inset)
+        errors[inset] = image_errors(supersampled(gal, vt, "baked"), ref)["relmse"]
+    assert errors[True] < 1.3 * errors["full"], errors
+    assert errors[False] > 2 * errors[True], errors
+    # The discs clipped coarsely (at most 32 rays): as close to Mitsuba, within 20% (measured:
+    # 8.13e-4 against 8.12e-4 clipped finely).
+    gal.bake(spacing=0.1, coarse_disc=True)
+    coarse = image_errors(supersampled(gal, vt, "baked"), ref)
+    assert coarse["relmse"] < 1.2 * errors[True] and coarse["psnr"] > 28 and coarse["flip"] < 0.08, (coarse, errors)

@@ -1,14 +1,20 @@
 """`gigascroll bench gallery`: the built-in `scroll` and `hall` rooms with a pack of smooth
 synthetic paintings. For each room: Mitsuba 3's path tracer on a spp ladder against a
 high-spp reference (computed once and cached), and a grid of our baked-still configurations
-(photons x bake spacing x bake light samples), each timed end to end: photon pass + photon
+(photons x gather (the sphere, or the surface disc at multiples of the auto radius) x bake
+spacing x bake light samples x gather stride x rays per pixel), each timed end to end: photon pass + photon
 map build + bake + the still itself. The error-time Pareto front of those configurations is
 compared with Mitsuba's time to the same error (log-log interpolation along its ladder), on
 the same cores. At the default settings, the error that baking adds over full lighting.
 
 Our stills cast --supersample^2 rays per pixel (pixel centres of a finer grid, box-filtered)
 because Mitsuba's box pixel filter averages over the pixel; times are for that many rays.
-Times are single runs on a shared machine (noisy); ratios are within the same run.
+The grid's configurations are each timed once (on a shared machine, noisy): that chooses
+the fastest configuration per target error. Choosing the fastest of many single timings
+favours lucky ones, so the chosen configurations and the Mitsuba ladder points the targets
+use are then re-timed --timing-repeats times, interleaved (ours and Mitsuba's alternating, the
+order reversed every other round), and the speedups are ratios of those medians, with the
+spread of the repeats beside them.
 """
 
 from __future__ import annotations
@@ -34,8 +40,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--height", type=int, default=54, help="still height (default 54)")
     parser.add_argument("--supersample", type=int, default=3,
                         help="rays per pixel per axis of the default-settings stills (default 3)")
-    parser.add_argument("--photons", default="10,12,14,16,18,20",
-                        help="photons emitted, as comma-separated powers of two (default 10,12,14,16,18,20)")
+    parser.add_argument("--photons", default="8,10,12,14,16,18,20",
+                        help="photons emitted, as comma-separated powers of two (default 8,10,12,14,16,18,20)")
+    parser.add_argument("--disc-photons", default="19",
+                        help="photon counts (powers of two) tried with the surface disc only (default 19: between "
+                             "the grid's counts near the hall's floor, where only the disc gets; empty: none)")
     parser.add_argument("--spacings", default="12,25,50,100,200",
                         help="bake spacings as fractions 1/N of the room's diagonal (default 12,25,50,100,200)")
     parser.add_argument("--bake-samples", default="1,4,16,64",
@@ -43,10 +52,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gather-strides", default="1,2",
                         help="bake gather strides tried at spacings of diag/100 and finer (default 1,2)")
     parser.add_argument("--disc", action=argparse.BooleanOptionalAction, default=True,
-                        help="also try the surface-disc gather at twice the auto radius (spacings diag/100 "
-                             "and finer, gathers / 4, 1-16 samples; default on)")
-    parser.add_argument("--supersamples", default="1,3",
-                        help="rays per pixel per axis of the configurations' stills (default 1,3)")
+                        help="also try the surface-disc gather at multiples of the auto radius (--disc-radii; "
+                             "spacings diag/25 and finer, 1-16 samples; default on)")
+    parser.add_argument("--disc-radii", default="2,4",
+                        help="the disc's radii as multiples of the auto radius (default 2,4; the larger ones "
+                             "with 4 and 16 samples only)")
+    parser.add_argument("--disc-details", default="fine,coarse",
+                        help="how finely the bake clips the discs: fine (up to 128 rays) and/or coarse "
+                             "(up to 32; bake(coarse_disc=True)); default fine,coarse")
+    parser.add_argument("--supersamples", default="1,3,5",
+                        help="rays per pixel per axis of the configurations' stills (default 1,3,5)")
     parser.add_argument("--default-photons", type=int, default=20,
                         help="log2 photons of the default-settings comparison of baked against full (default 20)")
     parser.add_argument("--full-samples", type=int, default=64,
@@ -56,6 +71,9 @@ def add_arguments(parser) -> None:
                         help="directory where the reference images are kept between runs")
     parser.add_argument("--mitsuba-spp", default="1,4,16,64,256,1024",
                         help="Mitsuba spp ladder for its time to each error")
+    parser.add_argument("--timing-repeats", type=int, default=3,
+                        help="re-timings, interleaved, of each target's chosen configuration and of the Mitsuba "
+                             "ladder points it is compared with; speedups are ratios of medians (default 3)")
     parser.add_argument("--quick", action="store_true", help="small settings, for a smoke test")
     parser.add_argument("--out", default="bench/gallery", help="directory for results.json and plots")
 
@@ -164,22 +182,36 @@ def run(args) -> int:
         args.photons, args.spacings, args.bake_samples, args.default_photons = "14,16", "25,50", "4,16", 16
         args.supersamples, args.disc = "1,2", False
         args.full_samples, args.reference_spp, args.mitsuba_spp = 16, 64, "1,4,16"
-    if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples) < 1:
-        raise UserError("--width, --height, --supersample, --full-samples and --reference-spp must be >= 1")
+    if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples, args.timing_repeats) < 1:
+        raise UserError("--width, --height, --supersample, --full-samples, --reference-spp and --timing-repeats "
+                        "must be >= 1")
     photons = _ints(args.photons, "--photons")
+    disc_photons = sorted(set(_ints(args.disc_photons, "--disc-photons")) - set(photons)) if (
+        args.disc and args.disc_photons) else []
     spacings = _ints(args.spacings, "--spacings")
     bake_samples = _ints(args.bake_samples, "--bake-samples")
     supersamples = _ints(args.supersamples, "--supersamples")
     strides = _ints(args.gather_strides, "--gather-strides")
     if not set(strides) <= {1, 2}:
         raise UserError("--gather-strides takes 1 and/or 2")
-    grid = [(False, n, ls, stride) for n in spacings for ls in bake_samples
+    disc_radii = _ints(args.disc_radii, "--disc-radii") if args.disc else []
+    # (disc radius as a multiple of the auto radius, 0 for the sphere; spacing diag/n; samples;
+    # gather stride; the discs clipped coarsely, bake(coarse_disc=True)). The disc's gathers
+    # on every (n <= 50) or every other point, or on every other or fourth (n >= 100; a gather
+    # at every point of a fine lattice never pays for itself), and only where the gathers'
+    # sub-lattice stays within the disc's radius.
+    details = [d for d in args.disc_details.split(",") if d]
+    if not set(details) <= {"fine", "coarse"} or (args.disc and not details):
+        raise UserError(f"--disc-details takes fine and/or coarse, got {args.disc_details!r}")
+    grid = [(0, n, ls, stride, False) for n in spacings for ls in bake_samples
             for stride in (strides if n >= 100 else [1])]
-    if args.disc:
-        grid += [(True, n, ls, 2) for n in spacings if n >= 100 for ls in bake_samples if ls <= 16]
+    grid += [(m, n, ls, stride, coarse) for m in disc_radii for n in spacings if n >= 25
+             for ls in bake_samples if ls <= 16 and (m == min(disc_radii) or ls >= 4)
+             for stride in ((1, 2) if n <= 50 else (2, 4)) for coarse in
+             sorted({d == "coarse" for d in details})]
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
-    if max(photons + [args.default_photons]) > 30:
-        raise UserError("--photons and --default-photons are powers of two up to 2^30")
+    if max(photons + disc_photons + [args.default_photons]) > 30:
+        raise UserError("--photons, --disc-photons and --default-photons are powers of two up to 2^30")
     try:
         import mitsuba as mi
     except ImportError:
@@ -195,11 +227,12 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "photons", "spacings", "bake_samples", "default_photons",
-                   "full_samples", "reference_spp", "mitsuba_spp")},
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "spacings", "bake_samples", "default_photons",
+                   "full_samples", "reference_spp", "mitsuba_spp", "timing_repeats")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
-    per_room = 2 + len(ladder) + len(photons) * len(grid) + len(set(spacings) | {200})
+    per_room = (2 + len(ladder) + len(photons) * len(grid) + len(disc_photons) * sum(1 for d, *_ in grid if d)
+                + len(set(spacings) | {200}))
     steps = tqdm(total=len(rooms) * per_room, desc="gallery bench", unit="step")
     for name in rooms:
         spec = builtin_room(name, pack)
@@ -219,41 +252,87 @@ def run(args) -> int:
             img, seconds = _mitsuba(mi, mscene, spp, seed=1)
             r["mitsuba"].append({"spp": spp, "seconds": seconds, **image_errors(img, ref)})
             steps.update()
-        del mscene
         diag = math.dist(*gal.bounds)
         # Our configurations, each timed end to end.
         configs, auto_radius = [], {}
         # Wall-clock times of the calls: "map" is everything light() does besides tracing
         # (the painting albedo read, dropping hidden photons, the hash grid).
-        for p, disc in [(p, d) for p in photons for d in sorted({d for d, *_ in grid})]:
-            if disc:  # the disc at twice the auto radius (read from the sphere's run before)
+        runs = [(p, d) for p in sorted(photons + disc_photons) for d in sorted({d for d, *_ in grid})
+                if d or p not in disc_photons]
+        for p, disc in runs:
+            if disc and p not in auto_radius:  # a disc-only count: the auto radius from a light() of its own
+                auto_radius[p] = gal.light(vt, photons=1 << p)["radius"]
+            if disc and disc * auto_radius[p] > 0.1 * diag:
+                # Discs wider than twice the auto radius's clamp (few photons): a gather
+                # over a tenth of the room clips against most of it, slow and blurred.
+                steps.update(sum(1 for d, *_ in grid if d == disc))
+                continue
+            if disc:  # the disc at a multiple of the auto radius (read from the sphere's run before)
                 t0 = time.perf_counter()
-                st = gal.light(vt, photons=1 << p, radius=2 * auto_radius[p], disc=True)
+                light_radius = disc * auto_radius[p]
+                st = gal.light(vt, photons=1 << p, radius=light_radius, disc=True)
             else:
                 t0 = time.perf_counter()
+                light_radius = None
                 st = gal.light(vt, photons=1 << p)
                 auto_radius[p] = st["radius"]
             light_seconds = time.perf_counter() - t0
-            for d, n, ls, stride in grid:
+            for d, n, ls, stride, coarse in grid:
                 if d != disc:
                     continue
+                if disc and stride > 1 and stride * diag / n > st["radius"]:
+                    steps.update()
+                    continue
                 t0 = time.perf_counter()
-                bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride)
+                bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride, coarse_disc=coarse)
                 bake_seconds = time.perf_counter() - t0
                 for ss in supersamples:
                     img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
                     c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
-                         "disc": disc, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
+                         "disc": bool(disc), "disc_radius_factor": disc, "coarse_disc": coarse, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
                          "gather_stride": stride, "supersample": ss, "bake_points": bst["bake_points"],
                          "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
                          "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
                          "still_seconds": still_seconds, **image_errors(img, ref)}
                     c["total_seconds"] = light_seconds + bake_seconds + still_seconds
+                    c["light_radius"] = light_radius  # what light() was given (None: auto)
                     configs.append(c)
                 steps.update()
         r["configs"] = configs
         r["front"] = pareto_front(configs)
-        r["targets"] = compare_with_mitsuba(configs, r["mitsuba"])
+        single = compare_with_mitsuba(configs, r["mitsuba"])
+        # The chosen configurations and the Mitsuba points they are compared with, re-timed.
+        rerun_errors = {}
+
+        def time_ours(c):
+            t0 = time.perf_counter()
+            gal.light(vt, photons=1 << c["photons_log2"], radius=c["light_radius"], disc=c["disc"])
+            gal.bake(spacing=diag / c["diagonal_over"], light_samples=c["bake_samples"],
+                     gather_stride=c["gather_stride"], coarse_disc=c["coarse_disc"])
+            seconds = time.perf_counter() - t0
+            img, still_seconds = _still(gal, vt, "baked", args.width, args.height, c["supersample"], fov)
+            rerun_errors.setdefault(id(c), []).append(relmse(img, ref))
+            steps.update()
+            return seconds + still_seconds
+
+        def time_mitsuba(spp):
+            steps.update()
+            return _mitsuba(mi, mscene, spp, seed=1)[1]
+
+        n_jobs = len({id(t["ours"]) for t in single if t["ours"]}) + len(
+            {s for t in single if t["ours"] for s in ladder_points_used(t, r["mitsuba"])})
+        steps.total += n_jobs * args.timing_repeats
+        ours_times, mitsuba_times = retime(single, r["mitsuba"], time_ours, time_mitsuba, args.timing_repeats)
+        r["targets"] = apply_repeats(single, r["mitsuba"], ours_times, mitsuba_times)
+        for t in r["targets"]:
+            if t["ours"] is not None and id(t["ours"]) in rerun_errors:
+                t["ours_repeat_relmse"] = rerun_errors[id(t["ours"])]
+        for l in r["mitsuba"]:
+            if mitsuba_times.get(l["spp"]):
+                l["repeat_seconds"] = mitsuba_times[l["spp"]]
+                l["median_seconds"] = float(np.median(mitsuba_times[l["spp"]]))
+        r["timing_repeats"] = args.timing_repeats
+        del mscene
         # The default settings: baked (16 stratified samples) against full lighting on the
         # same photon map, both against the reference, and the bake-spacing curve.
         st = gal.light(vt, photons=1 << args.default_photons, light_samples=args.full_samples)
@@ -281,7 +360,8 @@ def run(args) -> int:
     return 0
 
 
-CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "diagonal_over", "spacing_m",
+CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "disc_radius_factor", "coarse_disc",
+                  "diagonal_over", "spacing_m",
                   "bake_samples", "gather_stride", "supersample", "bake_points", "sides_skipped",
                   "photon_seconds", "build_seconds", "bake_seconds", "still_seconds", "total_seconds",
                   "relmse", "psnr", "flip")
@@ -342,6 +422,87 @@ def compare_with_mitsuba(configs: list[dict], ladder: list[dict]) -> list[dict]:
     return rows
 
 
+def ladder_points_used(row: dict, ladder: list[dict]) -> list[int]:
+    """The spp of the ladder points a target row's Mitsuba time comes from: its own point,
+    the two it is interpolated between, the cheapest (above the ladder's worst error) or the
+    largest (below the ladder: the lower bound)."""
+    if row["mitsuba_spp"] is not None:
+        return [row["mitsuba_spp"]]
+    pts = sorted((l["relmse"], l["spp"]) for l in ladder)
+    error = row["relmse"]
+    if row["mitsuba_seconds"] is None or error < pts[0][0]:
+        return [max(ladder, key=lambda l: l["seconds"])["spp"]]
+    for (e0, s0), (e1, s1) in zip(pts, pts[1:]):
+        if e0 <= error <= e1:
+            return sorted({s0, s1})
+    return [pts[-1][1]]
+
+
+def _interleaved(a: list, b: list) -> list:
+    """a[0], b[0], a[1], b[1], ... then the longer list's rest."""
+    out = []
+    for i in range(max(len(a), len(b))):
+        out += a[i:i + 1] + b[i:i + 1]
+    return out
+
+
+def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeats: int):
+    """Re-times every configuration chosen in `rows` (compare_with_mitsuba's, `ours` not None)
+    with time_ours(config) -> seconds, and every ladder point those rows use with
+    time_mitsuba(spp) -> seconds, `repeats` rounds, ours and Mitsuba's interleaved, every other
+    round in reverse order (so drifts in the machine's load fall on both alike). Returns
+    ({id(config): [seconds, ...]}, {spp: [seconds, ...]}), each list in the order timed."""
+    configs, spps = {}, set()
+    for row in rows:
+        if row["ours"] is not None:
+            configs.setdefault(id(row["ours"]), row["ours"])
+            spps.update(ladder_points_used(row, ladder))
+    jobs = _interleaved([("mitsuba", s) for s in sorted(spps)], [("ours", k) for k in configs])
+    ours, mitsuba = {k: [] for k in configs}, {s: [] for s in sorted(spps)}
+    for r in range(repeats):
+        for kind, key in (jobs if r % 2 == 0 else jobs[::-1]):
+            if kind == "ours":
+                ours[key].append(float(time_ours(configs[key])))
+            else:
+                mitsuba[key].append(float(time_mitsuba(key)))
+    return ours, mitsuba
+
+
+def apply_repeats(rows: list[dict], ladder: list[dict], ours_times: dict, mitsuba_times: dict) -> list[dict]:
+    """The target rows with the repeats' medians: Mitsuba's time at each target from the
+    median times of its ladder points (interpolated as before, errors from the single run),
+    ours the median of the chosen configuration's repeats, the speedup their ratio; the
+    spread as the speedup's range (Mitsuba's fastest against our slowest repeat, and the
+    reverse). Rows without repeats (not reached) are returned unchanged."""
+    def ladder_with(stat):
+        return [{**l, "seconds": stat(mitsuba_times[l["spp"]])} for l in ladder if mitsuba_times.get(l["spp"])]
+
+    med = ladder_with(lambda t: float(np.median(t)))
+    lo, hi = ladder_with(min), ladder_with(max)
+    out = []
+    for row in rows:
+        row = dict(row)
+        times = ours_times.get(id(row["ours"])) if row["ours"] is not None else None
+        if times:
+            used = ladder_points_used(row, ladder)
+            ours_med = float(np.median(times))
+            row["ours_repeat_seconds"] = times
+            row["ours_median_seconds"] = ours_med
+            row["mitsuba_repeat_seconds"] = {str(s): mitsuba_times[s] for s in used}
+            if row["mitsuba_seconds"] is not None:
+                m, m_lo, m_hi = (_time_to_error([x for x in lad if x["spp"] in used], row["relmse"])
+                                 for lad in (med, lo, hi))
+                row.update(mitsuba_median_seconds=m, speedup_median=m / ours_med,
+                           speedup_range=[m_lo / max(times), m_hi / min(times)])
+            else:
+                b = [float(np.median(mitsuba_times[s])) for s in used][0]
+                row.update(mitsuba_median_seconds=None, mitsuba_median_bound_seconds=b,
+                           speedup_median=None, speedup_at_least_median=b / ours_med,
+                           speedup_range=None)
+        out.append(row)
+    return out
+
+
 def _time_to_error(ladder: list[dict], error: float) -> float | None:
     """Seconds Mitsuba needs for `error` (relMSE), log-log interpolated along its ladder;
     None when even its largest spp does not reach it."""
@@ -358,8 +519,10 @@ def _time_to_error(ladder: list[dict], error: float) -> float | None:
 
 
 def _config_name(c: dict) -> str:
-    stride = ", gathers / 4" if c.get("gather_stride", 1) == 2 else ""
-    disc = ", disc r x 2" if c.get("disc") else ""
+    s = c.get("gather_stride", 1)
+    stride = f", gathers / {s * s}" if s > 1 else ""
+    disc = (f", disc r x {c.get('disc_radius_factor', 2)}{' coarse' if c.get('coarse_disc') else ''}"
+            if c.get("disc") else "")
     return (f"2^{c['photons_log2']}{disc}, diag/{c['diagonal_over']}, {c['bake_samples']} samples{stride}, "
             f"{c['supersample']}x{c['supersample']} rays")
 
@@ -373,13 +536,22 @@ def _print(name: str, r: dict) -> None:
         print(f"    {_config_name(c):68s} {c['photon_seconds']:.2f} + {c['build_seconds']:.2f} + "
               f"{c['bake_seconds']:.2f} + {c['still_seconds']:.3f} = {c['total_seconds']:.2f} s   "
               f"relMSE {c['relmse']:.2e}  FLIP {c['flip']:.3f}")
-    print("  target relMSE -> Mitsuba s -> ours s -> speedup:")
+    print("  target relMSE -> Mitsuba s -> ours s -> speedup (single run; medians of the repeats, their range):")
     for t in r["targets"]:
         m = f"{t['mitsuba_seconds']:.2f} s" if t["mitsuba_seconds"] else "not reached"
-        o = f"{t['ours']['total_seconds']:.2f} s" if t["ours"] else "not reached"
+        o = f"{t['ours']['total_seconds']:.3f} s" if t["ours"] else "not reached"
         sp = (f"{t['speedup']:.1f}x" if t["speedup"] else
               f">{t['speedup_at_least']:.1f}x" if t["speedup_at_least"] else "-")
-        print(f"    {t['relmse']:.2e}  ({t['mitsuba_spp'] or 'interp.'} spp) {m:>12s} {o:>12s} {sp:>7s}")
+        med = ""
+        if "ours_median_seconds" in t:
+            if t["speedup_median"] is not None:
+                lo, hi = t["speedup_range"]
+                med = (f"   median {t['mitsuba_median_seconds']:.3f} s / {t['ours_median_seconds']:.4f} s = "
+                       f"{t['speedup_median']:.1f}x ({lo:.1f}-{hi:.1f}x)")
+            else:
+                med = f"   median > {t['mitsuba_median_bound_seconds']:.2f} s / {t['ours_median_seconds']:.4f} s"
+                med += f" = >{t['speedup_at_least_median']:.1f}x"
+        print(f"    {t['relmse']:.2e}  ({t['mitsuba_spp'] or 'interp.'} spp) {m:>12s} {o:>12s} {sp:>7s}{med}")
     d = r["default"]
     print(f"  default settings, 2^{d['photons_log2']} photons: full ({d['full_samples']} samples) relMSE "
           f"{d['full']['relmse']:.2e}")

@@ -74,6 +74,47 @@ TEST(Gallery, PhotonsReadThePaintingsColourAtThePinnedLevel) {
     EXPECT_TRUE(level == 0 || !room.vt.is_pinned({0, level - 1, 0, 0}));
 }
 
+// A wide gather reads a coarser level than the finest pinned one: the coarsest whose texels
+// stay within an eighth of the radius (a uniform painting gives its colour at every level).
+TEST(Gallery, WideGathersReadTheirPaintingsAlbedoAtACoarserLevel) {
+    // A scroll-like strip: its pinned tail starts at a level that is still wide.
+    PackGeometry layout = PackGeometry::make(16, 2, {{4096, 32}});
+    VirtualTexture vt{layout, 16, 16, [](const TileKey&, std::uint8_t* out) {
+                          for (std::size_t i = 0; i < 16 * 16; ++i)
+                              out[3 * i] = 200, out[3 * i + 1] = 40, out[3 * i + 2] = 20;
+                      }};
+    Gallery gallery;
+    const float floor[12] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
+    const float light[12] = {-0.25f, 2, -0.25f, 0.25f, 2, -0.25f, 0.25f, 2, 0.25f, -0.25f, 2, 0.25f};
+    const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
+    gallery.add_surface(floor, 4, quad, 2, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
+    gallery.add_surface(light, 4, quad, 2, {0, 0, 0}, {10, 10, 10});
+    const double width_m = 2.0, height_m = width_m * 32 / 4096;
+    gallery.add_painting(0, layout.paintings[0], {-1.0, 1.0, -0.5}, {1, 0, 0}, {0, -1, 0}, width_m, height_m);
+    gallery.commit();
+    const PaintingGeometry& g = layout.paintings[0];
+    auto texel_m = [&](std::uint32_t l) { return std::max(width_m / g.level_width(l), height_m / g.level_height(l)); };
+    LightingSettings ls;
+    ls.photons = 1000, ls.radius = 0.001f;  // narrow: the finest pinned level
+    gallery.light(vt, ls);
+    const std::uint32_t pinned = gallery.stats().albedo_levels.at(0);
+    ASSERT_TRUE(vt.is_pinned({0, pinned, 0, 0}));
+    ASSERT_TRUE(pinned == 0 || !vt.is_pinned({0, pinned - 1, 0, 0}));
+    ASSERT_LT(pinned + 2, g.levels());
+    ASSERT_LT(texel_m(pinned + 1), texel_m(pinned + 2));
+    // Radius 8 texels of level pinned + 1 (and a little): that level, not the next.
+    ls.radius = float(8.0 * texel_m(pinned + 1) * 1.01);
+    gallery.light(vt, ls);
+    EXPECT_EQ(gallery.stats().albedo_levels.at(0), pinned + 1);
+    const float expected[3] = {kPaintingReflectance * srgb_to_linear(200 / 255.0f),
+                               kPaintingReflectance * srgb_to_linear(40 / 255.0f),
+                               kPaintingReflectance * srgb_to_linear(20 / 255.0f)};
+    const Vec3f a = gallery.scene().albedo_at(4, Vec3f(-0.2f, 1.0f - 0.5f * float(height_m), -0.5f));
+    EXPECT_NEAR(a.x, expected[0], 1e-4);
+    EXPECT_NEAR(a.y, expected[1], 1e-4);
+    EXPECT_NEAR(a.z, expected[2], 1e-4);
+}
+
 TEST(Gallery, BakedIrradianceEqualsFullAtLatticeCorners) {
     Room room;
     LightingSettings ls;
@@ -83,6 +124,7 @@ TEST(Gallery, BakedIrradianceEqualsFullAtLatticeCorners) {
     bs.spacing = 0.3;
     bs.light_samples = ls.light_samples;  // the same estimator as lighting "full"
     bs.stratified = false;
+    bs.inset_edges = false;  // the corners themselves, where "full" is evaluated
     room.gallery.bake(bs);
     for (Vec3f corner : {Vec3f(-1, 0, -1), Vec3f(-1, 0, 1), Vec3f(1, 0, 1)}) {
         Hit h;
@@ -132,6 +174,7 @@ struct LitFloor {
     double error(int samples, bool stratified) {
         BakeSettings bs;
         bs.spacing = 0.25, bs.light_samples = samples, bs.stratified = stratified;
+        bs.inset_edges = false;  // the estimator at the lattice points themselves
         gallery.bake(bs);
         // Lattice points of floor triangle 0 ((-1, 0, -1), (-1, 0, 1), (1, 0, 1)): its longest
         // edge 2 sqrt(2) / 0.25 -> 12 segments.
@@ -167,6 +210,58 @@ TEST(Gallery, StratifiedBakeIsUnbiasedAndLessNoisyThanIndependentSamples) {
         EXPECT_GT(indep, 1e-3);
         EXPECT_LT(strat, 0.4 * indep) << n << " samples";
     }
+}
+
+// A black wall stands on the floor's edge x = 1 (facing the room); the light does not see
+// it, so the floor's direct light is still the analytic rectangle's. The lattice points on
+// that edge also lie in the wall's plane: their shadow rays start on the wall. Baked with the
+// edge points inset, the floor next to the wall matches the analytic irradiance to the
+// lattice's interpolation error; on the edge itself the grazing shadow rays spoil the cell.
+TEST(Gallery, InsetEdgePointsKeepTheLatticeRightWhereSurfacesMeet) {
+    PackGeometry layout = PackGeometry::make(16, 2, {{64, 32}});
+    VirtualTexture vt{layout, 8, 8, [](const TileKey&, std::uint8_t* out) { std::fill(out, out + 3 * 256, 128); }};
+    Gallery gallery;
+    const float floor[12] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
+    const float wall[12] = {1, 0, -1, 1, 0, 1, 1, 2, 1, 1, 2, -1};  // x = 1, normal -x
+    const float light[12] = {-0.25f, 1, -0.25f, 0.25f, 1, -0.25f, 0.25f, 1, 0.25f, -0.25f, 1, 0.25f};
+    const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
+    gallery.add_surface(floor, 4, quad, 2, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
+    gallery.add_surface(wall, 4, quad, 2, {0, 0, 0}, {0, 0, 0});
+    gallery.add_surface(light, 4, quad, 2, {0, 0, 0}, {1, 1, 1});
+    gallery.commit();
+    ASSERT_LT(dot(gallery.scene().normal(2), Vec3f(1, 0, 0)), -0.99f);
+    LightingSettings ls;
+    ls.photons = 1024;  // every bounce off the floor ends on black surfaces or leaves
+    gallery.light(vt, ls);
+    // Points of the floor strip within one lattice cell (spacing 0.125 along the floor's
+    // triangles' longest edge, ~0.09 m along x) of the wall, and in the open middle.
+    auto error = [&](bool inset, float x0, float x1) {
+        BakeSettings bs;
+        bs.spacing = 0.125, bs.light_samples = 1024, bs.inset_edges = inset;
+        gallery.bake(bs);
+        double sum = 0;
+        int count = 0;
+        for (int a = 0; a < 8; ++a)
+            for (int b = 0; b < 41; ++b) {
+                Hit h;
+                h.p = Vec3f(x0 + (x1 - x0) * (a + 0.5f) / 8, 0, -0.95f + 1.9f * float(b) / 40);
+                h.tri = h.p.z > h.p.x ? 0 : 1;  // the floor's diagonal runs from (-1, -1) to (1, 1)
+                h.n = Vec3f(0, 1, 0), h.front = true;
+                const double exact = parallel_rectangle_irradiance(1, -0.25 - h.p.x, 0.25 - h.p.x, -0.25 - h.p.z,
+                                                                   0.25 - h.p.z);
+                const double e = gallery.irradiance_baked(h).x - exact;
+                sum += e * e / (exact * exact), ++count;
+            }
+        return sum / count;
+    };
+    const double open = error(true, -0.5f, 0.5f), near_wall = error(true, 0.91f, 1.0f);
+    const double on_edge = error(false, 0.91f, 1.0f);
+    // Measured relMSE: 9e-6 in the open (the lattice's interpolation and 1024 samples),
+    // 8.5e-5 next to the wall with the inset, 0.20 without it.
+    EXPECT_LT(open, 1e-4);
+    EXPECT_LT(near_wall, 5e-4);
+    EXPECT_GT(on_edge, 30 * near_wall);
+    EXPECT_GT(on_edge, 3e-2);
 }
 
 TEST(Gallery, SkippingUnlitSidesChangesNoLatticeValue) {

@@ -29,6 +29,16 @@ TEST(PhotonTracer, SameSeedSamePhotonsForAnyThreadCount) {
         EXPECT_EQ(a[i].power.y, b[i].power.y);
     }
     EXPECT_NE(a.size() == c.size() && a[0].p.x == c[0].p.x, true);
+    // Small passes are split in chunks of 256 photons and up, on both cores: still the same.
+    for (std::uint64_t n : {1ull, 300ull, 1024ull, 5000ull}) {
+        const auto s1 = trace_photons(scene, n, 7, 1);
+        const auto s2 = trace_photons(scene, n, 7, 2);
+        ASSERT_EQ(s1.size(), s2.size()) << n;
+        for (std::size_t i = 0; i < s1.size(); ++i) {
+            EXPECT_EQ(s1[i].p.x, s2[i].p.x);
+            EXPECT_EQ(s1[i].power.y, s2[i].power.y);
+        }
+    }
 }
 
 // No bounce cap: in a closed sphere of albedo 0.99 a photon stores rho / (1 - rho) = 99 copies
