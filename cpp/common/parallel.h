@@ -23,10 +23,15 @@
 
 namespace gigascroll {
 
-// Number of worker threads to use when the caller passes 0.
+// Number of worker threads to use when the caller passes 0. Asked once: the helper pool is
+// sized from it at first use anyway, and std::thread::hardware_concurrency reads /sys on
+// every call (a few percent of a small bake or still that calls parallel_for often).
 inline unsigned default_threads() {
-    unsigned n = std::thread::hardware_concurrency();
-    return n == 0 ? 1 : n;
+    static const unsigned all = [] {
+        const unsigned n = std::thread::hardware_concurrency();
+        return n == 0 ? 1u : n;
+    }();
+    return all;
 }
 
 namespace detail {

@@ -142,14 +142,6 @@ private:
     std::vector<Image> images_;
 };
 
-// The thread count of "all cores" (0), asked once: std::thread::hardware_concurrency reads
-// /sys on every call, a few percent of a small bake or still, and the helper pool's size was
-// fixed from it at first use anyway.
-unsigned threads_or_all(unsigned threads) {
-    static const unsigned all = default_threads();
-    return threads ? threads : all;
-}
-
 // Photons on the wall behind a painting, in the gap between them: light trapped there is real
 // but never seen, and a gather on the painting's face (its sphere reaches `depth` = the gather
 // radius off the plane, far more than a 1 mm gap) would count it as light on the painting: the
@@ -331,10 +323,10 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     rs.indirect = false;
     renderer_ = std::make_unique<Renderer>(scene_, rs);
     auto t0 = Clock::now();
-    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, threads_or_all(s.threads));
+    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, s.threads);
     stats_.photon_seconds = seconds_since(t0);
     t0 = Clock::now();
-    drop_hidden_photons(photons, placements_, radius, threads_or_all(s.threads));
+    drop_hidden_photons(photons, placements_, radius, s.threads);
     gather_.radius = radius;
     // The hash grid's build is serial: the photon groups for the bake's skip_unlit are
     // computed on the other core meanwhile.
@@ -343,7 +335,7 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
             if (job == 0) map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
             else group_photons(photons);
         }
-    }, threads_or_all(s.threads));
+    }, s.threads);
     stats_.build_seconds = seconds_since(t0);
     stats_.photons_stored = photons.size();
     stats_.radius = radius;
@@ -677,7 +669,7 @@ void Gallery::bake(const BakeSettings& s) {
             }
         }
         bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
-    }, threads_or_all(s.threads ? s.threads : lighting_.threads));
+    }, s.threads ? s.threads : lighting_.threads);
     if (stride > 1)
         parallel_for(rows.size(), 16, [&](std::size_t rb, std::size_t re) {
             for (std::size_t r = rb; r < re; ++r) {
@@ -707,7 +699,7 @@ void Gallery::bake(const BakeSettings& s) {
                 }
             }
             bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
-        }, threads_or_all(s.threads ? s.threads : lighting_.threads));
+        }, s.threads ? s.threads : lighting_.threads);
     bake_n_ = std::move(n);
     offset.pop_back();
     bake_offset_ = std::move(offset);
@@ -857,7 +849,7 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 out_row[3 * q.x] = L.x, out_row[3 * q.x + 1] = L.y, out_row[3 * q.x + 2] = L.z;
             }
         }
-    }, threads_or_all(threads ? threads : lighting_.threads));
+    }, threads ? threads : lighting_.threads);
 }
 
 }  // namespace gigascroll

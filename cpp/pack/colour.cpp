@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "common/parallel.h"
 
 namespace gigascroll {
 namespace {
@@ -81,7 +82,7 @@ namespace {
 // Runs fn(begin, end) over [0, pixels) in chunks of `chunk`, split over up to `threads` threads.
 template <typename Fn>
 void parallel_chunks(std::size_t pixels, unsigned threads, std::size_t chunk, Fn fn) {
-    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    if (threads == 0) threads = default_threads();
     const std::size_t parts = std::min<std::size_t>(threads, (pixels + chunk - 1) / chunk);
     if (parts <= 1) {
         fn(std::size_t(0), pixels);
