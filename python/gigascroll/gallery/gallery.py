@@ -190,9 +190,10 @@ class Gallery(_core._Gallery):
         for name, value in (("inset_edges", inset_edges), ("coarse_disc", coarse_disc)):
             if not isinstance(value, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {value!r}")
+        args = (s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit),
+                int(gather_stride), bool(inset_edges), bool(coarse_disc))
         if not progress:
-            self._bake(s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit), int(gather_stride), bool(inset_edges),
-                       bool(coarse_disc))
+            self._bake(*args)
             return self.stats
         import threading
 
@@ -202,8 +203,7 @@ class Gallery(_core._Gallery):
 
         def work():
             try:
-                self._bake(s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit), int(gather_stride), bool(inset_edges),
-                       bool(coarse_disc))
+                self._bake(*args)
             except BaseException as e:  # re-raised on the calling thread
                 failed.append(e)
 
