@@ -58,6 +58,21 @@ struct LightQuery {
     Vec3f p, n;
 };
 
+// Baked lighting as plain arrays, for the display pass to interpolate itself in SIMD lanes
+// straight from a packet's hits (no LightQuery / SurfaceLight records, no virtual call per
+// packet). The hit's triangle is t = first_triangle[geom] + prim; the side it is seen from is
+// the front when the eye-facing normal agrees with normal[t]; the irradiance there is the
+// linear interpolation at Embree's barycentrics on t's lattice of segments[t] segments per
+// edge, whose points start at offset[t] in front (or back): Gallery::irradiance_baked_at.
+// emission[t] is emitted from the front only.
+struct BakedLattice {
+    const std::uint32_t* first_triangle = nullptr;  // per Embree geometry
+    const Vec3f *normal = nullptr, *albedo = nullptr, *emission = nullptr;  // per triangle
+    const std::uint32_t* segments = nullptr;                                // per triangle
+    const std::uint64_t* offset = nullptr;                                  // per triangle
+    const Vec3f *front = nullptr, *back = nullptr;                          // per lattice point
+};
+
 // The scene's lighting as the display pass asks it, per hit: Embree geometry and primitive,
 // the point and the unit normal facing the viewer. Must be safe to call from many threads.
 class DisplayLighting {
@@ -67,6 +82,9 @@ public:
     // A packet of hits in one call (the display pass asks once per 16 rays, so the virtual
     // call is not paid per pixel). The default calls light() for each.
     virtual void light_batch(const LightQuery* queries, std::size_t count, SurfaceLight* out) const;
+    // Lighting that is a baked lattice returns it (valid while the lighting lives), and the
+    // display pass reads it in lanes instead of calling light_batch; nullptr: light_batch.
+    virtual const BakedLattice* baked_lattice() const { return nullptr; }
 };
 
 // Today's unlit views: radiance = albedo (irradiance pi), grey occluders.
