@@ -80,6 +80,7 @@ DisplayOptions GalleryLighting::options(unsigned threads) {
     DisplayOptions o;
     o.srgb_albedo = true;
     o.painting_reflectance = kPaintingReflectance;
+    o.keep_hit_points = false;  // the walk's one-eye displays read only the image
     o.threads = threads;
     return o;
 }

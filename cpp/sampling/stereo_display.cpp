@@ -652,6 +652,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     // A left eye that the right eye reuses: its hits claim right pixels as they are found
     // (ClaimProjection), and its painting pixels keep their light.
     const bool keep_light = claim_into != nullptr;
+    const bool keep_hits = hits_kept_;
     const BakedLattice* const baked = lighting.baked_lattice();
     std::optional<ClaimProjection> claim;
     if (claim_into) claim.emplace(*claim_into, claims_.data());
@@ -765,7 +766,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 ++traced_here;
                 const std::size_t i = row_start + k;
                 const unsigned geom = h.hit.geomID[k];
-                geom_out[i] = geom;
+                if (keep_hits) geom_out[i] = geom;
                 if (geom == kNoHit) {
                     rgb_out[3 * i] = rgb_out[3 * i + 1] = rgb_out[3 * i + 2] = 0.0f;
                     lod_out[i] = kNaN;
@@ -773,8 +774,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 }
                 // Component stores: a Vec3f copied through the stack stalled on store
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
-                Vec3f& gp = p_out[i];
-                gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
+                if (keep_hits) {
+                    Vec3f& gp = p_out[i];
+                    gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
+                }
                 if (!baked) {
                     LightQuery& q = queries[m];
                     q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
@@ -1107,6 +1110,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
+    hits_kept_ = o.keep_hit_points;
     render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st);
     sources_.clear();
 }
@@ -1124,6 +1128,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
             "display: edge_depth_ratio must be finite and >= 0");
     reusing_ = false;
+    hits_kept_ = true;
     const std::size_t n = std::size_t(right.width) * right.height;
     if (use_reuse) {
         // The last frame's right eye left every claim unclaimed again (no 8-byte fill of the
@@ -1165,6 +1170,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
 
 std::vector<float> DisplayPass::hit_points(int eye) const {
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
+    require(hits_kept_, "display: the last render kept no hit points (keep_hit_points=False)");
     const GBuffer& g = g_[eye];
     std::vector<float> out(3 * g.geom.size(), std::numeric_limits<float>::quiet_NaN());
     // A reused right pixel's point is its left source's.

@@ -116,6 +116,10 @@ struct DisplayOptions {
     float reuse_lod_tolerance = 1.0f / 1024.0f;
     // Added to every pixel's level of detail (negative: sharper).
     float lod_bias = 0.0f;
+    // false: render() (one eye) does not keep the hit points for hit_points(0), 16 bytes
+    // per pixel stored that nobody reads in a frame (render_stereo keeps them: the right
+    // eye reuses them).
+    bool keep_hit_points = true;
     unsigned threads = 0;  // 0 = all cores
 };
 
@@ -145,7 +149,8 @@ public:
     const EyeStats& left_stats() const { return stats_[0]; }
     const EyeStats& right_stats() const { return stats_[1]; }
     // After render_stereo with reuse: per right pixel, the left pixel whose hit it reuses
-    // (-1: traced), and the hit points of either eye (x, y, z per pixel; NaN where no hit).
+    // (-1: traced), and the hit points of either eye (x, y, z per pixel; NaN where no hit;
+    // InvalidArgument after a render() with keep_hit_points false).
     const std::vector<std::int32_t>& reuse_sources() const { return sources_; }
     std::vector<float> hit_points(int eye) const;
     // Per pixel of either eye: the level of detail sampled (NaN off paintings).
@@ -182,6 +187,7 @@ private:
     std::vector<std::uint64_t> claims_;
     bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last right eye)
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
+    bool hits_kept_ = true;  // the last frame kept the hit points (geom, p) of both eyes
     std::vector<std::int32_t> sources_;
 };
 

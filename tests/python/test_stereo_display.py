@@ -324,3 +324,23 @@ def test_left_eye_levels_equal_the_feedback_pass(setup, yaw):
     sees = fb["keys"] != v.NO_REQUEST
     assert sees.sum() > 1000
     assert np.allclose(ours[sees], fb["lod"][sees], atol=1e-4)
+
+
+def test_gallery_one_eye_display_keeps_no_hit_points(lit_gallery, small_scroll_pack):
+    """The gallery's one-eye display stores no hit points (nobody reads them in a frame):
+    hit_points(0) says so instead of returning stale ones, the levels are still kept (they
+    equal the stereo left eye's, which keeps its hits for the right eye), and a stereo frame
+    after it has its hits again."""
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    mono = src.display(d, vt, left).copy()
+    lods = np.asarray(d.lods(0)).copy()
+    with pytest.raises(ValueError, match="kept no hit points"):
+        d.hit_points(0)
+    img_l, _ = src.display_stereo(d, vt, left, right, True)
+    np.testing.assert_array_equal(img_l, mono)
+    np.testing.assert_array_equal(np.asarray(d.lods(0)), lods)
+    p = d.hit_points(0).reshape(-1, 3)
+    assert np.isfinite(p).all(axis=1).mean() > 0.5
