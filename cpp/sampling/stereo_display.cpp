@@ -345,14 +345,43 @@ struct ClaimProjection {
             if (target[k] != kNoTarget) __builtin_prefetch(claims + target[k], 1);
     }
 
+    // The right pixels a thread may claim without a compare-and-swap. With rows_aligned (the
+    // right eye is the left one moved along their common right axis, so a point projects
+    // into the same row of both, to float rounding) a claim is only made within one row of
+    // its left pixel's row (the rare other one is dropped: the right eye traces that pixel).
+    // Then a row strictly inside the chunk of left rows [rb, re) that this thread renders is
+    // claimed by this chunk's pixels alone, and its claims are a plain minimum (a locked
+    // compare-and-swap per left pixel drained the store buffer: a twelfth of the left eye);
+    // claims on the chunk's first and last rows and the rows beside them, which the
+    // neighbouring chunks' threads claim too, stay compare-and-swaps. The minimum does not
+    // depend on the order: the same claims win either way.
+    struct ClaimRows {
+        std::uint32_t plain_begin = 0, plain_end = 0;  // pixel indices of the chunk's inner rows
+        std::uint32_t near_begin = 0, near_end = ~0u;  // rows row - 1 .. row + 1 (aligned)
+    };
+    ClaimRows claim_rows(bool rows_aligned, std::size_t row, std::size_t rb, std::size_t re) const {
+        ClaimRows r;
+        if (!rows_aligned) return r;  // every claim a compare-and-swap, none dropped
+        if (re >= rb + 3) r.plain_begin = std::uint32_t((rb + 1) * rw), r.plain_end = std::uint32_t((re - 1) * rw);
+        r.near_begin = std::uint32_t((row > 0 ? row - 1 : 0) * rw);
+        r.near_end = std::uint32_t(std::min<std::size_t>(row + 2, std::size_t(fh)) * rw);
+        return r;
+    }
+
     // The projected lanes' claims; lane k is the left pixel first + k.
-    void claim16(const std::uint32_t* target, const float* depth, std::uint32_t first) const {
+    void claim16(const std::uint32_t* target, const float* depth, std::uint32_t first,
+                 const ClaimRows& rows) const {
         for (std::uint32_t k = 0; k < 16; ++k) {
-            if (target[k] == kNoTarget) continue;
+            const std::uint32_t t = target[k];
+            if (t == kNoTarget || t < rows.near_begin || t >= rows.near_end) continue;
             const std::uint64_t claim =
                 (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) | std::uint64_t(first + k);
-            std::atomic_ref<std::uint64_t> slot(claims[target[k]]);
+            std::atomic_ref<std::uint64_t> slot(claims[t]);
             std::uint64_t seen = slot.load(std::memory_order_relaxed);
+            if (t >= rows.plain_begin && t < rows.plain_end) {  // no other writer
+                if (claim < seen) slot.store(claim, std::memory_order_relaxed);
+                continue;
+            }
             while (claim < seen && !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
             }
         }
@@ -501,6 +530,17 @@ struct LatticeLanes {
         }
     }
 };
+
+// Whether a point projects into the same row of both eyes (to float rounding): the same
+// orientation and intrinsics, and the eyes apart along their right axis only.
+bool rows_align(const Camera& left, const Camera& right) {
+    auto same = [](const Vec3d& a, const Vec3d& b) { return length(a - b) <= 1e-12; };
+    const Vec3d offset = right.position - left.position;
+    const double apart = length(offset);
+    return same(left.forward, right.forward) && same(left.up, right.up) && same(left.right, right.right) &&
+           left.tan_half_y == right.tan_half_y && left.height == right.height &&
+           std::abs(dot(offset, left.up)) <= 1e-9 * apart && std::abs(dot(offset, left.forward)) <= 1e-9 * apart;
+}
 
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
@@ -670,7 +710,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     std::int32_t* const sources = reusing_ ? sources_.data() : nullptr;
     std::uint64_t* const claims = reusing_ ? claims_.data() : nullptr;
     const float release_ratio = 1.0f + o.edge_depth_ratio;
-    const std::size_t chunk_rows = reusing_ ? kReleaseChunkRows : 4;
+    // The left eye of a pair claims without compare-and-swaps inside its chunks' inner rows
+    // (ClaimProjection::claim_rows): chunks as tall as the right eye's.
+    const std::size_t chunk_rows = reusing_ || claim_into ? kReleaseChunkRows : 4;
+    const bool rows_aligned = claim_into && rows_align(eye, *claim_into);
     std::atomic<std::uint64_t> reused{0};
     GS_CHECK(!left || left_rgb != nullptr);
     const Vec3f origin(eye.position);
@@ -818,7 +861,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             }
             lap(t_shade);
             if (claim && m) {
-                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start));
+                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start),
+                               claim->claim_rows(rows_aligned, row, rb, re));
                 lap(t_reuse);
             }
             // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
