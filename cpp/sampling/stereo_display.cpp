@@ -145,7 +145,7 @@ struct PlaneMap {
 
     // uv clamped to [0, 1] and lambda = log2(footprint in texels) for n rays at once (D as
     // three arrays): a loop the compiler vectorises (the painting pixels in SIMD lanes), with
-    // log2 by fast_log2 and its rare non-normal footprints patched after the loop.
+    // log2 by fast_log2f and its rare non-normal footprints patched after the loop.
     __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
@@ -179,7 +179,7 @@ struct PlaneMap {
             const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
             const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
             std::uint32_t normal;
-            lod[k] = float(0.5 * fast_log2(rho2, normal));
+            lod[k] = 0.5f * fast_log2f(float(rho2), normal);
             odd |= normal ^ 1u;
         }
         if (odd) [[unlikely]] {  // zero, subnormal, infinite or NaN footprints: the libm value
@@ -192,38 +192,30 @@ struct PlaneMap {
                 const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
                 const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
                 std::uint32_t normal;
-                fast_log2(rho2, normal);
+                fast_log2f(float(rho2), normal);
                 if (!normal) lod[k] = float(0.5 * std::log2(rho2));
             }
         }
     }
 
-    // log2(x) for a positive normal double to about 3e-11 absolute, without a libm call so the
-    // lanes' loop vectorises: the exponent from the bits, the mantissa m in [sqrt(1/2),
-    // sqrt(2)) by log2(m) = 2 atanh(s) / ln 2 with s = (m - 1) / (m + 1), |s| < 0.172, to s^11.
-    // normal = false for zero, subnormal, infinite or NaN x (the value is then meaningless).
-    static __attribute__((always_inline)) double fast_log2(double x, std::uint32_t& normal) {
-        std::uint64_t bits;
-        std::memcpy(&bits, &x, sizeof bits);
-        const std::uint64_t biased = (bits >> 52) & 0x7ff;
-        normal = std::uint32_t(biased != 0) & std::uint32_t(biased != 0x7ff) &
-                 std::uint32_t((bits >> 63) == 0);
-        // Mantissa in [1, 2); above sqrt(2) it is halved and the exponent raised by one
-        // (integer operations only: a compare on doubles here kept the loop scalar).
-        const std::uint64_t field = bits & 0x000fffffffffffffull;
-        const std::uint64_t high =
-            std::uint64_t(std::int64_t(field) > std::int64_t(0x6a09e667f3bcdull));
-        const std::uint64_t mant = (field | 0x3ff0000000000000ull) - (high << 52);
-        double m;
-        std::memcpy(&m, &mant, sizeof m);
-        const std::uint64_t eb = (biased + high) | 0x4330000000000000ull;  // 2^52 + exponent + 1023
-        double e;
-        std::memcpy(&e, &eb, sizeof e);
-        e -= 4503599627370496.0 + 1023.0;
-        const double s = (m - 1.0) / (m + 1.0), s2 = s * s;
-        const double series =
-            1.0 + s2 * (1.0 / 3 + s2 * (1.0 / 5 + s2 * (1.0 / 7 + s2 * (1.0 / 9 + s2 * (1.0 / 11)))));
-        return e + s * series * 2.8853900817779268;  // 2 / ln 2
+    // log2(x) for a positive normal float without a libm call so the lanes' loop vectorises:
+    // the exponent from the bits, the mantissa m in [sqrt(1/2), sqrt(2)) by log2(m) =
+    // 2 atanh(s) / ln 2 with s = (m - 1) / (m + 1), |s| < 0.172, to s^9 (about 1e-9 from
+    // log2(m)), so the result is log2(x) rounded to float to an ulp or so (in double, as
+    // before, its division and series were a tenth of the packet loop). normal = false for
+    // zero, subnormal, infinite or NaN x (the value is then meaningless).
+    static __attribute__((always_inline)) float fast_log2f(float x, std::uint32_t& normal) {
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(x);
+        const std::uint32_t biased = (bits >> 23) & 0xff;
+        normal = std::uint32_t(biased != 0) & std::uint32_t(biased != 0xff) & std::uint32_t((bits >> 31) == 0);
+        // Mantissa in [1, 2); above sqrt(2) (0x3504f3) halved and the exponent raised by one.
+        const std::uint32_t field = bits & 0x7fffffu;
+        const std::uint32_t high = std::uint32_t(std::int32_t(field) > std::int32_t(0x3504f3));
+        const float m = std::bit_cast<float>((field | 0x3f800000u) - (high << 23));
+        const float e = float(std::int32_t(biased + high) - 127);
+        const float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
+        const float series = 1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7 + s2 * (1.0f / 9))));
+        return e + s * series * 2.88539008f;  // 2 / ln 2
     }
 };
 
