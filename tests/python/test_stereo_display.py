@@ -210,14 +210,20 @@ def test_gallery_right_eye_reuse_is_view_independent(lit_gallery, small_scroll_p
         assert np.allclose(img_r.reshape(-1, 3)[i], ref, rtol=2e-3, atol=1e-6), (i, p)
 
 
-def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup):
+@pytest.mark.parametrize("toe_in", [0.0, 0.03])
+def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup, toe_in):
     """The right eye's claims against a numpy brute force of the rule: every left hit is
     projected into the right image, the nearest (then the lowest left index) claims the pixel,
     and a claim deeper than (1 + edge_depth_ratio) x the nearest claim of its 3 x 3
     neighbourhood is released. A small ratio releases the painting's outline (the wall is
-    5 mm behind it)."""
+    5 mm behind it). Parallel eyes (a point lands in the same row of both: the claims inside
+    a thread's rows without compare-and-swaps) and eyes turned in by toe_in radians (rows
+    move by up to a few pixels at the corners: every claim a compare-and-swap)."""
     ex, vt = setup
     left, right = eyes(w=120, h=128)
+    if toe_in:
+        right = v.Camera(right.position, (-np.sin(toe_in), 0.0, np.cos(toe_in)), (0.0, 1.0, 0.0),
+                         right.tan_half_x, right.tan_half_y, *right.resolution)
     ratio = 0.005
     d = _core.DisplayPass()
     d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, reuse=True,
@@ -233,6 +239,8 @@ def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup):
     inside = (z > 0) & (fx >= 0) & (fx < w) & (fy >= 0) & (fy < h)
     target = (fy[inside] * w + fx[inside]).astype(np.int64)
     depth, source = z[inside], hit[inside]
+    # Turned-in eyes move rows by more than one: claims that parallel eyes would not make.
+    assert (np.abs(fy[inside] - source // w).max() >= 2) == bool(toe_in)
     order = np.lexsort((source, depth, target))     # per target pixel: nearest, then lowest index
     first = np.ones(order.size, bool)
     first[1:] = target[order][1:] != target[order][:-1]
