@@ -14,6 +14,15 @@ GalleryLighting::GalleryLighting(const Gallery& gallery, Lighting lighting)
             "Gallery: call light() before rendering with lighting");
     require(lighting != Lighting::Baked || gallery.baked(),
             "Gallery: call bake() before lighting 'baked'");
+    if (lighting == Lighting::Baked) {
+        const Scene& scene = gallery.scene();
+        const Gallery::BakeArrays bake = gallery.bake_arrays();
+        lattice_.first_triangle = scene.geometry_first_triangles();
+        lattice_.normal = scene.normals(), lattice_.albedo = scene.albedos();
+        lattice_.emission = scene.emissions();
+        lattice_.segments = bake.segments, lattice_.offset = bake.offset;
+        lattice_.front = bake.front, lattice_.back = bake.back;
+    }
 }
 
 void GalleryLighting::light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const {
@@ -71,6 +80,7 @@ DisplayOptions GalleryLighting::options(unsigned threads) {
     DisplayOptions o;
     o.srgb_albedo = true;
     o.painting_reflectance = kPaintingReflectance;
+    o.keep_hit_points = false;  // the walk's one-eye displays read only the image
     o.threads = threads;
     return o;
 }

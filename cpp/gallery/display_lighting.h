@@ -19,6 +19,10 @@ public:
     // Baked: the lattice at Embree's barycentrics, one call per packet (no point-to-barycentric
     // solve in double per pixel); unlit and full as light().
     void light_batch(const LightQuery* queries, std::size_t count, SurfaceLight* out) const override;
+    // Baked: the scene's and the bake's arrays, for the display pass's lookup in lanes.
+    const BakedLattice* baked_lattice() const override {
+        return lighting_ == Lighting::Baked ? &lattice_ : nullptr;
+    }
     // The display options that match the gallery's display (painting reflectance, sRGB).
     static DisplayOptions options(unsigned threads = 0);
 
@@ -26,6 +30,7 @@ private:
     const Gallery& gallery_;
     Lighting lighting_;
     std::shared_lock<std::shared_mutex> lock_;
+    BakedLattice lattice_;
 };
 
 }  // namespace gigascroll

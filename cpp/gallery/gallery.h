@@ -201,6 +201,17 @@ public:
     // Held by a display pass that calls the irradiance functions itself (gallery/display_lighting.h):
     // light() and bake() wait for it.
     std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock(mutex_); }
+    // The bake's lattices (bake_n_ and the rest below) for a display pass that interpolates
+    // them itself in SIMD lanes; valid while read_lock() is held and the gallery is baked.
+    struct BakeArrays {
+        const std::uint32_t* segments;  // per triangle
+        const std::uint64_t* offset;    // per triangle: its first lattice point
+        const Vec3f *front, *back;      // per lattice point
+        std::uint64_t points;
+    };
+    BakeArrays bake_arrays() const {
+        return {bake_n_.data(), bake_offset_.data(), bake_front_.data(), bake_back_.data(), bake_front_.size()};
+    }
 
 private:
     void require_lit() const;

@@ -87,6 +87,12 @@ public:
     // Hit::tri), for passes that cast their own rays.
     std::uint32_t triangle_of(unsigned geom, unsigned prim) const { return geom_offset_[geom] + prim; }
     Vec3f emission(std::uint32_t tri) const { return emission_[tri]; }
+    // The per-triangle arrays (indexed as triangle_of numbers them) and each geometry's first
+    // triangle, for passes that read them in SIMD lanes (the display pass's baked lighting).
+    const Vec3f* albedos() const { return albedo_.data(); }
+    const Vec3f* emissions() const { return emission_.data(); }
+    const Vec3f* normals() const { return normal_.data(); }
+    const std::uint32_t* geometry_first_triangles() const { return geom_offset_.data(); }
     Vec3f normal(std::uint32_t tri) const { return normal_[tri]; }
     Vec3f emitted_power() const { return power_; }   // sum of pi * area * radiance
     float emitter_weight_total() const { return weight_total_; }

@@ -145,7 +145,7 @@ struct PlaneMap {
 
     // uv clamped to [0, 1] and lambda = log2(footprint in texels) for n rays at once (D as
     // three arrays): a loop the compiler vectorises (the painting pixels in SIMD lanes), with
-    // log2 by fast_log2 and its rare non-normal footprints patched after the loop.
+    // log2 by fast_log2f and its rare non-normal footprints patched after the loop.
     __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
@@ -179,7 +179,7 @@ struct PlaneMap {
             const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
             const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
             std::uint32_t normal;
-            lod[k] = float(0.5 * fast_log2(rho2, normal));
+            lod[k] = 0.5f * fast_log2f(float(rho2), normal);
             odd |= normal ^ 1u;
         }
         if (odd) [[unlikely]] {  // zero, subnormal, infinite or NaN footprints: the libm value
@@ -192,38 +192,30 @@ struct PlaneMap {
                 const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
                 const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
                 std::uint32_t normal;
-                fast_log2(rho2, normal);
+                fast_log2f(float(rho2), normal);
                 if (!normal) lod[k] = float(0.5 * std::log2(rho2));
             }
         }
     }
 
-    // log2(x) for a positive normal double to about 3e-11 absolute, without a libm call so the
-    // lanes' loop vectorises: the exponent from the bits, the mantissa m in [sqrt(1/2),
-    // sqrt(2)) by log2(m) = 2 atanh(s) / ln 2 with s = (m - 1) / (m + 1), |s| < 0.172, to s^11.
-    // normal = false for zero, subnormal, infinite or NaN x (the value is then meaningless).
-    static __attribute__((always_inline)) double fast_log2(double x, std::uint32_t& normal) {
-        std::uint64_t bits;
-        std::memcpy(&bits, &x, sizeof bits);
-        const std::uint64_t biased = (bits >> 52) & 0x7ff;
-        normal = std::uint32_t(biased != 0) & std::uint32_t(biased != 0x7ff) &
-                 std::uint32_t((bits >> 63) == 0);
-        // Mantissa in [1, 2); above sqrt(2) it is halved and the exponent raised by one
-        // (integer operations only: a compare on doubles here kept the loop scalar).
-        const std::uint64_t field = bits & 0x000fffffffffffffull;
-        const std::uint64_t high =
-            std::uint64_t(std::int64_t(field) > std::int64_t(0x6a09e667f3bcdull));
-        const std::uint64_t mant = (field | 0x3ff0000000000000ull) - (high << 52);
-        double m;
-        std::memcpy(&m, &mant, sizeof m);
-        const std::uint64_t eb = (biased + high) | 0x4330000000000000ull;  // 2^52 + exponent + 1023
-        double e;
-        std::memcpy(&e, &eb, sizeof e);
-        e -= 4503599627370496.0 + 1023.0;
-        const double s = (m - 1.0) / (m + 1.0), s2 = s * s;
-        const double series =
-            1.0 + s2 * (1.0 / 3 + s2 * (1.0 / 5 + s2 * (1.0 / 7 + s2 * (1.0 / 9 + s2 * (1.0 / 11)))));
-        return e + s * series * 2.8853900817779268;  // 2 / ln 2
+    // log2(x) for a positive normal float without a libm call so the lanes' loop vectorises:
+    // the exponent from the bits, the mantissa m in [sqrt(1/2), sqrt(2)) by log2(m) =
+    // 2 atanh(s) / ln 2 with s = (m - 1) / (m + 1), |s| < 0.172, to s^9 (about 1e-9 from
+    // log2(m)), so the result is log2(x) rounded to float to an ulp or so (in double, as
+    // before, its division and series were a tenth of the packet loop). normal = false for
+    // zero, subnormal, infinite or NaN x (the value is then meaningless).
+    static __attribute__((always_inline)) float fast_log2f(float x, std::uint32_t& normal) {
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(x);
+        const std::uint32_t biased = (bits >> 23) & 0xff;
+        normal = std::uint32_t(biased != 0) & std::uint32_t(biased != 0xff) & std::uint32_t((bits >> 31) == 0);
+        // Mantissa in [1, 2); above sqrt(2) (0x3504f3) halved and the exponent raised by one.
+        const std::uint32_t field = bits & 0x7fffffu;
+        const std::uint32_t high = std::uint32_t(std::int32_t(field) > std::int32_t(0x3504f3));
+        const float m = std::bit_cast<float>((field | 0x3f800000u) - (high << 23));
+        const float e = float(std::int32_t(biased + high) - 127);
+        const float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
+        const float series = 1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7 + s2 * (1.0f / 9))));
+        return e + s * series * 2.88539008f;  // 2 / ln 2
     }
 };
 
@@ -345,19 +337,202 @@ struct ClaimProjection {
             if (target[k] != kNoTarget) __builtin_prefetch(claims + target[k], 1);
     }
 
+    // The right pixels a thread may claim without a compare-and-swap. With rows_aligned (the
+    // right eye is the left one moved along their common right axis, so a point projects
+    // into the same row of both, to float rounding) a claim is only made within one row of
+    // its left pixel's row (the rare other one is dropped: the right eye traces that pixel).
+    // Then a row strictly inside the chunk of left rows [rb, re) that this thread renders is
+    // claimed by this chunk's pixels alone, and its claims are a plain minimum (a locked
+    // compare-and-swap per left pixel drained the store buffer: a twelfth of the left eye);
+    // claims on the chunk's first and last rows and the rows beside them, which the
+    // neighbouring chunks' threads claim too, stay compare-and-swaps. The minimum does not
+    // depend on the order: the same claims win either way.
+    struct ClaimRows {
+        std::uint32_t plain_begin = 0, plain_end = 0;  // pixel indices of the chunk's inner rows
+        std::uint32_t near_begin = 0, near_end = ~0u;  // rows row - 1 .. row + 1 (aligned)
+    };
+    ClaimRows claim_rows(bool rows_aligned, std::size_t row, std::size_t rb, std::size_t re) const {
+        ClaimRows r;
+        if (!rows_aligned) return r;  // every claim a compare-and-swap, none dropped
+        if (re >= rb + 3) r.plain_begin = std::uint32_t((rb + 1) * rw), r.plain_end = std::uint32_t((re - 1) * rw);
+        r.near_begin = std::uint32_t((row > 0 ? row - 1 : 0) * rw);
+        r.near_end = std::uint32_t(std::min<std::size_t>(row + 2, std::size_t(fh)) * rw);
+        return r;
+    }
+
     // The projected lanes' claims; lane k is the left pixel first + k.
-    void claim16(const std::uint32_t* target, const float* depth, std::uint32_t first) const {
+    void claim16(const std::uint32_t* target, const float* depth, std::uint32_t first,
+                 const ClaimRows& rows) const {
         for (std::uint32_t k = 0; k < 16; ++k) {
-            if (target[k] == kNoTarget) continue;
+            const std::uint32_t t = target[k];
+            if (t == kNoTarget || t < rows.near_begin || t >= rows.near_end) continue;
             const std::uint64_t claim =
                 (std::uint64_t(std::bit_cast<std::uint32_t>(depth[k])) << 32) | std::uint64_t(first + k);
-            std::atomic_ref<std::uint64_t> slot(claims[target[k]]);
+            std::atomic_ref<std::uint64_t> slot(claims[t]);
             std::uint64_t seen = slot.load(std::memory_order_relaxed);
+            if (t >= rows.plain_begin && t < rows.plain_end) {  // no other writer
+                if (claim < seen) slot.store(claim, std::memory_order_relaxed);
+                continue;
+            }
             while (claim < seen && !slot.compare_exchange_weak(seen, claim, std::memory_order_relaxed)) {
             }
         }
     }
 };
+
+// A packet's light in SoA lanes: per lane the irradiance E, the albedo and the emission.
+struct LaneLight {
+    alignas(64) float Ex[16], Ey[16], Ez[16], ax[16], ay[16], az[16], mx[16], my[16], mz[16];
+};
+
+// The baked lattice at a packet's 16 lanes in two steps, so that the lattice points' cache
+// lines (the blend waited for them) arrive while the packet's other work runs: locate() finds
+// each lane's three points and weights and fetches the points, blend() reads them later.
+struct LatticeLanes {
+    alignas(64) const Vec3f* corner[3][16];
+    alignas(64) float weight[3][16];
+    alignas(64) std::uint32_t tri[16];
+    alignas(64) std::int32_t front[16];
+
+    // Lanes with hit[k] != 0 (Embree's geometry, primitive and barycentrics, and the
+    // eye-facing normal n): Gallery's lattice_lerp (the clamps, the cell, the sub-triangle
+    // and its weights) in straight loops over the lanes, lanes without a hit reading
+    // triangle 0 (ignored). No trapping math, as Gallery's lattice_cells: with it GCC keeps
+    // the selects as branches.
+    [[gnu::optimize("no-trapping-math"), gnu::noinline]]
+    void locate(const BakedLattice& b, const unsigned* __restrict geom_in,
+                const unsigned* __restrict prim_in, const float* __restrict b1_in,
+                const float* __restrict b2_in, const int* __restrict hit,
+                const float* __restrict nx, const float* __restrict ny,
+                const float* __restrict nz) {
+        alignas(64) std::int32_t segments[16], cell_i[16], cell_j[16], upper_of[16];
+        for (int k = 0; k < 16; ++k) {
+            const std::uint32_t g = hit[k] ? geom_in[k] : 0u, p = hit[k] ? prim_in[k] : 0u;
+            const std::uint32_t t = b.first_triangle[g] + p;
+            const Vec3f w = b.normal[t];
+            tri[k] = t, segments[k] = std::int32_t(b.segments[t]);
+            front[k] = w.x * nx[k] + w.y * ny[k] + w.z * nz[k] > 0;  // n faces the eye
+        }
+        int k0 = 0;
+#if defined(__AVX2__)
+        // 8 lanes at once, the same operations (GCC vectorises the loop below with masked
+        // stores, which are slow on AMD's cores). Selects are blends; min on int32 is
+        // vpminsd; a float to int32 conversion truncates as the casts do.
+        for (; k0 < 16; k0 += 8) {
+            const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+            const __m256i n = _mm256_load_si256(reinterpret_cast<const __m256i*>(segments + k0));
+            const __m256i n1 = _mm256_sub_epi32(n, _mm256_set1_epi32(1));
+            __m256 c1 = _mm256_loadu_ps(b1_in + k0), c2 = _mm256_loadu_ps(b2_in + k0);
+            // c < 0 ? 0 : (1 < c ? 1 : c)
+            c1 = _mm256_blendv_ps(_mm256_blendv_ps(c1, one, _mm256_cmp_ps(one, c1, _CMP_LT_OQ)), zero,
+                                  _mm256_cmp_ps(c1, zero, _CMP_LT_OQ));
+            c2 = _mm256_blendv_ps(_mm256_blendv_ps(c2, one, _mm256_cmp_ps(one, c2, _CMP_LT_OQ)), zero,
+                                  _mm256_cmp_ps(c2, zero, _CMP_LT_OQ));
+            const __m256 s = _mm256_add_ps(c1, c2);
+            const __m256 over = _mm256_cmp_ps(s, one, _CMP_GT_OQ);
+            c1 = _mm256_blendv_ps(c1, _mm256_div_ps(c1, s), over);
+            c2 = _mm256_blendv_ps(c2, _mm256_div_ps(c2, s), over);
+            const __m256 nf = _mm256_cvtepi32_ps(n);
+            const __m256 x = _mm256_mul_ps(c1, nf), y = _mm256_mul_ps(c2, nf);
+            const __m256i i = _mm256_min_epi32(_mm256_cvttps_epi32(x), n1);
+            const __m256i j = _mm256_min_epi32(_mm256_cvttps_epi32(y), _mm256_sub_epi32(n1, i));
+            const __m256 ex = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i)), ey = _mm256_sub_ps(y, _mm256_cvtepi32_ps(j));
+            __m256 fx = _mm256_blendv_ps(ex, zero, _mm256_cmp_ps(ex, zero, _CMP_LT_OQ));
+            __m256 fy = _mm256_blendv_ps(ey, zero, _mm256_cmp_ps(ey, zero, _CMP_LT_OQ));
+            const __m256 sum = _mm256_add_ps(fx, fy);
+            const __m256 past = _mm256_cmp_ps(sum, one, _CMP_GT_OQ);
+            // i + j + 2 <= n, i.e. not (i + j + 2 > n)
+            const __m256i room = _mm256_xor_si256(
+                _mm256_cmpgt_epi32(_mm256_add_epi32(_mm256_add_epi32(i, j), _mm256_set1_epi32(2)), n),
+                _mm256_set1_epi32(-1));
+            const __m256 upper = _mm256_and_ps(past, _mm256_castsi256_ps(room));
+            const __m256 rescale = _mm256_andnot_ps(upper, past);
+            const __m256 inv = _mm256_div_ps(one, sum);
+            fx = _mm256_blendv_ps(fx, _mm256_mul_ps(fx, inv), rescale);
+            fy = _mm256_blendv_ps(fy, _mm256_mul_ps(fy, inv), rescale);
+            _mm256_store_si256(reinterpret_cast<__m256i*>(cell_i + k0), i);
+            _mm256_store_si256(reinterpret_cast<__m256i*>(cell_j + k0), j);
+            _mm256_store_si256(reinterpret_cast<__m256i*>(upper_of + k0),
+                               _mm256_and_si256(_mm256_castps_si256(upper), _mm256_set1_epi32(1)));
+            _mm256_store_ps(weight[0] + k0, _mm256_blendv_ps(_mm256_sub_ps(_mm256_sub_ps(one, fx), fy),
+                                                            _mm256_sub_ps(_mm256_add_ps(fx, fy), one), upper));
+            _mm256_store_ps(weight[1] + k0, _mm256_blendv_ps(fx, _mm256_sub_ps(one, fx), upper));
+            _mm256_store_ps(weight[2] + k0, _mm256_blendv_ps(fy, _mm256_sub_ps(one, fy), upper));
+        }
+#endif
+        for (int k = k0; k < 16; ++k) {
+            const std::int32_t n = segments[k];
+            float c1 = b1_in[k], c2 = b2_in[k];
+            c1 = c1 < 0.0f ? 0.0f : (1.0f < c1 ? 1.0f : c1);  // std::clamp
+            c2 = c2 < 0.0f ? 0.0f : (1.0f < c2 ? 1.0f : c2);
+            const float s = c1 + c2;
+            const bool over = s > 1.0f;
+            const float q1 = c1 / s, q2 = c2 / s;
+            c1 = over ? q1 : c1, c2 = over ? q2 : c2;
+            const float x = c1 * float(n), y = c2 * float(n);
+            const std::int32_t xi = std::int32_t(x), yi = std::int32_t(y);
+            const std::int32_t i = xi < n - 1 ? xi : n - 1;
+            const std::int32_t j = yi < n - 1 - i ? yi : n - 1 - i;
+            const float ex = x - float(i), ey = y - float(j);
+            float fx = ex < 0.0f ? 0.0f : ex, fy = ey < 0.0f ? 0.0f : ey;
+            const float sum = fx + fy;
+            const bool upper = sum > 1.0f && i + j + 2 <= n;
+            const bool rescale = !upper && sum > 1.0f;
+            const float inv = 1.0f / sum;
+            const float sx = fx * inv, sy = fy * inv;
+            fx = rescale ? sx : fx, fy = rescale ? sy : fy;
+            cell_i[k] = i, cell_j[k] = j, upper_of[k] = upper;
+            weight[0][k] = upper ? fx + fy - 1 : 1 - fx - fy;
+            weight[1][k] = upper ? 1 - fx : fx, weight[2][k] = upper ? 1 - fy : fy;
+        }
+        for (int k = 0; k < 16; ++k) {
+            const std::uint64_t n = std::uint64_t(segments[k]);
+            const std::uint64_t i = std::uint64_t(cell_i[k]), j = std::uint64_t(cell_j[k]);
+            const bool upper = upper_of[k] != 0;
+            // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i.
+            const std::uint64_t row_i = i * (n + 1) - i * (i - 1) / 2, row_next = row_i + (n + 1 - i);
+            const std::uint64_t right = row_next + j, up = row_i + j + 1;
+            const std::uint64_t e0 = upper ? row_next + j + 1 : row_i + j;
+            const std::uint64_t e1 = upper ? up : right, e2 = upper ? right : up;
+            const Vec3f* E = (front[k] ? b.front : b.back) + b.offset[tri[k]];
+            corner[0][k] = E + e0, corner[1][k] = E + e1, corner[2][k] = E + e2;
+        }
+        for (int k = 0; k < 16; ++k)
+            if (hit[k]) {
+                __builtin_prefetch(corner[0][k]);
+                __builtin_prefetch(corner[1][k]);
+                __builtin_prefetch(corner[2][k]);
+            }
+    }
+
+    // E = E0 w0 + E1 w1 + E2 w2 per lane (lattice_lerp's order), the albedo and the emission
+    // (front side only).
+    void blend(const BakedLattice& b, LaneLight& __restrict out) const {
+        const Vec3f zero{0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < 16; ++k) {
+            const Vec3f a = *corner[0][k], c = *corner[1][k], d = *corner[2][k];
+            const float w0 = weight[0][k], w1 = weight[1][k], w2 = weight[2][k];
+            out.Ex[k] = a.x * w0 + c.x * w1 + d.x * w2;
+            out.Ey[k] = a.y * w0 + c.y * w1 + d.y * w2;
+            out.Ez[k] = a.z * w0 + c.z * w1 + d.z * w2;
+            const std::uint32_t t = tri[k];
+            const Vec3f al = b.albedo[t], em = front[k] ? b.emission[t] : zero;
+            out.ax[k] = al.x, out.ay[k] = al.y, out.az[k] = al.z;
+            out.mx[k] = em.x, out.my[k] = em.y, out.mz[k] = em.z;
+        }
+    }
+};
+
+// Whether a point projects into the same row of both eyes (to float rounding): the same
+// orientation and intrinsics, and the eyes apart along their right axis only.
+bool rows_align(const Camera& left, const Camera& right) {
+    auto same = [](const Vec3d& a, const Vec3d& b) { return length(a - b) <= 1e-12; };
+    const Vec3d offset = right.position - left.position;
+    const double apart = length(offset);
+    return same(left.forward, right.forward) && same(left.up, right.up) && same(left.right, right.right) &&
+           left.tan_half_y == right.tan_half_y && left.height == right.height &&
+           std::abs(dot(offset, left.up)) <= 1e-9 * apart && std::abs(dot(offset, left.forward)) <= 1e-9 * apart;
+}
 
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
@@ -509,6 +684,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     // A left eye that the right eye reuses: its hits claim right pixels as they are found
     // (ClaimProjection), and its painting pixels keep their light.
     const bool keep_light = claim_into != nullptr;
+    const bool keep_hits = hits_kept_;
+    const BakedLattice* const baked = lighting.baked_lattice();
     std::optional<ClaimProjection> claim;
     if (claim_into) claim.emplace(*claim_into, claims_.data());
     const auto t0 = Clock::now();
@@ -525,7 +702,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     std::int32_t* const sources = reusing_ ? sources_.data() : nullptr;
     std::uint64_t* const claims = reusing_ ? claims_.data() : nullptr;
     const float release_ratio = 1.0f + o.edge_depth_ratio;
-    const std::size_t chunk_rows = reusing_ ? kReleaseChunkRows : 4;
+    // The left eye of a pair claims without compare-and-swaps inside its chunks' inner rows
+    // (ClaimProjection::claim_rows): chunks as tall as the right eye's.
+    const std::size_t chunk_rows = reusing_ || claim_into ? kReleaseChunkRows : 4;
+    const bool rows_aligned = claim_into && rows_align(eye, *claim_into);
     std::atomic<std::uint64_t> reused{0};
     GS_CHECK(!left || left_rgb != nullptr);
     const Vec3f origin(eye.position);
@@ -580,6 +760,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
         std::array<std::uint32_t, 16> lane;
+        LaneLight lane_light;
+        LatticeLanes lattice;
 
         auto on_packet = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
                              const RTCRayHit16& h) {
@@ -619,7 +801,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 ++traced_here;
                 const std::size_t i = row_start + k;
                 const unsigned geom = h.hit.geomID[k];
-                geom_out[i] = geom;
+                if (keep_hits) geom_out[i] = geom;
                 if (geom == kNoHit) {
                     rgb_out[3 * i] = rgb_out[3 * i + 1] = rgb_out[3 * i + 2] = 0.0f;
                     lod_out[i] = kNaN;
@@ -627,12 +809,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 }
                 // Component stores: a Vec3f copied through the stack stalled on store
                 // forwarding (a 12-byte object read back as 8 + 4 bytes).
-                Vec3f& gp = p_out[i];
-                gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
-                LightQuery& q = queries[m];
-                q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
-                q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
-                q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
+                if (keep_hits) {
+                    Vec3f& gp = p_out[i];
+                    gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
+                }
+                if (!baked) {
+                    LightQuery& q = queries[m];
+                    q.geom = geom, q.prim = h.hit.primID[k], q.b1 = h.hit.u[k], q.b2 = h.hit.v[k];
+                    q.p.x = hx[k], q.p.y = hy[k], q.p.z = hz[k];
+                    q.n.x = nx[k], q.n.y = ny[k], q.n.z = nz[k];
+                }
                 lane_pl[m] = geom < placements ? placement[geom] : -1;
                 lane[m++] = k;
             }
@@ -642,17 +828,33 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             // the lighting call (their cache lines fetched meanwhile).
             alignas(64) std::uint32_t claim_target[16];
             alignas(64) float claim_depth[16];
+            alignas(64) int hit[16];
+            for (std::uint32_t k = 0; k < 16; ++k) hit[k] = valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
             if (claim && m) {
                 lap(t_shade);
-                alignas(64) int hit[16];
-                for (std::uint32_t k = 0; k < 16; ++k) hit[k] = valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
                 claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
                 lap(t_reuse);
             }
-            if (m) lighting.light_batch(queries.data(), m, lights.data());
+            // The hits' light per lane: the baked lattice read in lanes (its points fetched
+            // now, blended after the plane map below), else the lighting's batch call, its
+            // records spread onto their lanes.
+            LaneLight& ll = lane_light;
+            if (m && baked) {
+                lattice.locate(*baked, h.hit.geomID, h.hit.primID, h.hit.u, h.hit.v, hit, nx, ny, nz);
+            } else if (m) {
+                lighting.light_batch(queries.data(), m, lights.data());
+                for (std::uint32_t j = 0; j < m; ++j) {
+                    const SurfaceLight& sl = lights[j];
+                    const std::uint32_t k = lane[j];
+                    ll.Ex[k] = sl.irradiance.x, ll.Ey[k] = sl.irradiance.y, ll.Ez[k] = sl.irradiance.z;
+                    ll.ax[k] = sl.albedo.x, ll.ay[k] = sl.albedo.y, ll.az[k] = sl.albedo.z;
+                    ll.mx[k] = sl.emission.x, ll.my[k] = sl.emission.y, ll.mz[k] = sl.emission.z;
+                }
+            }
             lap(t_shade);
             if (claim && m) {
-                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start));
+                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start),
+                               claim->claim_rows(rows_aligned, row, rb, re));
                 lap(t_reuse);
             }
             // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
@@ -668,14 +870,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             for (std::uint32_t j = 0; j < m; ++j) {
                 const std::uint32_t k = lane[j];
                 const int pl = lane_pl[j];
-                if (pl < 0) {
-                    const SurfaceLight& sl = lights[j];
-                    const std::size_t i = row_start + k;
-                    const Vec3f L = sl.albedo * sl.irradiance * kInvPi + sl.emission;
-                    rgb_out[3 * i] = L.x, rgb_out[3 * i + 1] = L.y, rgb_out[3 * i + 2] = L.z;
-                    lod_out[i] = kNaN;
-                    continue;
-                }
+                if (pl < 0) continue;
                 const double c = col_sx[i0 + k];
                 Dx[np] = row_x + c * rdx;
                 Dy[np] = row_y + c * rdy;
@@ -691,6 +886,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                                                 pv + r0, plod + r0);
                 r0 = r1;
             }
+            if (m && baked) lattice.blend(*baked, ll);
+            for (std::uint32_t j = 0; j < m; ++j) {
+                if (lane_pl[j] >= 0) continue;
+                const std::uint32_t k = lane[j];
+                const std::size_t i = row_start + k;
+                const Vec3f L = Vec3f{ll.ax[k], ll.ay[k], ll.az[k]} * Vec3f{ll.Ex[k], ll.Ey[k], ll.Ez[k]} * kInvPi +
+                                Vec3f{ll.mx[k], ll.my[k], ll.mz[k]};
+                rgb_out[3 * i] = L.x, rgb_out[3 * i + 1] = L.y, rgb_out[3 * i + 2] = L.z;
+                lod_out[i] = kNaN;
+            }
             // The painting pixels' levels (with the bias; a non-finite level samples level 0)
             // stored, their texels queued, and their light kept for the right eye.
             Vec3f* __restrict const scale_out = keep_light ? g.scale.data() : nullptr;
@@ -705,19 +910,18 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             for (std::uint32_t q = 0; q < np; ++q) {
                 const std::uint32_t j = pj[q], k = lane[j];
                 const std::size_t i = row_start + k;
-                const SurfaceLight& sl = lights[j];
-                const Vec3f scale = sl.irradiance * kInvPi;
+                const Vec3f scale = Vec3f{ll.Ex[k], ll.Ey[k], ll.Ez[k]} * kInvPi;
+                const Vec3f emission{ll.mx[k], ll.my[k], ll.mz[k]};
                 if (keep_light) {
                     scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
-                    add_out[i].x = sl.emission.x, add_out[i].y = sl.emission.y;
-                    add_out[i].z = sl.emission.z;
+                    add_out[i].x = emission.x, add_out[i].y = emission.y, add_out[i].z = emission.z;
                 }
                 float lod = plod[q] + bias;
                 if (!std::isfinite(lod)) lod = 0.0f;
                 lod_out[i] = lod;
                 PendingPixel& pp = pend[pc];
                 pp.x = i0 + k, pp.placement = ppl[q];
-                pp.scale = scale, pp.add = sl.emission;
+                pp.scale = scale, pp.add = emission;
                 us_out[pc] = pu[q], vs_out[pc] = pv[q], lods_out[pc] = lod;
                 ++pc;
             }
@@ -942,6 +1146,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     EyeStats& st = stats_[0] = EyeStats{};
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
+    hits_kept_ = o.keep_hit_points;
     render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st);
     sources_.clear();
 }
@@ -959,6 +1164,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
             "display: edge_depth_ratio must be finite and >= 0");
     reusing_ = false;
+    hits_kept_ = true;
     const std::size_t n = std::size_t(right.width) * right.height;
     if (use_reuse) {
         // The last frame's right eye left every claim unclaimed again (no 8-byte fill of the
@@ -1000,6 +1206,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
 
 std::vector<float> DisplayPass::hit_points(int eye) const {
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
+    require(hits_kept_, "display: the last render kept no hit points (keep_hit_points=False)");
     const GBuffer& g = g_[eye];
     std::vector<float> out(3 * g.geom.size(), std::numeric_limits<float>::quiet_NaN());
     // A reused right pixel's point is its left source's.

@@ -58,6 +58,21 @@ struct LightQuery {
     Vec3f p, n;
 };
 
+// Baked lighting as plain arrays, for the display pass to interpolate itself in SIMD lanes
+// straight from a packet's hits (no LightQuery / SurfaceLight records, no virtual call per
+// packet). The hit's triangle is t = first_triangle[geom] + prim; the side it is seen from is
+// the front when the eye-facing normal agrees with normal[t]; the irradiance there is the
+// linear interpolation at Embree's barycentrics on t's lattice of segments[t] segments per
+// edge, whose points start at offset[t] in front (or back): Gallery::irradiance_baked_at.
+// emission[t] is emitted from the front only.
+struct BakedLattice {
+    const std::uint32_t* first_triangle = nullptr;  // per Embree geometry
+    const Vec3f *normal = nullptr, *albedo = nullptr, *emission = nullptr;  // per triangle
+    const std::uint32_t* segments = nullptr;                                // per triangle
+    const std::uint64_t* offset = nullptr;                                  // per triangle
+    const Vec3f *front = nullptr, *back = nullptr;                          // per lattice point
+};
+
 // The scene's lighting as the display pass asks it, per hit: Embree geometry and primitive,
 // the point and the unit normal facing the viewer. Must be safe to call from many threads.
 class DisplayLighting {
@@ -67,6 +82,9 @@ public:
     // A packet of hits in one call (the display pass asks once per 16 rays, so the virtual
     // call is not paid per pixel). The default calls light() for each.
     virtual void light_batch(const LightQuery* queries, std::size_t count, SurfaceLight* out) const;
+    // Lighting that is a baked lattice returns it (valid while the lighting lives), and the
+    // display pass reads it in lanes instead of calling light_batch; nullptr: light_batch.
+    virtual const BakedLattice* baked_lattice() const { return nullptr; }
 };
 
 // Today's unlit views: radiance = albedo (irradiance pi), grey occluders.
@@ -98,6 +116,10 @@ struct DisplayOptions {
     float reuse_lod_tolerance = 1.0f / 1024.0f;
     // Added to every pixel's level of detail (negative: sharper).
     float lod_bias = 0.0f;
+    // false: render() (one eye) does not keep the hit points for hit_points(0), 16 bytes
+    // per pixel stored that nobody reads in a frame (render_stereo keeps them: the right
+    // eye reuses them).
+    bool keep_hit_points = true;
     unsigned threads = 0;  // 0 = all cores
 };
 
@@ -127,7 +149,8 @@ public:
     const EyeStats& left_stats() const { return stats_[0]; }
     const EyeStats& right_stats() const { return stats_[1]; }
     // After render_stereo with reuse: per right pixel, the left pixel whose hit it reuses
-    // (-1: traced), and the hit points of either eye (x, y, z per pixel; NaN where no hit).
+    // (-1: traced), and the hit points of either eye (x, y, z per pixel; NaN where no hit;
+    // InvalidArgument after a render() with keep_hit_points false).
     const std::vector<std::int32_t>& reuse_sources() const { return sources_; }
     std::vector<float> hit_points(int eye) const;
     // Per pixel of either eye: the level of detail sampled (NaN off paintings).
@@ -164,6 +187,7 @@ private:
     std::vector<std::uint64_t> claims_;
     bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last right eye)
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
+    bool hits_kept_ = true;  // the last frame kept the hit points (geom, p) of both eyes
     std::vector<std::int32_t> sources_;
 };
 

@@ -210,14 +210,20 @@ def test_gallery_right_eye_reuse_is_view_independent(lit_gallery, small_scroll_p
         assert np.allclose(img_r.reshape(-1, 3)[i], ref, rtol=2e-3, atol=1e-6), (i, p)
 
 
-def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup):
+@pytest.mark.parametrize("toe_in", [0.0, 0.03])
+def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup, toe_in):
     """The right eye's claims against a numpy brute force of the rule: every left hit is
     projected into the right image, the nearest (then the lowest left index) claims the pixel,
     and a claim deeper than (1 + edge_depth_ratio) x the nearest claim of its 3 x 3
     neighbourhood is released. A small ratio releases the painting's outline (the wall is
-    5 mm behind it)."""
+    5 mm behind it). Parallel eyes (a point lands in the same row of both: the claims inside
+    a thread's rows without compare-and-swaps) and eyes turned in by toe_in radians (rows
+    move by up to a few pixels at the corners: every claim a compare-and-swap)."""
     ex, vt = setup
     left, right = eyes(w=120, h=128)
+    if toe_in:
+        right = v.Camera(right.position, (-np.sin(toe_in), 0.0, np.cos(toe_in)), (0.0, 1.0, 0.0),
+                         right.tan_half_x, right.tan_half_y, *right.resolution)
     ratio = 0.005
     d = _core.DisplayPass()
     d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, reuse=True,
@@ -233,6 +239,8 @@ def test_reuse_sources_follow_the_nearest_claim_and_the_edge_rule(setup):
     inside = (z > 0) & (fx >= 0) & (fx < w) & (fy >= 0) & (fy < h)
     target = (fy[inside] * w + fx[inside]).astype(np.int64)
     depth, source = z[inside], hit[inside]
+    # Turned-in eyes move rows by more than one: claims that parallel eyes would not make.
+    assert (np.abs(fy[inside] - source // w).max() >= 2) == bool(toe_in)
     order = np.lexsort((source, depth, target))     # per target pixel: nearest, then lowest index
     first = np.ones(order.size, bool)
     first[1:] = target[order][1:] != target[order][:-1]
@@ -324,3 +332,23 @@ def test_left_eye_levels_equal_the_feedback_pass(setup, yaw):
     sees = fb["keys"] != v.NO_REQUEST
     assert sees.sum() > 1000
     assert np.allclose(ours[sees], fb["lod"][sees], atol=1e-4)
+
+
+def test_gallery_one_eye_display_keeps_no_hit_points(lit_gallery, small_scroll_pack):
+    """The gallery's one-eye display stores no hit points (nobody reads them in a frame):
+    hit_points(0) says so instead of returning stale ones, the levels are still kept (they
+    equal the stereo left eye's, which keeps its hits for the right eye), and a stereo frame
+    after it has its hits again."""
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    left, right = eyes(path_x=3.0, distance=0.5, w=64, h=72, height=1.5)
+    d = _core.DisplayPass()
+    mono = src.display(d, vt, left).copy()
+    lods = np.asarray(d.lods(0)).copy()
+    with pytest.raises(ValueError, match="kept no hit points"):
+        d.hit_points(0)
+    img_l, _ = src.display_stereo(d, vt, left, right, True)
+    np.testing.assert_array_equal(img_l, mono)
+    np.testing.assert_array_equal(np.asarray(d.lods(0)), lods)
+    p = d.hit_points(0).reshape(-1, 3)
+    assert np.isfinite(p).all(axis=1).mean() > 0.5
