@@ -264,6 +264,13 @@ void Gallery::commit() {
     require(!committed(), "Gallery: already committed");
     require(scene_.triangle_count() > 0, "Gallery: the room is empty");
     scene_.commit();
+    tri_terms_.resize(tri_v0_.size());
+    for (std::size_t t = 0; t < tri_v0_.size(); ++t) {
+        const Vec3f e1 = tri_e1_[t], e2 = tri_e2_[t];
+        BarycentricTerms& b = tri_terms_[t];
+        b.d00 = dot(e1, e1), b.d01 = dot(e1, e2), b.d11 = dot(e2, e2);
+        b.denom = b.d00 * b.d11 - b.d01 * b.d01;
+    }
 }
 
 PaintingSceneView Gallery::feedback_view() const {
@@ -441,9 +448,8 @@ Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap, SurfaceDisc::Detail det
 
 Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
     const Vec3f d = p - tri_v0_[tri], e1 = tri_e1_[tri], e2 = tri_e2_[tri];
-    const double d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
+    const auto [d00, d01, d11, denom] = tri_terms_[tri];
     const double d20 = dot(d, e1), d21 = dot(d, e2);
-    const double denom = d00 * d11 - d01 * d01;
     double b1 = denom > 0 ? (d11 * d20 - d01 * d21) / denom : 0;
     double b2 = denom > 0 ? (d00 * d21 - d01 * d20) / denom : 0;
     b1 = std::clamp(b1, 0.0, 1.0), b2 = std::clamp(b2, 0.0, 1.0);
@@ -749,9 +755,11 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
             for (std::uint32_t x0 = 0; x0 < W; x0 += 16) {
                 const std::uint32_t n16 = std::min<std::uint32_t>(16, W - x0);
                 alignas(64) int valid[16];
+                Vec3d dd16[16];  // the unnormalised directions, for the painting coordinates
                 for (std::uint32_t k = 0; k < 16; ++k) {
                     valid[k] = k < n16 ? -1 : 0;
-                    const Vec3f d(normalize(camera.direction(x0 + std::min(k, n16 - 1) + 0.5, y + 0.5)));
+                    dd16[k] = camera.direction(x0 + std::min(k, n16 - 1) + 0.5, y + 0.5);
+                    const Vec3f d(normalize(dd16[k]));
                     packet.ray.dir_x[k] = d.x, packet.ray.dir_y[k] = d.y, packet.ray.dir_z[k] = d.z;
                     packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
                     packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
@@ -760,21 +768,43 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 rtcInitIntersectContext(&context);
                 context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
                 rtcIntersect16(valid, scene_.handle(), &context, &packet);
+                Hit hit16[16];
+                for (std::uint32_t k = 0; k < n16; ++k) {
+                    Hit& hit = hit16[k];
+                    if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+                    const Vec3f d(packet.ray.dir_x[k], packet.ray.dir_y[k], packet.ray.dir_z[k]);
+                    hit.t = packet.ray.tfar[k];
+                    hit.tri = geom_first_tri_[packet.hit.geomID[k]] + packet.hit.primID[k];
+                    hit.p = origin + d * hit.t;
+                    const Vec3f nn = scene_.normal(hit.tri);
+                    hit.front = dot(nn, d) < 0;
+                    hit.n = hit.front ? nn : -nn;
+                }
+                // Baked: the packet's hits through irradiance_baked_batch (lattice_lerp's
+                // operations at the same barycentrics: irradiance_baked's values, without a
+                // call and its mispredicted branches per pixel).
+                alignas(64) std::uint32_t batch_tri[16];
+                alignas(64) float batch_b1[16], batch_b2[16];
+                bool batch_front[16];
+                Vec3f batch_E[16];
+                if (lighting == Lighting::Baked) {
+                    std::size_t m = 0;
+                    for (std::uint32_t k = 0; k < n16; ++k) {
+                        if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+                        const Vec3f b = barycentric(hit16[k].tri, hit16[k].p);
+                        batch_tri[m] = hit16[k].tri, batch_front[m] = hit16[k].front;
+                        batch_b1[m] = b.x, batch_b2[m] = b.y;
+                        ++m;
+                    }
+                    irradiance_baked_batch(batch_tri, batch_front, batch_b1, batch_b2, m, batch_E);
+                }
+                std::size_t batch_next = 0;
                 for (std::uint32_t k = 0; k < n16; ++k) {
                     const std::uint32_t x = x0 + k;
                     const std::size_t px = y * std::size_t(W) + x;
-                    const Vec3d dd = camera.direction(x + 0.5, y + 0.5);
-                    Hit hit;
+                    const Vec3d dd = dd16[k];
+                    const Hit& hit = hit16[k];
                     const bool found = packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
-                    if (found) {
-                        const Vec3f d(packet.ray.dir_x[k], packet.ray.dir_y[k], packet.ray.dir_z[k]);
-                        hit.t = packet.ray.tfar[k];
-                        hit.tri = geom_first_tri_[packet.hit.geomID[k]] + packet.hit.primID[k];
-                        hit.p = origin + d * hit.t;
-                        const Vec3f nn = scene_.normal(hit.tri);
-                        hit.front = dot(nn, d) < 0;
-                        hit.n = hit.front ? nn : -nn;
-                    }
                     int slot = found ? tri_slot_[hit.tri] : -1;
                     if (hits.position) {
                         const Vec3f p = found ? hit.p : Vec3f(kNaN, kNaN, kNaN);
@@ -793,7 +823,7 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                     Vec3f E;
                     switch (lighting) {
                         case Lighting::Unlit: E = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
-                        case Lighting::Baked: E = irradiance_baked(hit); break;
+                        case Lighting::Baked: E = batch_E[batch_next++]; break;
                         case Lighting::Full: E = irradiance_full(hit); break;
                     }
                     const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
