@@ -156,10 +156,12 @@ void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<Paintin
         for (const PaintingPlacement& p : paintings) {
             const Vec3d n = p.normal(), rel = Vec3d(ph.p) - p.origin;
             const double h = dot(rel, n);
+            // The cheap tests first: most photons are far from every painting's plane.
+            if (!(std::abs(h) < double(depth))) continue;
+            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
             // On the plane within float rounding of a point at this distance from the origin.
             const double on_plane = 1e-5 * (length(rel) + p.width_m + p.height_m);
-            if (!(std::abs(h) > on_plane && std::abs(h) < double(depth))) continue;
-            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
+            if (!(std::abs(h) > on_plane)) continue;
             const double u = dot(rel, p.u_axis), v = dot(rel, p.v_axis);
             if (u >= 0 && u <= p.width_m && v >= 0 && v <= p.height_m) return true;
         }
@@ -264,6 +266,8 @@ void Gallery::commit() {
     require(!committed(), "Gallery: already committed");
     require(scene_.triangle_count() > 0, "Gallery: the room is empty");
     scene_.commit();
+    for (std::size_t t = 0; t < tri_v0_.size(); ++t)
+        if (max_component(scene_.emission(t)) > 0) emitter_tris_.push_back(std::uint32_t(t));
     tri_terms_.resize(tri_v0_.size());
     for (std::size_t t = 0; t < tri_v0_.size(); ++t) {
         const Vec3f e1 = tri_e1_[t], e2 = tri_e2_[t];
@@ -376,10 +380,9 @@ bool Gallery::side_reachable(std::uint32_t t, Vec3f n) const {
     // Direct light: Renderer::direct_irradiance counts a sample only when the emitter point
     // lies in front of the side (cos_x > 0) and the side's point in front of the emitter
     // (cos_l > 0). Both are linear in the points, so the triangles' vertices decide.
-    for (std::size_t e = 0; e < tri_v0_.size(); ++e) {
-        if (!(max_component(scene_.emission(e)) > 0)) continue;
+    for (const std::uint32_t e : emitter_tris_) {
         const Vec3f ev[3] = {tri_v0_[e], tri_v0_[e] + tri_e1_[e], tri_v0_[e] + tri_e2_[e]};
-        const Vec3f ne = scene_.normal(std::uint32_t(e));
+        const Vec3f ne = scene_.normal(e);
         float in_front = -std::numeric_limits<float>::infinity(), facing = in_front;
         for (int k = 0; k < 3; ++k) {
             in_front = std::max(in_front, dot(n, ev[k] - v[0]));
@@ -549,6 +552,31 @@ void lattice_cells(std::size_t m, const std::uint32_t* __restrict segments,
             w0_of[k] = upper ? fx + fy - 1 : 1 - fx - fy;
             w1_of[k] = upper ? 1 - fx : fx, w2_of[k] = upper ? 1 - fy : fy;
         }
+}
+}  // namespace
+
+namespace {
+// Gallery::barycentric's double arithmetic after its dot products, for m <= 16 points, with
+// selects in SIMD lanes (the same operations, so the same values): b1, b2 from the Gram
+// terms and the point's dot products, clamped onto the triangle. No trapping math, as in
+// lattice_cells, so that GCC evaluates both sides of the selects.
+[[gnu::optimize("no-trapping-math"), gnu::noinline]]
+void barycentric_solve(std::size_t m, const double* __restrict d00, const double* __restrict d01,
+                       const double* __restrict d11, const double* __restrict denom,
+                       const double* __restrict d20, const double* __restrict d21, float* __restrict b1_out,
+                       float* __restrict b2_out) {
+    for (std::size_t k = 0; k < m; ++k) {
+        const bool solvable = denom[k] > 0;
+        const double q1 = (d11[k] * d20[k] - d01[k] * d21[k]) / denom[k];
+        const double q2 = (d00[k] * d21[k] - d01[k] * d20[k]) / denom[k];
+        double b1 = solvable ? q1 : 0.0, b2 = solvable ? q2 : 0.0;
+        b1 = b1 < 0.0 ? 0.0 : (1.0 < b1 ? 1.0 : b1);  // std::clamp
+        b2 = b2 < 0.0 ? 0.0 : (1.0 < b2 ? 1.0 : b2);
+        const double s = b1 + b2;
+        const bool over = s > 1;
+        const double r1 = b1 / s, r2 = b2 / s;
+        b1_out[k] = float(over ? r1 : b1), b2_out[k] = float(over ? r2 : b2);
+    }
 }
 }  // namespace
 
@@ -788,14 +816,19 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 bool batch_front[16];
                 Vec3f batch_E[16];
                 if (lighting == Lighting::Baked) {
+                    alignas(64) double g00[16], g01[16], g11[16], det[16], d20[16], d21[16];
                     std::size_t m = 0;
                     for (std::uint32_t k = 0; k < n16; ++k) {
                         if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-                        const Vec3f b = barycentric(hit16[k].tri, hit16[k].p);
-                        batch_tri[m] = hit16[k].tri, batch_front[m] = hit16[k].front;
-                        batch_b1[m] = b.x, batch_b2[m] = b.y;
+                        const std::uint32_t t = hit16[k].tri;
+                        const Vec3f d = hit16[k].p - tri_v0_[t];
+                        const BarycentricTerms& b = tri_terms_[t];
+                        g00[m] = b.d00, g01[m] = b.d01, g11[m] = b.d11, det[m] = b.denom;
+                        d20[m] = dot(d, tri_e1_[t]), d21[m] = dot(d, tri_e2_[t]);
+                        batch_tri[m] = t, batch_front[m] = hit16[k].front;
                         ++m;
                     }
+                    barycentric_solve(m, g00, g01, g11, det, d20, d21, batch_b1, batch_b2);
                     irradiance_baked_batch(batch_tri, batch_front, batch_b1, batch_b2, m, batch_E);
                 }
                 std::size_t batch_next = 0;

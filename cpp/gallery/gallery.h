@@ -228,6 +228,7 @@ private:
         double d00, d01, d11, denom;
     };
     std::vector<BarycentricTerms> tri_terms_;
+    std::vector<std::uint32_t> emitter_tris_;  // the triangles that emit, in order (side_reachable)
     LightingSettings lighting_;
     std::unique_ptr<AlbedoTexture> albedo_;
     std::unique_ptr<Renderer> renderer_;  // direct light (emitter sampling, shadow rays)
