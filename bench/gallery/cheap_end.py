@@ -23,7 +23,7 @@ import numpy as np
 
 # (log2 photons, bake spacing as diagonal / n, bake light samples): the grid's cheapest
 # points and cheaper candidates.
-CONFIGS = [(6, 12, 1), (8, 12, 1), (10, 12, 1), (8, 12, 4), (10, 12, 4), (8, 6, 1), (10, 6, 1)]
+CONFIGS = [(6, 6, 1), (6, 12, 1), (8, 12, 1), (10, 12, 1), (8, 12, 4), (10, 12, 4), (8, 6, 1), (10, 6, 1)]
 WIDTH, HEIGHT, FOV = 96, 54, 60.0
 
 
