@@ -284,14 +284,16 @@ PaintingSceneView Gallery::feedback_view() const {
 
 void Gallery::check_texture(const VirtualTexture& vt) const {
     const auto& layout = vt.layout().paintings;
+    // The messages only when they are thrown: this runs in every light() and display call.
     for (const PaintingPlacement& p : placements_) {
-        require(p.painting < layout.size(),
-                "Gallery: painting " + std::to_string(p.painting) + " is not in the virtual texture's pack");
+        if (p.painting >= layout.size())
+            throw InvalidArgument("Gallery: painting " + std::to_string(p.painting) +
+                                  " is not in the virtual texture's pack");
         const PaintingGeometry& g = layout[p.painting];
-        require(g.width() == p.tiles.width() && g.height() == p.tiles.height() &&
-                    g.levels() == p.tiles.levels() && g.payload() == p.tiles.payload(),
-                "Gallery: the virtual texture's painting " + std::to_string(p.painting) +
-                    " is not the one the gallery was built from");
+        if (!(g.width() == p.tiles.width() && g.height() == p.tiles.height() && g.levels() == p.tiles.levels() &&
+              g.payload() == p.tiles.payload()))
+            throw InvalidArgument("Gallery: the virtual texture's painting " + std::to_string(p.painting) +
+                                  " is not the one the gallery was built from");
     }
 }
 
