@@ -37,8 +37,9 @@ inline unsigned default_threads() {
 namespace detail {
 
 // The helper threads. run() hands a job to up to `helpers` of them and returns while they
-// work; finish() waits for those that took it. All shared state is guarded by mutex_ (the job itself
-// synchronises through its own atomics), which keeps the pool ThreadSanitizer-clean.
+// work; finish() waits for those that took it. All shared state is guarded by mutex_ (the
+// job itself synchronises through its own atomics), which keeps the pool
+// ThreadSanitizer-clean.
 class HelperPool {
 public:
     using Job = void (*)(void*);
