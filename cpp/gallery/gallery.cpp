@@ -152,9 +152,35 @@ private:
 void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<PaintingPlacement>& paintings,
                          float depth, unsigned threads) {
     if (paintings.empty()) return;
+    // Per painting its normal and the bounding box of the slab a dropped photon lies in (the
+    // rectangle swept `depth` along the normal both ways): a photon outside every box is kept
+    // after six comparisons. Padded far beyond what the exact test below can admit outside
+    // the slab: its axes are orthonormal only within 1e-6 (add_painting), and rounding.
+    struct Slab {
+        Vec3d n, lo, hi;
+    };
+    std::vector<Slab> slabs;
+    for (const PaintingPlacement& p : paintings) {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        Slab s{p.normal(), Vec3d(inf, inf, inf), Vec3d(-inf, -inf, -inf)};
+        for (int corner = 0; corner < 8; ++corner) {
+            const Vec3d c = p.origin + (corner & 1 ? p.width_m : 0.0) * p.u_axis +
+                            (corner & 2 ? p.height_m : 0.0) * p.v_axis + (corner & 4 ? 1.0 : -1.0) * double(depth) * s.n;
+            s.lo = vmin(s.lo, c), s.hi = vmax(s.hi, c);
+        }
+        const double pad = 1e-3 * (p.width_m + p.height_m + double(depth)) + 1e-9 * length(p.origin);
+        s.lo = s.lo - Vec3d(pad, pad, pad), s.hi = s.hi + Vec3d(pad, pad, pad);
+        slabs.push_back(s);
+    }
     auto hidden = [&](const Photon& ph) {
-        for (const PaintingPlacement& p : paintings) {
-            const Vec3d n = p.normal(), rel = Vec3d(ph.p) - p.origin;
+        const Vec3d q(ph.p);
+        for (std::size_t i = 0; i < paintings.size(); ++i) {
+            const Slab& slab = slabs[i];
+            if (!(q.x >= slab.lo.x && q.x <= slab.hi.x && q.y >= slab.lo.y && q.y <= slab.hi.y && q.z >= slab.lo.z &&
+                  q.z <= slab.hi.z))
+                continue;
+            const PaintingPlacement& p = paintings[i];
+            const Vec3d n = slab.n, rel = q - p.origin;
             const double h = dot(rel, n);
             // The cheap tests first: most photons are far from every painting's plane.
             if (!(std::abs(h) < double(depth))) continue;
