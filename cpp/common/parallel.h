@@ -37,8 +37,9 @@ inline unsigned default_threads() {
 namespace detail {
 
 // The helper threads. run() hands a job to up to `helpers` of them and returns while they
-// work; finish() waits for them. All shared state is guarded by mutex_ (the job itself
-// synchronises through its own atomics), which keeps the pool ThreadSanitizer-clean.
+// work; finish() waits for those that took it. All shared state is guarded by mutex_ (the
+// job itself synchronises through its own atomics), which keeps the pool
+// ThreadSanitizer-clean.
 class HelperPool {
 public:
     using Job = void (*)(void*);
@@ -68,9 +69,13 @@ public:
         return wanted_;
     }
 
-    // Waits until the helpers of the last run() returned from the job.
+    // Waits until the helpers of the last run() that took the job returned from it. Called
+    // once the caller's own share is done, i.e. when no work is left to hand out: a helper
+    // that has not woken up yet is no longer wanted (it skips the job when it wakes) instead
+    // of being waited for; on a loaded machine its wake-up alone took longer than a small job.
     void finish() {
         std::unique_lock lock(mutex_);
+        wanted_ = taken_;
         done_.wait(lock, [&] { return finished_ == wanted_; });
         busy_ = false;
     }

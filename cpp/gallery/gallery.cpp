@@ -152,14 +152,42 @@ private:
 void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<PaintingPlacement>& paintings,
                          float depth, unsigned threads) {
     if (paintings.empty()) return;
+    // Per painting its normal and the bounding box of the slab a dropped photon lies in (the
+    // rectangle swept `depth` along the normal both ways): a photon outside every box is kept
+    // after six comparisons. Padded far beyond what the exact test below can admit outside
+    // the slab: its axes are orthonormal only within 1e-6 (add_painting), and rounding.
+    struct Slab {
+        Vec3d n, lo, hi;
+    };
+    std::vector<Slab> slabs;
+    for (const PaintingPlacement& p : paintings) {
+        constexpr double inf = std::numeric_limits<double>::infinity();
+        Slab s{p.normal(), Vec3d(inf, inf, inf), Vec3d(-inf, -inf, -inf)};
+        for (int corner = 0; corner < 8; ++corner) {
+            const Vec3d c = p.origin + (corner & 1 ? p.width_m : 0.0) * p.u_axis +
+                            (corner & 2 ? p.height_m : 0.0) * p.v_axis + (corner & 4 ? 1.0 : -1.0) * double(depth) * s.n;
+            s.lo = vmin(s.lo, c), s.hi = vmax(s.hi, c);
+        }
+        const double pad = 1e-3 * (p.width_m + p.height_m + double(depth)) + 1e-9 * length(p.origin);
+        s.lo = s.lo - Vec3d(pad, pad, pad), s.hi = s.hi + Vec3d(pad, pad, pad);
+        slabs.push_back(s);
+    }
     auto hidden = [&](const Photon& ph) {
-        for (const PaintingPlacement& p : paintings) {
-            const Vec3d n = p.normal(), rel = Vec3d(ph.p) - p.origin;
+        const Vec3d q(ph.p);
+        for (std::size_t i = 0; i < paintings.size(); ++i) {
+            const Slab& slab = slabs[i];
+            if (!(q.x >= slab.lo.x && q.x <= slab.hi.x && q.y >= slab.lo.y && q.y <= slab.hi.y && q.z >= slab.lo.z &&
+                  q.z <= slab.hi.z))
+                continue;
+            const PaintingPlacement& p = paintings[i];
+            const Vec3d n = slab.n, rel = q - p.origin;
             const double h = dot(rel, n);
+            // The cheap tests first: most photons are far from every painting's plane.
+            if (!(std::abs(h) < double(depth))) continue;
+            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
             // On the plane within float rounding of a point at this distance from the origin.
             const double on_plane = 1e-5 * (length(rel) + p.width_m + p.height_m);
-            if (!(std::abs(h) > on_plane && std::abs(h) < double(depth))) continue;
-            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
+            if (!(std::abs(h) > on_plane)) continue;
             const double u = dot(rel, p.u_axis), v = dot(rel, p.v_axis);
             if (u >= 0 && u <= p.width_m && v >= 0 && v <= p.height_m) return true;
         }
@@ -264,6 +292,15 @@ void Gallery::commit() {
     require(!committed(), "Gallery: already committed");
     require(scene_.triangle_count() > 0, "Gallery: the room is empty");
     scene_.commit();
+    for (std::size_t t = 0; t < tri_v0_.size(); ++t)
+        if (max_component(scene_.emission(t)) > 0) emitter_tris_.push_back(std::uint32_t(t));
+    tri_terms_.resize(tri_v0_.size());
+    for (std::size_t t = 0; t < tri_v0_.size(); ++t) {
+        const Vec3f e1 = tri_e1_[t], e2 = tri_e2_[t];
+        BarycentricTerms& b = tri_terms_[t];
+        b.d00 = dot(e1, e1), b.d01 = dot(e1, e2), b.d11 = dot(e2, e2);
+        b.denom = b.d00 * b.d11 - b.d01 * b.d01;
+    }
 }
 
 PaintingSceneView Gallery::feedback_view() const {
@@ -273,14 +310,16 @@ PaintingSceneView Gallery::feedback_view() const {
 
 void Gallery::check_texture(const VirtualTexture& vt) const {
     const auto& layout = vt.layout().paintings;
+    // The messages only when they are thrown: this runs in every light() and display call.
     for (const PaintingPlacement& p : placements_) {
-        require(p.painting < layout.size(),
-                "Gallery: painting " + std::to_string(p.painting) + " is not in the virtual texture's pack");
+        if (p.painting >= layout.size())
+            throw InvalidArgument("Gallery: painting " + std::to_string(p.painting) +
+                                  " is not in the virtual texture's pack");
         const PaintingGeometry& g = layout[p.painting];
-        require(g.width() == p.tiles.width() && g.height() == p.tiles.height() &&
-                    g.levels() == p.tiles.levels() && g.payload() == p.tiles.payload(),
-                "Gallery: the virtual texture's painting " + std::to_string(p.painting) +
-                    " is not the one the gallery was built from");
+        if (!(g.width() == p.tiles.width() && g.height() == p.tiles.height() && g.levels() == p.tiles.levels() &&
+              g.payload() == p.tiles.payload()))
+            throw InvalidArgument("Gallery: the virtual texture's painting " + std::to_string(p.painting) +
+                                  " is not the one the gallery was built from");
     }
 }
 
@@ -329,13 +368,15 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     drop_hidden_photons(photons, placements_, radius, s.threads);
     gather_.radius = radius;
     // The hash grid's build is serial: the photon groups for the bake's skip_unlit are
-    // computed on the other core meanwhile.
+    // computed on the other core meanwhile. Below a few thousand photons both take
+    // microseconds, less than handing one to the helper and waiting for it (2^8 photons:
+    // 27 against 39 us), so they run in turn.
     parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t job = b; job < e; ++job) {
             if (job == 0) map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
             else group_photons(photons);
         }
-    }, s.threads);
+    }, photons.size() < 4096 ? 1u : s.threads);
     stats_.build_seconds = seconds_since(t0);
     stats_.photons_stored = photons.size();
     stats_.radius = radius;
@@ -369,10 +410,9 @@ bool Gallery::side_reachable(std::uint32_t t, Vec3f n) const {
     // Direct light: Renderer::direct_irradiance counts a sample only when the emitter point
     // lies in front of the side (cos_x > 0) and the side's point in front of the emitter
     // (cos_l > 0). Both are linear in the points, so the triangles' vertices decide.
-    for (std::size_t e = 0; e < tri_v0_.size(); ++e) {
-        if (!(max_component(scene_.emission(e)) > 0)) continue;
+    for (const std::uint32_t e : emitter_tris_) {
         const Vec3f ev[3] = {tri_v0_[e], tri_v0_[e] + tri_e1_[e], tri_v0_[e] + tri_e2_[e]};
-        const Vec3f ne = scene_.normal(std::uint32_t(e));
+        const Vec3f ne = scene_.normal(e);
         float in_front = -std::numeric_limits<float>::infinity(), facing = in_front;
         for (int k = 0; k < 3; ++k) {
             in_front = std::max(in_front, dot(n, ev[k] - v[0]));
@@ -441,9 +481,8 @@ Vec3f Gallery::indirect(Vec3f p, Vec3f n, KnnHeap& heap, SurfaceDisc::Detail det
 
 Vec3f Gallery::barycentric(std::uint32_t tri, Vec3f p) const {
     const Vec3f d = p - tri_v0_[tri], e1 = tri_e1_[tri], e2 = tri_e2_[tri];
-    const double d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
+    const auto [d00, d01, d11, denom] = tri_terms_[tri];
     const double d20 = dot(d, e1), d21 = dot(d, e2);
-    const double denom = d00 * d11 - d01 * d01;
     double b1 = denom > 0 ? (d11 * d20 - d01 * d21) / denom : 0;
     double b2 = denom > 0 ? (d00 * d21 - d01 * d20) / denom : 0;
     b1 = std::clamp(b1, 0.0, 1.0), b2 = std::clamp(b2, 0.0, 1.0);
@@ -543,6 +582,31 @@ void lattice_cells(std::size_t m, const std::uint32_t* __restrict segments,
             w0_of[k] = upper ? fx + fy - 1 : 1 - fx - fy;
             w1_of[k] = upper ? 1 - fx : fx, w2_of[k] = upper ? 1 - fy : fy;
         }
+}
+}  // namespace
+
+namespace {
+// Gallery::barycentric's double arithmetic after its dot products, for m <= 16 points, with
+// selects in SIMD lanes (the same operations, so the same values): b1, b2 from the Gram
+// terms and the point's dot products, clamped onto the triangle. No trapping math, as in
+// lattice_cells, so that GCC evaluates both sides of the selects.
+[[gnu::optimize("no-trapping-math"), gnu::noinline]]
+void barycentric_solve(std::size_t m, const double* __restrict d00, const double* __restrict d01,
+                       const double* __restrict d11, const double* __restrict denom,
+                       const double* __restrict d20, const double* __restrict d21, float* __restrict b1_out,
+                       float* __restrict b2_out) {
+    for (std::size_t k = 0; k < m; ++k) {
+        const bool solvable = denom[k] > 0;
+        const double q1 = (d11[k] * d20[k] - d01[k] * d21[k]) / denom[k];
+        const double q2 = (d00[k] * d21[k] - d01[k] * d20[k]) / denom[k];
+        double b1 = solvable ? q1 : 0.0, b2 = solvable ? q2 : 0.0;
+        b1 = b1 < 0.0 ? 0.0 : (1.0 < b1 ? 1.0 : b1);  // std::clamp
+        b2 = b2 < 0.0 ? 0.0 : (1.0 < b2 ? 1.0 : b2);
+        const double s = b1 + b2;
+        const bool over = s > 1;
+        const double r1 = b1 / s, r2 = b2 / s;
+        b1_out[k] = float(over ? r1 : b1), b2_out[k] = float(over ? r2 : b2);
+    }
 }
 }  // namespace
 
@@ -749,9 +813,11 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
             for (std::uint32_t x0 = 0; x0 < W; x0 += 16) {
                 const std::uint32_t n16 = std::min<std::uint32_t>(16, W - x0);
                 alignas(64) int valid[16];
+                Vec3d dd16[16];  // the unnormalised directions, for the painting coordinates
                 for (std::uint32_t k = 0; k < 16; ++k) {
                     valid[k] = k < n16 ? -1 : 0;
-                    const Vec3f d(normalize(camera.direction(x0 + std::min(k, n16 - 1) + 0.5, y + 0.5)));
+                    dd16[k] = camera.direction(x0 + std::min(k, n16 - 1) + 0.5, y + 0.5);
+                    const Vec3f d(normalize(dd16[k]));
                     packet.ray.dir_x[k] = d.x, packet.ray.dir_y[k] = d.y, packet.ray.dir_z[k] = d.z;
                     packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
                     packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
@@ -760,21 +826,48 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                 rtcInitIntersectContext(&context);
                 context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
                 rtcIntersect16(valid, scene_.handle(), &context, &packet);
+                Hit hit16[16];
+                for (std::uint32_t k = 0; k < n16; ++k) {
+                    Hit& hit = hit16[k];
+                    if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+                    const Vec3f d(packet.ray.dir_x[k], packet.ray.dir_y[k], packet.ray.dir_z[k]);
+                    hit.t = packet.ray.tfar[k];
+                    hit.tri = geom_first_tri_[packet.hit.geomID[k]] + packet.hit.primID[k];
+                    hit.p = origin + d * hit.t;
+                    const Vec3f nn = scene_.normal(hit.tri);
+                    hit.front = dot(nn, d) < 0;
+                    hit.n = hit.front ? nn : -nn;
+                }
+                // Baked: the packet's hits through irradiance_baked_batch (lattice_lerp's
+                // operations at the same barycentrics: irradiance_baked's values, without a
+                // call and its mispredicted branches per pixel).
+                alignas(64) std::uint32_t batch_tri[16];
+                alignas(64) float batch_b1[16], batch_b2[16];
+                bool batch_front[16];
+                Vec3f batch_E[16];
+                if (lighting == Lighting::Baked) {
+                    alignas(64) double g00[16], g01[16], g11[16], det[16], d20[16], d21[16];
+                    std::size_t m = 0;
+                    for (std::uint32_t k = 0; k < n16; ++k) {
+                        if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+                        const std::uint32_t t = hit16[k].tri;
+                        const Vec3f d = hit16[k].p - tri_v0_[t];
+                        const BarycentricTerms& b = tri_terms_[t];
+                        g00[m] = b.d00, g01[m] = b.d01, g11[m] = b.d11, det[m] = b.denom;
+                        d20[m] = dot(d, tri_e1_[t]), d21[m] = dot(d, tri_e2_[t]);
+                        batch_tri[m] = t, batch_front[m] = hit16[k].front;
+                        ++m;
+                    }
+                    barycentric_solve(m, g00, g01, g11, det, d20, d21, batch_b1, batch_b2);
+                    irradiance_baked_batch(batch_tri, batch_front, batch_b1, batch_b2, m, batch_E);
+                }
+                std::size_t batch_next = 0;
                 for (std::uint32_t k = 0; k < n16; ++k) {
                     const std::uint32_t x = x0 + k;
                     const std::size_t px = y * std::size_t(W) + x;
-                    const Vec3d dd = camera.direction(x + 0.5, y + 0.5);
-                    Hit hit;
+                    const Vec3d dd = dd16[k];
+                    const Hit& hit = hit16[k];
                     const bool found = packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
-                    if (found) {
-                        const Vec3f d(packet.ray.dir_x[k], packet.ray.dir_y[k], packet.ray.dir_z[k]);
-                        hit.t = packet.ray.tfar[k];
-                        hit.tri = geom_first_tri_[packet.hit.geomID[k]] + packet.hit.primID[k];
-                        hit.p = origin + d * hit.t;
-                        const Vec3f nn = scene_.normal(hit.tri);
-                        hit.front = dot(nn, d) < 0;
-                        hit.n = hit.front ? nn : -nn;
-                    }
                     int slot = found ? tri_slot_[hit.tri] : -1;
                     if (hits.position) {
                         const Vec3f p = found ? hit.p : Vec3f(kNaN, kNaN, kNaN);
@@ -793,7 +886,7 @@ void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lig
                     Vec3f E;
                     switch (lighting) {
                         case Lighting::Unlit: E = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
-                        case Lighting::Baked: E = irradiance_baked(hit); break;
+                        case Lighting::Baked: E = batch_E[batch_next++]; break;
                         case Lighting::Full: E = irradiance_full(hit); break;
                     }
                     const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);

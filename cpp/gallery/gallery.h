@@ -232,6 +232,14 @@ private:
     std::vector<int> tri_slot_;         // global triangle -> painting slot or -1
     std::vector<std::uint32_t> geom_first_tri_;  // Embree geometry id -> its first triangle
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // every kept triangle
+    // Per triangle, barycentric()'s Gram terms dot(e1, e1), dot(e1, e2), dot(e2, e2) and their
+    // determinant, computed once at commit() (the same float and double operations as per
+    // call: the same bits) rather than at every baked display pixel.
+    struct BarycentricTerms {
+        double d00, d01, d11, denom;
+    };
+    std::vector<BarycentricTerms> tri_terms_;
+    std::vector<std::uint32_t> emitter_tris_;  // the triangles that emit, in order (side_reachable)
     LightingSettings lighting_;
     std::unique_ptr<AlbedoTexture> albedo_;
     std::unique_ptr<Renderer> renderer_;  // direct light (emitter sampling, shadow rays)

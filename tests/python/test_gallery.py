@@ -290,3 +290,20 @@ def test_relighting_reuses_nothing_stale_a_fresh_gallery_would_not_read(tmp_path
         assert np.array_equal(relit.render_display(cam, vt, lighting="baked"),
                               fresh.render_display(cam, vt, lighting="baked"))
     assert len(levels) > 1  # the radii did move the level read
+
+
+def test_a_texture_of_another_pack_is_refused_clearly(lit, tmp_path):
+    """light() and render_display() check the texture against the gallery's paintings: a pack
+    with fewer paintings, or a painting of another size, is a ValueError naming the painting."""
+    gal, vt = lit
+    cam = gal.camera((8, 8))
+    one = g.VirtualTexture(uniform_pack(tmp_path / "one.pack", {"white": (250, 250, 250)}))
+    other_size = g.VirtualTexture(uniform_pack(tmp_path / "size.pack", {"white": (250, 250, 250), "red": RED},
+                                               size=(128, 128)))
+    for wrong, message in ((one, "painting 1 is not in the virtual texture's pack"),
+                           (other_size, "painting 1 is not the one the gallery was built from")):
+        with pytest.raises(ValueError, match=message):
+            gal.render_display(cam, wrong, lighting="baked")
+        with pytest.raises(ValueError, match=message):
+            gal.light(wrong, photons=1000)
+    assert gal.render_display(cam, vt, lighting="baked").shape == (8, 8, 3)  # still lit and baked

@@ -45,8 +45,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--disc-photons", default="19",
                         help="photon counts (powers of two) tried with the surface disc only (default 19: between "
                              "the grid's counts near the hall's floor, where only the disc gets; empty: none)")
-    parser.add_argument("--spacings", default="12,25,50,100,200",
-                        help="bake spacings as fractions 1/N of the room's diagonal (default 12,25,50,100,200)")
+    parser.add_argument("--coarse-photons", default="6",
+                        help="photon counts (powers of two) tried with the sphere and spacings of diag/12 and coarser "
+                             "only (default 6: the cheapest stills, for Mitsuba's 1 spp; empty: none)")
+    parser.add_argument("--spacings", default="6,12,25,50,100,200",
+                        help="bake spacings as fractions 1/N of the room's diagonal (default 6,12,25,50,100,200)")
     parser.add_argument("--bake-samples", default="1,4,16,64",
                         help="emitter samples per lattice point (default 1,4,16,64)")
     parser.add_argument("--gather-strides", default="1,2",
@@ -180,7 +183,7 @@ def run(args) -> int:
     if args.quick:
         args.width, args.height, args.supersample = 32, 18, 2
         args.photons, args.spacings, args.bake_samples, args.default_photons = "14,16", "25,50", "4,16", 16
-        args.supersamples, args.disc = "1,2", False
+        args.supersamples, args.disc, args.coarse_photons = "1,2", False, ""
         args.full_samples, args.reference_spp, args.mitsuba_spp = 16, 64, "1,4,16"
     if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples, args.timing_repeats) < 1:
         raise UserError("--width, --height, --supersample, --full-samples, --reference-spp and --timing-repeats "
@@ -188,6 +191,8 @@ def run(args) -> int:
     photons = _ints(args.photons, "--photons")
     disc_photons = sorted(set(_ints(args.disc_photons, "--disc-photons")) - set(photons)) if (
         args.disc and args.disc_photons) else []
+    coarse_photons = sorted(set(_ints(args.coarse_photons, "--coarse-photons")) - set(photons)) if (
+        args.coarse_photons) else []
     spacings = _ints(args.spacings, "--spacings")
     bake_samples = _ints(args.bake_samples, "--bake-samples")
     supersamples = _ints(args.supersamples, "--supersamples")
@@ -210,7 +215,7 @@ def run(args) -> int:
              for stride in ((1, 2) if n <= 50 else (2, 4)) for coarse in
              sorted({d == "coarse" for d in details})]
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
-    if max(photons + disc_photons + [args.default_photons]) > 30:
+    if max(photons + disc_photons + coarse_photons + [args.default_photons]) > 30:
         raise UserError("--photons, --disc-photons and --default-photons are powers of two up to 2^30")
     try:
         import mitsuba as mi
@@ -227,11 +232,12 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "spacings", "bake_samples", "default_photons",
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "coarse_photons", "spacings", "bake_samples", "default_photons",
                    "full_samples", "reference_spp", "mitsuba_spp", "timing_repeats")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
     per_room = (2 + len(ladder) + len(photons) * len(grid) + len(disc_photons) * sum(1 for d, *_ in grid if d)
+                + len(coarse_photons) * sum(1 for d, *_ in grid if not d)
                 + len(set(spacings) | {200}))
     steps = tqdm(total=len(rooms) * per_room, desc="gallery bench", unit="step")
     for name in rooms:
@@ -257,8 +263,8 @@ def run(args) -> int:
         configs, auto_radius = [], {}
         # Wall-clock times of the calls: "map" is everything light() does besides tracing
         # (the painting albedo read, dropping hidden photons, the hash grid).
-        runs = [(p, d) for p in sorted(photons + disc_photons) for d in sorted({d for d, *_ in grid})
-                if d or p not in disc_photons]
+        runs = [(p, d) for p in sorted(photons + disc_photons + coarse_photons) for d in sorted({d for d, *_ in grid})
+                if (d or p not in disc_photons) and not (d and p in coarse_photons)]
         for p, disc in runs:
             if disc and p not in auto_radius:  # a disc-only count: the auto radius from a light() of its own
                 auto_radius[p] = gal.light(vt, photons=1 << p)["radius"]
@@ -280,7 +286,7 @@ def run(args) -> int:
             for d, n, ls, stride, coarse in grid:
                 if d != disc:
                     continue
-                if disc and stride > 1 and stride * diag / n > st["radius"]:
+                if (disc and stride > 1 and stride * diag / n > st["radius"]) or (p in coarse_photons and n > 12):
                     steps.update()
                     continue
                 t0 = time.perf_counter()

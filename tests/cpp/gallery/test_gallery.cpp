@@ -458,3 +458,39 @@ TEST(Gallery, DisplayShowsAlbedoTimesIrradianceOverPiOnTwoThreads) {
     }
     EXPECT_GT(painting, 20);
 }
+
+TEST(Gallery, BakedDisplayIrradianceIsThePointLookupBitForBit) {
+    // The display pass looks the lattice up per packet (irradiance_baked_batch after a batched
+    // barycentric solve); the reference is irradiance_baked at each pixel's hit, one at a time.
+    Room room;
+    LightingSettings ls;
+    ls.photons = 20000;
+    room.gallery.light(room.vt, ls);
+    BakeSettings bs;
+    bs.spacing = 0.2;
+    room.gallery.bake(bs);
+    for (const Vec3d eye : {Vec3d(0.3, 0.75, 1.5), Vec3d(-0.4, -0.6, 0.9)}) {  // floor from above, then below
+        const Camera camera = Camera::look_at(eye, {0, 0.2, -0.5}, {0, 1, 0}, 70, 37, 21);
+        const std::size_t n = std::size_t(camera.width) * camera.height;
+        std::vector<float> rgb(3 * n), E(3 * n), position(3 * n);
+        DisplayHits hits;
+        hits.irradiance = E.data(), hits.position = position.data();
+        room.gallery.render_display(camera, room.vt, Lighting::Baked, rgb.data(), hits, 2);
+        int compared = 0;
+        for (std::uint32_t y = 0; y < camera.height; ++y)
+            for (std::uint32_t x = 0; x < camera.width; ++x) {
+                const std::size_t i = std::size_t(y) * camera.width + x;
+                if (std::isnan(position[3 * i])) continue;
+                const Vec3f d(normalize(camera.direction(x + 0.5, y + 0.5)));
+                Hit h;
+                ASSERT_TRUE(room.gallery.scene().intersect(Vec3f(camera.position), d, h));
+                h.p = Vec3f(position[3 * i], position[3 * i + 1], position[3 * i + 2]);
+                const Vec3f nn = room.gallery.scene().normal(h.tri);
+                h.front = dot(nn, d) < 0;
+                const Vec3f ref = room.gallery.irradiance_baked(h);
+                for (int c = 0; c < 3; ++c) ASSERT_EQ(E[3 * i + c], ref[c]) << x << ", " << y;
+                ++compared;
+            }
+        EXPECT_GT(compared, 200);
+    }
+}
