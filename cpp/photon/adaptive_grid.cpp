@@ -161,7 +161,22 @@ Vec3f AdaptiveGrid::sum(Vec3f q, Vec3f nq, float r2, float* count) const {
     return sum_runs(rs, nr, pr, pg, pb, weight, count);
 }
 
-Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+namespace {
+// SurfaceDisc::sector without its table and branches, so the loop over a run vectorises:
+// the octant table [pu][pv][steep] as nibbles of one word.
+inline int octant_bits(float u, float v) {
+    const unsigned idx = unsigned(u >= 0) * 4 + unsigned(v >= 0) * 2 + unsigned(std::fabs(v) > std::fabs(u));
+    return int((0x10672354u >> (4 * idx)) & 0xfu);
+}
+inline int sector(float u, float v) {
+    constexpr float c = 0.92387953f, s = 0.38268343f;  // as SurfaceDisc::sector
+    const int k = octant_bits(u, v);
+    return 2 * k + int(octant_bits(u * c + v * s, v * c - u * s) == k);
+}
+}  // namespace
+
+template <bool Clipped>
+Vec3f AdaptiveGrid::disc_sum(const SurfaceDisc& d, float* count, float* foreign) const {
     constexpr int kLanes = 8;
     float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {}, sf[kLanes] = {};
     const float r2 = d.r * d.r, reach2 = d.reach2[0], thick = d.thickness;
@@ -171,7 +186,8 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
     const float* nx = nx_.data(); const float* ny = ny_.data(); const float* nz = nz_.data();
     const float* pr = pr_.data(); const float* pg = pg_.data(); const float* pb = pb_.data();
     // The arithmetic of gather_disc and SurfaceDisc::contains, term for term, so the same
-    // photons pass: within r (sphere), then normals, the slab |h| <= thickness, the disc.
+    // photons pass: within r (sphere), then normals, the slab |h| <= thickness, the disc
+    // (a clipped one: the reach of the photon's sector).
     auto lane = [&](std::uint64_t j, int l) {
         const float dx = px[j] - d.x.x, dy = py[j] - d.x.y, dz = pz[j] - d.x.z;
         const float d2 = dx * dx + dy * dy + dz * dz;
@@ -179,7 +195,9 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
         const float h = dx * d.n.x + dy * d.n.y + dz * d.n.z;
         const float u = dx * d.t.x + dy * d.t.y + dz * d.t.z, v = dx * d.b.x + dy * d.b.y + dz * d.b.z;
         const bool near = d2 <= r2;
-        const bool in = (agree > 0.5f) & (std::fabs(h) <= thick) & (u * u + v * v <= reach2);
+        float reach = reach2;
+        if constexpr (Clipped) reach = d.reach2[sector(u, v)];
+        const bool in = (agree > 0.5f) & (std::fabs(h) <= thick) & (u * u + v * v <= reach);
         const float w = float(near & in);
         sr[l] += w * pr[j];
         sg[l] += w * pg[j];
@@ -200,9 +218,17 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
         found += sw[l];
         rejected += sf[l];
     }
-    *count = found;
-    *foreign = rejected;
+    if (count) *count = found;
+    if (foreign) *foreign = rejected;
     return total;
+}
+
+Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+    return disc_sum<false>(d, count, foreign);
+}
+
+Vec3f AdaptiveGrid::sum_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+    return disc_sum<true>(d, count, foreign);
 }
 
 Vec3f AdaptiveGrid::sum_in_radius(Vec3f q, float r2, float* count) const {

@@ -74,8 +74,13 @@ public:
     // (normals agree and d.contains), their count in *count and in *foreign how many within
     // d.r it rejects. d must be unclipped (full_surface_disc). The same photons as gather_disc.
     Vec3f sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const;
+    // The second, clipped pass (make_surface_disc) vectorised the same way: what
+    // gather_disc(*this, d, count, foreign) sums, for any disc.
+    Vec3f sum_disc(const SurfaceDisc& d, float* count, float* foreign = nullptr) const;
 
 private:
+    template <bool Clipped>
+    Vec3f disc_sum(const SurfaceDisc& d, float* count, float* foreign) const;
     template <bool CheckNormal>
     Vec3f sum(Vec3f q, Vec3f n, float r2, float* count) const;
     void build(const std::vector<Photon>& photons, float edge);

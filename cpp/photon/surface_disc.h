@@ -119,7 +119,10 @@ DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Ve
     e.area = d.area;
     if (foreign > 0) {
         d = make_surface_disc(scene, x, n, r, detail);
-        e.power = gather_disc(map, d, &e.count);
+        if constexpr (requires { map.sum_disc(d, &e.count); })
+            e.power = map.sum_disc(d, &e.count);  // vectorised, the same photons
+        else
+            e.power = gather_disc(map, d, &e.count);
         e.area = d.area;
     }
     return e;
