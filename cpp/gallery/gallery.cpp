@@ -152,13 +152,45 @@ private:
 void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<PaintingPlacement>& paintings,
                          float depth, unsigned threads) {
     if (paintings.empty()) return;
+    // Each painting's box (its rectangle swept `depth` along the normal, padded well beyond
+    // the rounding of the test below) rejects most photons in a few float compares; the
+    // photons inside take the exact test, so the same photons are dropped.
+    struct Box {
+        Vec3f lo, hi;
+        Vec3d n;
+    };
+    std::vector<Box> boxes;
+    for (const PaintingPlacement& p : paintings) {
+        const Vec3d n = p.normal();
+        Vec3d lo(INFINITY, INFINITY, INFINITY), hi = -lo;
+        for (int k = 0; k < 8; ++k) {
+            const Vec3d c = p.origin + p.u_axis * (k & 1 ? p.width_m : 0.0) + p.v_axis * (k & 2 ? p.height_m : 0.0) +
+                            n * (k & 4 ? double(depth) : -double(depth));
+            lo = vmin(lo, c), hi = vmax(hi, c);
+        }
+        const double pad = 1e-3 * (p.width_m + p.height_m + double(depth)) +
+                           1e-5 * max_component(vmax(vabs(lo), vabs(hi)));
+        Box b;
+        for (int a = 0; a < 3; ++a) {
+            b.lo[a] = std::nextafter(float(lo[a] - pad), -INFINITY);
+            b.hi[a] = std::nextafter(float(hi[a] + pad), INFINITY);
+        }
+        b.n = n;
+        boxes.push_back(b);
+    }
     auto hidden = [&](const Photon& ph) {
-        for (const PaintingPlacement& p : paintings) {
-            const Vec3d n = p.normal(), rel = Vec3d(ph.p) - p.origin;
+        for (std::size_t i = 0; i < paintings.size(); ++i) {
+            const Box& b = boxes[i];
+            if (!(ph.p.x >= b.lo.x && ph.p.x <= b.hi.x && ph.p.y >= b.lo.y && ph.p.y <= b.hi.y &&
+                  ph.p.z >= b.lo.z && ph.p.z <= b.hi.z))
+                continue;
+            const PaintingPlacement& p = paintings[i];
+            const Vec3d n = b.n, rel = Vec3d(ph.p) - p.origin;
             const double h = dot(rel, n);
+            if (!(std::abs(h) < double(depth))) continue;  // first: most photons are far off the plane
             // On the plane within float rounding of a point at this distance from the origin.
             const double on_plane = 1e-5 * (length(rel) + p.width_m + p.height_m);
-            if (!(std::abs(h) > on_plane && std::abs(h) < double(depth))) continue;
+            if (!(std::abs(h) > on_plane)) continue;
             if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
             const double u = dot(rel, p.u_axis), v = dot(rel, p.v_axis);
             if (u >= 0 && u <= p.width_m && v >= 0 && v <= p.height_m) return true;
@@ -303,7 +335,9 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
         radius = std::clamp(radius, 1e-4f * diag, 0.05f * diag);
     }
     renderer_.reset();
-    map_.reset();
+    // The previous map's storage is recycled by the new one (fresh pages were a sixth of a
+    // 2^20-photon light()).
+    std::unique_ptr<PhotonMap> retired = std::move(map_);
     bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
     scene_.set_albedo_texture(nullptr);
     auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt, radius,
@@ -323,7 +357,8 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     rs.indirect = false;
     renderer_ = std::make_unique<Renderer>(scene_, rs);
     auto t0 = Clock::now();
-    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, s.threads);
+    std::vector<Photon>& photons = photon_scratch_;  // its capacity kept from the last light()
+    trace_photons(photons, scene_, s.photons, s.seed, s.threads);
     stats_.photon_seconds = seconds_since(t0);
     t0 = Clock::now();
     drop_hidden_photons(photons, placements_, radius, s.threads);
@@ -335,12 +370,18 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     // skip_unlit are computed on the other core meanwhile.
     parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t job = b; job < e; ++job) {
-            if (job == 0) map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Adaptive);
-            else group_photons(photons);
+            if (job == 0 && !photons.empty())
+                map_ = std::make_unique<PhotonMap>(photons, radius, GridKind::Adaptive, HashGrid::Mode::Auto,
+                                                   retired.get());
+            else if (job == 1) group_photons(photons);
         }
     }, s.threads);
+    retired.reset();
     stats_.build_seconds = seconds_since(t0);
     stats_.photons_stored = photons.size();
+    // The scratch is kept for the next lighting unless it is large (beyond 2^22 photons,
+    // 144 MiB, the memory matters more than the pages' faults).
+    if (photons.capacity() > (std::size_t(1) << 22)) std::vector<Photon>().swap(photons);
     stats_.radius = radius;
 }
 

@@ -24,6 +24,13 @@ Vec3f sample_cosine(Vec3f n, float u1, float u2) {
 std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::uint64_t seed,
                                   unsigned threads, TraceStats* stats, std::uint32_t pass,
                                   std::uint64_t max_stored) {
+    std::vector<Photon> out;
+    trace_photons(out, scene, count, seed, threads, stats, pass, max_stored);
+    return out;
+}
+
+void trace_photons(std::vector<Photon>& out, const Scene& scene, std::uint64_t count, std::uint64_t seed,
+                   unsigned threads, TraceStats* stats, std::uint32_t pass, std::uint64_t max_stored) {
     require(scene.committed(), "trace_photons: call Scene.commit() first");
     require(count > 0, "trace_photons: the photon count must be positive");
     require(count <= kMaxEmittedPhotons, "trace_photons: at most 2^32 photons per pass, got " +
@@ -34,10 +41,10 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
     TraceStats st;
     st.emitted = count;
     st.emitted_power = scene.emitted_power();
-    std::vector<Photon> out;
     if (scene.emitter_count() == 0 || !scene.reflects_anything()) {
+        out.clear();
         if (stats) *stats = st;
-        return out;  // nothing is ever stored
+        return;  // nothing is ever stored
     }
     // Each photon carries W / N per unit of emitter weight; see Scene::sample_emitter.
     const double scale = double(scene.emitter_weight_total()) * M_PI / double(count);
@@ -98,7 +105,8 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
             over_budget(unsynced);
         }
     }, threads);
-    // Concatenated in photon order, the copy (and its page faults) on every core.
+    // Concatenated in photon order, the copy (and its page faults) on every core. Every
+    // element is overwritten: only those beyond out's old size are value-initialised.
     std::vector<std::size_t> start(chunks + 1, 0);
     for (std::size_t c = 0; c < chunks; ++c) start[c + 1] = start[c] + parts[c].size();
     out.resize(start[chunks]);
@@ -110,7 +118,6 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
     }, threads);
     st.stored = out.size();
     if (stats) *stats = st;
-    return out;
 }
 
 }  // namespace gigascroll

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <nanoflann.hpp>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -324,5 +325,39 @@ TEST(AdaptiveGrid, ClippedDiscPassMatchesBruteForce) {
         float c_gen = 0;
         gather_disc(grid, d, &c_gen);
         EXPECT_EQ(c, c_gen);
+    }
+}
+
+TEST(AdaptiveGrid, ARecycledGridAnswersAsAFreshOne) {
+    // A grid built on the storage of a previous one (larger, then smaller photon sets, other
+    // radii and so other cell sizes) finds and sums exactly what a fresh grid does.
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    auto photons = [&](std::size_t n) {
+        std::vector<Photon> ph(n);
+        for (Photon& p : ph) {
+            p.p = {u(rng), u(rng), 0.01f * u(rng)};
+            p.n = {0, 0, 1};
+            p.power = {0.5f + 0.5f * u(rng), 1, 2};
+        }
+        return ph;
+    };
+    auto previous = std::make_unique<AdaptiveGrid>(photons(60000), 0.05f);
+    for (auto [n, r] : {std::pair{5000, 0.2f}, {40000, 0.03f}, {80000, 0.1f}, {100, 0.5f}}) {
+        const std::vector<Photon> ph = photons(std::size_t(n));
+        const AdaptiveGrid fresh(ph, r);
+        auto recycled = std::make_unique<AdaptiveGrid>(ph, r, 0.0f, previous.get());
+        ASSERT_EQ(recycled->size(), fresh.size());
+        EXPECT_EQ(recycled->cell_edge(), fresh.cell_edge());
+        for (std::size_t i = 0; i < ph.size(); ++i) EXPECT_EQ(recycled->photons()[i].p.x, fresh.photons()[i].p.x);
+        for (int i = 0; i < 100; ++i) {
+            const Vec3f q{u(rng), u(rng), 0};
+            float c0 = 0, c1 = 0;
+            const Vec3f a = fresh.sum_box(q, {0, 0, 1}, r * r, &c0), b = recycled->sum_box(q, {0, 0, 1}, r * r, &c1);
+            EXPECT_EQ(c0, c1);
+            EXPECT_EQ(a.x, b.x);
+            EXPECT_EQ(c0, float(brute(ph, q, r * r).size()));
+        }
+        previous = std::move(recycled);
     }
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "common/error.h"
 
@@ -37,6 +38,29 @@ TEST(PhotonTracer, SameSeedSamePhotonsForAnyThreadCount) {
         for (std::size_t i = 0; i < s1.size(); ++i) {
             EXPECT_EQ(s1[i].p.x, s2[i].p.x);
             EXPECT_EQ(s1[i].power.y, s2[i].power.y);
+        }
+    }
+}
+
+TEST(PhotonTracer, TracingIntoAReusedVectorGivesTheSamePhotons) {
+    // The overload that keeps out's capacity (a gallery relit) overwrites every element,
+    // whether out held more photons before or fewer.
+    Scene scene;
+    build_cornell(scene, 16, 16);
+    scene.commit();
+    const auto ref_small = trace_photons(scene, 3000, 7, 2), ref_big = trace_photons(scene, 20000, 9, 2);
+    std::vector<Photon> out(50000, Photon{{1, 2, 3}, {4, 5, 6}, {7, 8, 9}});
+    for (const auto* ref : {&ref_small, &ref_big, &ref_small}) {
+        TraceStats st;
+        const bool small = ref == &ref_small;
+        trace_photons(out, scene, small ? 3000 : 20000, small ? 7 : 9, 2, &st);
+        ASSERT_EQ(out.size(), ref->size());
+        EXPECT_EQ(st.stored, ref->size());
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            EXPECT_EQ(out[i].p.x, (*ref)[i].p.x);
+            EXPECT_EQ(out[i].p.z, (*ref)[i].p.z);
+            EXPECT_EQ(out[i].n.y, (*ref)[i].n.y);
+            EXPECT_EQ(out[i].power.x, (*ref)[i].power.x);
         }
     }
 }
