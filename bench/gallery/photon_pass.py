@@ -6,9 +6,11 @@ configurations at 2^18-2^20 photons from bench/gallery/results.json, with their 
 the cached 4096-spp Mitsuba reference (computed once if it is not in --reference-cache).
 
 Run from the repository root with the project's Python:
-    .venv/bin/python bench/gallery/photon_pass.py [--repeats 5] [--out build/photon-pass.json]
-Run it on two builds (before and after) alternately: the figures are medians of a shared
-machine's timings and only their ratio within one period of load means anything."""
+    .venv/bin/python bench/gallery/photon_pass.py [--repeats 3] [--out build/photon-pass.json]
+Run it on two builds (before and after) alternately, then
+    .venv/bin/python bench/gallery/photon_pass.py --compare before1.json,before2.json:after1.json,after2.json
+prints the table of bench/RESULTS.md: the figures are medians of a shared machine's timings
+and only their ratio within one period of load means anything."""
 import argparse
 import json
 import math
@@ -52,6 +54,30 @@ def front_configs(results: Path):
     return out
 
 
+def compare(before: list[Path], after: list[Path]) -> None:
+    """A markdown table of before / after: each row's best median over the runs given (runs
+    alternated between the builds, so a busy minute falls on one run, not on one build)."""
+    def best(paths):
+        runs = [json.loads(p.read_text()) for p in paths]
+        light = {k: min(r["light"][k]["seconds"] for r in runs) for k in runs[0]["light"]}
+        photon = {k: min(r["light"][k]["photon_seconds"] for r in runs) for k in runs[0]["light"]}
+        front = {row["config"]: (min(r["front"][i]["seconds"] for r in runs), row["relmse"])
+                 for i, row in enumerate(runs[0]["front"])}
+        return light, photon, front
+    (lb, pb, fb), (la, pa, fa) = best(before), best(after)
+    print("| light() | before: total (photon pass) | after: total (photon pass) | speedup total (photon pass) |")
+    print("|---|---|---|---|")
+    for k in lb:
+        print(f"| {k} | {lb[k]:.3f} s ({pb[k]:.3f}) | {la[k]:.3f} s ({pa[k]:.3f}) | "
+              f"{lb[k] / la[k]:.2f}x ({pb[k] / pa[k]:.2f}x) |")
+    print()
+    print("| hall front configuration | before: s, relMSE | after: s, relMSE | speedup |")
+    print("|---|---|---|---|")
+    for k, (t, e) in fb.items():
+        t2, e2 = fa[k]
+        print(f"| {k} | {t:.3f}, {e:.4e} | {t2:.3f}, {e2:.4e} | {t / t2:.2f}x |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=5)
@@ -60,7 +86,13 @@ def main():
     ap.add_argument("--results", default="bench/gallery/results.json")
     ap.add_argument("--out", default="build/photon-pass.json")
     ap.add_argument("--skip-light", action="store_true")
+    ap.add_argument("--compare", metavar="BEFORE,...:AFTER,...",
+                    help="print the before / after table of earlier runs' JSON files instead")
     a = ap.parse_args()
+    if a.compare:
+        before, after = a.compare.split(":")
+        compare([Path(p) for p in before.split(",")], [Path(p) for p in after.split(",")])
+        return
     pack_path = Path(a.pack)
     if pack_path.exists():
         pack = TilePack(pack_path)
