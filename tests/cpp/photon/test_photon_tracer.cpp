@@ -65,6 +65,32 @@ TEST(PhotonTracer, TracingIntoAReusedVectorGivesTheSamePhotons) {
     }
 }
 
+TEST(PhotonTracer, AShorterPassIsAPrefixOfALongerOne) {
+    // Photon i's path depends on (seed, i) alone, so the photons of a pass of n are the first
+    // ones of a pass of more (their power scaled by the counts' ratio), whatever the chunking: in the Cornell box (every chunk within
+    // its slot of 2 stored per emitted photon) and a furnace of albedo 0.9 (9 stored per
+    // emitted one: the chunks spill), on 1 and 2 threads.
+    for (float albedo : {0.0f, 0.9f}) {
+        Scene scene;
+        if (albedo > 0) build_furnace(scene, albedo, 1.0f, 8, 8);
+        else build_cornell(scene, 16, 16);
+        scene.commit();
+        const auto longer = trace_photons(scene, 20000, 5, 2);
+        for (unsigned threads : {1u, 2u}) {
+            const auto shorter = trace_photons(scene, 5000, 5, threads);
+            ASSERT_GT(shorter.size(), 4000u);
+            ASSERT_LT(shorter.size(), longer.size());
+            for (std::size_t i = 0; i < shorter.size(); ++i) {
+                ASSERT_EQ(shorter[i].p.x, longer[i].p.x) << albedo << " " << i;
+                ASSERT_EQ(shorter[i].p.y, longer[i].p.y);
+                ASSERT_EQ(shorter[i].n.z, longer[i].n.z);
+                // Each photon carries the scene's power / n.
+                ASSERT_NEAR(shorter[i].power.z, 4 * longer[i].power.z, 1e-5f * shorter[i].power.z);
+            }
+        }
+    }
+}
+
 // No bounce cap: in a closed sphere of albedo 0.99 a photon stores rho / (1 - rho) = 99 copies
 // on average (the old cap of 256 bounces stored at most 255 and lost 7.7% of the flux).
 TEST(PhotonTracer, FurnaceAtAlbedo099StoresTheGeometricMean) {
