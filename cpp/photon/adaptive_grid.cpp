@@ -208,7 +208,7 @@ inline int sector(float u, float v) {
 }
 }  // namespace
 
-template <bool Clipped>
+template <bool Clipped, bool StopAtForeign>
 Vec3f AdaptiveGrid::disc_sum(const SurfaceDisc& d, float* count, float* foreign) const {
     constexpr int kLanes = 8;
     float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {}, sf[kLanes] = {};
@@ -243,6 +243,11 @@ Vec3f AdaptiveGrid::disc_sum(const SurfaceDisc& d, float* count, float* foreign)
         for (; j + kLanes <= rs[i].end; j += kLanes)
             for (int l = 0; l < kLanes; ++l) lane(j + std::uint64_t(l), l);
         for (int l = 0; j < rs[i].end; ++j, ++l) lane(j, l);
+        if constexpr (StopAtForeign) {
+            float any = 0;
+            for (int l = 0; l < kLanes; ++l) any += sf[l];
+            if (any > 0) break;  // the caller clips the disc and sums again: these sums are moot
+        }
     }
     Vec3f total{0, 0, 0};
     float found = 0, rejected = 0;
@@ -257,11 +262,17 @@ Vec3f AdaptiveGrid::disc_sum(const SurfaceDisc& d, float* count, float* foreign)
 }
 
 Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {
-    return disc_sum<false>(d, count, foreign);
+    return disc_sum<false, false>(d, count, foreign);
+}
+
+bool AdaptiveGrid::sum_full_disc_unless_foreign(const SurfaceDisc& d, Vec3f* sum, float* count) const {
+    float foreign = 0;
+    *sum = disc_sum<false, true>(d, count, &foreign);
+    return foreign == 0;
 }
 
 Vec3f AdaptiveGrid::sum_disc(const SurfaceDisc& d, float* count, float* foreign) const {
-    return disc_sum<true>(d, count, foreign);
+    return disc_sum<true, false>(d, count, foreign);
 }
 
 Vec3f AdaptiveGrid::sum_in_radius(Vec3f q, float r2, float* count) const {

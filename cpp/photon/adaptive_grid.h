@@ -77,12 +77,16 @@ public:
     // (normals agree and d.contains), their count in *count and in *foreign how many within
     // d.r it rejects. d must be unclipped (full_surface_disc). The same photons as gather_disc.
     Vec3f sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const;
+    // The same pass for gather_surface_disc, which needs its sums only when no photon is
+    // foreign: true and sum_full_disc's sum and count when none is, false (sum and count
+    // meaningless) as soon as a row of cells holds one.
+    bool sum_full_disc_unless_foreign(const SurfaceDisc& d, Vec3f* sum, float* count) const;
     // The second, clipped pass (make_surface_disc) vectorised the same way: what
     // gather_disc(*this, d, count, foreign) sums, for any disc.
     Vec3f sum_disc(const SurfaceDisc& d, float* count, float* foreign = nullptr) const;
 
 private:
-    template <bool Clipped>
+    template <bool Clipped, bool StopAtForeign>
     Vec3f disc_sum(const SurfaceDisc& d, float* count, float* foreign) const;
     template <bool CheckNormal>
     Vec3f sum(Vec3f q, Vec3f n, float r2, float* count) const;

@@ -266,7 +266,55 @@ TEST(AdaptiveGrid, FullDiscPassMatchesTheGenericDiscGather) {
         EXPECT_EQ(f, f_ref);
         EXPECT_NEAR(s.x, s_ref.x, 1e-5f * (1 + std::fabs(s_ref.x)));
         EXPECT_NEAR(s.z, s_ref.z, 1e-5f * (1 + s_ref.z));
+        // The early-out variant: no foreign photon exactly when the full pass finds none, and
+        // then the full pass's sums bit for bit.
+        Vec3f s_early{-1, -1, -1};
+        float c_early = -1;
+        const bool clean = grid.sum_full_disc_unless_foreign(d, &s_early, &c_early);
+        EXPECT_EQ(clean, f_ref == 0);
+        if (clean) {
+            EXPECT_EQ(c_early, c);
+            EXPECT_EQ(s_early.x, s.x);
+            EXPECT_EQ(s_early.z, s.z);
+        }
     }
+}
+
+TEST(AdaptiveGrid, FullDiscPassStopsAtAForeignPhotonOnly) {
+    // Photons on the floor z = 0 (normal up) and on a wall x = 0.5 (normal -x): discs on the
+    // floor away from the wall hold no foreign photon (the full pass's sums, bit for bit),
+    // those within r of it do (found however the rows are ordered).
+    std::mt19937 rng(24);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<Photon> ph(30000);
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+        Photon& p = ph[i];
+        const bool wall = i % 4 == 0;
+        p.p = wall ? Vec3f(0.5f, u(rng), 0.5f + 0.5f * u(rng)) : Vec3f(u(rng), u(rng), 0);
+        p.n = wall ? Vec3f(-1, 0, 0) : Vec3f(0, 0, 1);
+        p.power = {0.5f + 0.5f * u(rng), 1, 2};
+    }
+    const AdaptiveGrid grid(ph, 0.1f);
+    int clean_discs = 0, foreign_discs = 0;
+    for (int i = 0; i < 400; ++i) {
+        const Vec3f x{0.7f * u(rng), u(rng), 0};
+        const SurfaceDisc d = full_surface_disc(x, {0, 0, 1}, 0.1f);
+        float c = 0, f = 0;
+        const Vec3f s = grid.sum_full_disc(d, &c, &f);
+        Vec3f s_early{-1, -1, -1};
+        float c_early = -1;
+        const bool clean = grid.sum_full_disc_unless_foreign(d, &s_early, &c_early);
+        EXPECT_EQ(clean, f == 0);
+        if (std::fabs(x.x - 0.5f) > 0.1f + 1e-3f) EXPECT_TRUE(clean);  // no wall photon within r
+        if (clean) {
+            EXPECT_EQ(c_early, c);
+            EXPECT_EQ(s_early.x, s.x);
+            EXPECT_EQ(s_early.z, s.z);
+        }
+        ++(clean ? clean_discs : foreign_discs);
+    }
+    EXPECT_GT(clean_discs, 50);  // both outcomes are exercised
+    EXPECT_GT(foreign_discs, 20);
 }
 
 TEST(AdaptiveGrid, ClippedDiscPassMatchesBruteForce) {
