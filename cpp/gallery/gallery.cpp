@@ -152,42 +152,46 @@ private:
 void drop_hidden_photons(std::vector<Photon>& photons, const std::vector<PaintingPlacement>& paintings,
                          float depth, unsigned threads) {
     if (paintings.empty()) return;
-    // Per painting its normal and the bounding box of the slab a dropped photon lies in (the
-    // rectangle swept `depth` along the normal both ways): a photon outside every box is kept
-    // after six comparisons. Padded far beyond what the exact test below can admit outside
-    // the slab: its axes are orthonormal only within 1e-6 (add_painting), and rounding.
-    struct Slab {
-        Vec3d n, lo, hi;
+    // Each painting's box (its rectangle swept `depth` along the normal, padded well beyond
+    // the rounding of the test below) rejects most photons in a few float compares; the
+    // photons inside take the exact test, so the same photons are dropped.
+    struct Box {
+        Vec3f lo, hi;
+        Vec3d n;
     };
-    std::vector<Slab> slabs;
+    std::vector<Box> boxes;
     for (const PaintingPlacement& p : paintings) {
-        constexpr double inf = std::numeric_limits<double>::infinity();
-        Slab s{p.normal(), Vec3d(inf, inf, inf), Vec3d(-inf, -inf, -inf)};
-        for (int corner = 0; corner < 8; ++corner) {
-            const Vec3d c = p.origin + (corner & 1 ? p.width_m : 0.0) * p.u_axis +
-                            (corner & 2 ? p.height_m : 0.0) * p.v_axis + (corner & 4 ? 1.0 : -1.0) * double(depth) * s.n;
-            s.lo = vmin(s.lo, c), s.hi = vmax(s.hi, c);
+        const Vec3d n = p.normal();
+        Vec3d lo(INFINITY, INFINITY, INFINITY), hi = -lo;
+        for (int k = 0; k < 8; ++k) {
+            const Vec3d c = p.origin + p.u_axis * (k & 1 ? p.width_m : 0.0) + p.v_axis * (k & 2 ? p.height_m : 0.0) +
+                            n * (k & 4 ? double(depth) : -double(depth));
+            lo = vmin(lo, c), hi = vmax(hi, c);
         }
-        const double pad = 1e-3 * (p.width_m + p.height_m + double(depth)) + 1e-9 * length(p.origin);
-        s.lo = s.lo - Vec3d(pad, pad, pad), s.hi = s.hi + Vec3d(pad, pad, pad);
-        slabs.push_back(s);
+        const double pad = 1e-3 * (p.width_m + p.height_m + double(depth)) +
+                           1e-5 * max_component(vmax(vabs(lo), vabs(hi)));
+        Box b;
+        for (int a = 0; a < 3; ++a) {
+            b.lo[a] = std::nextafter(float(lo[a] - pad), -INFINITY);
+            b.hi[a] = std::nextafter(float(hi[a] + pad), INFINITY);
+        }
+        b.n = n;
+        boxes.push_back(b);
     }
     auto hidden = [&](const Photon& ph) {
-        const Vec3d q(ph.p);
         for (std::size_t i = 0; i < paintings.size(); ++i) {
-            const Slab& slab = slabs[i];
-            if (!(q.x >= slab.lo.x && q.x <= slab.hi.x && q.y >= slab.lo.y && q.y <= slab.hi.y && q.z >= slab.lo.z &&
-                  q.z <= slab.hi.z))
+            const Box& b = boxes[i];
+            if (!(ph.p.x >= b.lo.x && ph.p.x <= b.hi.x && ph.p.y >= b.lo.y && ph.p.y <= b.hi.y &&
+                  ph.p.z >= b.lo.z && ph.p.z <= b.hi.z))
                 continue;
             const PaintingPlacement& p = paintings[i];
-            const Vec3d n = slab.n, rel = q - p.origin;
+            const Vec3d n = b.n, rel = Vec3d(ph.p) - p.origin;
             const double h = dot(rel, n);
-            // The cheap tests first: most photons are far from every painting's plane.
-            if (!(std::abs(h) < double(depth))) continue;
-            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
+            if (!(std::abs(h) < double(depth))) continue;  // first: most photons are far off the plane
             // On the plane within float rounding of a point at this distance from the origin.
             const double on_plane = 1e-5 * (length(rel) + p.width_m + p.height_m);
             if (!(std::abs(h) > on_plane)) continue;
+            if (!(dot(Vec3d(ph.n), n) * (h > 0 ? 1.0 : -1.0) < -0.5)) continue;
             const double u = dot(rel, p.u_axis), v = dot(rel, p.v_axis);
             if (u >= 0 && u <= p.width_m && v >= 0 && v <= p.height_m) return true;
         }
@@ -342,7 +346,9 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
         radius = std::clamp(radius, 1e-4f * diag, 0.05f * diag);
     }
     renderer_.reset();
-    map_.reset();
+    // The previous map's storage is recycled by the new one (fresh pages were a sixth of a
+    // 2^20-photon light()).
+    std::unique_ptr<PhotonMap> retired = std::move(map_);
     bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
     scene_.set_albedo_texture(nullptr);
     auto albedo = std::make_unique<PaintingAlbedo>(placements_, tri_slot_, vt, radius,
@@ -362,23 +368,33 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     rs.indirect = false;
     renderer_ = std::make_unique<Renderer>(scene_, rs);
     auto t0 = Clock::now();
-    std::vector<Photon> photons = trace_photons(scene_, s.photons, s.seed, s.threads);
+    std::vector<Photon>& photons = photon_scratch_;  // its capacity kept from the last light()
+    trace_photons(photons, scene_, s.photons, s.seed, s.threads);
     stats_.photon_seconds = seconds_since(t0);
     t0 = Clock::now();
     drop_hidden_photons(photons, placements_, radius, s.threads);
     gather_.radius = radius;
-    // The hash grid's build is serial: the photon groups for the bake's skip_unlit are
-    // computed on the other core meanwhile. Below a few thousand photons both take
-    // microseconds, less than handing one to the helper and waiting for it (2^8 photons:
-    // 27 against 39 us), so they run in turn.
+    // The adaptive grid (the renders' default): its queries walk only the cell rows their
+    // sphere touches, over structure-of-arrays copies, and both passes of the surface disc's
+    // gather are vectorised on it (the bake's disc gathers were most of the fine end's time
+    // on seed 001's 27 cells). Its build is serial: the photon groups for the bake's
+    // skip_unlit are computed on the other core meanwhile. Below a few thousand
+    // photons both take microseconds, less than handing one to the helper and waiting for it
+    // (2^8 photons: 27 against 39 us), so they run in turn.
     parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t job = b; job < e; ++job) {
-            if (job == 0) map_ = photons.empty() ? nullptr : std::make_unique<PhotonMap>(photons, radius, GridKind::Hash);
-            else group_photons(photons);
+            if (job == 0 && !photons.empty())
+                map_ = std::make_unique<PhotonMap>(photons, radius, GridKind::Adaptive, HashGrid::Mode::Auto,
+                                                   retired.get());
+            else if (job == 1) group_photons(photons);
         }
     }, photons.size() < 4096 ? 1u : s.threads);
+    retired.reset();
     stats_.build_seconds = seconds_since(t0);
     stats_.photons_stored = photons.size();
+    // The scratch is kept for the next lighting unless it is large (beyond 2^22 photons,
+    // 144 MiB, the memory matters more than the pages' faults).
+    if (photons.capacity() > (std::size_t(1) << 22)) std::vector<Photon>().swap(photons);
     stats_.radius = radius;
 }
 

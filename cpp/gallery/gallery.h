@@ -243,7 +243,8 @@ private:
     LightingSettings lighting_;
     std::unique_ptr<AlbedoTexture> albedo_;
     std::unique_ptr<Renderer> renderer_;  // direct light (emitter sampling, shadow rays)
-    std::unique_ptr<PhotonMap> map_;      // indirect light: the hash grid of photon/
+    std::unique_ptr<PhotonMap> map_;      // indirect light: the adaptive grid of photon/
+    std::vector<Photon> photon_scratch_;  // light()'s photon list, its capacity reused when relit
     GatherSettings gather_;
     // The stored photons grouped by (quantised) normal: a normal and the box of the group's
     // positions, for side_reachable; empty with photon_groups_overflow_ when there are too

@@ -30,8 +30,18 @@ std::int64_t cell_floor(float u, std::int64_t g) {
 }
 }  // namespace
 
-AdaptiveGrid::AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius)
+AdaptiveGrid::AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius,
+                           AdaptiveGrid* recycle)
     : r_(radius) {
+    if (recycle) {
+        start_ = std::move(recycle->start_), photons_ = std::move(recycle->photons_);
+        for (auto [to, from] : {std::pair{&px_, &recycle->px_}, {&py_, &recycle->py_}, {&pz_, &recycle->pz_},
+                                {&nx_, &recycle->nx_}, {&ny_, &recycle->ny_}, {&nz_, &recycle->nz_},
+                                {&pr_, &recycle->pr_}, {&pg_, &recycle->pg_}, {&pb_, &recycle->pb_}})
+            *to = std::move(*from);
+        // Their contents are stale until build() overwrites every element (a resize within
+        // the old size initialises nothing).
+    }
     require(std::isfinite(radius) && radius > 0.0f, "AdaptiveGrid: radius must be positive and finite");
     require(cells_per_radius == 0 || (cells_per_radius >= kMinCellsPerRadius && cells_per_radius <= kMaxCellsPerRadius),
             "AdaptiveGrid: cells_per_radius must be 0 (automatic) or within [0.25, 4]");
@@ -49,18 +59,15 @@ AdaptiveGrid::AdaptiveGrid(const std::vector<Photon>& photons, float radius, flo
         require(std::abs(lo_[a]) <= 1e30f && std::abs(hi_[a]) <= 1e30f,
                 "AdaptiveGrid: photon positions must be finite and within 1e30");
     if (cells_per_radius == 0) {
-        // Seed-sized cells (or coarser if they would be many) first; the photons found around a
-        // sample of photons decide the edge.
-        build(photons, radius);
+        // Seed-sized cells (or coarser if they would be many) first, of the positions alone
+        // (a sixth of the photons' bytes); the photons found around a sample of photons
+        // decide the edge of the grid then built.
+        build(photons, radius, true);
         const std::size_t n = photons.size(), samples = std::min<std::size_t>(n, 256);
         double found = 0;
-        for (std::size_t i = 0; i < samples; ++i) {
-            float c = 0;
-            sum_in_radius(photons[i * n / samples].p, radius * radius, &c);
-            found += c;
-        }
+        for (std::size_t i = 0; i < samples; ++i) found += double(count_in_radius(photons[i * n / samples].p, radius * radius));
         const float k = cells_for_density(samples ? found / double(samples) : 0.0);
-        if (k != 1.0f) build(photons, radius / k);
+        build(photons, radius / k);
     } else {
         build(photons, radius / cells_per_radius);
     }
@@ -72,7 +79,7 @@ std::uint64_t AdaptiveGrid::cells_for(float edge) const {
     return cells > 1e18 ? std::numeric_limits<std::uint64_t>::max() : std::uint64_t(cells);
 }
 
-void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge) {
+void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge, bool positions_only) {
     const std::size_t n = photons.size();
     // Coarser cells when the table would be large, or when a scene far from the origin makes
     // the rounding of cell coordinates (pad_) a sizeable part of a cell.
@@ -102,11 +109,37 @@ void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge) {
             c[a] = std::clamp<std::int64_t>(cell_floor((photons[i].p[a] - origin_[a]) * inv_h_, g_[a]), 0, g_[a] - 1);
         key[i] = std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]);
     }
-    sort_photons_by_key(photons, key, cells, start_, photons_, {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_});
+    if (!positions_only) {
+        sort_photons_by_key(photons, key, cells, start_, photons_, {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_});
+        return;
+    }
+    // The same counting sort, positions only (enough for count_in_radius).
+    start_.assign(cells + 1, 0);
+    for (std::uint64_t k : key) ++start_[k + 1];
+    for (std::uint64_t i = 0; i < cells; ++i) start_[i + 1] += start_[i];
+    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+    px_.resize(n), py_.resize(n), pz_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t j = fill[key[i]]++;
+        px_[j] = photons[i].p.x, py_[j] = photons[i].p.y, pz_[j] = photons[i].p.z;
+    }
+}
+
+std::uint64_t AdaptiveGrid::count_in_radius(Vec3f q, float r2) const {
+    PhotonRun rs[kMaxRuns];
+    const int nr = runs(q, std::sqrt(r2), rs);
+    const float* px = px_.data(); const float* py = py_.data(); const float* pz = pz_.data();
+    std::uint64_t found = 0;
+    for (int i = 0; i < nr; ++i)
+        for (std::uint64_t j = rs[i].begin; j < rs[i].end; ++j) {
+            const float dx = px[j] - q.x, dy = py[j] - q.y, dz = pz[j] - q.z;
+            found += (dx * dx + dy * dy + dz * dz <= r2) ? 1 : 0;
+        }
+    return found;
 }
 
 int AdaptiveGrid::runs(Vec3f q, float r, PhotonRun* out) const {
-    if (photons_.empty() || !(r > 0)) return 0;
+    if (px_.empty() || !(r > 0)) return 0;
     const float ux = (q.x - origin_.x) * inv_h_, uy = (q.y - origin_.y) * inv_h_, uz = (q.z - origin_.z) * inv_h_;
     if (!(std::isfinite(ux) && std::isfinite(uy) && std::isfinite(uz))) return 0;
     // The query radius in cells, padded; never more than the build radius's.
@@ -161,7 +194,22 @@ Vec3f AdaptiveGrid::sum(Vec3f q, Vec3f nq, float r2, float* count) const {
     return sum_runs(rs, nr, pr, pg, pb, weight, count);
 }
 
-Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+namespace {
+// SurfaceDisc::sector without its table and branches, so the loop over a run vectorises:
+// the octant table [pu][pv][steep] as nibbles of one word.
+inline int octant_bits(float u, float v) {
+    const unsigned idx = unsigned(u >= 0) * 4 + unsigned(v >= 0) * 2 + unsigned(std::fabs(v) > std::fabs(u));
+    return int((0x10672354u >> (4 * idx)) & 0xfu);
+}
+inline int sector(float u, float v) {
+    constexpr float c = 0.92387953f, s = 0.38268343f;  // as SurfaceDisc::sector
+    const int k = octant_bits(u, v);
+    return 2 * k + int(octant_bits(u * c + v * s, v * c - u * s) == k);
+}
+}  // namespace
+
+template <bool Clipped, bool StopAtForeign>
+Vec3f AdaptiveGrid::disc_sum(const SurfaceDisc& d, float* count, float* foreign) const {
     constexpr int kLanes = 8;
     float sr[kLanes] = {}, sg[kLanes] = {}, sb[kLanes] = {}, sw[kLanes] = {}, sf[kLanes] = {};
     const float r2 = d.r * d.r, reach2 = d.reach2[0], thick = d.thickness;
@@ -171,7 +219,8 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
     const float* nx = nx_.data(); const float* ny = ny_.data(); const float* nz = nz_.data();
     const float* pr = pr_.data(); const float* pg = pg_.data(); const float* pb = pb_.data();
     // The arithmetic of gather_disc and SurfaceDisc::contains, term for term, so the same
-    // photons pass: within r (sphere), then normals, the slab |h| <= thickness, the disc.
+    // photons pass: within r (sphere), then normals, the slab |h| <= thickness, the disc
+    // (a clipped one: the reach of the photon's sector).
     auto lane = [&](std::uint64_t j, int l) {
         const float dx = px[j] - d.x.x, dy = py[j] - d.x.y, dz = pz[j] - d.x.z;
         const float d2 = dx * dx + dy * dy + dz * dz;
@@ -179,7 +228,9 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
         const float h = dx * d.n.x + dy * d.n.y + dz * d.n.z;
         const float u = dx * d.t.x + dy * d.t.y + dz * d.t.z, v = dx * d.b.x + dy * d.b.y + dz * d.b.z;
         const bool near = d2 <= r2;
-        const bool in = (agree > 0.5f) & (std::fabs(h) <= thick) & (u * u + v * v <= reach2);
+        float reach = reach2;
+        if constexpr (Clipped) reach = d.reach2[sector(u, v)];
+        const bool in = (agree > 0.5f) & (std::fabs(h) <= thick) & (u * u + v * v <= reach);
         const float w = float(near & in);
         sr[l] += w * pr[j];
         sg[l] += w * pg[j];
@@ -192,6 +243,11 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
         for (; j + kLanes <= rs[i].end; j += kLanes)
             for (int l = 0; l < kLanes; ++l) lane(j + std::uint64_t(l), l);
         for (int l = 0; j < rs[i].end; ++j, ++l) lane(j, l);
+        if constexpr (StopAtForeign) {
+            float any = 0;
+            for (int l = 0; l < kLanes; ++l) any += sf[l];
+            if (any > 0) break;  // the caller clips the disc and sums again: these sums are moot
+        }
     }
     Vec3f total{0, 0, 0};
     float found = 0, rejected = 0;
@@ -200,9 +256,23 @@ Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* for
         found += sw[l];
         rejected += sf[l];
     }
-    *count = found;
-    *foreign = rejected;
+    if (count) *count = found;
+    if (foreign) *foreign = rejected;
     return total;
+}
+
+Vec3f AdaptiveGrid::sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+    return disc_sum<false, false>(d, count, foreign);
+}
+
+bool AdaptiveGrid::sum_full_disc_unless_foreign(const SurfaceDisc& d, Vec3f* sum, float* count) const {
+    float foreign = 0;
+    *sum = disc_sum<false, true>(d, count, &foreign);
+    return foreign == 0;
+}
+
+Vec3f AdaptiveGrid::sum_disc(const SurfaceDisc& d, float* count, float* foreign) const {
+    return disc_sum<true, false>(d, count, foreign);
 }
 
 Vec3f AdaptiveGrid::sum_in_radius(Vec3f q, float r2, float* count) const {

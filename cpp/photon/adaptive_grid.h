@@ -34,7 +34,10 @@ public:
 
     // cells_per_radius = r / cell edge; 0 chooses it from the photons' density. The grid is
     // dense; when its cells would exceed max(2^16, 4 * photons) the cells are made coarser.
-    AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius = 0);
+    // recycle (if given) hands over its storage, whose capacity the new grid reuses (a
+    // gallery relit: no fresh pages to fault in); it is left without photons, only to be destroyed.
+    AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius = 0,
+                 AdaptiveGrid* recycle = nullptr);
 
     float radius() const { return r_; }
     float cell_edge() const { return h_; }
@@ -74,11 +77,23 @@ public:
     // (normals agree and d.contains), their count in *count and in *foreign how many within
     // d.r it rejects. d must be unclipped (full_surface_disc). The same photons as gather_disc.
     Vec3f sum_full_disc(const SurfaceDisc& d, float* count, float* foreign) const;
+    // The same pass for gather_surface_disc, which needs its sums only when no photon is
+    // foreign: true and sum_full_disc's sum and count when none is, false (sum and count
+    // meaningless) as soon as a row of cells holds one.
+    bool sum_full_disc_unless_foreign(const SurfaceDisc& d, Vec3f* sum, float* count) const;
+    // The second, clipped pass (make_surface_disc) vectorised the same way: what
+    // gather_disc(*this, d, count, foreign) sums, for any disc.
+    Vec3f sum_disc(const SurfaceDisc& d, float* count, float* foreign = nullptr) const;
 
 private:
+    template <bool Clipped, bool StopAtForeign>
+    Vec3f disc_sum(const SurfaceDisc& d, float* count, float* foreign) const;
     template <bool CheckNormal>
     Vec3f sum(Vec3f q, Vec3f n, float r2, float* count) const;
-    void build(const std::vector<Photon>& photons, float edge);
+    // positions_only: start_ and px_, py_, pz_ alone, for count_in_radius.
+    void build(const std::vector<Photon>& photons, float edge, bool positions_only = false);
+    // How many photons lie within sqrt(r2) of q (what sum_in_radius counts).
+    std::uint64_t count_in_radius(Vec3f q, float r2) const;
     std::uint64_t cells_for(float edge) const;
 
     float r_ = 0, h_ = 0, inv_h_ = 0, pad_ = 0;

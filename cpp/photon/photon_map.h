@@ -32,8 +32,10 @@ struct GatherSettings {
 
 class PhotonMap {
 public:
+    // recycle (if given): a map about to be destroyed whose adaptive grid's storage the new
+    // adaptive grid reuses (AdaptiveGrid's recycle).
     PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind,
-              HashGrid::Mode mode = HashGrid::Mode::Auto);
+              HashGrid::Mode mode = HashGrid::Mode::Auto, PhotonMap* recycle = nullptr);
 
     std::size_t size() const { return photons().size(); }
     // The structure in use: exactly one of these is not null.

@@ -38,6 +38,12 @@ std::vector<Photon> trace_photons(const Scene& scene, std::uint64_t count, std::
                                   std::uint32_t pass = 0,
                                   std::uint64_t max_stored = kDefaultStoredPhotonBudget);
 
+// The same into `out` (its previous contents dropped, its capacity kept): a caller that traces
+// repeatedly (a gallery relit) reuses the memory instead of faulting in fresh pages each time.
+void trace_photons(std::vector<Photon>& out, const Scene& scene, std::uint64_t count, std::uint64_t seed,
+                   unsigned threads = 0, TraceStats* stats = nullptr, std::uint32_t pass = 0,
+                   std::uint64_t max_stored = kDefaultStoredPhotonBudget);
+
 // A cosine-distributed direction around n from two uniforms.
 Vec3f sample_cosine(Vec3f n, float u1, float u2);
 

@@ -112,14 +112,19 @@ DiscEstimate gather_surface_disc(const Scene& scene, const Map& map, Vec3f x, Ve
     DiscEstimate e;
     SurfaceDisc d = full_surface_disc(x, n, r);
     float foreign = 0;
-    if constexpr (requires { map.sum_full_disc(d, &e.count, &foreign); })
+    if constexpr (requires { map.sum_full_disc_unless_foreign(d, &e.power, &e.count); })
+        foreign = map.sum_full_disc_unless_foreign(d, &e.power, &e.count) ? 0.0f : 1.0f;  // vectorised
+    else if constexpr (requires { map.sum_full_disc(d, &e.count, &foreign); })
         e.power = map.sum_full_disc(d, &e.count, &foreign);  // vectorised, the same photons
     else
         e.power = gather_disc(map, d, &e.count, &foreign);
     e.area = d.area;
     if (foreign > 0) {
         d = make_surface_disc(scene, x, n, r, detail);
-        e.power = gather_disc(map, d, &e.count);
+        if constexpr (requires { map.sum_disc(d, &e.count); })
+            e.power = map.sum_disc(d, &e.count);  // vectorised, the same photons
+        else
+            e.power = gather_disc(map, d, &e.count);
         e.area = d.area;
     }
     return e;

@@ -307,3 +307,24 @@ def test_a_texture_of_another_pack_is_refused_clearly(lit, tmp_path):
         with pytest.raises(ValueError, match=message):
             gal.light(wrong, photons=1000)
     assert gal.render_display(cam, vt, lighting="baked").shape == (8, 8, 3)  # still lit and baked
+
+def test_relighting_at_other_photon_counts_renders_what_a_fresh_gallery_renders(tmp_path):
+    """light() traces into the previous lighting's photon list and builds its map on the previous
+    map's storage: relit at more, fewer and again more photons (sphere and disc gathers), the
+    gallery renders bit for bit what a fresh gallery lit once renders."""
+    from gallery_checks import gradient_pack
+
+    pack = gradient_pack(tmp_path / "a.pack")
+    room = box_room(painting="gradient", floor=(0.9, 0.9, 0.9))
+    relit = Gallery.from_room(room, pack)
+    vt = g.VirtualTexture(pack)
+    cam = relit.camera((24, 18), fov=70)
+    for photons, disc in [(40_000, False), (5_000, True), (60_000, True), (20_000, False)]:
+        st = relit.light(vt, photons=photons, disc=disc)
+        relit.bake(spacing=0.5, light_samples=2)
+        fresh = Gallery.from_room(room, pack)
+        st_fresh = fresh.light(vt, photons=photons, disc=disc)
+        fresh.bake(spacing=0.5, light_samples=2)
+        assert st["photons_stored"] == st_fresh["photons_stored"] > 0
+        assert np.array_equal(relit.render_display(cam, vt, lighting="baked"),
+                              fresh.render_display(cam, vt, lighting="baked"))

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <nanoflann.hpp>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -265,5 +266,146 @@ TEST(AdaptiveGrid, FullDiscPassMatchesTheGenericDiscGather) {
         EXPECT_EQ(f, f_ref);
         EXPECT_NEAR(s.x, s_ref.x, 1e-5f * (1 + std::fabs(s_ref.x)));
         EXPECT_NEAR(s.z, s_ref.z, 1e-5f * (1 + s_ref.z));
+        // The early-out variant: no foreign photon exactly when the full pass finds none, and
+        // then the full pass's sums bit for bit.
+        Vec3f s_early{-1, -1, -1};
+        float c_early = -1;
+        const bool clean = grid.sum_full_disc_unless_foreign(d, &s_early, &c_early);
+        EXPECT_EQ(clean, f_ref == 0);
+        if (clean) {
+            EXPECT_EQ(c_early, c);
+            EXPECT_EQ(s_early.x, s.x);
+            EXPECT_EQ(s_early.z, s.z);
+        }
+    }
+}
+
+TEST(AdaptiveGrid, FullDiscPassStopsAtAForeignPhotonOnly) {
+    // Photons on the floor z = 0 (normal up) and on a wall x = 0.5 (normal -x): discs on the
+    // floor away from the wall hold no foreign photon (the full pass's sums, bit for bit),
+    // those within r of it do (found however the rows are ordered).
+    std::mt19937 rng(24);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<Photon> ph(30000);
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+        Photon& p = ph[i];
+        const bool wall = i % 4 == 0;
+        p.p = wall ? Vec3f(0.5f, u(rng), 0.5f + 0.5f * u(rng)) : Vec3f(u(rng), u(rng), 0);
+        p.n = wall ? Vec3f(-1, 0, 0) : Vec3f(0, 0, 1);
+        p.power = {0.5f + 0.5f * u(rng), 1, 2};
+    }
+    const AdaptiveGrid grid(ph, 0.1f);
+    int clean_discs = 0, foreign_discs = 0;
+    for (int i = 0; i < 400; ++i) {
+        const Vec3f x{0.7f * u(rng), u(rng), 0};
+        const SurfaceDisc d = full_surface_disc(x, {0, 0, 1}, 0.1f);
+        float c = 0, f = 0;
+        const Vec3f s = grid.sum_full_disc(d, &c, &f);
+        Vec3f s_early{-1, -1, -1};
+        float c_early = -1;
+        const bool clean = grid.sum_full_disc_unless_foreign(d, &s_early, &c_early);
+        EXPECT_EQ(clean, f == 0);
+        if (std::fabs(x.x - 0.5f) > 0.1f + 1e-3f) EXPECT_TRUE(clean);  // no wall photon within r
+        if (clean) {
+            EXPECT_EQ(c_early, c);
+            EXPECT_EQ(s_early.x, s.x);
+            EXPECT_EQ(s_early.z, s.z);
+        }
+        ++(clean ? clean_discs : foreign_discs);
+    }
+    EXPECT_GT(clean_discs, 50);  // both outcomes are exercised
+    EXPECT_GT(foreign_discs, 20);
+}
+
+TEST(AdaptiveGrid, ClippedDiscPassMatchesBruteForce) {
+    // Discs clipped per sector (as make_surface_disc leaves them: some sectors short, some
+    // empty) against brute force over every photon with SurfaceDisc::contains: the same
+    // photons (count and rejected count exact), power within float rounding. Photons also
+    // sit on the sector boundaries (angles k * 22.5 degrees), where the branch-free sector
+    // must agree with SurfaceDisc::sector.
+    std::mt19937 rng(22);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<Photon> ph(40000);
+    for (std::size_t i = 0; i < ph.size(); ++i) {
+        Photon& p = ph[i];
+        if (i % 4 == 0) {  // on a sector boundary ray through a grid point
+            const float a = float(int(i / 4) % 16) * float(M_PI) / 8.0f, rho = 0.1f * std::fabs(u(rng));
+            const Vec3f c{std::round(u(rng) * 4) / 4, std::round(u(rng) * 4) / 4, 0};
+            p.p = c + Vec3f(std::cos(a), std::sin(a), 0) * rho;
+        } else {
+            p.p = {u(rng), u(rng), i % 3 ? 0.004f * u(rng) : 0.3f * u(rng)};
+        }
+        p.n = i % 5 ? Vec3f(0, 0, 1) : normalize(Vec3f(u(rng), u(rng), 0.5f));
+        p.power = {0.5f + 0.5f * u(rng), 1, 2};
+    }
+    const AdaptiveGrid grid(ph, 0.1f);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    for (int i = 0; i < 400; ++i) {
+        const bool on_grid_point = i % 4 == 0;
+        const Vec3f x = on_grid_point ? Vec3f(std::round(u(rng) * 4) / 4, std::round(u(rng) * 4) / 4, 0)
+                                      : Vec3f(u(rng), u(rng), 0.002f * u(rng));
+        const Vec3f n = i % 2 || on_grid_point ? Vec3f(0, 0, 1) : normalize(Vec3f(0.1f * u(rng), 0.1f * u(rng), 1));
+        SurfaceDisc d = full_surface_disc(x, n, 0.1f * (0.5f + 0.5f * std::fabs(u(rng))));
+        for (float& r2 : d.reach2) {
+            const float k = unit(rng);
+            r2 *= k < 0.2f ? 0.0f : k < 0.5f ? 1.0f : k * k;
+        }
+        float c_ref = 0, f_ref = 0;
+        Vec3f s_ref{0, 0, 0};
+        const float r2 = d.r * d.r;
+        for (const Photon& p : ph) {
+            const Vec3f e = p.p - d.x;
+            if (!(dot(e, e) <= r2)) continue;
+            if (dot(p.n, d.n) > 0.5f && d.contains(p.p)) {
+                s_ref += p.power;
+                c_ref += 1;
+            } else {
+                f_ref += 1;
+            }
+        }
+        float c = -1, f = -1;
+        const Vec3f s = grid.sum_disc(d, &c, &f);
+        EXPECT_EQ(c, c_ref);
+        EXPECT_EQ(f, f_ref);
+        EXPECT_NEAR(s.x, s_ref.x, 1e-5f * (1 + std::fabs(s_ref.x)));
+        EXPECT_NEAR(s.z, s_ref.z, 1e-5f * (1 + s_ref.z));
+        // And the generic gather over the same grid agrees.
+        float c_gen = 0;
+        gather_disc(grid, d, &c_gen);
+        EXPECT_EQ(c, c_gen);
+    }
+}
+
+TEST(AdaptiveGrid, ARecycledGridAnswersAsAFreshOne) {
+    // A grid built on the storage of a previous one (larger, then smaller photon sets, other
+    // radii and so other cell sizes) finds and sums exactly what a fresh grid does.
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    auto photons = [&](std::size_t n) {
+        std::vector<Photon> ph(n);
+        for (Photon& p : ph) {
+            p.p = {u(rng), u(rng), 0.01f * u(rng)};
+            p.n = {0, 0, 1};
+            p.power = {0.5f + 0.5f * u(rng), 1, 2};
+        }
+        return ph;
+    };
+    auto previous = std::make_unique<AdaptiveGrid>(photons(60000), 0.05f);
+    for (auto [n, r] : {std::pair{5000, 0.2f}, {40000, 0.03f}, {80000, 0.1f}, {100, 0.5f}}) {
+        const std::vector<Photon> ph = photons(std::size_t(n));
+        const AdaptiveGrid fresh(ph, r);
+        auto recycled = std::make_unique<AdaptiveGrid>(ph, r, 0.0f, previous.get());
+        ASSERT_EQ(recycled->size(), fresh.size());
+        EXPECT_EQ(recycled->cell_edge(), fresh.cell_edge());
+        for (std::size_t i = 0; i < ph.size(); ++i) EXPECT_EQ(recycled->photons()[i].p.x, fresh.photons()[i].p.x);
+        for (int i = 0; i < 100; ++i) {
+            const Vec3f q{u(rng), u(rng), 0};
+            float c0 = 0, c1 = 0;
+            const Vec3f a = fresh.sum_box(q, {0, 0, 1}, r * r, &c0), b = recycled->sum_box(q, {0, 0, 1}, r * r, &c1);
+            EXPECT_EQ(c0, c1);
+            EXPECT_EQ(a.x, b.x);
+            EXPECT_EQ(c0, float(brute(ph, q, r * r).size()));
+        }
+        previous = std::move(recycled);
     }
 }

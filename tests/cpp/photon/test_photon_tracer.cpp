@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "common/error.h"
 
@@ -37,6 +38,55 @@ TEST(PhotonTracer, SameSeedSamePhotonsForAnyThreadCount) {
         for (std::size_t i = 0; i < s1.size(); ++i) {
             EXPECT_EQ(s1[i].p.x, s2[i].p.x);
             EXPECT_EQ(s1[i].power.y, s2[i].power.y);
+        }
+    }
+}
+
+TEST(PhotonTracer, TracingIntoAReusedVectorGivesTheSamePhotons) {
+    // The overload that keeps out's capacity (a gallery relit) overwrites every element,
+    // whether out held more photons before or fewer.
+    Scene scene;
+    build_cornell(scene, 16, 16);
+    scene.commit();
+    const auto ref_small = trace_photons(scene, 3000, 7, 2), ref_big = trace_photons(scene, 20000, 9, 2);
+    std::vector<Photon> out(50000, Photon{{1, 2, 3}, {4, 5, 6}, {7, 8, 9}});
+    for (const auto* ref : {&ref_small, &ref_big, &ref_small}) {
+        TraceStats st;
+        const bool small = ref == &ref_small;
+        trace_photons(out, scene, small ? 3000 : 20000, small ? 7 : 9, 2, &st);
+        ASSERT_EQ(out.size(), ref->size());
+        EXPECT_EQ(st.stored, ref->size());
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            EXPECT_EQ(out[i].p.x, (*ref)[i].p.x);
+            EXPECT_EQ(out[i].p.z, (*ref)[i].p.z);
+            EXPECT_EQ(out[i].n.y, (*ref)[i].n.y);
+            EXPECT_EQ(out[i].power.x, (*ref)[i].power.x);
+        }
+    }
+}
+
+TEST(PhotonTracer, AShorterPassIsAPrefixOfALongerOne) {
+    // Photon i's path depends on (seed, i) alone, so the photons of a pass of n are the first
+    // ones of a pass of more (their power scaled by the counts' ratio), whatever the chunking: in the Cornell box (every chunk within
+    // its slot of 2 stored per emitted photon) and a furnace of albedo 0.9 (9 stored per
+    // emitted one: the chunks spill), on 1 and 2 threads.
+    for (float albedo : {0.0f, 0.9f}) {
+        Scene scene;
+        if (albedo > 0) build_furnace(scene, albedo, 1.0f, 8, 8);
+        else build_cornell(scene, 16, 16);
+        scene.commit();
+        const auto longer = trace_photons(scene, 20000, 5, 2);
+        for (unsigned threads : {1u, 2u}) {
+            const auto shorter = trace_photons(scene, 5000, 5, threads);
+            ASSERT_GT(shorter.size(), 4000u);
+            ASSERT_LT(shorter.size(), longer.size());
+            for (std::size_t i = 0; i < shorter.size(); ++i) {
+                ASSERT_EQ(shorter[i].p.x, longer[i].p.x) << albedo << " " << i;
+                ASSERT_EQ(shorter[i].p.y, longer[i].p.y);
+                ASSERT_EQ(shorter[i].n.z, longer[i].n.z);
+                // Each photon carries the scene's power / n.
+                ASSERT_NEAR(shorter[i].power.z, 4 * longer[i].power.z, 1e-5f * shorter[i].power.z);
+            }
         }
     }
 }
