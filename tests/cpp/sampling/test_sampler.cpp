@@ -237,7 +237,8 @@ TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
     }
 }
 
-// Trilinear runs as two batched bilinear passes and a blend; it must equal the per-sample
+// Trilinear runs batched (on RGB8 slots both levels in one pass, sample_trilinear_rgb8; on
+// BC1 as two batched bilinear passes and a blend); it must equal the per-sample
 // trilinear reference bit for bit at fractional levels (both levels answered, one of them
 // or both by a resident ancestor), at the top level and at NaN, whatever the batch and
 // thread boundaries and with interleaved (u, v).
