@@ -447,7 +447,9 @@ struct TileExtent {
 // fine one again where trilinear blends nothing), with sample_trilinear's level rule, plus
 // each level's in-tile offset for a resident tile: TexelFinder::footprint with s = 0,
 // in int32 (i, j < 2^30 and cx P <= i + 1).
-void trilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
+// Not inlined: inlined, its restrict parameters were lost and GCC ran a scalar copy of the
+// first loop with branches for a large share of the samples.
+__attribute__((noinline)) void trilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
                     const float* __restrict lod_in, std::size_t n, const PyramidExtent e,
                     const std::int32_t levels, const Divider divide_p, const TileExtent t,
                     TrilinearBatch& __restrict b) {
@@ -459,18 +461,21 @@ void trilinear_taps(const double* __restrict u_in, const double* __restrict v_in
     const float top = e.top;
     constexpr std::int64_t kOneBits = 0x3ff0000000000000;  // 1.0
     const std::int32_t P = t.payload, E = t.border, last = t.tile - 2, row = t.row_bytes;
+    // The levels and the blend (sample_trilinear's rule), then the level-0 positions: apart,
+    // as one loop GCC did not vectorise ("control flow in loop").
     for (std::size_t k = 0; k < n; ++k) {
-        auto below_one = [&](double x) {
-            return std::bit_cast<double>(below(std::bit_cast<std::int64_t>(x), kOneBits));
-        };
-        const double u = below_one(lo0(u_in[k])), v = below_one(lo0(v_in[k]));
         const float lod = below(lo0(lod_in[k]), top);
         const std::int32_t l0 = static_cast<std::int32_t>(lod);
         const float f = lod - float(l0);
         const bool two = (f > 0) & (l0 + 1 < levels);
-        const double x0 = u * W, y0 = v * H;
-        b.x0[k] = x0, b.y0[k] = y0, b.blend[k] = two ? f : 0.0f;
+        b.blend[k] = two ? f : 0.0f;
         b.level[0][k] = std::uint32_t(l0), b.level[1][k] = std::uint32_t(two ? l0 + 1 : l0);
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        auto below_one = [&](double x) {
+            return std::bit_cast<double>(below(std::bit_cast<std::int64_t>(x), kOneBits));
+        };
+        b.x0[k] = below_one(lo0(u_in[k])) * W, b.y0[k] = below_one(lo0(v_in[k])) * H;
     }
     // One loop per level, as bilinear_taps (a loop over both levels inside did not vectorise).
     for (int c = 0; c < 2; ++c) {
@@ -557,7 +562,7 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
 
     TrilinearBatch b;
     const std::uint8_t* texel[2][kBatch];
-    float lod_scalar[kBatch];
+    float lod_scalar[kBatch], lod_dense[kBatch];
     double u_dense[kBatch], v_dense[kBatch];
     std::fill(lod_scalar, lod_scalar + kBatch, r.lod_scalar);
 
@@ -565,13 +570,20 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
         const std::size_t n = std::min(kBatch, end - b0);
         const float* l_in = r.lod ? r.lod + b0 : lod_scalar;
         const double *u_in = r.u + b0, *v_in = r.v + b0;
-        if (r.uv_stride != 1) {
+        // The taps in whole vectors of 8 (no scalar remainder loop): a partial batch and
+        // interleaved (u, v) are copied, the partial batch padded with valid inputs whose
+        // taps nobody reads.
+        const std::size_t n8 = (n + 7) & ~std::size_t(7);
+        if (r.uv_stride != 1 || n8 != n) {
             const std::size_t st = r.uv_stride;
             for (std::size_t k = 0; k < n; ++k)
-                u_dense[k] = r.u[(b0 + k) * st], v_dense[k] = r.v[(b0 + k) * st];
-            u_in = u_dense, v_in = v_dense;
+                u_dense[k] = r.u[(b0 + k) * st], v_dense[k] = r.v[(b0 + k) * st], lod_dense[k] = l_in[k];
+            std::fill(u_dense + n, u_dense + n8, 0.0);
+            std::fill(v_dense + n, v_dense + n8, 0.0);
+            std::fill(lod_dense + n, lod_dense + n8, 0.0f);
+            u_in = u_dense, v_in = v_dense, l_in = lod_dense;
         }
-        trilinear_taps(u_in, v_in, l_in, n, pyramid, std::int32_t(L), divide_p, tile, b);
+        trilinear_taps(u_in, v_in, l_in, n8, pyramid, std::int32_t(L), divide_p, tile, b);
         // Page entries, fallbacks, addresses and prefetches of both levels.
         for (std::size_t k = 0; k < n; ++k) {
             for (int c = 0; c < 2; ++c) {
