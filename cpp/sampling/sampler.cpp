@@ -434,7 +434,7 @@ void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::siz
 // adds 0 * 0, as sample_trilinear's blend adds 0 * (second - out) with second = out.
 struct TrilinearBatch {
     alignas(64) double x0[kBatch], y0[kBatch];
-    alignas(64) std::int32_t ix[2][kBatch], iy[2][kBatch], offset[2][kBatch];
+    alignas(64) std::int32_t offset[2][kBatch];
     alignas(64) float fx[2][kBatch], fy[2][kBatch], blend[kBatch];
     alignas(64) std::uint32_t level[2][kBatch], cx[2][kBatch], cy[2][kBatch];
 };
@@ -449,10 +449,12 @@ struct TileExtent {
 // in int32 (i, j < 2^30 and cx P <= i + 1).
 // Not inlined: inlined, its restrict parameters were lost and GCC ran a scalar copy of the
 // first loop with branches for a large share of the samples.
-__attribute__((noinline)) void trilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
-                    const float* __restrict lod_in, std::size_t n, const PyramidExtent e,
-                    const std::int32_t levels, const Divider divide_p, const TileExtent t,
-                    TrilinearBatch& __restrict b) {
+__attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
+                                              const double* __restrict v_in,
+                                              const float* __restrict lod_in, std::size_t n,
+                                              const PyramidExtent e, const std::int32_t levels,
+                                              const Divider divide_p, const TileExtent t,
+                                              TrilinearBatch& __restrict b) {
     auto lo0 = [](auto x) { return decltype(x)(0) < x ? x : decltype(x)(0); };
     auto below = [](auto x, auto hi) { return x < hi ? x : hi; };
     auto above = [](auto x, auto lo) { return lo < x ? x : lo; };
@@ -493,7 +495,7 @@ __attribute__((noinline)) void trilinear_taps(const double* __restrict u_in, con
             const auto cy = static_cast<std::int32_t>(divide_p.by_double_below_2_31(j + (gj >= 0.5f ? 1 : 0)));
             const std::int32_t jx = below(above(i - cx * P + E, 0), last);
             const std::int32_t jy = below(above(j - cy * P + E, 0), last);
-            b.ix[c][k] = i, b.iy[c][k] = j, b.fx[c][k] = fi, b.fy[c][k] = gj;
+            b.fx[c][k] = fi, b.fy[c][k] = gj;
             b.cx[c][k] = std::uint32_t(cx), b.cy[c][k] = std::uint32_t(cy);
             b.offset[c][k] = jy * row + jx * 3;
         }
