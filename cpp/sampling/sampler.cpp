@@ -13,6 +13,10 @@
 #include "pack/bc1.h"
 #include "sampling/bilinear.h"
 
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
 namespace gigascroll {
 
 Filter parse_filter(const std::string& f) {
@@ -27,6 +31,8 @@ template <TexelFormat F>
 void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
 template <TexelFormat F>
 void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin, std::size_t end);
+void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin,
+                           std::size_t end);
 void sample_trilinear_serial(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin,
                              std::size_t end);
 
@@ -226,7 +232,7 @@ void sample_range(const VirtualTexture& vt, const SampleRequest& r, std::size_t 
     if (vt.format() == TexelFormat::Bc1)
         sample_trilinear<TexelFormat::Bc1>(vt, r, begin, end);
     else
-        sample_trilinear<TexelFormat::Rgb8>(vt, r, begin, end);
+        sample_trilinear_rgb8(vt, r, begin, end);
 }
 
 // The per-sample trilinear path: the reference that sample_trilinear's batches reproduce
@@ -414,6 +420,196 @@ void sample_trilinear(const VirtualTexture& vt, const SampleRequest& r, std::siz
         for (std::size_t k = 0; k < n; ++k)
             for (int c = 0; c < 3; ++c)
                 out[3 * k + c] += blend[k] * (second[3 * k + c] - out[3 * k + c]);
+    }
+}
+
+
+// Trilinear on RGB8 slots in one pass over the samples instead of two bilinear passes and a
+// blend: both levels' taps from one clamped uv (trilinear_taps), each level's page entry
+// kept by its own finder (one finder for both would thrash between the two levels' tiles),
+// and where a level's tile is resident (no fallback, nearly always) the footprint's in-tile
+// byte offset computed in the taps' lanes, so the per-sample loop only adds the slot's base.
+// The same taps, fallback, blend products and blend as sample_trilinear, hence the same
+// floats: a sample with one level (blend 0) blends its fine footprint with itself, which
+// adds 0 * 0, as sample_trilinear's blend adds 0 * (second - out) with second = out.
+struct TrilinearBatch {
+    alignas(64) double x0[kBatch], y0[kBatch];
+    alignas(64) std::int32_t offset[2][kBatch];
+    alignas(64) float fx[2][kBatch], fy[2][kBatch], blend[kBatch];
+    alignas(64) std::uint32_t level[2][kBatch], cx[2][kBatch], cy[2][kBatch];
+};
+
+struct TileExtent {
+    std::int32_t payload, border, tile, row_bytes;
+};
+
+// bilinear_taps for the fine level floor(lod) and the coarse level floor(lod) + 1 (or the
+// fine one again where trilinear blends nothing), with sample_trilinear's level rule, plus
+// each level's in-tile offset for a resident tile: TexelFinder::footprint with s = 0,
+// in int32 (i, j < 2^30 and cx P <= i + 1).
+// Not inlined: inlined, its restrict parameters were lost and GCC ran a scalar copy of the
+// first loop with branches for a large share of the samples.
+__attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
+                                              const double* __restrict v_in,
+                                              const float* __restrict lod_in, std::size_t n,
+                                              const PyramidExtent e, const std::int32_t levels,
+                                              const Divider divide_p, const TileExtent t,
+                                              TrilinearBatch& __restrict b) {
+    auto lo0 = [](auto x) { return decltype(x)(0) < x ? x : decltype(x)(0); };
+    auto below = [](auto x, auto hi) { return x < hi ? x : hi; };
+    auto above = [](auto x, auto lo) { return lo < x ? x : lo; };
+    const std::uint32_t width = e.width, height = e.height;
+    const double W = width, H = height;
+    const float top = e.top;
+    constexpr std::int64_t kOneBits = 0x3ff0000000000000;  // 1.0
+    const std::int32_t P = t.payload, E = t.border, last = t.tile - 2, row = t.row_bytes;
+    // The levels and the blend (sample_trilinear's rule), then the level-0 positions: apart,
+    // as one loop GCC did not vectorise ("control flow in loop").
+    for (std::size_t k = 0; k < n; ++k) {
+        const float lod = below(lo0(lod_in[k]), top);
+        const std::int32_t l0 = static_cast<std::int32_t>(lod);
+        const float f = lod - float(l0);
+        const bool two = (f > 0) & (l0 + 1 < levels);
+        b.blend[k] = two ? f : 0.0f;
+        b.level[0][k] = std::uint32_t(l0), b.level[1][k] = std::uint32_t(two ? l0 + 1 : l0);
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+        auto below_one = [&](double x) {
+            return std::bit_cast<double>(below(std::bit_cast<std::int64_t>(x), kOneBits));
+        };
+        b.x0[k] = below_one(lo0(u_in[k])) * W, b.y0[k] = below_one(lo0(v_in[k])) * H;
+    }
+    // One loop per level, as bilinear_taps (a loop over both levels inside did not vectorise).
+    for (int c = 0; c < 2; ++c) {
+        const std::uint32_t* __restrict level = b.level[c];
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint32_t l = level[k];
+            const double scale = std::bit_cast<double>(std::uint64_t(1023 - l) << 52);
+            const std::uint32_t wl = (width + (1u << l) - 1) >> l;
+            const std::uint32_t hl = (height + (1u << l) - 1) >> l;
+            const double tx = below(above(b.x0[k] * scale, 0.5), double(wl) - 0.5) - 0.5;
+            const double ty = below(above(b.y0[k] * scale, 0.5), double(hl) - 0.5) - 0.5;
+            const auto i = static_cast<std::int32_t>(tx), j = static_cast<std::int32_t>(ty);
+            const float fi = static_cast<float>(tx - double(i)), gj = static_cast<float>(ty - double(j));
+            const auto cx = static_cast<std::int32_t>(divide_p.by_double_below_2_31(i + (fi >= 0.5f ? 1 : 0)));
+            const auto cy = static_cast<std::int32_t>(divide_p.by_double_below_2_31(j + (gj >= 0.5f ? 1 : 0)));
+            const std::int32_t jx = below(above(i - cx * P + E, 0), last);
+            const std::int32_t jy = below(above(j - cy * P + E, 0), last);
+            b.fx[c][k] = fi, b.fy[c][k] = gj;
+            b.cx[c][k] = std::uint32_t(cx), b.cy[c][k] = std::uint32_t(cy);
+            b.offset[c][k] = jy * row + jx * 3;
+        }
+    }
+}
+
+// Both levels' bilerp_rgb8 of one sample and sample_trilinear's blend, out[0..2]; `wide`
+// also writes a garbage out[3] (the next sample's first channel, written after).
+inline void blend_levels_rgb8(const std::uint8_t* fine, const std::uint8_t* coarse, std::size_t row,
+                              float fx0, float fy0, float fx1, float fy1, float blend, bool wide,
+                              float* out) {
+#if defined(__AVX2__)
+    // The two footprints in the two halves of 8 lanes: the same products and sums per half.
+    auto texels = [](const std::uint8_t* a, const std::uint8_t* b) {
+        std::int32_t x, y;
+        std::memcpy(&x, a, 4);
+        std::memcpy(&y, b, 4);
+        return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_insert_epi32(_mm_cvtsi32_si128(x), y, 1)));
+    };
+    auto halves = [](float a, float b) {
+        return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(a)), _mm_set1_ps(b), 1);
+    };
+    const __m256 one = _mm256_set1_ps(1.0f), fx = halves(fx0, fx1), fy = halves(fy0, fy1);
+    const __m256 gx = _mm256_sub_ps(one, fx), gy = _mm256_sub_ps(one, fy);
+    __m256 c = _mm256_mul_ps(_mm256_mul_ps(gx, gy), texels(fine, coarse));
+    c = _mm256_add_ps(c, _mm256_mul_ps(_mm256_mul_ps(fx, gy), texels(fine + 3, coarse + 3)));
+    c = _mm256_add_ps(c, _mm256_mul_ps(_mm256_mul_ps(gx, fy), texels(fine + row, coarse + row)));
+    c = _mm256_add_ps(c, _mm256_mul_ps(_mm256_mul_ps(fx, fy), texels(fine + row + 3, coarse + row + 3)));
+    const __m128 f = _mm256_castps256_ps128(c), g = _mm256_extractf128_ps(c, 1);
+    const __m128 r = _mm_add_ps(f, _mm_mul_ps(_mm_set1_ps(blend), _mm_sub_ps(g, f)));
+    if (wide) {
+        _mm_storeu_ps(out, r);
+    } else {
+        alignas(16) float lanes[4];
+        _mm_store_ps(lanes, r);
+        out[0] = lanes[0], out[1] = lanes[1], out[2] = lanes[2];
+    }
+#elif defined(__SSE2__)
+    (void)wide;
+    alignas(16) float f[4], g[4];
+    bilerp_rgb8_wide(fine, row, fx0, fy0, f);
+    bilerp_rgb8_wide(coarse, row, fx1, fy1, g);
+    for (int k = 0; k < 3; ++k) out[k] = f[k] + blend * (g[k] - f[k]);
+#else
+    (void)wide;
+    float c[3];
+    bilerp_rgb8(fine, row, 3, 1, fx0, fy0, out);
+    bilerp_rgb8(coarse, row, 3, 1, fx1, fy1, c);
+    for (int k = 0; k < 3; ++k) out[k] += blend * (c[k] - out[k]);
+#endif
+}
+
+void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin,
+                           std::size_t end) {
+    const PaintingGeometry& pt = vt.layout().paintings[r.painting];
+    const std::uint32_t L = pt.levels(), width = pt.width(), height = pt.height();
+    const LevelAxes axes(width, height, L);
+    const Divider divide_p(vt.layout().payload());
+    TexelFinder finders[2] = {TexelFinder(vt, r.painting), TexelFinder(vt, r.painting)};
+    const std::size_t row = finders[0].row_bytes();
+    const std::uint8_t* const physical = vt.physical();
+    const std::size_t slot_bytes = vt.slot_bytes();
+    const TileExtent tile{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
+                          std::int32_t(vt.layout().tile_size), std::int32_t(row)};
+    const PyramidExtent pyramid{width, height, float(L - 1)};
+
+    TrilinearBatch b;
+    const std::uint8_t* texel[2][kBatch];
+    float lod_scalar[kBatch], lod_dense[kBatch];
+    double u_dense[kBatch], v_dense[kBatch];
+    std::fill(lod_scalar, lod_scalar + kBatch, r.lod_scalar);
+
+    for (std::size_t b0 = begin; b0 < end; b0 += kBatch) {
+        const std::size_t n = std::min(kBatch, end - b0);
+        const float* l_in = r.lod ? r.lod + b0 : lod_scalar;
+        const double *u_in = r.u + b0, *v_in = r.v + b0;
+        // The taps in whole vectors of 8 (no scalar remainder loop): a partial batch and
+        // interleaved (u, v) are copied, the partial batch padded with valid inputs whose
+        // taps nobody reads.
+        const std::size_t n8 = (n + 7) & ~std::size_t(7);
+        if (r.uv_stride != 1 || n8 != n) {
+            const std::size_t st = r.uv_stride;
+            for (std::size_t k = 0; k < n; ++k)
+                u_dense[k] = r.u[(b0 + k) * st], v_dense[k] = r.v[(b0 + k) * st], lod_dense[k] = l_in[k];
+            std::fill(u_dense + n, u_dense + n8, 0.0);
+            std::fill(v_dense + n, v_dense + n8, 0.0);
+            std::fill(lod_dense + n, lod_dense + n8, 0.0f);
+            u_in = u_dense, v_in = v_dense, l_in = lod_dense;
+        }
+        trilinear_taps(u_in, v_in, l_in, n8, pyramid, std::int32_t(L), divide_p, tile, b);
+        // Page entries, fallbacks, addresses and prefetches of both levels.
+        for (std::size_t k = 0; k < n; ++k) {
+            for (int c = 0; c < 2; ++c) {
+                const std::uint32_t l = b.level[c][k], cx = b.cx[c][k], cy = b.cy[c][k];
+                const PageEntry e = finders[c].entry(l, cx, cy);
+                const std::uint32_t al = e.level(), s = al - l;
+                const std::uint8_t* p;
+                if (s == 0) [[likely]] {
+                    p = physical + std::size_t(e.slot()) * slot_bytes + std::uint32_t(b.offset[c][k]);
+                } else {  // fallback: the resident ancestor answers at its own resolution
+                    const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
+                    b.fx[c][k] = tx.f, b.fy[c][k] = ty.f;
+                    p = finders[c].texel(e, s, tx.i0, ty.i0, cx, cy);
+                }
+                __builtin_prefetch(p);
+                __builtin_prefetch(p + row);
+                texel[c][k] = p;
+                if (c == 0 && r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
+            }
+        }
+        float* out = r.out + 3 * b0;
+        for (std::size_t k = 0; k < n; ++k)
+            blend_levels_rgb8(texel[0][k], texel[1][k], row, b.fx[0][k], b.fy[0][k], b.fx[1][k],
+                              b.fy[1][k], b.blend[k], b0 + k + 1 < end, out + 3 * k);
     }
 }
 

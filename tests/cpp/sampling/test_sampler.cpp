@@ -237,7 +237,8 @@ TEST(VirtualTexture, BatchedBilinearEqualsPerSampleArithmetic) {
     }
 }
 
-// Trilinear runs as two batched bilinear passes and a blend; it must equal the per-sample
+// Trilinear runs batched (on RGB8 slots both levels in one pass, sample_trilinear_rgb8; on
+// BC1 as two batched bilinear passes and a blend); it must equal the per-sample
 // trilinear reference bit for bit at fractional levels (both levels answered, one of them
 // or both by a resident ancestor), at the top level and at NaN, whatever the batch and
 // thread boundaries and with interleaved (u, v).
@@ -281,6 +282,51 @@ TEST(VirtualTexture, BatchedTrilinearEqualsPerSampleArithmetic) {
         for (std::size_t i = 0; i < 3 * n; ++i)
             ASSERT_EQ(got[i], ref[i]) << "value " << i << ", " << threads << " threads";
     }
+}
+
+// The display pass's calls: dense u and v, one call per run of one painting under a read lock
+// the caller holds (sample_serial_locked), runs of every length from 1 up (partial batches,
+// whose taps are padded to whole vectors, and whole ones): each run must equal the per-sample
+// trilinear reference bit for bit.
+TEST(VirtualTexture, TrilinearRunsOfAnyLengthEqualPerSampleArithmetic) {
+    const CutPainting painting(777, 1301, 32, 3, 31);
+    const std::uint32_t L = painting.level_count();
+    VirtualTexture vt(painting.layout, 14, 14, painting.source());
+    std::mt19937 rng(37);
+    painting.insert_random(vt, 0.5, rng);
+    std::uniform_real_distribution<double> unit(-0.02, 1.02);
+    std::vector<double> u, v;
+    std::vector<float> lod;
+    std::vector<std::size_t> run_start;
+    for (std::size_t len = 1; len <= 150; len += (len < 20 ? 1 : 13)) {
+        run_start.push_back(u.size());
+        double u0 = unit(rng), v0 = unit(rng);
+        const float lod0 = float(unit(rng) * L);
+        for (std::size_t k = 0; k < len; ++k) {  // a row of pixels across the painting
+            u.push_back(u0 + 0.0011 * double(k)), v.push_back(v0 + 0.0002 * double(k));
+            lod.push_back(lod0 + 0.003f * float(k));
+        }
+    }
+    run_start.push_back(u.size());
+    const std::size_t n = u.size();
+    std::vector<float> ref(3 * n, -1.0f), got(3 * n, -2.0f);
+    std::vector<std::int8_t> ref_level(n, -1), got_level(n, -2);
+    SampleRequest r;
+    r.u = u.data(), r.v = v.data(), r.lod = lod.data(), r.count = n, r.filter = Filter::Trilinear;
+    r.out = ref.data(), r.level_out = ref_level.data();
+    sample_trilinear_reference(vt, r);
+    {
+        const auto lock = vt.read_lock();
+        for (std::size_t q = 0; q + 1 < run_start.size(); ++q) {
+            const std::size_t b = run_start[q], e = run_start[q + 1];
+            SampleRequest s = r;
+            s.u = u.data() + b, s.v = v.data() + b, s.lod = lod.data() + b, s.count = e - b;
+            s.out = got.data() + 3 * b, s.level_out = got_level.data() + b;
+            sample_serial_locked(vt, s);
+        }
+    }
+    ASSERT_EQ(got_level, ref_level);
+    for (std::size_t i = 0; i < 3 * n; ++i) ASSERT_EQ(got[i], ref[i]) << "value " << i;
 }
 
 // Interleaved (u, v) pairs (the display pass's layout), a scalar lod and NaN inputs: NaN
