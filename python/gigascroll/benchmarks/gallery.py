@@ -45,9 +45,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--disc-photons", default="19",
                         help="photon counts (powers of two) tried with the surface disc only (default 19: between "
                              "the grid's counts near the hall's floor, where only the disc gets; empty: none)")
-    parser.add_argument("--coarse-photons", default="6",
+    parser.add_argument("--coarse-photons", default="6,7",
                         help="photon counts (powers of two) tried with the sphere and spacings of diag/12 and coarser "
-                             "only (default 6: the cheapest stills, for Mitsuba's 1 spp; empty: none)")
+                             "only (default 6,7: the cheapest stills, for Mitsuba's 1 spp; empty: none)")
     parser.add_argument("--spacings", default="6,12,25,50,100,200",
                         help="bake spacings as fractions 1/N of the room's diagonal (default 6,12,25,50,100,200)")
     parser.add_argument("--bake-samples", default="1,4,16,64",
