@@ -14,6 +14,7 @@
 #include "photon/rng.h"
 #include "pack/tile_key.h"
 #include "sampling/sampler.h"
+#include "sampling/stereo_display.h"
 #include "views/feedback.h"
 
 namespace gigascroll {
@@ -518,33 +519,15 @@ namespace {
 // Linear interpolation on triangle t's lattice of n segments (points E) at barycentrics
 // (b1, b2), clamped onto the triangle.
 inline Vec3f lattice_lerp(const Vec3f* E, std::uint32_t n, float b1, float b2) {
-    // Clamped onto the triangle as barycentric() does (Embree's u, v may round just outside).
-    b1 = std::clamp(b1, 0.0f, 1.0f), b2 = std::clamp(b2, 0.0f, 1.0f);
-    if (b1 + b2 > 1.0f) {
-        const float s = b1 + b2;
-        b1 /= s, b2 /= s;
-    }
-    const float x = b1 * float(n), y = b2 * float(n);  // x + y <= n
-    const std::uint32_t i = std::min(std::uint32_t(x), n - 1);
-    const std::uint32_t j = std::min(std::uint32_t(y), n - 1 - i);
-    float fx = std::max(x - float(i), 0.0f), fy = std::max(y - float(j), 0.0f);
-    // The lower sub-triangle (i, j), (i+1, j), (i, j+1) or the upper one (i+1, j+1),
-    // (i, j+1), (i+1, j), chosen by selects: which one a pixel falls in is a coin toss, and
-    // a branch on it mispredicted half the time. On the far edge (no upper one) rounding
-    // can put the point just past the lower one: scale back onto the edge.
-    const bool upper = fx + fy > 1.0f && i + j + 2 <= n;
-    if (!upper && fx + fy > 1.0f) {
-        const float s = 1.0f / (fx + fy);
-        fx *= s, fy *= s;
-    }
+    const LatticeCell cell = lattice_cell(std::int32_t(n), b1, b2);
+    const auto i = std::uint32_t(cell.i), j = std::uint32_t(cell.j);
+    const bool upper = cell.upper;
     // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i.
     const std::uint64_t row_i = lattice_index(i, 0, n), row_next = row_i + (n + 1 - i);
     const std::uint64_t right = row_next + j, up = row_i + j + 1;
     const std::uint64_t k0 = upper ? row_next + j + 1 : row_i + j;
     const std::uint64_t k1 = upper ? up : right, k2 = upper ? right : up;
-    const float w0 = upper ? fx + fy - 1 : 1 - fx - fy;
-    const float w1 = upper ? 1 - fx : fx, w2 = upper ? 1 - fy : fy;
-    return E[k0] * w0 + E[k1] * w1 + E[k2] * w2;
+    return E[k0] * cell.w0 + E[k1] * cell.w1 + E[k2] * cell.w2;
 }
 }  // namespace
 
@@ -573,31 +556,11 @@ void lattice_cells(std::size_t m, const std::uint32_t* __restrict segments,
     float* __restrict w0_of = c.w0_of;
     float* __restrict w1_of = c.w1_of;
     float* __restrict w2_of = c.w2_of;
-        for (std::size_t k = 0; k < m; ++k) {
-            const std::int32_t n = std::int32_t(segments[t_in[k]]);
-            float c1 = b1_in[k], c2 = b2_in[k];
-            c1 = c1 < 0.0f ? 0.0f : (1.0f < c1 ? 1.0f : c1);  // std::clamp
-            c2 = c2 < 0.0f ? 0.0f : (1.0f < c2 ? 1.0f : c2);
-            const float s = c1 + c2;
-            const bool over = s > 1.0f;
-            const float q1 = c1 / s, q2 = c2 / s;
-            c1 = over ? q1 : c1, c2 = over ? q2 : c2;
-            const float x = c1 * float(n), y = c2 * float(n);
-            const std::int32_t xi = std::int32_t(x), yi = std::int32_t(y);
-            const std::int32_t i = xi < n - 1 ? xi : n - 1;
-            const std::int32_t j = yi < n - 1 - i ? yi : n - 1 - i;
-            const float ex = x - float(i), ey = y - float(j);
-            float fx = ex < 0.0f ? 0.0f : ex, fy = ey < 0.0f ? 0.0f : ey;
-            const float sum = fx + fy;
-            const bool upper = sum > 1.0f && i + j + 2 <= n;
-            const bool rescale = !upper && sum > 1.0f;
-            const float inv = 1.0f / sum;
-            const float sx = fx * inv, sy = fy * inv;
-            fx = rescale ? sx : fx, fy = rescale ? sy : fy;
-            cell_i[k] = i, cell_j[k] = j, upper_of[k] = upper;
-            w0_of[k] = upper ? fx + fy - 1 : 1 - fx - fy;
-            w1_of[k] = upper ? 1 - fx : fx, w2_of[k] = upper ? 1 - fy : fy;
-        }
+    for (std::size_t k = 0; k < m; ++k) {
+        const LatticeCell cell = lattice_cell(std::int32_t(segments[t_in[k]]), b1_in[k], b2_in[k]);
+        cell_i[k] = cell.i, cell_j[k] = cell.j, upper_of[k] = cell.upper;
+        w0_of[k] = cell.w0, w1_of[k] = cell.w1, w2_of[k] = cell.w2;
+    }
 }
 }  // namespace
 

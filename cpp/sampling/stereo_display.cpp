@@ -461,29 +461,9 @@ struct LatticeLanes {
         }
 #endif
         for (int k = k0; k < 16; ++k) {
-            const std::int32_t n = segments[k];
-            float c1 = b1_in[k], c2 = b2_in[k];
-            c1 = c1 < 0.0f ? 0.0f : (1.0f < c1 ? 1.0f : c1);  // std::clamp
-            c2 = c2 < 0.0f ? 0.0f : (1.0f < c2 ? 1.0f : c2);
-            const float s = c1 + c2;
-            const bool over = s > 1.0f;
-            const float q1 = c1 / s, q2 = c2 / s;
-            c1 = over ? q1 : c1, c2 = over ? q2 : c2;
-            const float x = c1 * float(n), y = c2 * float(n);
-            const std::int32_t xi = std::int32_t(x), yi = std::int32_t(y);
-            const std::int32_t i = xi < n - 1 ? xi : n - 1;
-            const std::int32_t j = yi < n - 1 - i ? yi : n - 1 - i;
-            const float ex = x - float(i), ey = y - float(j);
-            float fx = ex < 0.0f ? 0.0f : ex, fy = ey < 0.0f ? 0.0f : ey;
-            const float sum = fx + fy;
-            const bool upper = sum > 1.0f && i + j + 2 <= n;
-            const bool rescale = !upper && sum > 1.0f;
-            const float inv = 1.0f / sum;
-            const float sx = fx * inv, sy = fy * inv;
-            fx = rescale ? sx : fx, fy = rescale ? sy : fy;
-            cell_i[k] = i, cell_j[k] = j, upper_of[k] = upper;
-            weight[0][k] = upper ? fx + fy - 1 : 1 - fx - fy;
-            weight[1][k] = upper ? 1 - fx : fx, weight[2][k] = upper ? 1 - fy : fy;
+            const LatticeCell c = lattice_cell(segments[k], b1_in[k], b2_in[k]);
+            cell_i[k] = c.i, cell_j[k] = c.j, upper_of[k] = c.upper;
+            weight[0][k] = c.w0, weight[1][k] = c.w1, weight[2][k] = c.w2;
         }
         for (int k = 0; k < 16; ++k) {
             const std::uint64_t n = std::uint64_t(segments[k]);

@@ -73,6 +73,42 @@ struct BakedLattice {
     const Vec3f *front = nullptr, *back = nullptr;                          // per lattice point
 };
 
+// Where barycentrics (b1, b2) fall on a triangle's lattice of n segments per edge: the cell
+// (i, j), whether they lie in its upper sub-triangle (i+1, j+1), (i, j+1), (i+1, j) rather than
+// the lower one (i, j), (i+1, j), (i, j+1), and the weights of those three corners in that
+// order. (b1, b2) are clamped onto the triangle first (Embree's u, v may round just outside);
+// on the far edge, which has no upper sub-triangle, rounding can put the point just past the
+// lower one, so it is scaled back onto the edge. Selects only, no branches: which sub-triangle
+// a pixel falls in is a coin toss (a branch on it mispredicted half the time), and loops over
+// it vectorise. The one definition of the arithmetic for the Gallery's lookups and the
+// display pass (whose AVX2 lanes do the same operations).
+struct LatticeCell {
+    std::int32_t i, j;
+    bool upper;
+    float w0, w1, w2;
+};
+[[gnu::always_inline]] inline LatticeCell lattice_cell(std::int32_t n, float b1, float b2) {
+    b1 = b1 < 0.0f ? 0.0f : (1.0f < b1 ? 1.0f : b1);  // std::clamp
+    b2 = b2 < 0.0f ? 0.0f : (1.0f < b2 ? 1.0f : b2);
+    const float s = b1 + b2;
+    const bool over = s > 1.0f;
+    const float q1 = b1 / s, q2 = b2 / s;
+    b1 = over ? q1 : b1, b2 = over ? q2 : b2;
+    const float x = b1 * float(n), y = b2 * float(n);  // x + y <= n
+    const std::int32_t xi = std::int32_t(x), yi = std::int32_t(y);
+    const std::int32_t i = xi < n - 1 ? xi : n - 1;
+    const std::int32_t j = yi < n - 1 - i ? yi : n - 1 - i;
+    const float ex = x - float(i), ey = y - float(j);
+    float fx = ex < 0.0f ? 0.0f : ex, fy = ey < 0.0f ? 0.0f : ey;
+    const float sum = fx + fy;
+    const bool upper = sum > 1.0f && i + j + 2 <= n;
+    const bool rescale = !upper && sum > 1.0f;
+    const float inv = 1.0f / sum;
+    const float sx = fx * inv, sy = fy * inv;
+    fx = rescale ? sx : fx, fy = rescale ? sy : fy;
+    return {i, j, upper, upper ? fx + fy - 1 : 1 - fx - fy, upper ? 1 - fx : fx, upper ? 1 - fy : fy};
+}
+
 // The scene's lighting as the display pass asks it, per hit: Embree geometry and primitive,
 // the point and the unit normal facing the viewer. Must be safe to call from many threads.
 class DisplayLighting {
