@@ -12,7 +12,9 @@
 //
 // Light on the paintings (issue 13 §2):
 //  - light(): the photon pass (photon/photon_tracer.h, through Scene::albedo_at) over the
-//    whole room into a hash-grid PhotonMap (photon/photon_map.h). A painting's albedo at a
+//    whole room into a PhotonMap (photon/photon_map.h) on the project's adaptive grid
+//    (photon/adaptive_grid.h: seed 001's hash grid with cells sized from the photon density,
+//    queries walking only the cell rows their sphere or disc touches). A painting's albedo at a
 //    photon's bounce comes from the virtual texture at the painting's finest pinned level, or
 //    a coarser one for wide gathers (see PaintingAlbedo in gallery.cpp), so a red painting
 //    bleeds red onto the floor. Photons
