@@ -149,6 +149,9 @@ def test_apply_repeats_gives_ratios_of_medians_against_brute_force():
     (("--timing-repeats", "0"), "--timing-repeats"),
     (("--disc-photons", "x"), "--disc-photons"),
     (("--disc-photons", "31"), "powers of two up to 2^30"),
+    (("--coarse-photons", "x"), "--coarse-photons"),
+    (("--coarse-photons", "0"), "--coarse-photons needs positive integers"),
+    (("--coarse-photons", "31"), "powers of two up to 2^30"),
 ])
 def test_bad_options_are_one_line_errors(gigascroll_cli, tmp_path, args, message):
     r = gigascroll_cli("bench", "gallery", "--out", tmp_path, *args)
