@@ -173,25 +173,31 @@ struct PyramidExtent {
     float top;                    // the coarsest level
 };
 
+// The tap loops' clamps as selects, so that GCC vectorises the loops: "0 < x ? x : 0" also
+// maps NaN to 0. below_one clamps a non-negative double to 1 on its bits (non-negative doubles
+// order as their int64 bits): as a double select it kept GCC 12 from vectorising the loop
+// ("control flow in loop").
+template <typename T>
+inline T lo0(T x) { return T(0) < x ? x : T(0); }
+template <typename T, typename U>
+inline auto below(T x, U hi) { return x < hi ? x : hi; }
+template <typename T, typename U>
+inline auto above(T x, U lo) { return lo < x ? x : lo; }
+inline double below_one(double x) {
+    constexpr std::int64_t kOneBits = 0x3ff0000000000000;  // 1.0
+    return std::bit_cast<double>(below(std::bit_cast<std::int64_t>(x), kOneBits));
+}
+
 // The sampler's per-sample arithmetic without branches and on restrict pointers, so GCC
 // vectorises it; the same operations as sample_range's taps (bilinear_tap, tap_tile), hence
 // the same results. Min and max are selects; "0 < x ? x : 0" also maps NaN to 0.
 void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
                    const float* __restrict lod_in, std::size_t n, const PyramidExtent e,
                    const Divider divide_p, TapBatch& __restrict b) {
-    auto lo0 = [](auto x) { return decltype(x)(0) < x ? x : decltype(x)(0); };
-    auto below = [](auto x, auto hi) { return x < hi ? x : hi; };
-    auto above = [](auto x, auto lo) { return lo < x ? x : lo; };
     const std::uint32_t width = e.width, height = e.height;
     const double W = width, H = height;
     const float top = e.top;
-    constexpr std::int64_t kOneBits = 0x3ff0000000000000;  // 1.0
     for (std::size_t k = 0; k < n; ++k) {
-        // The upper clamp on the bits (non-negative doubles order as their int64 bits): as
-        // a double select it kept GCC 12 from vectorising the loop ("control flow in loop").
-        auto below_one = [&](double x) {
-            return std::bit_cast<double>(below(std::bit_cast<std::int64_t>(x), kOneBits));
-        };
         const double u = below_one(lo0(u_in[k])), v = below_one(lo0(v_in[k]));
         const float lod = below(lo0(lod_in[k]), top);
         // lod >= 0 here, so lround(lod) = floor(lod + 0.5).
@@ -455,13 +461,9 @@ __attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
                                               const PyramidExtent e, const std::int32_t levels,
                                               const Divider divide_p, const TileExtent t,
                                               TrilinearBatch& __restrict b) {
-    auto lo0 = [](auto x) { return decltype(x)(0) < x ? x : decltype(x)(0); };
-    auto below = [](auto x, auto hi) { return x < hi ? x : hi; };
-    auto above = [](auto x, auto lo) { return lo < x ? x : lo; };
     const std::uint32_t width = e.width, height = e.height;
     const double W = width, H = height;
     const float top = e.top;
-    constexpr std::int64_t kOneBits = 0x3ff0000000000000;  // 1.0
     const std::int32_t P = t.payload, E = t.border, last = t.tile - 2, row = t.row_bytes;
     // The levels and the blend (sample_trilinear's rule), then the level-0 positions: apart,
     // as one loop GCC did not vectorise ("control flow in loop").
@@ -474,9 +476,6 @@ __attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
         b.level[0][k] = std::uint32_t(l0), b.level[1][k] = std::uint32_t(two ? l0 + 1 : l0);
     }
     for (std::size_t k = 0; k < n; ++k) {
-        auto below_one = [&](double x) {
-            return std::bit_cast<double>(below(std::bit_cast<std::int64_t>(x), kOneBits));
-        };
         b.x0[k] = below_one(lo0(u_in[k])) * W, b.y0[k] = below_one(lo0(v_in[k])) * H;
     }
     // One loop per level, as bilinear_taps (a loop over both levels inside did not vectorise).
