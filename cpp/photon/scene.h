@@ -117,6 +117,12 @@ private:
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // emitters only, indexed like emitters_
     std::vector<std::uint32_t> emitters_;
     std::vector<float> emitter_cdf_;
+    // A guide table over emitter_cdf_ (the cutpoint method): entry b is the index
+    // std::upper_bound finds for b / K, K = emitter_guide_.size() - 1 a power of two, so a
+    // u in [b / K, (b + 1) / K) is searched between entries b and b + 1 only: the same
+    // index as the whole binary search, in a step or two (the search's mispredicted
+    // branches were 5% of a fine bake's 2.7 M emitter samples).
+    std::vector<std::uint32_t> emitter_guide_;
     Vec3f power_{0, 0, 0};
     float weight_total_ = 0;
     bool reflects_ = false;
