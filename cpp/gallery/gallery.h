@@ -20,7 +20,9 @@
 //    bleeds red onto the floor. Photons
 //    trapped between a painting and its wall are dropped before the map is built (see
 //    drop_hidden_photons): through a 1 mm gap a gather on the painting would count them.
-//    Direct light is the photon Renderer's emitter sampling (Renderer::direct_irradiance).
+//    Direct light is the photon Renderer's emitter sampling (Renderer::direct_irradiance); the
+//    bake's is by default the ratio estimator of BakeSettings::analytic_direct (the exact
+//    unoccluded irradiance of the emitters times the visible fraction of its samples).
 //  - Display radiance = albedo x E / pi + emission. A painting's albedo is the VT's trilinear
 //    sample at the pixel's level of detail (kPaintingReflectance x the linearised sRGB texel);
 //    E is direct light (emitter sampling, shadow rays) plus the photon gather (seed 001 eq. 1).
