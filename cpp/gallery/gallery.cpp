@@ -529,28 +529,57 @@ Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c, 
     const int probes = analytic_probes > 0 ? std::min(std::max(analytic_probes, samples / 2), samples) : 0;
     const int step = probes > 0 ? samples / probes : 1;
     int tested = 0, visible = 0;
-    auto shade = [&](int i) {
-        const LightSample ls = sample(i);
-        const Vec3f w = ls.p - hit.p;
-        const float d2 = dot(w, w);
-        const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
-        if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {
-            ++c.shadow_rays_skipped;
-            return;
-        }
-        ++c.shadow_rays;
-        const Vec3f f = ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
-        unoccluded += f;
+    // Samples in batches of up to 16 whose shadow rays go out as one packet; the sums in
+    // sample order.
+    auto shade = [&](const int* index, int count) {
+        Vec3f f[16], o[16], d[16];
+        float tfar[16];
+        int ray_of[16];
+        int rays = 0;
         const float eps = scene_.epsilon();
-        const Vec3f o = hit.p + hit.n * eps;
-        ++tested;
-        if (!scene_.occluded(o, ls.p - o, 1.0f - 2.0f * eps / std::sqrt(d2))) E += f, ++visible;
+        for (int k = 0; k < count; ++k) {
+            ray_of[k] = -1;
+            const LightSample ls = sample(index[k]);
+            const Vec3f w = ls.p - hit.p;
+            const float d2 = dot(w, w);
+            const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
+            if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {
+                ++c.shadow_rays_skipped;
+                continue;
+            }
+            ++c.shadow_rays;
+            f[k] = ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+            o[rays] = hit.p + hit.n * eps;
+            d[rays] = ls.p - o[rays];
+            tfar[rays] = 1.0f - 2.0f * eps / std::sqrt(d2);
+            ray_of[k] = rays++;
+        }
+        bool blocked[16];
+        scene_.occluded16(rays, o, d, tfar, blocked);
+        for (int k = 0; k < count; ++k) {
+            if (ray_of[k] < 0) continue;
+            unoccluded += f[k];
+            ++tested;
+            if (!blocked[ray_of[k]]) E += f[k], ++visible;
+        }
     };
-    for (int k = 0; k < probes; ++k) shade(k * step);
+    // Batches of 16 without a heap allocation per point: the probes, then the others.
+    int batch[16], in_batch = 0;
+    auto add = [&](int i) {
+        batch[in_batch++] = i;
+        if (in_batch == 16) shade(batch, in_batch), in_batch = 0;
+    };
+    auto flush = [&] {
+        if (in_batch) shade(batch, in_batch), in_batch = 0;
+    };
+    for (int k = 0; k < probes; ++k) add(k * step);
+    flush();
     const bool agreed = probes > 0 && probes < samples && tested == probes && (visible == 0 || visible == tested);
-    if (!agreed)
+    if (!agreed) {
         for (int i = 0; i < samples; ++i)
-            if (probes == 0 || i % step != 0 || i / step >= probes) shade(i);
+            if (probes == 0 || i % step != 0 || i / step >= probes) add(i);
+        flush();
+    }
     // The ratio estimator: the exact unoccluded irradiance times the fraction of the drawn
     // samples' unoccluded sum that is visible, per channel; their plain mean where none
     // reached a light (nothing to say about visibility) or the formula has no value.

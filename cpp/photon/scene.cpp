@@ -211,6 +211,26 @@ bool Scene::occluded(Vec3f o, Vec3f d, float tfar) const {
     return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
 }
 
+void Scene::occluded16(int count, const Vec3f* o, const Vec3f* d, const float* tfar, bool* out) const {
+    GS_CHECK(count >= 0 && count <= 16);
+    if (count == 0) return;
+    alignas(64) int valid[16];
+    alignas(64) RTCRay16 ray;
+    for (int k = 0; k < 16; ++k) {
+        const int i = k < count ? k : 0;  // idle lanes repeat ray 0 (valid = 0: not traced)
+        if (k < count) require_valid_ray(o[i], d[i], tfar[i]);
+        valid[k] = k < count ? -1 : 0;
+        ray.org_x[k] = o[i].x, ray.org_y[k] = o[i].y, ray.org_z[k] = o[i].z;
+        ray.dir_x[k] = d[i].x, ray.dir_y[k] = d[i].y, ray.dir_z[k] = d[i].z;
+        ray.tnear[k] = 0.0f, ray.tfar[k] = tfar[i], ray.time[k] = 0.0f;
+        ray.mask[k] = 0xffffffffu, ray.id[k] = unsigned(k), ray.flags[k] = 0;
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded16(valid, scene_, &ctx, &ray);
+    for (int k = 0; k < count; ++k) out[k] = ray.tfar[k] < 0.0f;
+}
+
 LightSample Scene::sample_emitter(float u_tri, float u1, float u2) const {
     LightSample s;
     if (emitters_.empty()) return s;

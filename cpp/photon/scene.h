@@ -65,6 +65,9 @@ public:
     bool intersect_checked(Vec3f o, Vec3f d, Hit& hit) const;
     // True when something blocks o + t d for t in (0, tfar).
     bool occluded(Vec3f o, Vec3f d, float tfar) const;
+    // occluded() for count <= 16 rays at once (one Embree packet: rays from one point to
+    // one light share most of their traversal): out[k] for ray k.
+    void occluded16(int count, const Vec3f* o, const Vec3f* d, const float* tfar, bool* out) const;
 
     // Picks an emissive triangle in proportion to its power, then a uniform point on it.
     LightSample sample_emitter(float u_tri, float u1, float u2) const;
