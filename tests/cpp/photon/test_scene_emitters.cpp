@@ -1,13 +1,16 @@
 // Scene::sample_emitter's emitter choice (a branch-free count for a few emitters, a guide
 // table for many) against the cumulative distribution the test computes itself: u in the
-// k-th of n equal-power strata picks the k-th emitter, and nothing breaks for u outside [0, 1).
+// k-th of n equal-power strata picks the k-th emitter, and nothing breaks for u outside [0, 1);
+// and shadow rays in packets (Scene::occluded16) against single ones.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <random>
 #include <vector>
 
+#include "common/error.h"
 #include "photon/scene.h"
 
 using namespace gigascroll;
@@ -63,4 +66,42 @@ TEST(SceneEmitters, UnequalPowersTakeTheirShareOfU) {
     const int m = 100000;
     for (int i = 0; i < m; ++i) weak += scene.sample_emitter((i + 0.5f) / m, 0.1f, 0.1f).tri < 20;
     EXPECT_NEAR(double(weak) / m, 0.2, 2.0 / m);
+}
+
+// Shadow rays in one packet give the single rays' answers: random segments among a few
+// quads, 1 to 16 at a time.
+TEST(SceneEmitters, PacketShadowRaysAnswerAsSingleOnes) {
+    Scene scene;
+    add_lights(scene, 5, 1.0f);
+    const float floor[12] = {-1, 0, -1, 10, 0, -1, 10, 0, 2, -1, 0, 2};
+    const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
+    const float albedo[3] = {0.5f, 0.5f, 0.5f};
+    scene.add_mesh(floor, 4, quad, 2, albedo, false, {0, 0, 0});
+    scene.commit();
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1.5f, 11.0f), h(-0.5f, 3.0f);
+    int blocked_total = 0, rays = 0;
+    for (int round = 0; round < 400; ++round) {
+        const int count = 1 + round % 16;
+        Vec3f o[16], d[16];
+        float tfar[16];
+        for (int k = 0; k < count; ++k) {
+            o[k] = Vec3f(u(rng), h(rng), 0.3f * u(rng));
+            d[k] = Vec3f(u(rng), h(rng), 0.3f * u(rng)) - o[k];
+            tfar[k] = k % 3 == 0 ? 0.5f : 1.0f;
+        }
+        bool out[16];
+        scene.occluded16(count, o, d, tfar, out);
+        for (int k = 0; k < count; ++k) {
+            EXPECT_EQ(out[k], scene.occluded(o[k], d[k], tfar[k])) << round << " " << k;
+            blocked_total += out[k], ++rays;
+        }
+    }
+    EXPECT_GT(blocked_total, rays / 10);  // both answers occur
+    EXPECT_LT(blocked_total, rays - rays / 10);
+    // A bad ray is refused, as by occluded().
+    Vec3f o[1] = {Vec3f(0, 1, 0)}, d[1] = {Vec3f(0, 0, 0)};
+    float t[1] = {1};
+    bool out[1];
+    EXPECT_THROW(scene.occluded16(1, o, d, t, out), InvalidArgument);
 }
