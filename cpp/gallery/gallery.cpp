@@ -583,6 +583,7 @@ Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c, 
     // The ratio estimator: the exact unoccluded irradiance times the fraction of the drawn
     // samples' unoccluded sum that is visible, per channel; their plain mean where none
     // reached a light (nothing to say about visibility) or the formula has no value.
+    if (visible == 0) return {0, 0, 0};  // what the ratio (or the mean) gives: no formula needed
     const Vec3f exact = unoccluded_irradiance(hit.p, hit.n);
     const int drawn = agreed ? probes : samples;
     for (int a = 0; a < 3; ++a) {
