@@ -93,16 +93,18 @@ void bind_gallery(nb::module_& m) {
             g.light(vt, s);
         }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a, "disc"_a)
         .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads, bool stratified,
-                         bool skip_unlit, int gather_stride, bool inset_edges, bool coarse_disc) {
+                         bool skip_unlit, int gather_stride, bool inset_edges, bool coarse_disc,
+                         bool analytic_direct, int shadow_probes) {
             BakeSettings s;
             s.spacing = spacing, s.light_samples = light_samples, s.threads = threads;
             s.stratified = stratified, s.skip_unlit = skip_unlit, s.gather_stride = gather_stride;
-            s.inset_edges = inset_edges, s.coarse_disc = coarse_disc;
+            s.inset_edges = inset_edges, s.coarse_disc = coarse_disc, s.analytic_direct = analytic_direct;
+            s.shadow_probes = shadow_probes;
             nb::gil_scoped_release release;
             g.bake(s);
         }, "spacing"_a, "light_samples"_a, "threads"_a, "stratified"_a = true, "skip_unlit"_a = true,
            "gather_stride"_a = 1, "inset_edges"_a = true,
-           "coarse_disc"_a = false)
+           "coarse_disc"_a = false, "analytic_direct"_a = true, "shadow_probes"_a = 4)
         .def("_bake_progress", &Gallery::bake_progress)
         .def_prop_ro("stats", [](const Gallery& g) {
             const LightingStats& s = g.stats();

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <unordered_map>
 
@@ -11,6 +12,7 @@
 #include "common/error.h"
 #include "common/parallel.h"
 #include "photon/gather.h"
+#include "photon/polygon_irradiance.h"
 #include "photon/rng.h"
 #include "pack/tile_key.h"
 #include "sampling/sampler.h"
@@ -299,6 +301,35 @@ void Gallery::commit() {
     scene_.commit();
     for (std::size_t t = 0; t < tri_v0_.size(); ++t)
         if (max_component(scene_.emission(t)) > 0) emitter_tris_.push_back(std::uint32_t(t));
+    // Edges two emitter triangles share, in opposite directions, on one plane with one
+    // radiance (a quad light's diagonal): unoccluded_irradiance leaves out their terms, which
+    // cancel (unit_triangle_irradiance).
+    emitter_shared_edges_.assign(emitter_tris_.size(), 0);
+    {
+        std::map<std::array<float, 6>, std::pair<std::size_t, int>> edges;
+        for (std::size_t k = 0; k < emitter_tris_.size(); ++k) {
+            const std::uint32_t t = emitter_tris_[k];
+            const Vec3f v[3] = {tri_v0_[t], tri_v0_[t] + tri_e1_[t], tri_v0_[t] + tri_e2_[t]};
+            for (int j = 0; j < 3; ++j) {
+                const Vec3f from = v[j], to = v[(j + 1) % 3];
+                const auto it = edges.find({to.x, to.y, to.z, from.x, from.y, from.z});
+                if (it != edges.end()) {
+                    const auto [other, oj] = it->second;
+                    const std::uint32_t u = emitter_tris_[other];
+                    const Vec3f le = scene_.emission(t), lo = scene_.emission(u);
+                    const bool coplanar = dot(scene_.normal(t), scene_.normal(u)) > 1.0f - 1e-6f;
+                    if (coplanar && le.x == lo.x && le.y == lo.y && le.z == lo.z &&
+                        !(emitter_shared_edges_[other] >> oj & 1)) {
+                        emitter_shared_edges_[k] |= 1u << j;
+                        emitter_shared_edges_[other] |= 1u << oj;
+                        edges.erase(it);
+                        continue;
+                    }
+                }
+                edges.emplace(std::array<float, 6>{from.x, from.y, from.z, to.x, to.y, to.z}, std::pair{k, j});
+            }
+        }
+    }
     tri_terms_.resize(tri_v0_.size());
     for (std::size_t t = 0; t < tri_v0_.size(); ++t) {
         const Vec3f e1 = tri_e1_[t], e2 = tri_e2_[t];
@@ -378,15 +409,15 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     // The adaptive grid (the renders' default): its queries walk only the cell rows their
     // sphere touches, over structure-of-arrays copies, and both passes of the surface disc's
     // gather are vectorised on it (the bake's disc gathers were most of the fine end's time
-    // on seed 001's 27 cells). Its build is serial: the photon groups for the bake's
-    // skip_unlit are computed on the other core meanwhile. Below a few thousand
+    // on seed 001's 27 cells). Its build sorts on both cores (the same grid as a serial
+    // build), beside the photon groups for the bake's skip_unlit. Below a few thousand
     // photons both take microseconds, less than handing one to the helper and waiting for it
     // (2^8 photons: 27 against 39 us), so they run in turn.
     parallel_for(2, 1, [&](std::size_t b, std::size_t e) {
         for (std::size_t job = b; job < e; ++job) {
             if (job == 0 && !photons.empty())
                 map_ = std::make_unique<PhotonMap>(photons, radius, GridKind::Adaptive, HashGrid::Mode::Auto,
-                                                   retired.get());
+                                                   retired.get(), s.threads);
             else if (job == 1) group_photons(photons);
         }
     }, photons.size() < 4096 ? 1u : s.threads);
@@ -452,13 +483,23 @@ bool Gallery::side_reachable(std::uint32_t t, Vec3f n) const {
     return false;
 }
 
-Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c) const {
+Vec3f Gallery::unoccluded_irradiance(Vec3f p, Vec3f n) const {
+    Vec3f E{0, 0, 0};
+    for (std::size_t k = 0; k < emitter_tris_.size(); ++k) {
+        const std::uint32_t e = emitter_tris_[k];
+        const Vec3f a = tri_v0_[e];
+        const float u = unit_triangle_irradiance(p, n, a, a + tri_e1_[e], a + tri_e2_[e], emitter_shared_edges_[k]);
+        if (u != 0) E += scene_.emission(e) * u;
+    }
+    return vmax(E, Vec3f(0, 0, 0));  // the parts' sum is >= 0 up to rounding
+}
+
+Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c, int analytic_probes) const {
     if (scene_.emitter_count() == 0 || samples <= 0) return {0, 0, 0};
     // Keyed by position like Renderer::direct_irradiance, on its own stream.
     Rng rng(lighting_.seed, stream_id(StreamKind::Light, 0, 1), scene_.position_key(hit.p));
     const double shift[3] = {rng.uniform(), rng.uniform(), rng.uniform()};
-    Vec3f E{0, 0, 0};
-    for (int i = 0; i < samples; ++i) {
+    auto sample = [&](int i) {
         // The emitter choice stratified in `samples` strata (one jittered lattice: emitter
         // triangles get their share of samples, in order), the point on it from R2. Every
         // coordinate is uniform on [0, 1) for a uniform shift: unbiased.
@@ -471,9 +512,86 @@ Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c) 
         // Onto the triangle by the square-root map (continuous, area-preserving: the points
         // stay as well spread as in the square), not by folding the square's upper half.
         const float su = std::sqrt(u[1]);
-        E += emitter_sample_irradiance(scene_, hit, scene_.sample_emitter(u[0], 1.0f - su, u[2] * su), c);
+        return scene_.sample_emitter(u[0], 1.0f - su, u[2] * su);
+    };
+    Vec3f E{0, 0, 0};
+    if (analytic_probes < 0) {
+        for (int i = 0; i < samples; ++i) E += emitter_sample_irradiance(scene_, hit, sample(i), c);
+        return E * (1.0f / float(samples));
     }
-    return E * (1.0f / float(samples));
+    // BakeSettings::analytic_direct: emitter_sample_irradiance's terms with the unoccluded
+    // contribution kept apart. The probes first (samples 0, step, 2 step, ...: one per group
+    // of strata, so spread over the emitters); when they all reach a light, or none does,
+    // the point is taken to see all of it or none, and the other samples are not drawn.
+    Vec3f unoccluded{0, 0, 0};
+    // At least half the samples: as they grow, only points that see all or none of the light
+    // agree (the estimator stays consistent).
+    const int probes = analytic_probes > 0 ? std::min(std::max(analytic_probes, samples / 2), samples) : 0;
+    const int step = probes > 0 ? samples / probes : 1;
+    int tested = 0, visible = 0;
+    // Samples in batches of up to 16 whose shadow rays go out as one packet; the sums in
+    // sample order.
+    auto shade = [&](const int* index, int count) {
+        Vec3f f[16], o[16], d[16];
+        float tfar[16];
+        int ray_of[16];
+        int rays = 0;
+        const float eps = scene_.epsilon();
+        for (int k = 0; k < count; ++k) {
+            ray_of[k] = -1;
+            const LightSample ls = sample(index[k]);
+            const Vec3f w = ls.p - hit.p;
+            const float d2 = dot(w, w);
+            const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
+            if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {
+                ++c.shadow_rays_skipped;
+                continue;
+            }
+            ++c.shadow_rays;
+            f[k] = ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+            o[rays] = hit.p + hit.n * eps;
+            d[rays] = ls.p - o[rays];
+            tfar[rays] = 1.0f - 2.0f * eps / std::sqrt(d2);
+            ray_of[k] = rays++;
+        }
+        bool blocked[16];
+        scene_.occluded16(rays, o, d, tfar, blocked);
+        for (int k = 0; k < count; ++k) {
+            if (ray_of[k] < 0) continue;
+            unoccluded += f[k];
+            ++tested;
+            if (!blocked[ray_of[k]]) E += f[k], ++visible;
+        }
+    };
+    // Batches of 16 without a heap allocation per point: the probes, then the others.
+    int batch[16], in_batch = 0;
+    auto add = [&](int i) {
+        batch[in_batch++] = i;
+        if (in_batch == 16) shade(batch, in_batch), in_batch = 0;
+    };
+    auto flush = [&] {
+        if (in_batch) shade(batch, in_batch), in_batch = 0;
+    };
+    for (int k = 0; k < probes; ++k) add(k * step);
+    flush();
+    const bool agreed = probes > 0 && probes < samples && tested == probes && (visible == 0 || visible == tested);
+    if (!agreed) {
+        for (int i = 0; i < samples; ++i)
+            if (probes == 0 || i % step != 0 || i / step >= probes) add(i);
+        flush();
+    }
+    // The ratio estimator: the exact unoccluded irradiance times the fraction of the drawn
+    // samples' unoccluded sum that is visible, per channel; their plain mean where none
+    // reached a light (nothing to say about visibility) or the formula has no value.
+    if (visible == 0) return {0, 0, 0};  // what the ratio (or the mean) gives: no formula needed
+    const Vec3f exact = unoccluded_irradiance(hit.p, hit.n);
+    const int drawn = agreed ? probes : samples;
+    for (int a = 0; a < 3; ++a) {
+        const float r = E[a] / unoccluded[a];
+        E[a] = unoccluded[a] > 0 && std::isfinite(exact[a]) && std::isfinite(r) ? exact[a] * std::min(r, 1.0f)
+                                                                                : E[a] / float(drawn);
+    }
+    return E;
 }
 
 void Gallery::require_lit() const {
@@ -620,6 +738,7 @@ void Gallery::bake(const BakeSettings& s) {
     require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
     require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
             "Gallery.bake: light_samples must be in [1, 65536]");
+    require(s.shadow_probes >= 0 && s.shadow_probes <= 1 << 16, "Gallery.bake: shadow_probes must be in [0, 65536]");
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
     require_lit();
@@ -644,7 +763,11 @@ void Gallery::bake(const BakeSettings& s) {
                     " lattice points");
     }
     const std::uint64_t total = offset[tris];
-    std::vector<Vec3f> front(total), back(total);
+    // On the previous bake's storage (its pages were a twentieth of a fine bake when fresh);
+    // the gallery is unbaked until this bake completes.
+    std::vector<Vec3f> front = std::move(bake_front_), back = std::move(bake_back_);
+    bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
+    front.assign(total, Vec3f(0, 0, 0)), back.assign(total, Vec3f(0, 0, 0));
     // gather_stride s > 1: the gathers on the sub-lattice of the points whose i and j are
     // multiples of s (n / s segments), interpolated onto the others after the direct light.
     std::vector<std::uint64_t> sub_offset(tris + 1, 0);
@@ -700,7 +823,7 @@ void Gallery::bake(const BakeSettings& s) {
                     if (!(reachable[t] >> side & 1)) continue;  // stays zero
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
-                    Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c)
+                    Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c, s.analytic_direct ? s.shadow_probes : -1)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
                     if (stride == 1) E += indirect(h.p, h.n, heap, detail);
                     else if (i % stride == 0 && j % stride == 0)

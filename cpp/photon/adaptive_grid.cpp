@@ -31,7 +31,7 @@ std::int64_t cell_floor(float u, std::int64_t g) {
 }  // namespace
 
 AdaptiveGrid::AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius,
-                           AdaptiveGrid* recycle)
+                           AdaptiveGrid* recycle, unsigned threads)
     : r_(radius) {
     if (recycle) {
         start_ = std::move(recycle->start_), photons_ = std::move(recycle->photons_);
@@ -62,14 +62,14 @@ AdaptiveGrid::AdaptiveGrid(const std::vector<Photon>& photons, float radius, flo
         // Seed-sized cells (or coarser if they would be many) first, of the positions alone
         // (a sixth of the photons' bytes); the photons found around a sample of photons
         // decide the edge of the grid then built.
-        build(photons, radius, true);
+        build(photons, radius, true, threads);
         const std::size_t n = photons.size(), samples = std::min<std::size_t>(n, 256);
         double found = 0;
         for (std::size_t i = 0; i < samples; ++i) found += double(count_in_radius(photons[i * n / samples].p, radius * radius));
         const float k = cells_for_density(samples ? found / double(samples) : 0.0);
-        build(photons, radius / k);
+        build(photons, radius / k, false, threads);
     } else {
-        build(photons, radius / cells_per_radius);
+        build(photons, radius / cells_per_radius, false, threads);
     }
 }
 
@@ -79,7 +79,7 @@ std::uint64_t AdaptiveGrid::cells_for(float edge) const {
     return cells > 1e18 ? std::numeric_limits<std::uint64_t>::max() : std::uint64_t(cells);
 }
 
-void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge, bool positions_only) {
+void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge, bool positions_only, unsigned threads) {
     const std::size_t n = photons.size();
     // Coarser cells when the table would be large, or when a scene far from the origin makes
     // the rounding of cell coordinates (pad_) a sizeable part of a cell.
@@ -103,26 +103,27 @@ void AdaptiveGrid::build(const std::vector<Photon>& photons, float edge, bool po
 
     const std::uint64_t cells = std::uint64_t(g_[0]) * std::uint64_t(g_[1]) * std::uint64_t(g_[2]);
     std::vector<std::uint64_t> key(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        std::int64_t c[3];
-        for (int a = 0; a < 3; ++a)
-            c[a] = std::clamp<std::int64_t>(cell_floor((photons[i].p[a] - origin_[a]) * inv_h_, g_[a]), 0, g_[a] - 1);
-        key[i] = std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]);
-    }
+    const unsigned parts = threads == 0 ? default_threads() : threads;
+    parallel_for(n, std::size_t(1) << 15, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+            std::int64_t c[3];
+            for (int a = 0; a < 3; ++a)
+                c[a] = std::clamp<std::int64_t>(cell_floor((photons[i].p[a] - origin_[a]) * inv_h_, g_[a]), 0,
+                                                g_[a] - 1);
+            key[i] = std::uint64_t((c[2] * g_[1] + c[1]) * g_[0] + c[0]);
+        }
+    }, parts);
     if (!positions_only) {
-        sort_photons_by_key(photons, key, cells, start_, photons_, {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_});
+        sort_photons_by_key(photons, key, cells, start_, photons_, {&px_, &py_, &pz_, &nx_, &ny_, &nz_, &pr_, &pg_, &pb_},
+                            parts);
         return;
     }
     // The same counting sort, positions only (enough for count_in_radius).
-    start_.assign(cells + 1, 0);
-    for (std::uint64_t k : key) ++start_[k + 1];
-    for (std::uint64_t i = 0; i < cells; ++i) start_[i + 1] += start_[i];
-    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
     px_.resize(n), py_.resize(n), pz_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t j = fill[key[i]]++;
-        px_[j] = photons[i].p.x, py_[j] = photons[i].p.y, pz_[j] = photons[i].p.z;
-    }
+    float* x = px_.data(); float* y = py_.data(); float* z = pz_.data();
+    counting_sort(key, cells, start_, parts, [&](std::size_t i, std::uint32_t j) {
+        x[j] = photons[i].p.x, y[j] = photons[i].p.y, z[j] = photons[i].p.z;
+    });
 }
 
 std::uint64_t AdaptiveGrid::count_in_radius(Vec3f q, float r2) const {

@@ -36,8 +36,9 @@ public:
     // dense; when its cells would exceed max(2^16, 4 * photons) the cells are made coarser.
     // recycle (if given) hands over its storage, whose capacity the new grid reuses (a
     // gallery relit: no fresh pages to fault in); it is left without photons, only to be destroyed.
+    // threads (0: all cores) build it: the same grid on any number (counting_sort).
     AdaptiveGrid(const std::vector<Photon>& photons, float radius, float cells_per_radius = 0,
-                 AdaptiveGrid* recycle = nullptr);
+                 AdaptiveGrid* recycle = nullptr, unsigned threads = 1);
 
     float radius() const { return r_; }
     float cell_edge() const { return h_; }
@@ -91,7 +92,7 @@ private:
     template <bool CheckNormal>
     Vec3f sum(Vec3f q, Vec3f n, float r2, float* count) const;
     // positions_only: start_ and px_, py_, pz_ alone, for count_in_radius.
-    void build(const std::vector<Photon>& photons, float edge, bool positions_only = false);
+    void build(const std::vector<Photon>& photons, float edge, bool positions_only, unsigned threads);
     // How many photons lie within sqrt(r2) of q (what sum_in_radius counts).
     std::uint64_t count_in_radius(Vec3f q, float r2) const;
     std::uint64_t cells_for(float edge) const;

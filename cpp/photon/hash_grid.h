@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/parallel.h"
 #include "photon/photon_tracer.h"
 
 namespace gigascroll {
@@ -22,29 +23,78 @@ struct PhotonRun {
     std::uint64_t begin, end;
 };
 
+// A stable counting sort of indices 0..n-1 by key (every key < keys): start[k] the exclusive
+// prefix sum of the counts (keys + 1 entries), and place(i, j) called once per i with its
+// sorted position j. threads > 1 (0: all cores) sorts on several threads when the keys are
+// few beside the indices (a count table per thread): each thread's indices go after the
+// earlier threads' within every key, so the positions are the serial sort's, whatever the
+// thread count.
+template <class Index, class Place>
+void counting_sort(const std::vector<std::uint64_t>& key, std::uint64_t keys, std::vector<Index>& start,
+                   unsigned threads, Place&& place) {
+    const std::size_t n = key.size();
+    const unsigned parts = threads == 0 ? default_threads() : threads;
+    start.assign(keys + 1, 0);
+    if (parts < 2 || n < (std::size_t(1) << 16) || keys > n / 8) {
+        for (std::uint64_t k : key) ++start[k + 1];
+        for (std::uint64_t i = 0; i < keys; ++i) start[i + 1] += start[i];
+        std::vector<Index> fill(start.begin(), start.end() - 1);
+        for (std::size_t i = 0; i < n; ++i) place(i, fill[key[i]]++);
+        return;
+    }
+    // Part p (indices [p n / parts, (p + 1) n / parts)) counts its keys, then fills key k from
+    // start[k] plus the earlier parts' counts of k.
+    std::vector<std::vector<Index>> fill(parts);
+    auto part = [&](std::size_t p) { return std::pair{p * n / parts, (p + 1) * n / parts}; };
+    parallel_for(parts, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t p = b; p < e; ++p) {
+            fill[p].assign(keys, 0);
+            const auto [i0, i1] = part(p);
+            for (std::size_t i = i0; i < i1; ++i) ++fill[p][key[i]];
+        }
+    }, parts);
+    Index running = 0;
+    for (std::uint64_t k = 0; k < keys; ++k) {
+        start[k] = running;
+        for (unsigned p = 0; p < parts; ++p) {
+            const Index c = fill[p][k];
+            fill[p][k] = running;
+            running += c;
+        }
+    }
+    start[keys] = running;
+    parallel_for(parts, 1, [&](std::size_t b, std::size_t e) {
+        for (std::size_t p = b; p < e; ++p) {
+            const auto [i0, i1] = part(p);
+            Index* f = fill[p].data();
+            for (std::size_t i = i0; i < i1; ++i) place(i, f[key[i]]++);
+        }
+    }, parts);
+}
+
 // The structure-of-arrays grids' storage: `photons` counting-sorted by key (every key < keys)
 // into `sorted`, start[k] the exclusive prefix sum of the counts (keys + 1 entries), and the
 // sorted photons' position, normal and power components in `lanes` (px, py, pz, nx, ny, nz,
-// pr, pg, pb). One routine, so both grids store photons in the same order.
+// pr, pg, pb). One routine, so both grids store photons in the same order; threads as in
+// counting_sort (the same order on any number).
 template <class Index>
 void sort_photons_by_key(const std::vector<Photon>& photons, const std::vector<std::uint64_t>& key,
                          std::uint64_t keys, std::vector<Index>& start, std::vector<Photon>& sorted,
-                         const std::array<std::vector<float>*, 9>& lanes) {
+                         const std::array<std::vector<float>*, 9>& lanes, unsigned threads = 1) {
     const std::size_t n = photons.size();
-    start.assign(keys + 1, 0);
-    for (std::uint64_t k : key) ++start[k + 1];
-    for (std::uint64_t i = 0; i < keys; ++i) start[i + 1] += start[i];
-    std::vector<Index> fill(start.begin(), start.end() - 1);
     sorted.resize(n);
-    for (std::size_t i = 0; i < n; ++i) sorted[fill[key[i]]++] = photons[i];
+    Photon* out = sorted.data();
+    counting_sort(key, keys, start, threads, [&](std::size_t i, Index j) { out[j] = photons[i]; });
     for (auto* v : lanes) v->resize(n);
     auto& [px, py, pz, nx, ny, nz, pr, pg, pb] = lanes;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Photon& p = sorted[i];
-        (*px)[i] = p.p.x, (*py)[i] = p.p.y, (*pz)[i] = p.p.z;
-        (*nx)[i] = p.n.x, (*ny)[i] = p.n.y, (*nz)[i] = p.n.z;
-        (*pr)[i] = p.power.x, (*pg)[i] = p.power.y, (*pb)[i] = p.power.z;
-    }
+    parallel_for(n, std::size_t(1) << 15, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+            const Photon& p = out[i];
+            (*px)[i] = p.p.x, (*py)[i] = p.p.y, (*pz)[i] = p.p.z;
+            (*nx)[i] = p.n.x, (*ny)[i] = p.n.y, (*nz)[i] = p.n.z;
+            (*pr)[i] = p.power.x, (*pg)[i] = p.power.y, (*pb)[i] = p.power.z;
+        }
+    }, threads == 0 ? default_threads() : threads);
 }
 
 // Sum over the runs of weight(j) * power_j, the weights' sum into *count (if not null). The

@@ -26,12 +26,12 @@ bool parse_gather_is_knn(const std::string& s) {
 }
 
 PhotonMap::PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind, HashGrid::Mode mode,
-                     PhotonMap* recycle) {
+                     PhotonMap* recycle, unsigned threads) {
     require(std::isfinite(radius) && radius > 0.0f, "PhotonMap: radius must be positive and finite");
     if (kind == GridKind::Hash) grid_ = std::make_unique<HashGrid>(photons, radius, mode);
     else if (kind == GridKind::Adaptive)
         adaptive_ = std::make_unique<AdaptiveGrid>(photons, radius, 0.0f,
-                                                   recycle ? recycle->adaptive_.get() : nullptr);
+                                                   recycle ? recycle->adaptive_.get() : nullptr, threads);
     else kd_ = std::make_unique<KdTree>(photons);
 }
 

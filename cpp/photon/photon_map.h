@@ -33,9 +33,10 @@ struct GatherSettings {
 class PhotonMap {
 public:
     // recycle (if given): a map about to be destroyed whose adaptive grid's storage the new
-    // adaptive grid reuses (AdaptiveGrid's recycle).
+    // adaptive grid reuses (AdaptiveGrid's recycle); threads build the adaptive grid (0: all
+    // cores; the same grid on any number).
     PhotonMap(const std::vector<Photon>& photons, float radius, GridKind kind,
-              HashGrid::Mode mode = HashGrid::Mode::Auto, PhotonMap* recycle = nullptr);
+              HashGrid::Mode mode = HashGrid::Mode::Auto, PhotonMap* recycle = nullptr, unsigned threads = 1);
 
     std::size_t size() const { return photons().size(); }
     // The structure in use: exactly one of these is not null.

@@ -125,6 +125,15 @@ void Scene::commit() {
     weight_total_ = float(total);
     if (total > 0)
         for (float& c : emitter_cdf_) c = float(c / total);
+    if (!emitters_.empty()) {
+        std::size_t buckets = 1;
+        while (buckets < 2 * emitters_.size() && buckets < (std::size_t(1) << 16)) buckets *= 2;
+        emitter_guide_.resize(buckets + 1);
+        for (std::size_t b = 0; b <= buckets; ++b)
+            emitter_guide_[b] = std::uint32_t(
+                std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), float(b) / float(buckets)) -
+                emitter_cdf_.begin());
+    }
     committed_ = true;
 }
 
@@ -136,16 +145,20 @@ namespace {
 // Embree aborts the process (its ray.valid() assertion) on a ray with a NaN, infinite or
 // larger than ~1.8e18 component. Rays of the core start at bounded cameras and scenes, so
 // this only fails for a bug or a caller's own ray: a ValueError then, never an abort.
-void require_valid_ray(Vec3f o, Vec3f d, float tfar) {
-    constexpr float kLimit = 1e18f;
-    const bool ok = std::abs(o.x) <= kLimit && std::abs(o.y) <= kLimit && std::abs(o.z) <= kLimit &&
-                    std::abs(d.x) <= kLimit && std::abs(d.y) <= kLimit && std::abs(d.z) <= kLimit &&
-                    max_component(vabs(d)) > 0 && !std::isnan(tfar);
-    if (!ok)
-        throw InvalidArgument("ray origin and direction must be finite and within +-1e18, the direction "
+// The message out of line and cold, the test inline and without branches: it runs before
+// every ray (3% of a fine bake as a call).
+[[gnu::noinline, gnu::cold]] void throw_invalid_ray(Vec3f o, Vec3f d) {
+    throw InvalidArgument("ray origin and direction must be finite and within +-1e18, the direction "
                               "non-zero (got origin (" + std::to_string(o.x) + ", " + std::to_string(o.y) +
                               ", " + std::to_string(o.z) + "), direction (" + std::to_string(d.x) + ", " +
                               std::to_string(d.y) + ", " + std::to_string(d.z) + "))");
+}
+inline void require_valid_ray(Vec3f o, Vec3f d, float tfar) {
+    constexpr float kLimit = 1e18f;
+    const bool ok = (std::abs(o.x) <= kLimit) & (std::abs(o.y) <= kLimit) & (std::abs(o.z) <= kLimit) &
+                    (std::abs(d.x) <= kLimit) & (std::abs(d.y) <= kLimit) & (std::abs(d.z) <= kLimit) &
+                    (max_component(vabs(d)) > 0) & !std::isnan(tfar);
+    if (!ok) [[unlikely]] throw_invalid_ray(o, d);
 }
 }  // namespace
 
@@ -198,16 +211,54 @@ bool Scene::occluded(Vec3f o, Vec3f d, float tfar) const {
     return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
 }
 
+void Scene::occluded16(int count, const Vec3f* o, const Vec3f* d, const float* tfar, bool* out) const {
+    GS_CHECK(count >= 0 && count <= 16);
+    if (count == 0) return;
+    alignas(64) int valid[16];
+    alignas(64) RTCRay16 ray;
+    for (int k = 0; k < 16; ++k) {
+        const int i = k < count ? k : 0;  // idle lanes repeat ray 0 (valid = 0: not traced)
+        if (k < count) require_valid_ray(o[i], d[i], tfar[i]);
+        valid[k] = k < count ? -1 : 0;
+        ray.org_x[k] = o[i].x, ray.org_y[k] = o[i].y, ray.org_z[k] = o[i].z;
+        ray.dir_x[k] = d[i].x, ray.dir_y[k] = d[i].y, ray.dir_z[k] = d[i].z;
+        ray.tnear[k] = 0.0f, ray.tfar[k] = tfar[i], ray.time[k] = 0.0f;
+        ray.mask[k] = 0xffffffffu, ray.id[k] = unsigned(k), ray.flags[k] = 0;
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded16(valid, scene_, &ctx, &ray);
+    for (int k = 0; k < count; ++k) out[k] = ray.tfar[k] < 0.0f;
+}
+
 LightSample Scene::sample_emitter(float u_tri, float u1, float u2) const {
     LightSample s;
     if (emitters_.empty()) return s;
-    const auto it = std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u_tri);
-    const std::size_t i = std::min<std::size_t>(std::size_t(it - emitter_cdf_.begin()), emitters_.size() - 1);
-    const std::uint32_t t = emitters_[i];
-    if (u1 + u2 > 1.0f) {  // fold the unit square onto the triangle
-        u1 = 1.0f - u1;
-        u2 = 1.0f - u2;
+    std::size_t found;
+    const std::size_t buckets = emitter_guide_.size() - 1;
+    if (emitter_cdf_.size() <= 16) {
+        // A few emitters (a room's lights): upper_bound's index is the number of entries that
+        // u_tri is not below (the cdf is sorted; a NaN u counts them all, as upper_bound
+        // returns the end for it), counted without branches.
+        found = 0;
+        for (const float c : emitter_cdf_) found += !(u_tri < c);
+    } else if (u_tri >= 0.0f && u_tri < 1.0f) {
+        // u * K is exact (K a power of two), so bucket b holds u: cdf entries before
+        // guide[b] are <= b / K <= u, and the entry at guide[b + 1] is > (b + 1) / K > u.
+        const auto b = std::min(std::size_t(u_tri * float(buckets)), buckets - 1);
+        const float* lo = emitter_cdf_.data() + emitter_guide_[b];
+        const float* hi = emitter_cdf_.data() + emitter_guide_[b + 1];
+        found = std::size_t(std::upper_bound(lo, hi, u_tri) - emitter_cdf_.data());
+    } else {
+        found = std::size_t(std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u_tri) - emitter_cdf_.begin());
     }
+    const std::size_t i = std::min<std::size_t>(found, emitters_.size() - 1);
+    const std::uint32_t t = emitters_[i];
+    // Fold the unit square onto the triangle, as selects (the photon pass's fold is a coin
+    // flip for the branch predictor).
+    const bool fold = u1 + u2 > 1.0f;
+    u1 = fold ? 1.0f - u1 : u1;
+    u2 = fold ? 1.0f - u2 : u2;
     s.tri = t;
     s.p = tri_v0_[i] + tri_e1_[i] * u1 + tri_e2_[i] * u2;
     s.n = normal_[t];

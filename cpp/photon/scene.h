@@ -65,6 +65,9 @@ public:
     bool intersect_checked(Vec3f o, Vec3f d, Hit& hit) const;
     // True when something blocks o + t d for t in (0, tfar).
     bool occluded(Vec3f o, Vec3f d, float tfar) const;
+    // occluded() for count <= 16 rays at once (one Embree packet: rays from one point to
+    // one light share most of their traversal): out[k] for ray k.
+    void occluded16(int count, const Vec3f* o, const Vec3f* d, const float* tfar, bool* out) const;
 
     // Picks an emissive triangle in proportion to its power, then a uniform point on it.
     LightSample sample_emitter(float u_tri, float u1, float u2) const;
@@ -117,6 +120,12 @@ private:
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // emitters only, indexed like emitters_
     std::vector<std::uint32_t> emitters_;
     std::vector<float> emitter_cdf_;
+    // A guide table over emitter_cdf_ (the cutpoint method): entry b is the index
+    // std::upper_bound finds for b / K, K = emitter_guide_.size() - 1 a power of two, so a
+    // u in [b / K, (b + 1) / K) is searched between entries b and b + 1 only: the same
+    // index as the whole binary search, in a step or two (the search's mispredicted
+    // branches were 5% of a fine bake's 2.7 M emitter samples).
+    std::vector<std::uint32_t> emitter_guide_;
     Vec3f power_{0, 0, 0};
     float weight_total_ = 0;
     bool reflects_ = false;

@@ -98,9 +98,12 @@ def test_hostile_render_arguments(lit, pack):
        gather_stride=st.one_of(st.integers(-1, 4), floats, st.booleans()),
        stratified=st.booleans(), skip_unlit=st.booleans(),
        inset_edges=st.one_of(st.booleans(), st.none(), st.integers(-1, 2), st.text(max_size=3)),
-       coarse_disc=st.one_of(st.booleans(), st.none(), st.integers(-1, 2), floats), disc=st.booleans())
+       coarse_disc=st.one_of(st.booleans(), st.none(), st.integers(-1, 2), floats), disc=st.booleans(),
+       analytic_direct=st.one_of(st.booleans(), st.none(), st.integers(-1, 2)),
+       shadow_probes=st.one_of(st.integers(-2, 40), st.sampled_from([65537, 1 << 40]), floats, st.booleans()))
 def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, gather_stride, stratified,
-                                                  skip_unlit, inset_edges, coarse_disc, disc):
+                                                  skip_unlit, inset_edges, coarse_disc, disc, analytic_direct,
+                                                  shadow_probes):
     gal = Gallery.from_room(box_room(), pack)
     vt = g.VirtualTexture(pack)
     gal.light(vt, photons=2000, disc=disc)
@@ -108,11 +111,14 @@ def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, 
         spacing = max(spacing, 0.05)  # finer lattices only cost time
     try:
         gal.bake(spacing=spacing, light_samples=light_samples, gather_stride=gather_stride,
-                 stratified=stratified, skip_unlit=skip_unlit, inset_edges=inset_edges, coarse_disc=coarse_disc)
+                 stratified=stratified, skip_unlit=skip_unlit, inset_edges=inset_edges, coarse_disc=coarse_disc,
+                 analytic_direct=analytic_direct, shadow_probes=shadow_probes)
     except ValueError:
         assert not gal.baked
         return
-    assert isinstance(inset_edges, bool) and isinstance(coarse_disc, bool)  # anything else is refused
+    # Anything else is refused.
+    assert isinstance(inset_edges, bool) and isinstance(coarse_disc, bool) and isinstance(analytic_direct, bool)
+    assert isinstance(shadow_probes, int) and not isinstance(shadow_probes, bool) and 0 <= shadow_probes <= 1 << 16
     img = gal.render_display(gal.camera((6, 4)), vt, lighting="baked")
     assert np.isfinite(img).all() and (img >= 0).all() and img.max() > 0
 

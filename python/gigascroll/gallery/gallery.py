@@ -165,7 +165,8 @@ class Gallery(_core._Gallery):
 
     def bake(self, spacing: float | None = None, light_samples: int = 16, threads: int = 0,
              progress: bool = False, stratified: bool = True, skip_unlit: bool = True,
-             gather_stride: int = 1, inset_edges: bool = True, coarse_disc: bool = False) -> dict:
+             gather_stride: int = 1, inset_edges: bool = True, coarse_disc: bool = False,
+             analytic_direct: bool = True, shadow_probes: int = 4) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
         point with `light_samples` emitter samples plus the photon gather. stratified: the
@@ -178,8 +179,13 @@ class Gallery(_core._Gallery):
         (where surfaces meet, the point on the edge also lies on the neighbour's plane: shadow
         rays and the disc's clipping rays graze it); False: on the edge. coarse_disc (with
         light(disc=True)): the bake's discs clipped with at most 32 rays instead of 128 (about
-        half the bake's time, a little more error). progress=True shows a tqdm bar over the
-        lattice rows. Returns `stats`."""
+        half the bake's time, a little more error). analytic_direct (with stratified): the
+        emitters' exact unoccluded irradiance (Lambert's polygon formula) times the visible
+        fraction of the samples' contribution (Heitz et al. 2018's ratio estimator): no noise
+        where a point sees all of the light or none of it; False: the samples' plain mean.
+        shadow_probes (with analytic_direct): that many samples' shadow rays first; when they
+        all agree (all lit or all shadowed) the point's other samples are skipped (0: never).
+        progress=True shows a tqdm bar over the lattice rows. Returns `stats`."""
         s = 0.0 if spacing is None else float(spacing)
         if not math.isfinite(s) or s < 0 or (spacing is not None and s == 0):
             raise ValueError(f"spacing must be positive and finite, got {spacing!r}")
@@ -187,11 +193,16 @@ class Gallery(_core._Gallery):
             raise ValueError(f"light_samples must be an integer, got {light_samples!r}")
         if isinstance(gather_stride, bool) or gather_stride not in (1, 2, 4, 8):
             raise ValueError(f"gather_stride must be 1, 2, 4 or 8, got {gather_stride!r}")
-        for name, value in (("inset_edges", inset_edges), ("coarse_disc", coarse_disc)):
+        for name, value in (("inset_edges", inset_edges), ("coarse_disc", coarse_disc),
+                            ("analytic_direct", analytic_direct)):
             if not isinstance(value, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {value!r}")
+        if isinstance(shadow_probes, bool) or not isinstance(shadow_probes, (int, np.integer)) \
+                or not 0 <= shadow_probes <= 1 << 16:
+            raise ValueError(f"shadow_probes must be an integer in [0, 65536], got {shadow_probes!r}")
         args = (s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit),
-                int(gather_stride), bool(inset_edges), bool(coarse_disc))
+                int(gather_stride), bool(inset_edges), bool(coarse_disc), bool(analytic_direct),
+                int(shadow_probes))
         if not progress:
             self._bake(*args)
             return self.stats

@@ -409,3 +409,35 @@ TEST(AdaptiveGrid, ARecycledGridAnswersAsAFreshOne) {
         previous = std::move(recycled);
     }
 }
+
+// Above 2^16 photons and with few cells per photon the build sorts on several threads: the
+// same storage order as a serial build (so the same sums, bit for bit), and the set brute
+// force finds.
+TEST(AdaptiveGrid, ABuildOnSeveralThreadsEqualsASerialOne) {
+    const std::vector<Photon> ph = random_photons(150000, 11);
+    for (float k : {0.0f, 0.5f, 2.0f}) {
+        const AdaptiveGrid serial(ph, 0.05f, k, nullptr, 1);
+        for (unsigned threads : {2u, 3u, 0u}) {
+            const AdaptiveGrid parallel(ph, 0.05f, k, nullptr, threads);
+            ASSERT_EQ(parallel.cell_count(), serial.cell_count());
+            ASSERT_EQ(parallel.size(), serial.size());
+            for (std::size_t i = 0; i < ph.size(); ++i) {
+                ASSERT_EQ(parallel.photons()[i].p.x, serial.photons()[i].p.x) << i;
+                ASSERT_EQ(parallel.photons()[i].p.y, serial.photons()[i].p.y) << i;
+                ASSERT_EQ(parallel.photons()[i].p.z, serial.photons()[i].p.z) << i;
+            }
+        }
+        const AdaptiveGrid parallel(ph, 0.05f, k, nullptr, 2);
+        std::mt19937 rng(5);
+        std::uniform_real_distribution<float> u(-1, 1);
+        for (int q = 0; q < 20; ++q) {
+            const Vec3f x(u(rng), u(rng), 0.3f * u(rng));
+            expect_equal(found(parallel, x, 0.05f * 0.05f), brute(ph, x, 0.05f * 0.05f));
+            float cs = 0, cp = 0;
+            const Vec3f ss = serial.sum_in_radius(x, 0.0025f, &cs), sp = parallel.sum_in_radius(x, 0.0025f, &cp);
+            EXPECT_EQ(ss.x, sp.x);
+            EXPECT_EQ(cs, cp);
+            EXPECT_EQ(cp, float(brute(ph, x, 0.0025f).size()));
+        }
+    }
+}
