@@ -533,7 +533,7 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
     width = w, height = h;
     const std::size_t n = std::size_t(w) * h;
     geom.resize(n), p.resize(n), lod.resize(n);
-    if (keep_light) lod_right.resize(n), scale.resize(n), add.resize(n);
+    if (keep_light) scale.resize(n), add.resize(n);
 }
 
 namespace {
@@ -554,6 +554,7 @@ struct RowScratch {
     std::vector<std::uint32_t> rx;
     std::vector<int> rpl;
     std::vector<std::int32_t> rsrc;
+    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz;
     std::vector<float> rlod;
     // The right eye's edge release: one row of claimed depths (with an infinite depth either
     // side) and the row minima of the last three claim rows (row r in slot r % 3).
@@ -566,6 +567,7 @@ struct RowScratch {
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
+            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz}) a->resize(w);
             depths.resize(w + 2);
             for (auto& m : row_min) m.resize(w);
         }
@@ -673,13 +675,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     std::vector<PlaneMap> maps;
     maps.reserve(scene.paintings.size());
     for (const PaintingPlacement& pp : scene.paintings) maps.emplace_back(pp, eye);
-    // A left eye that the right eye reuses maps its painting hits into the right eye's levels
-    // of detail too (the right eye's own plane maps, the same operations as its row loop).
-    std::vector<PlaneMap> maps_right;
-    if (claim_into) {
-        maps_right.reserve(scene.paintings.size());
-        for (const PaintingPlacement& pp : scene.paintings) maps_right.emplace_back(pp, *claim_into);
-    }
     const GBuffer* left = reusing_ ? &g_[0] : nullptr;
     // The right eye: its claims released row by row just before the row is rendered (the
     // claims of the rows above and below are read, so a worker resets the claims of its
@@ -713,11 +708,13 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
         std::vector<double>&us = sc.us, &vs = sc.vs;  // u and v apart: the sampler's batches read them densely
         std::vector<float>&lods = sc.lods, &texels = sc.texels;
-        // The right eye's reused painting pixels of the row that sample their own texel:
-        // column, placement, left source and level.
+        // The right eye's reused painting pixels of the row: column, placement, left source,
+        // point, direction, and uv and level.
         std::vector<std::uint32_t>& rx = sc.rx;
         std::vector<int>& rpl = sc.rpl;
         std::vector<std::int32_t>& rsrc = sc.rsrc;
+        std::vector<double>&rPx = sc.rPx, &rPy = sc.rPy, &rPz = sc.rPz, &rDx = sc.rDx, &rDy = sc.rDy,
+                          &rDz = sc.rDz;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
         Vec3d row_dir;
@@ -861,35 +858,12 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 pj[np] = j, ppl[np] = pl;
                 ++np;
             }
-            // For the right eye (a left eye it reuses): the same lanes' points seen from the
-            // right eye, D = (p - eye) / ((p - eye) . forward) as its row loop computes it
-            // from the kept point, mapped to its level of detail.
-            alignas(64) double RDx[16], RDy[16], RDz[16];
-            alignas(64) float rlod[16];
-            if (claim && np) {
-                const double ex = claim_into->position.x, ey = claim_into->position.y,
-                             ez = claim_into->position.z;
-                const double fx = claim_into->forward.x, fy = claim_into->forward.y,
-                             fz = claim_into->forward.z;
-                for (std::uint32_t q = 0; q < np; ++q) {
-                    const std::uint32_t k = lane[pj[q]];
-                    RDx[q] = double(hx[k]), RDy[q] = double(hy[k]), RDz[q] = double(hz[k]);
-                }
-                for (std::uint32_t q = 0; q < np; ++q) {
-                    const double tx = RDx[q] - ex, ty = RDy[q] - ey, tz = RDz[q] - ez;
-                    const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
-                    RDx[q] = tx * inv, RDy[q] = ty * inv, RDz[q] = tz * inv;
-                }
-            }
             for (std::uint32_t r0 = 0; r0 < np;) {
                 const int pl = ppl[r0];
                 std::uint32_t r1 = r0 + 1;
                 while (r1 < np && ppl[r1] == pl) ++r1;
                 maps[std::size_t(pl)].map_lanes(r1 - r0, Dx + r0, Dy + r0, Dz + r0, pu + r0,
                                                 pv + r0, plod + r0);
-                if (claim)
-                    maps_right[std::size_t(pl)].lod_lanes(r1 - r0, RDx + r0, RDy + r0, RDz + r0,
-                                                          rlod + r0);
                 r0 = r1;
             }
             if (m && baked) lattice.blend(*baked, ll);
@@ -903,10 +877,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 lod_out[i] = kNaN;
             }
             // The painting pixels' levels (with the bias; a non-finite level samples level 0)
-            // stored and their texels queued; for the right eye their level there, and their
-            // light where the right eye would sample its own texel (the test of its row loop).
-            float* __restrict const lod_right_out = keep_light ? g.lod_right.data() : nullptr;
-            const float tolerance = o.reuse_lod_tolerance;
+            // stored, their texels queued, and their light kept for the right eye.
             Vec3f* __restrict const scale_out = keep_light ? g.scale.data() : nullptr;
             Vec3f* __restrict const add_out = keep_light ? g.add.data() : nullptr;
             PendingPixel* __restrict const pend = pending.data();
@@ -921,18 +892,13 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const std::size_t i = row_start + k;
                 const Vec3f scale = Vec3f{ll.Ex[k], ll.Ey[k], ll.Ez[k]} * kInvPi;
                 const Vec3f emission{ll.mx[k], ll.my[k], ll.mz[k]};
+                if (keep_light) {
+                    scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
+                    add_out[i].x = emission.x, add_out[i].y = emission.y, add_out[i].z = emission.z;
+                }
                 float lod = plod[q] + bias;
                 if (!std::isfinite(lod)) lod = 0.0f;
                 lod_out[i] = lod;
-                if (keep_light) {
-                    lod_right_out[i] = rlod[q];
-                    float lod_r = rlod[q] + bias;
-                    if (!std::isfinite(lod_r)) lod_r = 0.0f;
-                    if (!(std::abs(lod - lod_r) <= tolerance)) [[unlikely]] {
-                        scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
-                        add_out[i].x = emission.x, add_out[i].y = emission.y, add_out[i].z = emission.z;
-                    }
-                }
                 PendingPixel& pp = pend[pc];
                 pp.x = i0 + k, pp.placement = ppl[q];
                 pp.scale = scale, pp.add = emission;
@@ -967,19 +933,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         auto on_row = [&](std::size_t row) {
             lap(t_rays);
             start_row(row);
-            // The right eye's claimed pixels: the left hit and its light, and the level of this
-            // eye, which the left eye computed for the point as this eye sees it. A reused point
-            // whose level here is the left eye's to within the tolerance keeps the left eye's
-            // sample (the trilinear blend would move by less than that fraction of the two
-            // levels' difference); with the left eye's texel, light and shading its radiance is
-            // the left pixel's, copied. The others (rare) sample their own texel under the left
-            // light, at uv from their point. The buffers in restrict locals: through the
-            // captured references every store forced their reload.
+            // The right eye's claimed pixels: the left hit and its light, the level of this eye
+            // (the point seen along this eye's ray through it), the painting pixels' level in
+            // SIMD lanes per run of one painting (PlaneMap::lod_lanes, as the left eye's
+            // packets). The buffers in restrict locals: through the captured references every
+            // store forced their reload.
             if (left) {
                 const std::int32_t* __restrict src = sources + row * w;
                 const unsigned* __restrict lgeom = left->geom.data();
+                const Vec3f* __restrict lp = left->p.data();
                 const float* __restrict llod = left->lod.data();
-                const float* __restrict llod_right = left->lod_right.data();
                 const float* __restrict lrgb = left_rgb;
                 unsigned* __restrict geom_out = g.geom.data() + row * w;
                 float* __restrict lod_out = g.lod.data() + row * w;
@@ -989,9 +952,10 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 std::uint32_t* __restrict rxs = rx.data();
                 int* __restrict rpls = rpl.data();
                 std::int32_t* __restrict rsrcs = rsrc.data();
-                float* __restrict lods_r = rlod.data();
-                const float bias = o.lod_bias, tolerance = o.reuse_lod_tolerance;
-                std::size_t nr = 0, reused_here = 0, copied = 0;
+                double* __restrict px = rPx.data();
+                double* __restrict py = rPy.data();
+                double* __restrict pz = rPz.data();
+                std::size_t nr = 0, reused_here = 0;
                 for (std::uint32_t x = 0; x < w; ++x) {
                     const std::int32_t s = src[x];
                     if (s < 0) continue;
@@ -1000,41 +964,66 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     const unsigned geom = lgeom[si];
                     geom_out[x] = geom;  // the point stays in the left buffer (hit_points)
                     const int pl = geom < placements ? placement[geom] : -1;
-                    float lod = kNaN;
-                    if (pl >= 0) {
-                        lod = llod_right[si] + bias;
-                        if (!std::isfinite(lod)) lod = 0.0f;
-                    }
-                    lod_out[x] = lod;
-                    // Off paintings the left eye's radiance: the same light, the same albedo.
-                    if (pl < 0 || std::abs(llod[si] - lod) <= tolerance) [[likely]] {
+                    if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
                         rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
                         rgb_out[3 * x + 2] = lrgb[3 * si + 2];
-                        copied += pl >= 0;
+                        lod_out[x] = kNaN;
                         continue;
                     }
-                    rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s, lods_r[nr] = lod;
+                    const Vec3f& p = lp[si];
+                    rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s;
+                    px[nr] = p.x, py[nr] = p.y, pz[nr] = p.z;
                     ++nr;
                 }
                 hit_count += reused_here;
                 // D = (p - eye) / ((p - eye) . forward), as Vec3d's operators compute it.
-                const Vec3f* __restrict lp = left->p.data();
-                const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
-                const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
+                double* __restrict dx = rDx.data();
+                double* __restrict dy = rDy.data();
+                double* __restrict dz = rDz.data();
+                {
+                    const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
+                    const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
+                    for (std::size_t k = 0; k < nr; ++k) {
+                        const double tx = px[k] - ex, ty = py[k] - ey, tz = pz[k] - ez;
+                        const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
+                        dx[k] = tx * inv, dy[k] = ty * inv, dz[k] = tz * inv;
+                    }
+                }
+                float* __restrict lods_r = rlod.data();
+                for (std::size_t r0 = 0; r0 < nr;) {
+                    const int pl = rpls[r0];
+                    std::size_t r1 = r0 + 1;
+                    while (r1 < nr && rpls[r1] == pl) ++r1;
+                    maps[std::size_t(pl)].lod_lanes(r1 - r0, dx + r0, dy + r0, dz + r0, lods_r + r0);
+                    r0 = r1;
+                }
+                // A reused point whose level here is the left eye's to within the tolerance keeps
+                // the left eye's sample (the trilinear blend would move by less than that fraction
+                // of the two levels' difference); with the left eye's texel, light and shading its
+                // radiance is the left pixel's, copied. The others sample their own texel under
+                // the left light.
+                const float bias = o.lod_bias, tolerance = o.reuse_lod_tolerance;
+                std::size_t copied = 0;
                 for (std::size_t k = 0; k < nr; ++k) {
+                    const std::uint32_t x = rxs[k];
                     const std::size_t si = std::size_t(rsrcs[k]);
-                    const Vec3f& p = lp[si];
-                    const double tx = double(p.x) - ex, ty = double(p.y) - ey, tz = double(p.z) - ez;
-                    const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
-                    double d[3] = {tx * inv, ty * inv, tz * inv};
+                    float lod = lods_r[k] + bias;
+                    if (!std::isfinite(lod)) lod = 0.0f;
+                    lod_out[x] = lod;
+                    if (std::abs(llod[si] - lod) <= tolerance) {
+                        rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
+                        rgb_out[3 * x + 2] = lrgb[3 * si + 2];
+                        ++copied;
+                        continue;
+                    }
                     double u, v;
                     float unused;
-                    maps[std::size_t(rpls[k])].map_lanes(1, d, d + 1, d + 2, &u, &v, &unused);
+                    maps[std::size_t(rpls[k])].map_lanes(1, dx + k, dy + k, dz + k, &u, &v, &unused);
                     const std::size_t q = pending_count++;
                     GS_CHECK(q < w);  // one pixel per column and row
                     PendingPixel& pp = pending[q];
-                    pp.x = rxs[k], pp.placement = rpls[k];
-                    us[q] = u, vs[q] = v, lods[q] = lods_r[k];
+                    pp.x = x, pp.placement = rpls[k];
+                    us[q] = u, vs[q] = v, lods[q] = lod;
                     pp.scale = left->scale[si], pp.add = left->add[si];
                 }
                 copied_count += copied;

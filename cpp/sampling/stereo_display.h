@@ -200,14 +200,9 @@ private:
         std::vector<unsigned> geom;        // RTC_INVALID_GEOMETRY_ID: no hit
         std::vector<Vec3f> p;
         std::vector<float> lod;            // NaN off paintings
-        // Left eye only (keep_light): per painting pixel that claims a right pixel, the level
-        // of detail the right eye sees its point at (before the bias), computed while the
-        // hit is in registers, so that the right eye's reused pixels need neither the point
-        // nor a plane map; and only where that level differs from this eye's by more than
-        // reuse_lod_tolerance (a reused right pixel then samples its own texel under the
-        // left light; the others copy the left radiance), the light: radiance = linear
-        // albedo x scale + add.
-        std::vector<float> lod_right;
+        // Left eye only (keep_light): per painting pixel its light, radiance = linear albedo x
+        // scale + add (a reused right pixel whose level differs samples its own texel under
+        // the left light; one whose level agrees copies the left radiance).
         std::vector<Vec3f> scale, add;
         void resize(std::uint32_t w, std::uint32_t h, bool keep_light);
     };
