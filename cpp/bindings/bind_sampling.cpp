@@ -111,19 +111,23 @@ void bind_stereo_display(nb::module_& m) {
         .def("render_stereo", [](DisplayPass& d, const ExhibitionScene& scene, const DisplayLighting& lighting,
                                  const VirtualTexture& vt, const Camera& left, const Camera& right,
                                  bool reuse, bool srgb_albedo, float edge_depth_ratio, float lod_bias,
-                                 unsigned threads) {
+                                 float reuse_lod_tolerance, unsigned threads) {
             require(scene.committed(), "commit() the scene before the display pass");
             FreshArray<float, nb::ndim<3>> l({left.height, left.width, 3});
             FreshArray<float, nb::ndim<3>> r({right.height, right.width, 3});
-            const DisplayOptions o = display_options(srgb_albedo, edge_depth_ratio, lod_bias, threads);
+            DisplayOptions o = display_options(srgb_albedo, edge_depth_ratio, lod_bias, threads);
+            o.reuse_lod_tolerance = reuse_lod_tolerance;
             {
                 nb::gil_scoped_release release;
                 d.render_stereo(scene.view(), lighting, vt, left, right, reuse, o, l.data, r.data);
             }
             return nb::make_tuple(l.array, r.array); },
             "scene"_a, "lighting"_a, "vt"_a, "left"_a, "right"_a, "reuse"_a = true,
-            "srgb_albedo"_a = true, "edge_depth_ratio"_a = 0.05f, "lod_bias"_a = 0.0f, "threads"_a = 0,
-            "Both eyes: (left, right) float32 images; reuse=False traces the right eye in full.")
+            "srgb_albedo"_a = true, "edge_depth_ratio"_a = 0.05f, "lod_bias"_a = 0.0f,
+            "reuse_lod_tolerance"_a = DisplayOptions{}.reuse_lod_tolerance, "threads"_a = 0,
+            "Both eyes: (left, right) float32 images; reuse=False traces the right eye in full.\n"
+            "A reused right pixel keeps the left eye's texel where its level of detail is within\n"
+            "reuse_lod_tolerance of the left eye's (0: it always samples its own).")
         .def_prop_ro("left_stats", [](const DisplayPass& d) { return eye_stats(d.left_stats()); })
         .def_prop_ro("right_stats", [](const DisplayPass& d) { return eye_stats(d.right_stats()); })
         .def("reuse_sources", [](const DisplayPass& d) {

@@ -1143,6 +1143,8 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
             "display: both eyes need the same resolution");
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
             "display: edge_depth_ratio must be finite and >= 0");
+    require(std::isfinite(o.reuse_lod_tolerance) && o.reuse_lod_tolerance >= 0,
+            "display: reuse_lod_tolerance must be finite and >= 0");
     reusing_ = false;
     hits_kept_ = true;
     const std::size_t n = std::size_t(right.width) * right.height;

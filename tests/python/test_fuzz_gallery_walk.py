@@ -31,8 +31,9 @@ def scene(small_scroll_pack):
 @settings(max_examples=40, deadline=None, suppress_health_check=FIXTURES)
 @given(pos=st.tuples(finite, finite, finite), fwd=st.tuples(finite, finite, finite),
        up=st.tuples(finite, finite, finite), tan=st.floats(0.01, 50), w=st.integers(1, 40),
-       h=st.integers(1, 40), reuse=st.booleans(), ratio=st.floats(0, 10))
-def test_display_pass_any_camera(scene, pos, fwd, up, tan, w, h, reuse, ratio):
+       h=st.integers(1, 40), reuse=st.booleans(), ratio=st.floats(0, 10),
+       tolerance=st.one_of(st.floats(0, 2), anything))
+def test_display_pass_any_camera(scene, pos, fwd, up, tan, w, h, reuse, ratio, tolerance):
     src, vt, _ = scene
     try:
         left = v.Camera(pos, fwd, up, tan, tan * h / w, w, h)
@@ -40,8 +41,15 @@ def test_display_pass_any_camera(scene, pos, fwd, up, tan, w, h, reuse, ratio):
     except ValueError:
         return  # a degenerate frame (zero or parallel forward and up) is refused by Camera
     d = _core.DisplayPass()
+    with np.errstate(over="ignore"):
+        as_float32 = float(np.float32(tolerance))  # what the pass receives
+    if not (math.isfinite(as_float32) and as_float32 >= 0):
+        with pytest.raises(ValueError, match="reuse_lod_tolerance"):
+            d.render_stereo(src.scene, src.lighting, vt, left, right, reuse=reuse,
+                            edge_depth_ratio=ratio, reuse_lod_tolerance=tolerance)
+        return
     a, b = d.render_stereo(src.scene, src.lighting, vt, left, right, reuse=reuse,
-                           edge_depth_ratio=ratio)
+                           edge_depth_ratio=ratio, reuse_lod_tolerance=tolerance)
     assert a.shape == b.shape == (h, w, 3)
     assert np.all(np.isfinite(a)) and np.all(np.isfinite(b)) and a.min() >= 0 and b.min() >= 0
     st_r = d.right_stats

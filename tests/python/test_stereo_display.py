@@ -74,11 +74,21 @@ def setup(small_scroll, small_scroll_pack):
     return small_scroll, vt
 
 
-def test_reused_pixel_is_what_the_right_eye_computes_there(setup):
+@pytest.mark.parametrize("toe_in, tolerance", [(0.0, None), (0.04, None), (0.04, 0.0)])
+def test_reused_pixel_is_what_the_right_eye_computes_there(setup, toe_in, tolerance):
+    """Parallel eyes (the levels of both eyes agree: reused pixels copy the left radiance),
+    and eyes turned in (the right eye's levels differ: reused pixels whose level differs by
+    more than reuse_lod_tolerance sample their own texel under the left pixel's light; with
+    tolerance 0 every one that differs at all)."""
     ex, vt = setup
     left, right = eyes()
+    if toe_in:
+        right = v.Camera(right.position, (-np.sin(toe_in), 0.0, np.cos(toe_in)), (0.0, 1.0, 0.0),
+                         right.tan_half_x, right.tan_half_y, *right.resolution)
     d = _core.DisplayPass()
-    img_l, img_r = d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, reuse=True)
+    kw = {} if tolerance is None else {"reuse_lod_tolerance": tolerance}
+    img_l, img_r = d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, reuse=True,
+                                   **kw)
     st = d.right_stats
     src = d.reuse_sources()
     reused = np.flatnonzero(src >= 0)
@@ -95,6 +105,16 @@ def test_reused_pixel_is_what_the_right_eye_computes_there(setup):
                        filter="trilinear")
     got = img_r.reshape(-1, 3)[reused[on_painting]]
     assert np.allclose(got, srgb_to_linear(ref), atol=2e-3)
+    # Which reused pixels sampled their own texel: none for parallel eyes, else the ones
+    # whose level moved by more than the tolerance (the default 1/1024).
+    moved = np.abs(d.lods(1)[reused[on_painting]] - d.lods(0)[src[reused[on_painting]]])
+    own = moved > (1 / 1024 if tolerance is None else tolerance)
+    assert own.sum() == 0 if not toe_in else own.sum() > 100
+    # Where they did, the texel at the right eye's level, not the left pixel's radiance.
+    if own.any():
+        left_radiance = img_l.reshape(-1, 3)[src[reused[on_painting]]][own]
+        assert np.abs(got[own] - left_radiance).max() > 1e-3
+        assert np.allclose(got[own], srgb_to_linear(ref)[own], atol=2e-3)
     # Pixels off the painting show the grey wall in both eyes.
     wall = img_r.reshape(-1, 3)[reused[~on_painting]]
     assert np.allclose(wall, 0.5)
@@ -151,6 +171,9 @@ def test_display_bad_input(setup):
         d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, other)
     with pytest.raises(ValueError, match="edge_depth_ratio"):
         d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, edge_depth_ratio=float("nan"))
+    for bad in (float("nan"), -1.0, float("inf")):
+        with pytest.raises(ValueError, match="reuse_lod_tolerance"):
+            d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, reuse_lod_tolerance=bad)
     with pytest.raises(ValueError, match="lod_bias"):
         d.render(ex.scene, _core.UnlitLighting(), vt, left, lod_bias=float("inf"))
     with pytest.raises(ValueError, match="albedo"):
