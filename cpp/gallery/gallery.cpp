@@ -536,22 +536,12 @@ Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c, 
         float tfar[16];
         int ray_of[16];
         int rays = 0;
-        const float eps = scene_.epsilon();
         for (int k = 0; k < count; ++k) {
             ray_of[k] = -1;
-            const LightSample ls = sample(index[k]);
-            const Vec3f w = ls.p - hit.p;
-            const float d2 = dot(w, w);
-            const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
-            if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {
-                ++c.shadow_rays_skipped;
-                continue;
-            }
-            ++c.shadow_rays;
-            f[k] = ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
-            o[rays] = hit.p + hit.n * eps;
-            d[rays] = ls.p - o[rays];
-            tfar[rays] = 1.0f - 2.0f * eps / std::sqrt(d2);
+            EmitterShadowRay ray;
+            if (!emitter_sample_unshadowed(scene_, hit, sample(index[k]), c, ray)) continue;
+            f[k] = ray.contribution;
+            o[rays] = ray.origin, d[rays] = ray.direction, tfar[rays] = ray.tfar;
             ray_of[k] = rays++;
         }
         bool blocked[16];

@@ -102,22 +102,31 @@ Vec3f Renderer::direct_irradiance(const Hit& hit, int samples, ShadeCounters& c,
     return E * (1.0f / float(samples));
 }
 
-Vec3f emitter_sample_irradiance(const Scene& scene, const Hit& hit, const LightSample& ls,
-                                ShadeCounters& c) {
+bool emitter_sample_unshadowed(const Scene& scene, const Hit& hit, const LightSample& ls, ShadeCounters& c,
+                               EmitterShadowRay& ray) {
     const Vec3f w = ls.p - hit.p;
     const float d2 = dot(w, w);
     const float cos_x = dot(hit.n, w), cos_l = -dot(ls.n, w);
     if (!(cos_x > 0 && cos_l > 0 && d2 > 0)) {  // light behind the surface, or facing away
         ++c.shadow_rays_skipped;
-        return {0, 0, 0};
+        return false;
     }
     ++c.shadow_rays;
     const float eps = scene.epsilon();
-    const float d = std::sqrt(d2);
-    const Vec3f o = hit.p + hit.n * eps;
-    if (scene.occluded(o, ls.p - o, 1.0f - 2.0f * eps / d)) return {0, 0, 0};
     // cos_x cos_l / d^2 with both cosines still scaled by d.
-    return ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+    ray.contribution = ls.radiance * (cos_x * cos_l / (d2 * d2 * ls.pdf_area));
+    ray.origin = hit.p + hit.n * eps;
+    ray.direction = ls.p - ray.origin;
+    ray.tfar = 1.0f - 2.0f * eps / std::sqrt(d2);
+    return true;
+}
+
+Vec3f emitter_sample_irradiance(const Scene& scene, const Hit& hit, const LightSample& ls,
+                                ShadeCounters& c) {
+    EmitterShadowRay ray;
+    if (!emitter_sample_unshadowed(scene, hit, ls, c, ray) || scene.occluded(ray.origin, ray.direction, ray.tfar))
+        return {0, 0, 0};
+    return ray.contribution;
 }
 
 Vec3f Renderer::surface_radiance(const Hit& hit, KnnHeap& heap, ShadeCounters& c) const {

@@ -77,6 +77,16 @@ struct ShadeCounters {
 Vec3f emitter_sample_irradiance(const Scene& scene, const Hit& hit, const LightSample& ls,
                                 ShadeCounters& c);
 
+// The same sample before its shadow ray: the share it adds when the ray finds the light, and
+// that ray (origin, direction to the sample point, tfar as a fraction of the direction).
+struct EmitterShadowRay {
+    Vec3f contribution, origin, direction;
+    float tfar;
+};
+// False (counted as a skipped shadow ray) when the light is behind the surface or faces away.
+bool emitter_sample_unshadowed(const Scene& scene, const Hit& hit, const LightSample& ls, ShadeCounters& c,
+                               EmitterShadowRay& ray);
+
 class Renderer {
 public:
     // Runs the photon pass (unless skipped) and builds the photon map.

@@ -40,6 +40,16 @@ struct Room {
         gallery.add_painting(0, layout.paintings[0], {-0.5, 1.0, -0.5}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.5);
         gallery.commit();
     }
+
+    // Lit by 20000 photons and baked at `spacing` with the other settings at their defaults.
+    void light_and_bake(double spacing) {
+        LightingSettings ls;
+        ls.photons = 20000;
+        gallery.light(vt, ls);
+        BakeSettings bs;
+        bs.spacing = spacing;
+        gallery.bake(bs);
+    }
 };
 
 }  // namespace
@@ -446,12 +456,7 @@ TEST(Gallery, GatherStrideInterpolatesTheGathersOfItsSubLattice) {
 // the point, is the reference), on both sides, and the batched lookup equals the single one.
 TEST(Gallery, BakedIrradianceAtEmbreeBarycentricsEqualsThePointsLookup) {
     Room room;
-    LightingSettings ls;
-    ls.photons = 20000;
-    room.gallery.light(room.vt, ls);
-    BakeSettings bs;
-    bs.spacing = 0.15;
-    room.gallery.bake(bs);
+    room.light_and_bake(0.15);
     const Scene& scene = room.gallery.scene();
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> coord(-0.99f, 0.99f);
@@ -537,12 +542,7 @@ TEST(Gallery, BakedDisplayIrradianceIsThePointLookupBitForBit) {
     // The display pass looks the lattice up per packet (irradiance_baked_batch after a batched
     // barycentric solve); the reference is irradiance_baked at each pixel's hit, one at a time.
     Room room;
-    LightingSettings ls;
-    ls.photons = 20000;
-    room.gallery.light(room.vt, ls);
-    BakeSettings bs;
-    bs.spacing = 0.2;
-    room.gallery.bake(bs);
+    room.light_and_bake(0.2);
     for (const Vec3d eye : {Vec3d(0.3, 0.75, 1.5), Vec3d(-0.4, -0.6, 0.9)}) {  // floor from above, then below
         const Camera camera = Camera::look_at(eye, {0, 0.2, -0.5}, {0, 1, 0}, 70, 37, 21);
         const std::size_t n = std::size_t(camera.width) * camera.height;
