@@ -121,7 +121,8 @@ void bind_gallery(nb::module_& m) {
             return d;
         }, "Timings and sizes of the last light() and bake().")
         .def("_render_display", [](const Gallery& g, const Camera& camera, const VirtualTexture& vt,
-                                   const std::string& lighting, ImageOut out, bool hits, unsigned threads) {
+                                   const std::string& lighting, ImageOut out, bool hits, unsigned threads,
+                                   bool reference) {
             const Lighting l = parse_lighting(lighting);
             const std::size_t W = camera.width, H = camera.height;
             require(out.shape(0) == H && out.shape(1) == W && out.shape(2) == 3,
@@ -144,10 +145,10 @@ void bind_gallery(nb::module_& m) {
             }
             {
                 nb::gil_scoped_release release;
-                g.render_display(camera, vt, l, out.data(), h, threads);
+                g.render_display(camera, vt, l, out.data(), h, threads, reference);
             }
             return d;
-        }, "camera"_a, "vt"_a, "lighting"_a, "out"_a, "hits"_a, "threads"_a)
+        }, "camera"_a, "vt"_a, "lighting"_a, "out"_a, "hits"_a, "threads"_a, "reference"_a = false)
         .def("render_view", [](const Gallery& g, const Camera& camera, std::int64_t width,
                                std::int64_t height, double lod_bias, unsigned threads,
                                std::int64_t display_step) {

@@ -17,6 +17,7 @@
 #include "pack/tile_key.h"
 #include "sampling/sampler.h"
 #include "sampling/stereo_display.h"
+#include "gallery/display_lighting.h"
 #include "views/feedback.h"
 
 namespace gigascroll {
@@ -867,10 +868,19 @@ void Gallery::bake(const BakeSettings& s) {
 }
 
 void Gallery::render_display(const Camera& camera, const VirtualTexture& vt, Lighting lighting,
-                             float* rgb, const DisplayHits& hits, unsigned threads) const {
+                             float* rgb, const DisplayHits& hits, unsigned threads, bool reference) const {
     require(committed(), "Gallery: commit() before rendering");
     require(rgb != nullptr, "Gallery.render_display: no output");
     check_texture(vt);
+    const bool any_hits = hits.position || hits.slot || hits.uv || hits.lod || hits.irradiance;
+    if (lighting == Lighting::Baked && !reference && !any_hits) {
+        // Before this function's own read lock: GalleryLighting takes it (a second shared
+        // lock on the same thread could wait behind a queued light() forever).
+        const GalleryLighting light(*this, lighting);
+        DisplayPass pass;
+        pass.render(feedback_view(), light, vt, camera, GalleryLighting::options(threads), rgb);
+        return;
+    }
     std::shared_lock lock(mutex_);
     if (lighting != Lighting::Unlit) require_lit();
     require(lighting != Lighting::Baked || !bake_offset_.empty(), "Gallery: call bake() before lighting 'baked'");

@@ -406,12 +406,16 @@ struct LatticeLanes {
                 const float* __restrict nx, const float* __restrict ny,
                 const float* __restrict nz) {
         alignas(64) std::int32_t segments[16], cell_i[16], cell_j[16], upper_of[16];
+        // A lane without a hit holds whatever Embree left in its u, v (NaN or huge after a
+        // miss): its cell would index far outside the lattice, and blend() reads every lane.
+        alignas(64) float b1[16], b2[16];
         for (int k = 0; k < 16; ++k) {
             const std::uint32_t g = hit[k] ? geom_in[k] : 0u, p = hit[k] ? prim_in[k] : 0u;
             const std::uint32_t t = b.first_triangle[g] + p;
             const Vec3f w = b.normal[t];
             tri[k] = t, segments[k] = std::int32_t(b.segments[t]);
             front[k] = w.x * nx[k] + w.y * ny[k] + w.z * nz[k] > 0;  // n faces the eye
+            b1[k] = hit[k] ? b1_in[k] : 0.0f, b2[k] = hit[k] ? b2_in[k] : 0.0f;
         }
         int k0 = 0;
 #if defined(__AVX2__)
@@ -422,7 +426,7 @@ struct LatticeLanes {
             const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
             const __m256i n = _mm256_load_si256(reinterpret_cast<const __m256i*>(segments + k0));
             const __m256i n1 = _mm256_sub_epi32(n, _mm256_set1_epi32(1));
-            __m256 c1 = _mm256_loadu_ps(b1_in + k0), c2 = _mm256_loadu_ps(b2_in + k0);
+            __m256 c1 = _mm256_load_ps(b1 + k0), c2 = _mm256_load_ps(b2 + k0);
             // c < 0 ? 0 : (1 < c ? 1 : c)
             c1 = _mm256_blendv_ps(_mm256_blendv_ps(c1, one, _mm256_cmp_ps(one, c1, _CMP_LT_OQ)), zero,
                                   _mm256_cmp_ps(c1, zero, _CMP_LT_OQ));
@@ -461,7 +465,7 @@ struct LatticeLanes {
         }
 #endif
         for (int k = k0; k < 16; ++k) {
-            const LatticeCell c = lattice_cell(segments[k], b1_in[k], b2_in[k]);
+            const LatticeCell c = lattice_cell(segments[k], b1[k], b2[k]);
             cell_i[k] = c.i, cell_j[k] = c.j, upper_of[k] = c.upper;
             weight[0][k] = c.w0, weight[1][k] = c.w1, weight[2][k] = c.w2;
         }

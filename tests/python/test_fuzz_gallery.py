@@ -66,10 +66,50 @@ def test_any_camera_gives_finite_radiance(lit, eye, target, fov, w, h, lighting)
         return  # looking straight up or down: the camera refuses the degenerate frame
     rgb, hits = gal.render_display(cam, vt, lighting=lighting, hits=True)
     assert rgb.shape == (h, w, 3) and np.isfinite(rgb).all() and (rgb >= 0).all()
+    # Without hits, baked runs the packet display pass: finite, and the per-pixel path's
+    # pixels up to float rounding (a silhouette pixel may land on the other side of an edge).
+    fast = gal.render_display(cam, vt, lighting=lighting)
+    assert fast.shape == (h, w, 3) and np.isfinite(fast).all() and (fast >= 0).all()
+    far = ~np.isclose(fast, rgb, rtol=1e-3, atol=1e-5).all(axis=2)
+    assert far.sum() <= max(1, far.size // 10)
     on = hits["slot"] >= 0
     assert ((hits["uv"][on] >= 0) & (hits["uv"][on] <= 1)).all()
     fb = gal.render_view(cam, width=w, height=h)
     assert fb["keys"].shape == (h, w)
+
+
+def test_open_room_seen_from_outside_displays_black_where_nothing_is_hit(pack):
+    """A room without its ceiling and front wall, seen from outside and above: most rays miss.
+    The packet display pass (the still, the walk's one eye and its stereo pair) read the baked
+    lattice in every lane of a 16-ray packet, and a missed lane's barycentrics are whatever
+    Embree left there: they once indexed outside the lattice and crashed. Against the
+    per-pixel path; missed pixels are 0."""
+    from gigascroll import _core
+    spec = box_room()
+    spec.surfaces = [s for s in spec.surfaces if s.name not in ("ceiling", "front")]
+    gal = Gallery.from_room(spec, pack)
+    vt = g.VirtualTexture(pack)
+    gal.light(vt, photons=3000)
+    gal.bake(spacing=0.5, light_samples=2)
+    for eye, target, (w, h) in (((-4.14, -2.63, 3.01), (0.82, -4.06, -0.67), (2, 9)),
+                                 ((0.0, 6.0, 7.0), (0.0, 1.0, -2.0), (37, 23)),
+                                 ((0.3, 1.5, 9.0), (0.0, 1.5, 0.0), (64, 40))):
+        cam = g.Camera(list(eye), list(target), [0, 1, 0], 80.0, resolution=(w, h))
+        ref, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
+        missed = ~np.isfinite(hits["position"]).all(axis=2)
+        fast = gal.render_display(cam, vt, lighting="baked")
+        mono = np.asarray(_core._gallery_display(_core.DisplayPass(), gal, vt, cam, "baked", 0, None))
+        right = g.Camera([eye[0] + 0.064, eye[1], eye[2]], [target[0] + 0.064, target[1], target[2]],
+                         [0, 1, 0], 80.0, resolution=(w, h))
+        left_img, right_img = _core._gallery_display_stereo(_core.DisplayPass(), gal, vt, cam, right, "baked",
+                                                            True)
+        for img in (fast, mono, np.asarray(left_img), np.asarray(right_img)):
+            assert np.isfinite(img).all() and (img >= 0).all()
+        assert (fast[missed] == 0).all() and (ref[missed] == 0).all()
+        near = np.isclose(fast, ref, rtol=1e-3, atol=1e-5).all(axis=2)
+        assert near.mean() > 0.95
+        assert np.array_equal(mono, fast) and np.array_equal(np.asarray(left_img), fast)
+    assert missed.mean() > 0.2  # the last view looks into the open front: a good part of it misses
 
 
 def test_hostile_render_arguments(lit, pack):
@@ -84,6 +124,9 @@ def test_hostile_render_arguments(lit, pack):
     other = uniform_pack(Path(pack.path).parent / "other.pack", {"a": (1, 2, 3)}, size=(40, 40), tile_size=16)
     with pytest.raises(ValueError, match="not the one|not in"):
         gal.render_display(cam, g.VirtualTexture(other), lighting="unlit")
+    for bad in ("yes", None, 1):
+        with pytest.raises(ValueError, match="reference"):
+            gal.render_display(cam, vt, lighting="baked", reference=bad)
     for out in (np.zeros((4, 4, 3), np.float32)[:, ::-1], np.zeros((4, 4, 3), np.float32).T,
                 np.zeros((4, 4), np.float32)):
         with pytest.raises(ValueError):

@@ -198,10 +198,30 @@ def test_gallery_display_pass_equals_the_gallerys_own(lit_gallery, small_scroll_
     vt = VirtualTexture(small_scroll_pack, (30, 30))
     cam = v.Camera((4.0, 1.5, -0.6), (4.3, 1.4, 0.0), (0.0, 1.0, 0.0), 70.0, resolution=(80, 64))
     ours = src.display(_core.DisplayPass(), vt, cam)
-    theirs = src.gallery.render_display(cam, vt, lighting="baked")
+    theirs = src.gallery.render_display(cam, vt, lighting="baked", reference=True)
     assert ours.shape == theirs.shape and ours.max() > 0
     close = np.isclose(ours, theirs, rtol=1e-3, atol=1e-6).all(axis=2)
     assert close.mean() > 0.99   # silhouette pixels may hit the other side of an edge
+
+
+def test_gallery_still_takes_the_packet_pass(lit_gallery, small_scroll_pack):
+    """Gallery.render_display's baked still (the packet display pass) against its per-pixel
+    path (reference=True) and against hits=True, which takes the per-pixel path too; both
+    threads counts give the same image."""
+    src, room = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    cam = v.Camera((4.0, 1.5, -0.6), (4.3, 1.4, 0.0), (0.0, 1.0, 0.0), 70.0, resolution=(80, 64))
+    g = src.gallery
+    fast = g.render_display(cam, vt, lighting="baked")
+    ref = g.render_display(cam, vt, lighting="baked", reference=True)
+    rgb, _ = g.render_display(cam, vt, lighting="baked", hits=True)
+    assert np.array_equal(rgb, ref) and fast.max() > 0
+    close = np.isclose(fast, ref, rtol=1e-3, atol=1e-6).all(axis=2)
+    assert close.mean() > 0.99 and not np.array_equal(fast, ref)  # two code paths, same pixels
+    assert np.array_equal(g.render_display(cam, vt, lighting="baked", threads=1), fast)
+    assert np.array_equal(src.display(_core.DisplayPass(), vt, cam), fast)
+    with pytest.raises(ValueError, match="reference"):
+        g.render_display(cam, vt, lighting="baked", reference="yes")
 
 
 def test_gallery_right_eye_reuse_is_view_independent(lit_gallery, small_scroll_pack):
@@ -229,7 +249,7 @@ def test_gallery_right_eye_reuse_is_view_independent(lit_gallery, small_scroll_p
         depth = (p - np.array(right.position)) @ fwd
         one = v.Camera(tuple(p - depth * fwd), tuple(fwd), (0.0, 1.0, 0.0), right.tan_half_x / w,
                        right.tan_half_y / h, 1, 1)
-        ref = src.gallery.render_display(one, vt, lighting="baked")[0, 0]
+        ref = src.gallery.render_display(one, vt, lighting="baked", reference=True)[0, 0]
         assert np.allclose(img_r.reshape(-1, 3)[i], ref, rtol=2e-3, atol=1e-6), (i, p)
 
 

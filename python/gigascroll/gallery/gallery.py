@@ -233,7 +233,7 @@ class Gallery(_core._Gallery):
     # rendering --------------------------------------------------------------------------------
 
     def render_display(self, camera: Camera, vt, lighting: str = "baked", out: np.ndarray | None = None,
-                       hits: bool = False, threads: int = 0):
+                       hits: bool = False, threads: int = 0, reference: bool = False):
         """The display pass at the camera's full resolution, one primary ray per pixel centre:
         (H, W, 3) float32 linear radiance (written into `out` when given). A painting's albedo
         is the VT's trilinear sample at the pixel's lambda; lighting "baked" and "full" light()
@@ -241,7 +241,9 @@ class Gallery(_core._Gallery):
         (rgb, dict) with per-pixel 'position' (H, W, 3) float32 (NaN where nothing is hit),
         'slot' (H, W) int32 (-1 off paintings), 'uv' (H, W, 2) float64 and 'lod' (H, W) float32
         (NaN off paintings), and 'irradiance' (H, W, 3) float32, the E of radiance = albedo x
-        E / pi + emission (view-independent: another eye seeing the same point can reuse it)."""
+        E / pi + emission (view-independent: another eye seeing the same point can reuse it).
+        Baked without hits runs the walk's packet display pass (faster, equal to float
+        rounding); reference=True (and hits=True) runs the per-pixel path, its oracle."""
         if lighting not in LIGHTING_MODES:
             raise ValueError(f"lighting must be one of {LIGHTING_MODES}, got {lighting!r}")
         if not isinstance(camera, Camera):
@@ -256,7 +258,9 @@ class Gallery(_core._Gallery):
         elif not (isinstance(out, np.ndarray) and out.dtype == np.float32 and out.shape == shape
                   and out.flags.c_contiguous and out.flags.writeable):
             raise ValueError(f"out must be a writeable C-contiguous float32 array of shape {shape}")
-        d = self._render_display(camera, vt, lighting, out, bool(hits), int(threads))
+        if not isinstance(reference, (bool, np.bool_)):
+            raise ValueError(f"reference must be True or False, got {reference!r}")
+        d = self._render_display(camera, vt, lighting, out, bool(hits), int(threads), bool(reference))
         return (out, dict(d)) if hits else out
 
     def stream(self, camera: Camera, vt, rounds: int = 3) -> int:
