@@ -100,6 +100,35 @@ def test_retime_interleaves_and_times_each_chosen_configuration_and_point():
     assert all(len(v) == 3 for v in list(ours.values()) + list(mitsuba.values()))
 
 
+def test_retime_gives_cheap_jobs_more_rounds_still_interleaved():
+    """Jobs whose single timing is at most cheap_seconds (a config's total_seconds, a ladder
+    point's seconds) run cheap_repeats rounds, the others repeats; in the rounds after the
+    expensive jobs stopped the cheap ones keep their order, reversed every other round."""
+    ladder = _ladder()
+    cs = _configs(3, 30)
+    rows = compare_with_mitsuba(cs, ladder)
+    log = []
+    ours, mitsuba = retime(rows, ladder, lambda c: log.append(("o", id(c))) or 1.0,
+                           lambda s: log.append(("m", s)) or 2.0, repeats=3, cheap_repeats=7,
+                           cheap_seconds=0.5)
+    chosen = {id(r["ours"]): r["ours"] for r in rows if r["ours"] is not None}
+    spps = {s for r in rows if r["ours"] is not None for s in ladder_points_used(r, ladder)}
+    seconds = {l["spp"]: l["seconds"] for l in ladder}
+    cheap_o = {k for k, c in chosen.items() if c["total_seconds"] <= 0.5}
+    cheap_m = {s for s in spps if seconds[s] <= 0.5}
+    assert cheap_o and cheap_m and (len(cheap_o) < len(chosen) or len(cheap_m) < len(spps))
+    for k in chosen:
+        assert len(ours[k]) == (7 if k in cheap_o else 3)
+    for s in spps:
+        assert len(mitsuba[s]) == (7 if s in cheap_m else 3)
+    # Rounds 4-7 hold the cheap jobs alone, alternating in direction.
+    per_round = len(cheap_o) + len(cheap_m)
+    tail = log[len(log) - 4 * per_round:]
+    r3, r4, r5 = tail[:per_round], tail[per_round:2 * per_round], tail[2 * per_round:3 * per_round]
+    assert r4 == r3[::-1] and r5 == r3
+    assert {j for j in r3} == {("o", k) for k in cheap_o} | {("m", s) for s in cheap_m}
+
+
 def test_apply_repeats_gives_ratios_of_medians_against_brute_force():
     rng = np.random.default_rng(4)
     ladder = _ladder()

@@ -12,9 +12,10 @@ because Mitsuba's box pixel filter averages over the pixel; times are for that m
 The grid's configurations are each timed once (on a shared machine, noisy): that chooses
 the fastest configuration per target error. Choosing the fastest of many single timings
 favours lucky ones, so the chosen configurations and the Mitsuba ladder points the targets
-use are then re-timed --timing-repeats times, interleaved (ours and Mitsuba's alternating, the
-order reversed every other round), and the speedups are ratios of those medians, with the
-spread of the repeats beside them.
+use are then re-timed --timing-repeats times (--cheap-repeats times for jobs of at most 50 ms,
+whose times scatter most), interleaved (ours and Mitsuba's alternating, the order reversed
+every other round), and the speedups are ratios of those medians, with the spread of the
+repeats beside them.
 """
 
 from __future__ import annotations
@@ -30,6 +31,9 @@ from ..errors import UserError
 from ..experiments import pyplot, save_figure, write_json
 
 ROOMS = ("scroll", "hall")
+# Re-timed jobs (ours or a Mitsuba ladder point) whose single timing is at most this many
+# seconds get --cheap-repeats re-timings instead of --timing-repeats.
+CHEAP_SECONDS = 0.05
 
 
 def add_arguments(parser) -> None:
@@ -79,6 +83,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--timing-repeats", type=int, default=3,
                         help="re-timings, interleaved, of each target's chosen configuration and of the Mitsuba "
                              "ladder points it is compared with; speedups are ratios of medians (default 3)")
+    parser.add_argument("--cheap-repeats", type=int, default=30,
+                        help="re-timings of the chosen configurations and ladder points whose single timing "
+                             f"is at most {CHEAP_SECONDS * 1e3:.0f} ms (millisecond jobs are the noisiest; "
+                             "default 30)")
     parser.add_argument("--quick", action="store_true", help="small settings, for a smoke test")
     parser.add_argument("--out", default="bench/gallery", help="directory for results.json and plots")
 
@@ -187,8 +195,11 @@ def run(args) -> int:
         args.photons, args.spacings, args.bake_samples, args.default_photons = "14,16", "25,50", "4,16", 16
         args.supersamples, args.disc, args.coarse_photons = "1,2", False, ""
         args.full_samples, args.reference_spp, args.mitsuba_spp = 16, 64, "1,4,16"
-    if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples, args.timing_repeats) < 1:
-        raise UserError("--width, --height, --supersample, --full-samples, --reference-spp and --timing-repeats "
+        args.cheap_repeats = min(args.cheap_repeats, args.timing_repeats)
+    if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples, args.timing_repeats,
+           args.cheap_repeats) < 1:
+        raise UserError("--width, --height, --supersample, --full-samples, --reference-spp, --timing-repeats "
+                        "and --cheap-repeats "
                         "must be >= 1")
     photons = _ints(args.photons, "--photons")
     disc_photons = sorted(set(_ints(args.disc_photons, "--disc-photons")) - set(photons)) if (
@@ -240,7 +251,7 @@ def run(args) -> int:
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
                    "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "coarse_photons", "spacings", "bake_samples", "default_photons",
-                   "full_samples", "reference_spp", "mitsuba_spp", "timing_repeats")},
+                   "full_samples", "reference_spp", "mitsuba_spp", "timing_repeats", "cheap_repeats")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
     per_room = (2 + len(ladder) + len(photons) * len(grid) + len(disc_photons) * sum(1 for d, *_ in grid if d)
@@ -335,10 +346,13 @@ def run(args) -> int:
             steps.update()
             return _mitsuba(mi, mscene, spp, seed=1)[1]
 
-        n_jobs = len({id(t["ours"]) for t in single if t["ours"]}) + len(
-            {s for t in single if t["ours"] for s in ladder_points_used(t, r["mitsuba"])})
-        steps.total += n_jobs * args.timing_repeats
-        ours_times, mitsuba_times = retime(single, r["mitsuba"], time_ours, time_mitsuba, args.timing_repeats)
+        chosen = {id(t["ours"]): t["ours"]["total_seconds"] for t in single if t["ours"]}
+        used = {s for t in single if t["ours"] for s in ladder_points_used(t, r["mitsuba"])}
+        job_seconds = list(chosen.values()) + [l["seconds"] for l in r["mitsuba"] if l["spp"] in used]
+        steps.total += sum(max(args.timing_repeats, args.cheap_repeats) if t <= CHEAP_SECONDS else args.timing_repeats
+                           for t in job_seconds)
+        ours_times, mitsuba_times = retime(single, r["mitsuba"], time_ours, time_mitsuba, args.timing_repeats,
+                                           args.cheap_repeats)
         r["targets"] = apply_repeats(single, r["mitsuba"], ours_times, mitsuba_times)
         for t in r["targets"]:
             if t["ours"] is not None and id(t["ours"]) in rerun_errors:
@@ -463,21 +477,36 @@ def _interleaved(a: list, b: list) -> list:
     return out
 
 
-def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeats: int):
+def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeats: int,
+           cheap_repeats: int | None = None, cheap_seconds: float = CHEAP_SECONDS):
     """Re-times every configuration chosen in `rows` (compare_with_mitsuba's, `ours` not None)
     with time_ours(config) -> seconds, and every ladder point those rows use with
     time_mitsuba(spp) -> seconds, `repeats` rounds, ours and Mitsuba's interleaved, every other
-    round in reverse order (so drifts in the machine's load fall on both alike). Returns
-    ({id(config): [seconds, ...]}, {spp: [seconds, ...]}), each list in the order timed."""
+    round in reverse order (so drifts in the machine's load fall on both alike). Jobs whose
+    single timing (the config's total_seconds, the ladder point's seconds) is at most
+    `cheap_seconds` run `cheap_repeats` rounds instead when that is more: a millisecond job's
+    time moves by tens of percent from call to call (the other process's threads, cold
+    caches), so a median of 3 is a coin toss there, and 30 of them cost a fraction of a
+    second. Returns ({id(config): [seconds, ...]}, {spp: [seconds, ...]}), each list in the
+    order timed."""
     configs, spps = {}, set()
     for row in rows:
         if row["ours"] is not None:
             configs.setdefault(id(row["ours"]), row["ours"])
             spps.update(ladder_points_used(row, ladder))
+    seconds = {l["spp"]: l["seconds"] for l in ladder}
+    cheap = max(repeats, cheap_repeats or 0)
+
+    def rounds_of(kind, key):
+        t = configs[key]["total_seconds"] if kind == "ours" else seconds[key]
+        return cheap if t <= cheap_seconds else repeats
+
     jobs = _interleaved([("mitsuba", s) for s in sorted(spps)], [("ours", k) for k in configs])
     ours, mitsuba = {k: [] for k in configs}, {s: [] for s in sorted(spps)}
-    for r in range(repeats):
+    for r in range(max([rounds_of(*j) for j in jobs], default=0)):
         for kind, key in (jobs if r % 2 == 0 else jobs[::-1]):
+            if r >= rounds_of(kind, key):
+                continue
             if kind == "ours":
                 ours[key].append(float(time_ours(configs[key])))
             else:
