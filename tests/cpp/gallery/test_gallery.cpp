@@ -538,6 +538,43 @@ TEST(Gallery, DisplayShowsAlbedoTimesIrradianceOverPiOnTwoThreads) {
     EXPECT_GT(painting, 20);
 }
 
+TEST(Gallery, BakedStillOnThePacketPassMatchesThePerPixelPathWhereRaysMiss) {
+    // Room is open: most rays of these views miss everything. The packet pass reads the
+    // lattice in all 16 lanes of a packet, so a missed lane must not index it with the
+    // barycentrics Embree left undefined (it once read far outside the lattice).
+    Room room;
+    room.light_and_bake(0.2);
+    for (const Vec3d eye : {Vec3d(0.3, 0.75, 1.5), Vec3d(-0.4, -0.6, 0.9), Vec3d(2.5, 3.0, 2.0)}) {
+        const Camera camera = Camera::look_at(eye, {0, 0.2, -0.5}, {0, 1, 0}, 100, 37, 21);
+        const std::size_t n = std::size_t(camera.width) * camera.height;
+        std::vector<float> fast(3 * n, -1.0f), ref(3 * n), position(3 * n);
+        DisplayHits hits;
+        hits.position = position.data();
+        room.gallery.render_display(camera, room.vt, Lighting::Baked, ref.data(), hits, 2);
+        room.gallery.render_display(camera, room.vt, Lighting::Baked, fast.data(), {}, 2);
+        std::vector<float> reference_path(3 * n);
+        room.gallery.render_display(camera, room.vt, Lighting::Baked, reference_path.data(), {}, 2, true);
+        EXPECT_EQ(reference_path, ref);  // reference = true is the per-pixel path, as with hits
+        int missed = 0, close = 0, hit = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (std::isnan(position[3 * i])) {
+                ++missed;
+                EXPECT_EQ(fast[3 * i], 0.0f);
+                EXPECT_EQ(fast[3 * i + 2], 0.0f);
+                continue;
+            }
+            ++hit;
+            bool near = true;
+            for (int c = 0; c < 3; ++c)
+                near = near && std::abs(fast[3 * i + c] - ref[3 * i + c]) <= 1e-5f + 1e-3f * ref[3 * i + c];
+            close += near;
+        }
+        EXPECT_GT(missed, int(n / 10));
+        EXPECT_GT(hit, 10);
+        EXPECT_GE(close, hit - hit / 20);  // silhouette pixels may land on either side of an edge
+    }
+}
+
 TEST(Gallery, BakedDisplayIrradianceIsThePointLookupBitForBit) {
     // The display pass looks the lattice up per packet (irradiance_baked_batch after a batched
     // barycentric solve); the reference is irradiance_baked at each pixel's hit, one at a time.
