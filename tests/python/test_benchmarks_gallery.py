@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from gigascroll.benchmarks.gallery import (_time_to_error, apply_repeats, compare_with_mitsuba, fastest_reaching,
-                                           ladder_points_used, pareto_front, retime)
+                                           ladder_points_used, pareto_front, retime,
+                                           retime_plan)
 
 
 def _configs(seed=0, n=60):
@@ -127,6 +128,8 @@ def test_retime_gives_cheap_jobs_more_rounds_still_interleaved():
     r3, r4, r5 = tail[:per_round], tail[per_round:2 * per_round], tail[2 * per_round:3 * per_round]
     assert r4 == r3[::-1] and r5 == r3
     assert {j for j in r3} == {("o", k) for k in cheap_o} | {("m", s) for s in cheap_m}
+    # The plan the bench's progress bar is sized from counts exactly the calls made.
+    assert sum(n for *_, n in retime_plan(rows, ladder, 3, 7, cheap_seconds=0.5)[1]) == len(log)
 
 
 def test_apply_repeats_gives_ratios_of_medians_against_brute_force():
@@ -176,6 +179,8 @@ def test_apply_repeats_gives_ratios_of_medians_against_brute_force():
 
 @pytest.mark.parametrize("args, message", [
     (("--timing-repeats", "0"), "--timing-repeats"),
+    (("--cheap-repeats", "0"), "--cheap-repeats"),
+    (("--cheap-repeats", "-3"), "--cheap-repeats"),
     (("--disc-photons", "x"), "--disc-photons"),
     (("--disc-photons", "31"), "powers of two up to 2^30"),
     (("--coarse-photons", "x"), "--coarse-photons"),

@@ -346,11 +346,8 @@ def run(args) -> int:
             steps.update()
             return _mitsuba(mi, mscene, spp, seed=1)[1]
 
-        chosen = {id(t["ours"]): t["ours"]["total_seconds"] for t in single if t["ours"]}
-        used = {s for t in single if t["ours"] for s in ladder_points_used(t, r["mitsuba"])}
-        job_seconds = list(chosen.values()) + [l["seconds"] for l in r["mitsuba"] if l["spp"] in used]
-        steps.total += sum(max(args.timing_repeats, args.cheap_repeats) if t <= CHEAP_SECONDS else args.timing_repeats
-                           for t in job_seconds)
+        steps.total += sum(n for *_, n in retime_plan(single, r["mitsuba"], args.timing_repeats,
+                                                       args.cheap_repeats)[1])
         ours_times, mitsuba_times = retime(single, r["mitsuba"], time_ours, time_mitsuba, args.timing_repeats,
                                            args.cheap_repeats)
         r["targets"] = apply_repeats(single, r["mitsuba"], ours_times, mitsuba_times)
@@ -477,18 +474,15 @@ def _interleaved(a: list, b: list) -> list:
     return out
 
 
-def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeats: int,
-           cheap_repeats: int | None = None, cheap_seconds: float = CHEAP_SECONDS):
-    """Re-times every configuration chosen in `rows` (compare_with_mitsuba's, `ours` not None)
-    with time_ours(config) -> seconds, and every ladder point those rows use with
-    time_mitsuba(spp) -> seconds, `repeats` rounds, ours and Mitsuba's interleaved, every other
-    round in reverse order (so drifts in the machine's load fall on both alike). Jobs whose
-    single timing (the config's total_seconds, the ladder point's seconds) is at most
-    `cheap_seconds` run `cheap_repeats` rounds instead when that is more: a millisecond job's
-    time moves by tens of percent from call to call (the other process's threads, cold
-    caches), so a median of 3 is a coin toss there, and 30 of them cost a fraction of a
-    second. Returns ({id(config): [seconds, ...]}, {spp: [seconds, ...]}), each list in the
-    order timed."""
+def retime_plan(rows: list[dict], ladder: list[dict], repeats: int, cheap_repeats: int | None = None,
+                cheap_seconds: float = CHEAP_SECONDS):
+    """What retime() runs: ({id(config): config} of the configurations chosen in `rows`,
+    [(kind, key, rounds)] of the jobs in their interleaved order, kind "ours" (key the
+    config's id) or "mitsuba" (key its spp)). Jobs whose single timing (the config's
+    total_seconds, the ladder point's seconds) is at most `cheap_seconds` get `cheap_repeats`
+    rounds when that is more than `repeats`: a millisecond job's time moves by tens of percent
+    from call to call (the other process's threads, cold caches), so a median of 3 is a coin
+    toss there, and 30 of them cost a fraction of a second."""
     configs, spps = {}, set()
     for row in rows:
         if row["ours"] is not None:
@@ -496,16 +490,25 @@ def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeat
             spps.update(ladder_points_used(row, ladder))
     seconds = {l["spp"]: l["seconds"] for l in ladder}
     cheap = max(repeats, cheap_repeats or 0)
-
-    def rounds_of(kind, key):
-        t = configs[key]["total_seconds"] if kind == "ours" else seconds[key]
-        return cheap if t <= cheap_seconds else repeats
-
     jobs = _interleaved([("mitsuba", s) for s in sorted(spps)], [("ours", k) for k in configs])
-    ours, mitsuba = {k: [] for k in configs}, {s: [] for s in sorted(spps)}
-    for r in range(max([rounds_of(*j) for j in jobs], default=0)):
-        for kind, key in (jobs if r % 2 == 0 else jobs[::-1]):
-            if r >= rounds_of(kind, key):
+    return configs, [(kind, key, cheap if (configs[key]["total_seconds"] if kind == "ours" else seconds[key])
+                      <= cheap_seconds else repeats) for kind, key in jobs]
+
+
+def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeats: int,
+           cheap_repeats: int | None = None, cheap_seconds: float = CHEAP_SECONDS):
+    """Re-times every configuration chosen in `rows` (compare_with_mitsuba's, `ours` not None)
+    with time_ours(config) -> seconds, and every ladder point those rows use with
+    time_mitsuba(spp) -> seconds, in rounds, ours and Mitsuba's interleaved, every other round
+    in reverse order (so drifts in the machine's load fall on both alike); each job for its
+    retime_plan() number of rounds. Returns ({id(config): [seconds, ...]}, {spp: [seconds,
+    ...]}), each list in the order timed."""
+    configs, jobs = retime_plan(rows, ladder, repeats, cheap_repeats, cheap_seconds)
+    ours = {key: [] for kind, key, _ in jobs if kind == "ours"}
+    mitsuba = {key: [] for kind, key, _ in jobs if kind == "mitsuba"}
+    for r in range(max([n for *_, n in jobs], default=0)):
+        for kind, key, rounds in (jobs if r % 2 == 0 else jobs[::-1]):
+            if r >= rounds:
                 continue
             if kind == "ours":
                 ours[key].append(float(time_ours(configs[key])))
