@@ -22,6 +22,7 @@ GalleryLighting::GalleryLighting(const Gallery& gallery, Lighting lighting)
         lattice_.emission = scene.emissions();
         lattice_.segments = bake.segments, lattice_.offset = bake.offset;
         lattice_.front = bake.front, lattice_.back = bake.back;
+        lattice_.triangles = scene.triangle_count(), lattice_.points = bake.points;
     }
 }
 

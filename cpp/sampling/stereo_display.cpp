@@ -505,6 +505,130 @@ struct LatticeLanes {
             out.mx[k] = em.x, out.my[k] = em.y, out.mz[k] = em.z;
         }
     }
+
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+// GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
+// used uninitialized (GCC bug 105593, fixed in GCC 13).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    // locate() and blend() in 16 lanes of one vector each: the arrays gathered with 32-bit
+    // float indices (the caller checks lanes16(): 3 x the triangles and the points below
+    // 2^31), the cell arithmetic as locate's, the corners' indices in uint32 (n < 2^16, so
+    // i (n + 1) and a triangle's (n + 1)(n + 2) / 2 points fit). The same operations in the
+    // same order as the lane loops, hence the same floats; lanes without a hit are masked
+    // out of the gathers (their values are never read).
+    alignas(64) std::int32_t point[3][16];  // float index of each corner in front or back
+    __mmask16 hit_lanes = 0, front_lanes = 0;
+
+    static bool lanes16(const BakedLattice& b) {
+        constexpr std::uint64_t kLimit = (std::uint64_t(1) << 31) / 3;
+        return b.triangles > 0 && b.triangles < kLimit && b.points < kLimit;
+    }
+
+    void locate16(const BakedLattice& b, const unsigned* __restrict geom_in,
+                  const unsigned* __restrict prim_in, const float* __restrict b1_in,
+                  const float* __restrict b2_in, const int* __restrict hit,
+                  const float* __restrict nx, const float* __restrict ny, const float* __restrict nz) {
+        const __m512i hits = _mm512_load_si512(hit);
+        const __mmask16 hm = _mm512_test_epi32_mask(hits, hits);
+        hit_lanes = hm;
+        const __m512i g = _mm512_maskz_loadu_epi32(hm, geom_in), p = _mm512_maskz_loadu_epi32(hm, prim_in);
+        const __m512i t = _mm512_add_epi32(_mm512_i32gather_epi32(g, b.first_triangle, 4), p);
+        _mm512_store_si512(tri, t);
+        const __m512i t3 = _mm512_mullo_epi32(t, _mm512_set1_epi32(3));
+        const float* normal = &b.normal->x;
+        const __m512 wx = _mm512_i32gather_ps(t3, normal, 4);
+        const __m512 wy = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(1)), normal, 4);
+        const __m512 wz = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(2)), normal, 4);
+        const __m512 facing = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(wx, _mm512_load_ps(nx)),
+                                                          _mm512_mul_ps(wy, _mm512_load_ps(ny))),
+                                            _mm512_mul_ps(wz, _mm512_load_ps(nz)));
+        const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
+        front_lanes = _mm512_cmp_ps_mask(facing, zero, _CMP_GT_OQ);
+        const __m512i n = _mm512_i32gather_epi32(t, b.segments, 4);
+        const __m512i n1 = _mm512_sub_epi32(n, _mm512_set1_epi32(1));
+        __m512 c1 = _mm512_maskz_loadu_ps(hm, b1_in), c2 = _mm512_maskz_loadu_ps(hm, b2_in);
+        // c < 0 ? 0 : (1 < c ? 1 : c)
+        c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c1, _CMP_LT_OQ), c1, one);
+        c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(c1, zero, _CMP_LT_OQ), c1, zero);
+        c2 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c2, _CMP_LT_OQ), c2, one);
+        c2 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(c2, zero, _CMP_LT_OQ), c2, zero);
+        const __m512 s = _mm512_add_ps(c1, c2);
+        const __mmask16 over = _mm512_cmp_ps_mask(s, one, _CMP_GT_OQ);
+        c1 = _mm512_mask_div_ps(c1, over, c1, s);
+        c2 = _mm512_mask_div_ps(c2, over, c2, s);
+        const __m512 nf = _mm512_cvtepi32_ps(n);
+        const __m512 x = _mm512_mul_ps(c1, nf), y = _mm512_mul_ps(c2, nf);
+        const __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
+        const __m512i j = _mm512_min_epi32(_mm512_cvttps_epi32(y), _mm512_sub_epi32(n1, i));
+        const __m512 ex = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i)), ey = _mm512_sub_ps(y, _mm512_cvtepi32_ps(j));
+        __m512 fx = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(ex, zero, _CMP_LT_OQ), ex, zero);
+        __m512 fy = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(ey, zero, _CMP_LT_OQ), ey, zero);
+        const __m512 sum = _mm512_add_ps(fx, fy);
+        const __mmask16 past = _mm512_cmp_ps_mask(sum, one, _CMP_GT_OQ);
+        const __mmask16 room = _mm512_cmple_epi32_mask(
+            _mm512_add_epi32(_mm512_add_epi32(i, j), _mm512_set1_epi32(2)), n);  // i + j + 2 <= n
+        const __mmask16 upper = past & room, rescale = past & ~upper;
+        const __m512 inv = _mm512_div_ps(one, sum);
+        fx = _mm512_mask_mul_ps(fx, rescale, fx, inv);
+        fy = _mm512_mask_mul_ps(fy, rescale, fy, inv);
+        _mm512_store_ps(weight[0], _mm512_mask_blend_ps(upper, _mm512_sub_ps(_mm512_sub_ps(one, fx), fy),
+                                                         _mm512_sub_ps(_mm512_add_ps(fx, fy), one)));
+        _mm512_store_ps(weight[1], _mm512_mask_blend_ps(upper, fx, _mm512_sub_ps(one, fx)));
+        _mm512_store_ps(weight[2], _mm512_mask_blend_ps(upper, fy, _mm512_sub_ps(one, fy)));
+        // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i (uint32).
+        const __m512i one_i = _mm512_set1_epi32(1);
+        const __m512i np1 = _mm512_add_epi32(n, one_i);
+        const __m512i tri_i = _mm512_srli_epi32(_mm512_mullo_epi32(i, _mm512_sub_epi32(i, one_i)), 1);
+        const __m512i row_i = _mm512_sub_epi32(_mm512_mullo_epi32(i, np1), tri_i);
+        const __m512i row_next = _mm512_add_epi32(row_i, _mm512_sub_epi32(np1, i));
+        const __m512i right = _mm512_add_epi32(row_next, j), up = _mm512_add_epi32(_mm512_add_epi32(row_i, j), one_i);
+        const __m512i e0 = _mm512_mask_blend_epi32(upper, _mm512_add_epi32(row_i, j), _mm512_add_epi32(right, one_i));
+        const __m512i e1 = _mm512_mask_blend_epi32(upper, right, up);
+        const __m512i e2 = _mm512_mask_blend_epi32(upper, up, right);
+        // The triangle's first point: the low word of offset[t] (below 2^31 / 3).
+        const __m512i first = _mm512_i32gather_epi32(_mm512_add_epi32(t, t), b.offset, 4);
+        const __m512i three = _mm512_set1_epi32(3);
+        const __m512i e[3] = {e0, e1, e2};
+        for (int c = 0; c < 3; ++c)
+            _mm512_store_si512(point[c], _mm512_mullo_epi32(_mm512_add_epi32(first, e[c]), three));
+        for (int k = 0; k < 16; ++k)
+            if (hm >> k & 1) {
+                const float* E = &((front_lanes >> k & 1) ? b.front : b.back)->x;
+                __builtin_prefetch(E + point[0][k]);
+                __builtin_prefetch(E + point[1][k]);
+                __builtin_prefetch(E + point[2][k]);
+            }
+    }
+
+    void blend16(const BakedLattice& b, LaneLight& __restrict out) const {
+        const __mmask16 on_front = hit_lanes & front_lanes, on_back = hit_lanes & ~front_lanes;
+        const float *F = &b.front->x, *B = &b.back->x;
+        auto corner = [&](int c, int axis) {
+            const __m512i at = _mm512_add_epi32(_mm512_load_si512(point[c]), _mm512_set1_epi32(axis));
+            __m512 v = _mm512_setzero_ps();
+            if (on_front) v = _mm512_mask_i32gather_ps(v, on_front, at, F, 4);
+            if (on_back) v = _mm512_mask_i32gather_ps(v, on_back, at, B, 4);
+            return v;
+        };
+        const __m512 w0 = _mm512_load_ps(weight[0]), w1 = _mm512_load_ps(weight[1]), w2 = _mm512_load_ps(weight[2]);
+        float* E[3] = {out.Ex, out.Ey, out.Ez};
+        for (int axis = 0; axis < 3; ++axis)
+            _mm512_store_ps(E[axis], _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(corner(0, axis), w0),
+                                                                 _mm512_mul_ps(corner(1, axis), w1)),
+                                                   _mm512_mul_ps(corner(2, axis), w2)));
+        const __m512i t3 = _mm512_mullo_epi32(_mm512_load_si512(tri), _mm512_set1_epi32(3));
+        const float *albedo = &b.albedo->x, *emission = &b.emission->x;
+        float* A[3] = {out.ax, out.ay, out.az};
+        float* M[3] = {out.mx, out.my, out.mz};
+        for (int axis = 0; axis < 3; ++axis) {
+            const __m512i at = _mm512_add_epi32(t3, _mm512_set1_epi32(axis));
+            _mm512_store_ps(A[axis], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), hit_lanes, at, albedo, 4));
+            _mm512_store_ps(M[axis], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), on_front, at, emission, 4));
+        }
+    }
+#pragma GCC diagnostic pop
+#endif
 };
 
 // Whether a point projects into the same row of both eyes (to float rounding): the same
@@ -670,6 +794,11 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
     const bool keep_light = claim_into != nullptr;
     const bool keep_hits = hits_kept_;
     const BakedLattice* const baked = lighting.baked_lattice();
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+    const bool lanes16 = baked && LatticeLanes::lanes16(*baked);
+#else
+    constexpr bool lanes16 = false;
+#endif
     std::optional<ClaimProjection> claim;
     if (claim_into) claim.emplace(*claim_into, claims_.data());
     const auto t0 = Clock::now();
@@ -823,7 +952,11 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             // now, blended after the plane map below), else the lighting's batch call, its
             // records spread onto their lanes.
             LaneLight& ll = lane_light;
-            if (m && baked) {
+            if (m && lanes16) {
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+                lattice.locate16(*baked, h.hit.geomID, h.hit.primID, h.hit.u, h.hit.v, hit, nx, ny, nz);
+#endif
+            } else if (m && baked) {
                 lattice.locate(*baked, h.hit.geomID, h.hit.primID, h.hit.u, h.hit.v, hit, nx, ny, nz);
             } else if (m) {
                 lighting.light_batch(queries.data(), m, lights.data());
@@ -870,7 +1003,13 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                                                 pv + r0, plod + r0);
                 r0 = r1;
             }
-            if (m && baked) lattice.blend(*baked, ll);
+            if (m && lanes16) {
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+                lattice.blend16(*baked, ll);
+#endif
+            } else if (m && baked) {
+                lattice.blend(*baked, ll);
+            }
             for (std::uint32_t j = 0; j < m; ++j) {
                 if (lane_pl[j] >= 0) continue;
                 const std::uint32_t k = lane[j];

@@ -71,6 +71,9 @@ struct BakedLattice {
     const std::uint32_t* segments = nullptr;                                // per triangle
     const std::uint64_t* offset = nullptr;                                  // per triangle
     const Vec3f *front = nullptr, *back = nullptr;                          // per lattice point
+    // The counts (0: unknown): when 3 x either is below 2^31 the display pass gathers the
+    // arrays in 16 lanes with 32-bit indices (AVX-512), else it reads them lane by lane.
+    std::uint64_t triangles = 0, points = 0;
 };
 
 // Where barycentrics (b1, b2) fall on a triangle's lattice of n segments per edge: the cell
@@ -81,7 +84,7 @@ struct BakedLattice {
 // lower one, so it is scaled back onto the edge. Selects only, no branches: which sub-triangle
 // a pixel falls in is a coin toss (a branch on it mispredicted half the time), and loops over
 // it vectorise. The one definition of the arithmetic for the Gallery's lookups and the
-// display pass (whose AVX2 lanes do the same operations).
+// display pass (whose AVX2 and AVX-512 lanes do the same operations).
 struct LatticeCell {
     std::int32_t i, j;
     bool upper;

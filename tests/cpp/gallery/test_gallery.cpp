@@ -14,6 +14,7 @@
 
 #include "cache/virtual_texture.h"
 #include "common/error.h"
+#include "gallery/display_lighting.h"
 #include "gallery/gallery.h"
 #include "pack/geometry.h"
 #include "views/camera.h"
@@ -31,12 +32,15 @@ struct Room {
                               out[3 * i] = 200, out[3 * i + 1] = 40, out[3 * i + 2] = 20;
                       }};
     Gallery gallery;
-    Room() {
+    // panel: also a free-standing 1.6 x 1.2 m panel at x = 0.6 whose back faces the light.
+    explicit Room(bool panel = false) {
         const float floor[12] = {-1, 0, -1, -1, 0, 1, 1, 0, 1, 1, 0, -1};
         const float light[12] = {-0.25f, 2, -0.25f, 0.25f, 2, -0.25f, 0.25f, 2, 0.25f, -0.25f, 2, 0.25f};
+        const float wall[12] = {0.6f, 0, -0.8f, 0.6f, 1.2f, -0.8f, 0.6f, 1.2f, 0.8f, 0.6f, 0, 0.8f};
         const std::int64_t quad[6] = {0, 1, 2, 0, 2, 3};
         gallery.add_surface(floor, 4, quad, 2, {0.5f, 0.5f, 0.5f}, {0, 0, 0});
         gallery.add_surface(light, 4, quad, 2, {0, 0, 0}, {10, 10, 10});
+        if (panel) gallery.add_surface(wall, 4, quad, 2, {0.7f, 0.6f, 0.5f}, {0, 0, 0});
         gallery.add_painting(0, layout.paintings[0], {-0.5, 1.0, -0.5}, {1, 0, 0}, {0, -1, 0}, 1.0, 0.5);
         gallery.commit();
     }
@@ -603,5 +607,65 @@ TEST(Gallery, BakedDisplayIrradianceIsThePointLookupBitForBit) {
                 ++compared;
             }
         EXPECT_GT(compared, 200);
+    }
+}
+
+namespace {
+// The Gallery's baked lighting with its lattice's counts hidden (0: unknown), which makes the
+// display pass read the lattice lane by lane instead of gathering it in 16-lane vectors.
+class LaneByLaneLighting final : public DisplayLighting {
+public:
+    explicit LaneByLaneLighting(const GalleryLighting& l) : inner_(l), lattice_(*l.baked_lattice()) {
+        lattice_.triangles = lattice_.points = 0;
+    }
+    void light(unsigned geom, unsigned prim, Vec3f p, Vec3f n, SurfaceLight& out) const override {
+        inner_.light(geom, prim, p, n, out);
+    }
+    const BakedLattice* baked_lattice() const override { return &lattice_; }
+
+private:
+    const GalleryLighting& inner_;
+    BakedLattice lattice_;
+};
+}  // namespace
+
+TEST(Gallery, BakedLatticeGatheredInLanesEqualsItReadLaneByLane) {
+    // With AVX-512 the display pass gathers the lattice, its triangles' data and the corner
+    // points in 16 lanes; its lanes must give the lane loop's floats on either side of a
+    // surface, for one eye and for the left eye of a stereo pair (which keeps its light for
+    // the right eye), with rays that miss in the same packets as rays that hit. Room's panel
+    // gives a lit back lattice.
+    Room room(true);
+    Gallery& g = room.gallery;
+    room.light_and_bake(0.2);
+    const GalleryLighting gathered(g, Lighting::Baked);
+    const LaneByLaneLighting lane_by_lane(gathered);
+    ASSERT_EQ(gathered.baked_lattice()->triangles, g.scene().triangle_count());
+    ASSERT_GT(gathered.baked_lattice()->points, 0u);
+    const PaintingSceneView view = g.feedback_view();
+    const DisplayOptions o = GalleryLighting::options(2);
+    // The floor and the painting from the front, the panel's lit back and the floor beyond,
+    // the floor from below (its unlit back) with the light's.
+    for (const auto& [eye, target] : {std::pair{Vec3d(0.3, 0.75, 1.5), Vec3d(0, 0.2, -0.5)},
+                                      std::pair{Vec3d(-0.3, 0.9, 1.4), Vec3d(0.6, 0.6, 0)},
+                                      std::pair{Vec3d(-0.4, -0.6, 0.9), Vec3d(0, 0.2, -0.5)}}) {
+        const Camera left = Camera::look_at(eye, target, {0, 1, 0}, 100, 53, 29);
+        const Camera right = Camera::look_at(eye + Vec3d(0.064, 0, 0), target + Vec3d(0.064, 0, 0), {0, 1, 0}, 100, 53, 29);
+        const std::size_t n = std::size_t(left.width) * left.height;
+        std::vector<float> a(3 * n, -1.0f), b(3 * n, -2.0f), al(3 * n), ar(3 * n), bl(3 * n), br(3 * n);
+        DisplayPass pa, pb;
+        pa.render(view, gathered, room.vt, left, o, a.data());
+        pb.render(view, lane_by_lane, room.vt, left, o, b.data());
+        EXPECT_EQ(a, b);
+        pa.render_stereo(view, gathered, room.vt, left, right, true, o, al.data(), ar.data());
+        pb.render_stereo(view, lane_by_lane, room.vt, left, right, true, o, bl.data(), br.data());
+        EXPECT_EQ(al, bl);
+        EXPECT_EQ(ar, br);
+        EXPECT_EQ(al, a);
+        EXPECT_GT(pa.left_stats().hits, n / 8);
+        EXPECT_LT(pa.left_stats().hits, n);  // rays that miss the open room
+        if (eye.y > 0) {  // lit surfaces in view
+            EXPECT_GT(std::count_if(a.begin(), a.end(), [](float v) { return v > 0; }), std::ptrdiff_t(n / 4));
+        }
     }
 }
