@@ -519,6 +519,8 @@ struct LatticeLanes {
     // out of the gathers (their values are never read).
     alignas(64) std::int32_t point[3][16];  // float index of each corner in front or back
     __mmask16 hit_lanes = 0, front_lanes = 0;
+    int first_lane = 0;  // the first hit lane
+    bool one_triangle = false, one_cell = false;  // under every hit lane
 
     static bool lanes16(const BakedLattice& b) {
         constexpr std::uint64_t kLimit = (std::uint64_t(1) << 31) / 3;
@@ -533,19 +535,40 @@ struct LatticeLanes {
         const __mmask16 hm = _mm512_test_epi32_mask(hits, hits);
         hit_lanes = hm;
         const __m512i g = _mm512_maskz_loadu_epi32(hm, geom_in), p = _mm512_maskz_loadu_epi32(hm, prim_in);
-        const __m512i t = _mm512_add_epi32(_mm512_i32gather_epi32(g, b.first_triangle, 4), p);
+        // Nearly every packet has one triangle under all its hit lanes (and one lattice cell:
+        // a cell spans many pixels). Its data are then read once and broadcast: on these
+        // cores a 16-lane gather costs about as much as 16 loads.
+        const int k0 = std::countr_zero(unsigned(hm));  // the caller has hits
+        first_lane = k0;
+        const unsigned g0 = geom_in[k0], p0 = prim_in[k0];
+        one_triangle = (_mm512_mask_cmpeq_epi32_mask(hm, g, _mm512_set1_epi32(int(g0))) &
+                        _mm512_mask_cmpeq_epi32_mask(hm, p, _mm512_set1_epi32(int(p0)))) == hm;
+        __m512i t, n, first;
+        __m512 wx, wy, wz;
+        if (one_triangle) {
+            const std::uint32_t t0 = b.first_triangle[g0] + p0;
+            const Vec3f w = b.normal[t0];
+            t = _mm512_set1_epi32(int(t0));
+            wx = _mm512_set1_ps(w.x), wy = _mm512_set1_ps(w.y), wz = _mm512_set1_ps(w.z);
+            n = _mm512_set1_epi32(int(b.segments[t0]));
+            first = _mm512_set1_epi32(int(std::uint32_t(b.offset[t0])));
+        } else {
+            t = _mm512_add_epi32(_mm512_i32gather_epi32(g, b.first_triangle, 4), p);
+            const __m512i t3 = _mm512_mullo_epi32(t, _mm512_set1_epi32(3));
+            const float* normal = &b.normal->x;
+            wx = _mm512_i32gather_ps(t3, normal, 4);
+            wy = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(1)), normal, 4);
+            wz = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(2)), normal, 4);
+            n = _mm512_i32gather_epi32(t, b.segments, 4);
+            // The triangle's first point: the low word of offset[t] (below 2^31 / 3).
+            first = _mm512_i32gather_epi32(_mm512_add_epi32(t, t), b.offset, 4);
+        }
         _mm512_store_si512(tri, t);
-        const __m512i t3 = _mm512_mullo_epi32(t, _mm512_set1_epi32(3));
-        const float* normal = &b.normal->x;
-        const __m512 wx = _mm512_i32gather_ps(t3, normal, 4);
-        const __m512 wy = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(1)), normal, 4);
-        const __m512 wz = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(2)), normal, 4);
         const __m512 facing = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(wx, _mm512_load_ps(nx)),
                                                           _mm512_mul_ps(wy, _mm512_load_ps(ny))),
                                             _mm512_mul_ps(wz, _mm512_load_ps(nz)));
         const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
         front_lanes = _mm512_cmp_ps_mask(facing, zero, _CMP_GT_OQ);
-        const __m512i n = _mm512_i32gather_epi32(t, b.segments, 4);
         const __m512i n1 = _mm512_sub_epi32(n, _mm512_set1_epi32(1));
         __m512 c1 = _mm512_maskz_loadu_ps(hm, b1_in), c2 = _mm512_maskz_loadu_ps(hm, b2_in);
         // c < 0 ? 0 : (1 < c ? 1 : c)
@@ -586,12 +609,22 @@ struct LatticeLanes {
         const __m512i e0 = _mm512_mask_blend_epi32(upper, _mm512_add_epi32(row_i, j), _mm512_add_epi32(right, one_i));
         const __m512i e1 = _mm512_mask_blend_epi32(upper, right, up);
         const __m512i e2 = _mm512_mask_blend_epi32(upper, up, right);
-        // The triangle's first point: the low word of offset[t] (below 2^31 / 3).
-        const __m512i first = _mm512_i32gather_epi32(_mm512_add_epi32(t, t), b.offset, 4);
         const __m512i three = _mm512_set1_epi32(3);
         const __m512i e[3] = {e0, e1, e2};
         for (int c = 0; c < 3; ++c)
             _mm512_store_si512(point[c], _mm512_mullo_epi32(_mm512_add_epi32(first, e[c]), three));
+        // One cell: one triangle, one side, and the same cell and sub-triangle in every lane.
+        const __m512i lane0 = _mm512_set1_epi32(k0);
+        auto uniform = [&](__m512i v) {
+            return _mm512_mask_cmpeq_epi32_mask(hm, v, _mm512_permutexvar_epi32(lane0, v)) == hm;
+        };
+        auto all_or_none = [&](__mmask16 m) { return (m & hm) == ((m >> k0 & 1) ? hm : 0); };
+        one_cell = one_triangle && uniform(i) && uniform(j) && all_or_none(upper) && all_or_none(front_lanes);
+        if (one_cell) {
+            const float* E = &((front_lanes >> k0 & 1) ? b.front : b.back)->x;
+            for (int c = 0; c < 3; ++c) __builtin_prefetch(E + point[c][k0]);
+            return;
+        }
         for (int k = 0; k < 16; ++k)
             if (hm >> k & 1) {
                 const float* E = &((front_lanes >> k & 1) ? b.front : b.back)->x;
@@ -604,7 +637,10 @@ struct LatticeLanes {
     void blend16(const BakedLattice& b, LaneLight& __restrict out) const {
         const __mmask16 on_front = hit_lanes & front_lanes, on_back = hit_lanes & ~front_lanes;
         const float *F = &b.front->x, *B = &b.back->x;
+        const int k0 = first_lane;
         auto corner = [&](int c, int axis) {
+            if (one_cell)
+                return _mm512_set1_ps(((front_lanes >> k0 & 1) ? F : B)[point[c][k0] + axis]);
             const __m512i at = _mm512_add_epi32(_mm512_load_si512(point[c]), _mm512_set1_epi32(axis));
             __m512 v = _mm512_setzero_ps();
             if (on_front) v = _mm512_mask_i32gather_ps(v, on_front, at, F, 4);
@@ -617,10 +653,18 @@ struct LatticeLanes {
             _mm512_store_ps(E[axis], _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(corner(0, axis), w0),
                                                                  _mm512_mul_ps(corner(1, axis), w1)),
                                                    _mm512_mul_ps(corner(2, axis), w2)));
-        const __m512i t3 = _mm512_mullo_epi32(_mm512_load_si512(tri), _mm512_set1_epi32(3));
         const float *albedo = &b.albedo->x, *emission = &b.emission->x;
         float* A[3] = {out.ax, out.ay, out.az};
         float* M[3] = {out.mx, out.my, out.mz};
+        if (one_triangle) {
+            const std::size_t t0 = 3 * std::size_t(tri[k0]);
+            for (int axis = 0; axis < 3; ++axis) {
+                _mm512_store_ps(A[axis], _mm512_set1_ps(albedo[t0 + axis]));
+                _mm512_store_ps(M[axis], _mm512_maskz_mov_ps(on_front, _mm512_set1_ps(emission[t0 + axis])));
+            }
+            return;
+        }
+        const __m512i t3 = _mm512_mullo_epi32(_mm512_load_si512(tri), _mm512_set1_epi32(3));
         for (int axis = 0; axis < 3; ++axis) {
             const __m512i at = _mm512_add_epi32(t3, _mm512_set1_epi32(axis));
             _mm512_store_ps(A[axis], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), hit_lanes, at, albedo, 4));
