@@ -158,6 +158,7 @@ private:
 };
 
 constexpr std::size_t kBatch = 64;
+constexpr std::size_t kRun = 16;  // samples checked together for one tile (kBatch's divisor)
 
 // Per sample of a batch: level-0 position, level asked for, the taps at that level (integer
 // texel and weight per axis) and the tile column / row holding the sample point.
@@ -585,24 +586,55 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
             u_in = u_dense, v_in = v_dense, l_in = lod_dense;
         }
         trilinear_taps(u_in, v_in, l_in, n8, pyramid, std::int32_t(L), divide_p, tile, b);
-        // Page entries, fallbacks, addresses and prefetches of both levels.
-        for (std::size_t k = 0; k < n; ++k) {
-            for (int c = 0; c < 2; ++c) {
-                const std::uint32_t l = b.level[c][k], cx = b.cx[c][k], cy = b.cy[c][k];
+        // Page entries, fallbacks, addresses and prefetches of both levels. A run of 16
+        // samples whose taps lie in one resident tile at each level (the common case: the
+        // display's samples are neighbouring pixels) takes its slots' bases once, in a loop
+        // that vectorises; the others sample by sample.
+        for (std::size_t k0 = 0; k0 < n; k0 += kRun) {
+            const std::size_t k1 = std::min(n, k0 + kRun);
+            const std::uint8_t* base[2] = {nullptr, nullptr};
+            for (int c = 0; c < 2 && k1 - k0 == kRun; ++c) {
+                const std::uint32_t l = b.level[c][k0], cx = b.cx[c][k0], cy = b.cy[c][k0];
+                std::uint32_t differ = 0;
+                for (std::size_t k = k0; k < k1; ++k)
+                    differ |= (b.level[c][k] ^ l) | (b.cx[c][k] ^ cx) | (b.cy[c][k] ^ cy);
+                if (differ) break;
                 const PageEntry e = finders[c].entry(l, cx, cy);
-                const std::uint32_t al = e.level(), s = al - l;
-                const std::uint8_t* p;
-                if (s == 0) [[likely]] {
-                    p = physical + std::size_t(e.slot()) * slot_bytes + std::uint32_t(b.offset[c][k]);
-                } else {  // fallback: the resident ancestor answers at its own resolution
-                    const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
-                    b.fx[c][k] = tx.f, b.fy[c][k] = ty.f;
-                    p = finders[c].texel(e, s, tx.i0, ty.i0, cx, cy);
+                if (e.level() != l) break;  // a fallback (or no entry)
+                base[c] = physical + std::size_t(e.slot()) * slot_bytes;
+            }
+            if (base[0] && base[1]) {
+                for (int c = 0; c < 2; ++c) {
+                    const std::int32_t* __restrict offset = b.offset[c];
+                    const std::uint8_t** __restrict out = texel[c];
+                    for (std::size_t k = k0; k < k1; ++k) out[k] = base[c] + std::uint32_t(offset[k]);
+                    for (std::size_t k = k0; k < k1; k += 4) {  // 4 texels of 3 bytes: under a line
+                        __builtin_prefetch(out[k]);
+                        __builtin_prefetch(out[k] + row);
+                    }
                 }
-                __builtin_prefetch(p);
-                __builtin_prefetch(p + row);
-                texel[c][k] = p;
-                if (c == 0 && r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
+                if (r.level_out)
+                    std::fill(r.level_out + b0 + k0, r.level_out + b0 + k1, static_cast<std::int8_t>(b.level[0][k0]));
+                continue;
+            }
+            for (std::size_t k = k0; k < k1; ++k) {
+                for (int c = 0; c < 2; ++c) {
+                    const std::uint32_t l = b.level[c][k], cx = b.cx[c][k], cy = b.cy[c][k];
+                    const PageEntry e = finders[c].entry(l, cx, cy);
+                    const std::uint32_t al = e.level(), s = al - l;
+                    const std::uint8_t* p;
+                    if (s == 0) [[likely]] {
+                        p = physical + std::size_t(e.slot()) * slot_bytes + std::uint32_t(b.offset[c][k]);
+                    } else {  // fallback: the resident ancestor answers at its own resolution
+                        const Tap tx = axes.tap_x(b.x0[k], al), ty = axes.tap_y(b.y0[k], al);
+                        b.fx[c][k] = tx.f, b.fy[c][k] = ty.f;
+                        p = finders[c].texel(e, s, tx.i0, ty.i0, cx, cy);
+                    }
+                    __builtin_prefetch(p);
+                    __builtin_prefetch(p + row);
+                    texel[c][k] = p;
+                    if (c == 0 && r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
+                }
             }
         }
         float* out = r.out + 3 * b0;

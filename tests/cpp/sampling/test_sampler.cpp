@@ -287,13 +287,17 @@ TEST(VirtualTexture, BatchedTrilinearEqualsPerSampleArithmetic) {
 // The display pass's calls: dense u and v, one call per run of one painting under a read lock
 // the caller holds (sample_serial_locked), runs of every length from 1 up (partial batches,
 // whose taps are padded to whole vectors, and whole ones): each run must equal the per-sample
-// trilinear reference bit for bit.
-TEST(VirtualTexture, TrilinearRunsOfAnyLengthEqualPerSampleArithmetic) {
+// trilinear reference bit for bit, with half the tiles resident (fallbacks) and with all of
+// them (where 16 samples' taps lie in one tile at both levels, the sampler takes the two
+// slots' bases once).
+class TrilinearRuns : public ::testing::TestWithParam<double> {};
+
+TEST_P(TrilinearRuns, OfAnyLengthEqualPerSampleArithmetic) {
     const CutPainting painting(777, 1301, 32, 3, 31);
     const std::uint32_t L = painting.level_count();
-    VirtualTexture vt(painting.layout, 14, 14, painting.source());
+    VirtualTexture vt(painting.layout, 40, 40, painting.source());
     std::mt19937 rng(37);
-    painting.insert_random(vt, 0.5, rng);
+    painting.insert_random(vt, GetParam(), rng);
     std::uniform_real_distribution<double> unit(-0.02, 1.02);
     std::vector<double> u, v;
     std::vector<float> lod;
@@ -328,6 +332,7 @@ TEST(VirtualTexture, TrilinearRunsOfAnyLengthEqualPerSampleArithmetic) {
     ASSERT_EQ(got_level, ref_level);
     for (std::size_t i = 0; i < 3 * n; ++i) ASSERT_EQ(got[i], ref[i]) << "value " << i;
 }
+INSTANTIATE_TEST_SUITE_P(VirtualTexture, TrilinearRuns, ::testing::Values(0.5, 1.0));
 
 // Interleaved (u, v) pairs (the display pass's layout), a scalar lod and NaN inputs: NaN
 // coordinates sample at 0 and a NaN lod at level 0, in both filters' code.
