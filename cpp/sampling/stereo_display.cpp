@@ -726,7 +726,7 @@ struct RowScratch {
     std::vector<std::uint32_t> rx;
     std::vector<int> rpl;
     std::vector<std::int32_t> rsrc;
-    std::vector<double> rPx, rPy, rPz, rDx, rDy, rDz;
+    std::vector<double> rDx, rDy, rDz;
     std::vector<float> rlod;
     // The right eye's edge release: one row of claimed depths (with an infinite depth either
     // side) and the row minima of the last three claim rows (row r in slot r % 3).
@@ -739,7 +739,7 @@ struct RowScratch {
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
-            for (auto* a : {&rPx, &rPy, &rPz, &rDx, &rDy, &rDz}) a->resize(w);
+            for (auto* a : {&rDx, &rDy, &rDz}) a->resize(w);
             depths.resize(w + 2);
             for (auto& m : row_min) m.resize(w);
         }
@@ -890,7 +890,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         std::vector<std::uint32_t>& rx = sc.rx;
         std::vector<int>& rpl = sc.rpl;
         std::vector<std::int32_t>& rsrc = sc.rsrc;
-        std::vector<double>&rPx = sc.rPx, &rPy = sc.rPy, &rPz = sc.rPz, &rDx = sc.rDx, &rDy = sc.rDy,
+        std::vector<double>&rDx = sc.rDx, &rDy = sc.rDy,
                           &rDz = sc.rDz;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
@@ -1121,9 +1121,9 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             lap(t_rays);
             start_row(row);
             // The right eye's claimed pixels: the left hit and its light, the level of this eye
-            // (the point seen along this eye's ray through it), the painting pixels' level in
-            // SIMD lanes per run of one painting (PlaneMap::lod_lanes, as the left eye's
-            // packets). The buffers in restrict locals: through the captured references every
+            // at the pixel (along its centre ray, as a traced pixel's), the painting pixels'
+            // level in SIMD lanes per run of one painting (PlaneMap::lod_lanes, as the left
+            // eye's packets). The buffers in restrict locals: through the captured references every
             // store forced their reload.
             if (left) {
                 const std::int32_t* __restrict src = sources + row * w;
@@ -1139,9 +1139,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 std::uint32_t* __restrict rxs = rx.data();
                 int* __restrict rpls = rpl.data();
                 std::int32_t* __restrict rsrcs = rsrc.data();
-                double* __restrict px = rPx.data();
-                double* __restrict py = rPy.data();
-                double* __restrict pz = rPz.data();
                 std::size_t nr = 0, reused_here = 0;
                 for (std::uint32_t x = 0; x < w; ++x) {
                     const std::int32_t s = src[x];
@@ -1157,23 +1154,23 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                         lod_out[x] = kNaN;
                         continue;
                     }
-                    const Vec3f& p = lp[si];
                     rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s;
-                    px[nr] = p.x, py[nr] = p.y, pz[nr] = p.z;
                     ++nr;
                 }
                 hit_count += reused_here;
-                // D = (p - eye) / ((p - eye) . forward), as Vec3d's operators compute it.
+                // The level along this eye's ray through the pixel's centre, as the packets
+                // compute a traced pixel's (D = row direction + screen x along right, D . forward
+                // = 1): no point gathered and no division per pixel.
                 double* __restrict dx = rDx.data();
                 double* __restrict dy = rDy.data();
                 double* __restrict dz = rDz.data();
                 {
-                    const double ex = eye.position.x, ey = eye.position.y, ez = eye.position.z;
-                    const double fx = eye.forward.x, fy = eye.forward.y, fz = eye.forward.z;
+                    const double rdx = eye.right.x, rdy = eye.right.y, rdz = eye.right.z;
+                    const double row_x = row_dir.x, row_y = row_dir.y, row_z = row_dir.z;
+                    const double* __restrict col_sx = column_sx.data();
                     for (std::size_t k = 0; k < nr; ++k) {
-                        const double tx = px[k] - ex, ty = py[k] - ey, tz = pz[k] - ez;
-                        const double inv = 1.0 / (tx * fx + ty * fy + tz * fz);
-                        dx[k] = tx * inv, dy[k] = ty * inv, dz[k] = tz * inv;
+                        const double c = col_sx[rxs[k]];
+                        dx[k] = row_x + c * rdx, dy[k] = row_y + c * rdy, dz[k] = row_z + c * rdz;
                     }
                 }
                 float* __restrict lods_r = rlod.data();
@@ -1203,9 +1200,14 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                         ++copied;
                         continue;
                     }
+                    // The texel at the left hit's point: D = (p - eye) / ((p - eye) . forward).
+                    const Vec3f& p = lp[si];
+                    const double tx = p.x - eye.position.x, ty = p.y - eye.position.y, tz = p.z - eye.position.z;
+                    const double inv = 1.0 / (tx * eye.forward.x + ty * eye.forward.y + tz * eye.forward.z);
+                    const double Dx = tx * inv, Dy = ty * inv, Dz = tz * inv;
                     double u, v;
                     float unused;
-                    maps[std::size_t(rpls[k])].map_lanes(1, dx + k, dy + k, dz + k, &u, &v, &unused);
+                    maps[std::size_t(rpls[k])].map_lanes(1, &Dx, &Dy, &Dz, &u, &v, &unused);
                     const std::size_t q = pending_count++;
                     GS_CHECK(q < w);  // one pixel per column and row
                     PendingPixel& pp = pending[q];

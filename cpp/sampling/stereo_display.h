@@ -10,7 +10,8 @@
 // a near surface that no left sample happened to land on), and the right eye traces only the
 // pixels left unclaimed. A claimed pixel keeps the left hit's point and its light (irradiance,
 // albedo, emission: view-independent on Lambertian surfaces) and takes its texture sample at
-// the right eye's level of detail (the left eye's sample when the levels agree to within
+// the right eye's level of detail for the pixel (along its centre ray, as a traced pixel's
+// level) at the left point (the left eye's sample when the levels agree to within
 // reuse_lod_tolerance), so the reused pixel is what the right eye computes for that point.
 //
 // One fused sweep per eye (issue 14 §5): per row, 16-ray packets are traced and, while their
