@@ -534,7 +534,7 @@ Vec3f Gallery::direct_stratified(const Hit& hit, int samples, ShadeCounters& c, 
     // sample order.
     auto shade = [&](const int* index, int count) {
         Vec3f f[16], o[16], d[16];
-        float tfar[16];
+        float tfar[16] = {};  // lanes past `rays` are masked off
         int ray_of[16];
         int rays = 0;
         for (int k = 0; k < count; ++k) {
