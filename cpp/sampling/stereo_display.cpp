@@ -953,7 +953,27 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             const std::size_t row_start = row * w + i0;
             alignas(64) int lane_pl[16];  // per hit: its painting placement, -1 for the room
             std::uint32_t m = 0, traced_here = 0;
-            for (std::uint32_t k = 0; k < n; ++k) {
+            // A whole packet on one surface (most packets, with baked light): its lanes need no
+            // compaction, and on a painting no gathering of the painting lanes.
+            const unsigned g0 = h.hit.geomID[0];
+            bool dense = n == 16 && baked && g0 != kNoHit;
+            if (dense) {
+                int all = -1;
+                for (std::uint32_t k = 0; k < 16; ++k) all &= valid[k] & -int(h.hit.geomID[k] == g0);
+                dense = all != 0;
+            }
+            if (dense) {
+                const int pl0 = g0 < placements ? placement[g0] : -1;
+                if (keep_hits)
+                    for (std::uint32_t k = 0; k < 16; ++k) {
+                        geom_out[row_start + k] = g0;
+                        Vec3f& gp = p_out[row_start + k];
+                        gp.x = hx[k], gp.y = hy[k], gp.z = hz[k];
+                    }
+                for (std::uint32_t k = 0; k < 16; ++k) lane_pl[k] = pl0, lane[k] = k;
+                m = traced_here = 16;
+            }
+            for (std::uint32_t k = 0; k < n && !dense; ++k) {
                 if (!valid[k]) continue;
                 ++traced_here;
                 const std::size_t i = row_start + k;
@@ -1028,7 +1048,16 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             const double rdx = eye.right.x, rdy = eye.right.y, rdz = eye.right.z;
             const double row_x = row_dir.x, row_y = row_dir.y, row_z = row_dir.z;
             const double* __restrict const col_sx = column_sx.data();
-            for (std::uint32_t j = 0; j < m; ++j) {
+            const bool dense_painting = dense && lane_pl[0] >= 0;
+            if (dense_painting) {
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    const double c = col_sx[i0 + k];
+                    Dx[k] = row_x + c * rdx, Dy[k] = row_y + c * rdy, Dz[k] = row_z + c * rdz;
+                    pj[k] = k, ppl[k] = lane_pl[0];
+                }
+                np = 16;
+            }
+            for (std::uint32_t j = 0; j < m && !dense_painting; ++j) {
                 const std::uint32_t k = lane[j];
                 const int pl = lane_pl[j];
                 if (pl < 0) continue;
@@ -1054,7 +1083,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             } else if (m && baked) {
                 lattice.blend(*baked, ll);
             }
-            for (std::uint32_t j = 0; j < m; ++j) {
+            for (std::uint32_t j = 0; j < m && !dense_painting; ++j) {
                 if (lane_pl[j] >= 0) continue;
                 const std::uint32_t k = lane[j];
                 const std::size_t i = row_start + k;

@@ -662,6 +662,21 @@ TEST(Gallery, BakedLatticeGatheredInLanesEqualsItReadLaneByLane) {
         EXPECT_EQ(al, bl);
         EXPECT_EQ(ar, br);
         EXPECT_EQ(al, a);
+        // The hit points the stereo pass keeps (whole packets on one surface store them
+        // apart from the others) against the per-pixel path's.
+        std::vector<float> position(3 * n), unused(3 * n);
+        DisplayHits hits;
+        hits.position = position.data();
+        g.render_display(left, room.vt, Lighting::Baked, unused.data(), hits, 2);
+        const std::vector<float> kept = pa.hit_points(0);
+        std::size_t compared = 0;
+        for (std::size_t i = 0; i < 3 * n; ++i) {
+            ASSERT_EQ(std::isnan(kept[i]), std::isnan(position[i])) << i;
+            if (std::isnan(kept[i])) continue;
+            ASSERT_NEAR(kept[i], position[i], 1e-5f) << i;
+            ++compared;
+        }
+        EXPECT_GT(compared, 3 * n / 8);
         EXPECT_GT(pa.left_stats().hits, n / 8);
         EXPECT_LT(pa.left_stats().hits, n);  // rays that miss the open room
         if (eye.y > 0) {  // lit surfaces in view
