@@ -1168,23 +1168,70 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 std::uint32_t* __restrict rxs = rx.data();
                 int* __restrict rpls = rpl.data();
                 std::int32_t* __restrict rsrcs = rsrc.data();
-                std::size_t nr = 0, reused_here = 0;
-                for (std::uint32_t x = 0; x < w; ++x) {
-                    const std::int32_t s = src[x];
-                    if (s < 0) continue;
-                    ++reused_here;
-                    const std::size_t si = std::size_t(s);
+                std::size_t nr = 0, reused_here = 0, copied = 0;
+                const float bias = o.lod_bias, tolerance = o.reuse_lod_tolerance;
+                // 16 pixels reusing 16 consecutive left pixels on one surface (most of a row:
+                // the disparity changes slowly) are copied whole: the left radiance, and on a
+                // painting the levels in SIMD lanes and the copy if all agree with the left
+                // eye's (else they go the per-pixel way below, as every other pixel).
+                auto dense_run = [&](std::uint32_t x0) {
+                    const std::int32_t s0 = src[x0];
+                    if (s0 < 0) return false;
+                    int same = -1;
+                    for (std::uint32_t k = 0; k < 16; ++k) same &= -int(src[x0 + k] == s0 + std::int32_t(k));
+                    if (!same) return false;
+                    const std::size_t si = std::size_t(s0);
                     const unsigned geom = lgeom[si];
-                    geom_out[x] = geom;  // the point stays in the left buffer (hit_points)
+                    for (std::uint32_t k = 0; k < 16; ++k) same &= -int(lgeom[si + k] == geom);
+                    if (!same) return false;
                     const int pl = geom < placements ? placement[geom] : -1;
-                    if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
-                        rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
-                        rgb_out[3 * x + 2] = lrgb[3 * si + 2];
-                        lod_out[x] = kNaN;
-                        continue;
+                    alignas(64) float lod16[16];
+                    if (pl >= 0) {
+                        alignas(64) double Dx[16], Dy[16], Dz[16];
+                        const double* __restrict col_sx = column_sx.data() + x0;
+                        for (std::uint32_t k = 0; k < 16; ++k) {
+                            const double c = col_sx[k];
+                            Dx[k] = row_dir.x + c * eye.right.x, Dy[k] = row_dir.y + c * eye.right.y;
+                            Dz[k] = row_dir.z + c * eye.right.z;
+                        }
+                        maps[std::size_t(pl)].lod_lanes(16, Dx, Dy, Dz, lod16);
+                        for (std::uint32_t k = 0; k < 16; ++k) {
+                            float lod = lod16[k] + bias;
+                            if (!std::isfinite(lod)) lod = 0.0f;
+                            lod16[k] = lod;
+                            same &= -int(std::abs(llod[si + k] - lod) <= tolerance);
+                        }
+                        if (!same) return false;
+                        copied += 16;
+                    } else {
+                        std::fill_n(lod16, 16, kNaN);
                     }
-                    rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s;
-                    ++nr;
+                    std::fill_n(geom_out + x0, 16, geom);  // the points stay in the left buffer
+                    std::copy_n(lod16, 16, lod_out + x0);
+                    std::copy_n(lrgb + 3 * si, 48, rgb_out + 3 * std::size_t(x0));
+                    reused_here += 16;
+                    return true;
+                };
+                for (std::uint32_t x0 = 0; x0 < w; x0 += 16) {
+                    const std::uint32_t x1 = std::min(w, x0 + 16);
+                    if (x1 - x0 == 16 && dense_run(x0)) continue;
+                    for (std::uint32_t x = x0; x < x1; ++x) {
+                        const std::int32_t s = src[x];
+                        if (s < 0) continue;
+                        ++reused_here;
+                        const std::size_t si = std::size_t(s);
+                        const unsigned geom = lgeom[si];
+                        geom_out[x] = geom;  // the point stays in the left buffer (hit_points)
+                        const int pl = geom < placements ? placement[geom] : -1;
+                        if (pl < 0) {  // the left eye's radiance: the same light, the same albedo
+                            rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
+                            rgb_out[3 * x + 2] = lrgb[3 * si + 2];
+                            lod_out[x] = kNaN;
+                            continue;
+                        }
+                        rxs[nr] = x, rpls[nr] = pl, rsrcs[nr] = s;
+                        ++nr;
+                    }
                 }
                 hit_count += reused_here;
                 // The level along this eye's ray through the pixel's centre, as the packets
@@ -1215,8 +1262,6 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 // of the two levels' difference); with the left eye's texel, light and shading its
                 // radiance is the left pixel's, copied. The others sample their own texel under
                 // the left light.
-                const float bias = o.lod_bias, tolerance = o.reuse_lod_tolerance;
-                std::size_t copied = 0;
                 for (std::size_t k = 0; k < nr; ++k) {
                     const std::uint32_t x = rxs[k];
                     const std::size_t si = std::size_t(rsrcs[k]);
