@@ -724,6 +724,24 @@ bool rows_align(const Camera& left, const Camera& right) {
            std::abs(dot(offset, left.up)) <= 1e-9 * apart && std::abs(dot(offset, left.forward)) <= 1e-9 * apart;
 }
 
+// The unnormalised ray direction D (D . forward = 1) through the centre of column x of one
+// row, as the packets cast it: the row's direction + the column's screen x along right.
+struct RowDirections {
+    Vec3d row, right;
+    const double* screen_x = nullptr;  // per column
+    [[gnu::always_inline]] void at(std::size_t x, double& dx, double& dy, double& dz) const {
+        const double c = screen_x[x];
+        dx = row.x + c * right.x, dy = row.y + c * right.y, dz = row.z + c * right.z;
+    }
+};
+
+// A painting pixel's level as sampled: the plane map's with the bias; a non-finite one
+// samples level 0.
+[[gnu::always_inline]] inline float sampled_lod(float lod, float bias) {
+    lod += bias;
+    return std::isfinite(lod) ? lod : 0.0f;
+}
+
 void check_camera(const Camera& eye) {
     require(eye.width > 0 && eye.height > 0, "display: the eye's resolution must be positive");
     require(std::uint64_t(eye.width) * eye.height < (std::uint64_t(1) << 31),
@@ -932,7 +950,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                           &rDz = sc.rDz;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
-        Vec3d row_dir;
+        RowDirections directions{{}, eye.right, column_sx.data()};
         std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0, reused_count = 0;
         // Thread time per stage: laps between the stages of the fused loop, taken on every
         // kTimedRow-th row only (a clock read per stage and packet costs a few percent).
@@ -949,7 +967,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
         auto start_row = [&](std::size_t row) {
             if (row == current_row) return;
             current_row = row;
-            row_dir = eye.forward + eye.screen_y(row + 0.5) * eye.up;
+            directions.row = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending_count = 0;
         };
         std::array<LightQuery, 16> queries;
@@ -1083,14 +1101,11 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
             alignas(64) std::uint32_t pj[16];
             alignas(64) int ppl[16];
             std::uint32_t np = 0;
-            const double rdx = eye.right.x, rdy = eye.right.y, rdz = eye.right.z;
-            const double row_x = row_dir.x, row_y = row_dir.y, row_z = row_dir.z;
-            const double* __restrict const col_sx = column_sx.data();
+            const RowDirections rays = directions;  // a local copy: stores cannot alias it
             const bool dense_painting = dense && lane_pl[0] >= 0;
             if (dense_painting) {
                 for (std::uint32_t k = 0; k < 16; ++k) {
-                    const double c = col_sx[i0 + k];
-                    Dx[k] = row_x + c * rdx, Dy[k] = row_y + c * rdy, Dz[k] = row_z + c * rdz;
+                    rays.at(i0 + k, Dx[k], Dy[k], Dz[k]);
                     pj[k] = k, ppl[k] = lane_pl[0];
                 }
                 np = 16;
@@ -1099,10 +1114,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 const std::uint32_t k = lane[j];
                 const int pl = lane_pl[j];
                 if (pl < 0) continue;
-                const double c = col_sx[i0 + k];
-                Dx[np] = row_x + c * rdx;
-                Dy[np] = row_y + c * rdy;
-                Dz[np] = row_z + c * rdz;
+                rays.at(i0 + k, Dx[np], Dy[np], Dz[np]);
                 pj[np] = j, ppl[np] = pl;
                 ++np;
             }
@@ -1150,8 +1162,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
                     add_out[i].x = emission.x, add_out[i].y = emission.y, add_out[i].z = emission.z;
                 }
-                float lod = plod[q] + bias;
-                if (!std::isfinite(lod)) lod = 0.0f;
+                const float lod = sampled_lod(plod[q], bias);
                 lod_out[i] = lod;
                 PendingPixel& pp = pend[pc];
                 pp.x = i0 + k, pp.placement = ppl[q];
@@ -1226,18 +1237,12 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                     alignas(64) float lod16[16];
                     if (pl >= 0) {
                         alignas(64) double Dx[16], Dy[16], Dz[16];
-                        const double* __restrict col_sx = column_sx.data() + x0;
-                        for (std::uint32_t k = 0; k < 16; ++k) {
-                            const double c = col_sx[k];
-                            Dx[k] = row_dir.x + c * eye.right.x, Dy[k] = row_dir.y + c * eye.right.y;
-                            Dz[k] = row_dir.z + c * eye.right.z;
-                        }
+                        const RowDirections rays = directions;
+                        for (std::uint32_t k = 0; k < 16; ++k) rays.at(x0 + k, Dx[k], Dy[k], Dz[k]);
                         maps[std::size_t(pl)].lod_lanes(16, Dx, Dy, Dz, lod16);
                         for (std::uint32_t k = 0; k < 16; ++k) {
-                            float lod = lod16[k] + bias;
-                            if (!std::isfinite(lod)) lod = 0.0f;
-                            lod16[k] = lod;
-                            same &= -int(std::abs(llod[si + k] - lod) <= tolerance);
+                            lod16[k] = sampled_lod(lod16[k], bias);
+                            same &= -int(std::abs(llod[si + k] - lod16[k]) <= tolerance);
                         }
                         if (!same) return false;
                         copied += 16;
@@ -1279,13 +1284,8 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 double* __restrict dy = rDy.data();
                 double* __restrict dz = rDz.data();
                 {
-                    const double rdx = eye.right.x, rdy = eye.right.y, rdz = eye.right.z;
-                    const double row_x = row_dir.x, row_y = row_dir.y, row_z = row_dir.z;
-                    const double* __restrict col_sx = column_sx.data();
-                    for (std::size_t k = 0; k < nr; ++k) {
-                        const double c = col_sx[rxs[k]];
-                        dx[k] = row_x + c * rdx, dy[k] = row_y + c * rdy, dz[k] = row_z + c * rdz;
-                    }
+                    const RowDirections rays = directions;
+                    for (std::size_t k = 0; k < nr; ++k) rays.at(rxs[k], dx[k], dy[k], dz[k]);
                 }
                 float* __restrict lods_r = rlod.data();
                 for (std::size_t r0 = 0; r0 < nr;) {
@@ -1303,8 +1303,7 @@ void DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLighti
                 for (std::size_t k = 0; k < nr; ++k) {
                     const std::uint32_t x = rxs[k];
                     const std::size_t si = std::size_t(rsrcs[k]);
-                    float lod = lods_r[k] + bias;
-                    if (!std::isfinite(lod)) lod = 0.0f;
+                    const float lod = sampled_lod(lods_r[k], bias);
                     lod_out[x] = lod;
                     if (std::abs(llod[si] - lod) <= tolerance) {
                         rgb_out[3 * x] = lrgb[3 * si], rgb_out[3 * x + 1] = lrgb[3 * si + 1];
