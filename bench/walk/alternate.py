@@ -9,8 +9,9 @@ the installed gigascroll._core. Modes:
   left    the left eye's display against the bare cast of its pixels: the median over 12
           alternations of 3 displays and 3 bare casts of their process-CPU-time ratio;
   stereo  the same for both eyes with reuse against the bare cast of both eyes;
-  right   the right eye with reuse against the left eye at 900 x 960 over five poses of the
-          walk (4 stereo frames each): the medians of both eyes' stage times, and their ratio.
+  right   the right eye with reuse against the left eye (900 x 960 unless --eye) over five
+          poses of the walk (4 stereo frames each): the medians of both eyes' stage times, and
+          their ratio.
 """
 import argparse
 import importlib.util
@@ -56,10 +57,10 @@ def display_ratio(mode, w, h):
           f"{statistics.median(shown) * 1e3:.1f} ms cpu bare {statistics.median(bare) * 1e3:.1f} ms cpu")
 
 
-def right_vs_left():
+def right_vs_left(w, h):
     sys.path.insert(0, HERE)
     from single_pose import pose
-    p = pose(900, 960)
+    p = pose(w, h)
     src, vt, d, outs, path = p["src"], p["vt"], p["display"], p["outs"], p["path"]
     stages = {}
     for frame in range(len(path) // 6, len(path), len(path) // 6):
@@ -77,17 +78,20 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("old")
     ap.add_argument("new")
-    ap.add_argument("--eye", default="1800x1920")
+    ap.add_argument("--eye", help="per-eye WxH (default 1800x1920; --mode right 900x960)")
     ap.add_argument("--mode", choices=["left", "stereo", "right"], default="left")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--child", help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.eye is None:
+        a.eye = "900x960" if a.mode == "right" else "1800x1920"
     if a.child:
         load_core(a.child)
+        w, h = map(int, a.eye.split("x"))
         if a.mode == "right":
-            right_vs_left()
+            right_vs_left(w, h)
         else:
-            display_ratio(a.mode, *map(int, a.eye.split("x")))
+            display_ratio(a.mode, w, h)
         return
     for path in (a.old, a.new):
         if not os.path.isfile(path):

@@ -22,7 +22,9 @@
 // the per-pixel arithmetic runs in SIMD lanes: hit points and eye-facing normals for all 16
 // rays, and the painting pixels' uv and level (a libm-free log2) per run of one painting. Per pixel the
 // pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
-// eye reuses, its light.
+// eye reuses, its light. With reuse, when the eyes' rows align (the headset's case), both eyes
+// run in one wavefront of 16-row chunks: a right chunk starts once the left chunks beside it
+// have made their claims, while those claims and left rows are still in cache.
 //
 // The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
 // is not reentrant.
@@ -31,6 +33,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "cache/virtual_texture.h"
@@ -160,6 +163,10 @@ struct DisplayOptions {
     // per pixel stored that nobody reads in a frame (render_stereo keeps them: the right
     // eye reuses them).
     bool keep_hit_points = true;
+    // render_stereo with reuse, eyes whose rows align: both eyes' rows in one wavefront, each
+    // right chunk once the left rows it reads are done (false: the whole left eye first; the
+    // same frame, for tests and benchmarks).
+    bool interleave_eyes = true;
     unsigned threads = 0;  // 0 = all cores
 };
 
@@ -217,10 +224,17 @@ private:
     // to, and the painting pixels keep their light. While reusing_ (the right eye), each row's
     // claims are released on depth edges just before the row is rendered; claimed pixels are
     // not traced: they take the left hit and light, and their texel at this eye's level.
-    void render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
-                    const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
-                    GBuffer& g, const Camera* claim_into, const float* left_rgb, float* rgb,
-                    EyeStats& st);
+    // How render_eye runs its rows: body(rb, re) on chunks of chunk_rows rows. Without one, a
+    // parallel_for over the eye's rows; render_stereo's pair with reuse runs both eyes' chunks
+    // in one wavefront (see render_stereo).
+    using RowsBody = std::function<void(std::size_t, std::size_t)>;
+    using RunRows = std::function<void(std::size_t chunk_rows, const RowsBody& body)>;
+    // st's stage seconds are left as thread time of the timed rows; the wall time of the call
+    // is returned for the caller to split among the stages (split_wall).
+    double render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
+                      const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
+                      GBuffer& g, const Camera* claim_into, const float* left_rgb, float* rgb,
+                      EyeStats& st, const RunRows* run = nullptr);
 
     GBuffer g_[2];
     EyeStats stats_[2];

@@ -80,6 +80,36 @@ TEST(StereoDisplay, ReusedPixelsShowWhatTheRightEyeTraces) {
     }
 }
 
+// The eyes' chunks in one wavefront (the default) give the frame of the whole left eye first:
+// a right chunk started before the left rows beside it had claimed its pixels would release
+// other claims. On one thread the wavefront's order alone must hold; on two, its waits.
+TEST(StereoDisplay, TheEyesInterleavedGiveTheFrameOfTheLeftEyeFirst) {
+    Wall room;
+    const std::uint32_t w = 160, h = 200;  // 13 chunks of 16 rows
+    const Camera left = eye(0.4 - 0.0315, w, h), right = eye(0.4 + 0.0315, w, h);
+    UnlitLighting lighting;
+    for (unsigned threads : {1u, 2u}) {
+        DisplayOptions o;
+        o.threads = threads;
+        std::vector<float> l(3 * w * h), r(3 * w * h), l0(3 * w * h), r0(3 * w * h);
+        DisplayPass interleaved, sequential;
+        for (int frame = 0; frame < 2; ++frame) {  // the second reuses the cleared claims
+            interleaved.render_stereo(room.scene.view(), lighting, room.vt, left, right, true, o,
+                                      l.data(), r.data());
+            o.interleave_eyes = false;
+            sequential.render_stereo(room.scene.view(), lighting, room.vt, left, right, true, o,
+                                     l0.data(), r0.data());
+            o.interleave_eyes = true;
+            EXPECT_EQ(l, l0);
+            EXPECT_EQ(r, r0);
+            EXPECT_EQ(interleaved.reuse_sources(), sequential.reuse_sources());
+            EXPECT_EQ(interleaved.right_stats().reused, sequential.right_stats().reused);
+            EXPECT_EQ(interleaved.right_stats().traced, sequential.right_stats().traced);
+            EXPECT_GT(interleaved.right_stats().reused, interleaved.right_stats().pixels / 2);
+        }
+    }
+}
+
 TEST(StereoDisplay, BareRaysSeeWhatTheDisplaySees) {
     Wall room;
     const Camera c = eye(0.4, 64, 48);
