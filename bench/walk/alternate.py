@@ -32,10 +32,10 @@ def load_core(path):
     spec.loader.exec_module(module)
 
 
-def display_ratio(mode, w, h):
+def display_ratio(mode, w, h, frame):
     sys.path.insert(0, HERE)
     from single_pose import pose
-    p = pose(w, h)
+    p = pose(w, h, frame)
     src, vt, left, right, d, outs = p["src"], p["vt"], p["left"], p["right"], p["display"], p["outs"]
     ratios, shown, bare = [], [], []
     for _ in range(12):
@@ -80,6 +80,7 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--eye", help="per-eye WxH (default 1800x1920; --mode right 900x960)")
     ap.add_argument("--mode", choices=["left", "stereo", "right"], default="left")
+    ap.add_argument("--frame", type=int, help="the walk's frame for left and stereo (default: mid-walk)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--child", help=argparse.SUPPRESS)
     a = ap.parse_args()
@@ -91,7 +92,7 @@ def main():
         if a.mode == "right":
             right_vs_left(w, h)
         else:
-            display_ratio(a.mode, w, h)
+            display_ratio(a.mode, w, h, a.frame)
         return
     for path in (a.old, a.new):
         if not os.path.isfile(path):
@@ -99,8 +100,9 @@ def main():
             sys.exit(2)
     for _ in range(a.rounds):
         for name, path in (("old", a.old), ("new", a.new)):
+            frame = [] if a.frame is None else ["--frame", str(a.frame)]
             out = subprocess.run([sys.executable, __file__, a.old, a.new, "--eye", a.eye, "--mode",
-                                  a.mode, "--child", path], capture_output=True, text=True)
+                                  a.mode, *frame, "--child", path], capture_output=True, text=True)
             if out.returncode:
                 print(f"alternate.py: the {name} module's process failed:\n{out.stderr}", file=sys.stderr)
                 sys.exit(2)

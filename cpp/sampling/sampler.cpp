@@ -454,9 +454,11 @@ struct TileExtent {
 // fine one again where trilinear blends nothing), with sample_trilinear's level rule, plus
 // each level's in-tile offset for a resident tile: TexelFinder::footprint with s = 0,
 // in int32 (i, j < 2^30 and cx P <= i + 1).
+// Returns whether any sample blends two levels; if none does, the coarse level's taps are not
+// computed (nobody reads them).
 // Not inlined: inlined, its restrict parameters were lost and GCC ran a scalar copy of the
 // first loop with branches for a large share of the samples.
-__attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
+__attribute__((noinline)) bool trilinear_taps(const double* __restrict u_in,
                                               const double* __restrict v_in,
                                               const float* __restrict lod_in, std::size_t n,
                                               const PyramidExtent e, const std::int32_t levels,
@@ -468,6 +470,7 @@ __attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
     const std::int32_t P = t.payload, E = t.border, last = t.tile - 2, row = t.row_bytes;
     // The levels and the blend (sample_trilinear's rule), then the level-0 positions: apart,
     // as one loop GCC did not vectorise ("control flow in loop").
+    std::uint32_t any_two = 0;
     for (std::size_t k = 0; k < n; ++k) {
         const float lod = below(lo0(lod_in[k]), top);
         const std::int32_t l0 = static_cast<std::int32_t>(lod);
@@ -475,12 +478,13 @@ __attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
         const bool two = (f > 0) & (l0 + 1 < levels);
         b.blend[k] = two ? f : 0.0f;
         b.level[0][k] = std::uint32_t(l0), b.level[1][k] = std::uint32_t(two ? l0 + 1 : l0);
+        any_two |= std::uint32_t(two);
     }
     for (std::size_t k = 0; k < n; ++k) {
         b.x0[k] = below_one(lo0(u_in[k])) * W, b.y0[k] = below_one(lo0(v_in[k])) * H;
     }
     // One loop per level, as bilinear_taps (a loop over both levels inside did not vectorise).
-    for (int c = 0; c < 2; ++c) {
+    for (int c = 0; c < (any_two ? 2 : 1); ++c) {
         const std::uint32_t* __restrict level = b.level[c];
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint32_t l = level[k];
@@ -500,6 +504,7 @@ __attribute__((noinline)) void trilinear_taps(const double* __restrict u_in,
             b.offset[c][k] = jy * row + jx * 3;
         }
     }
+    return any_two != 0;
 }
 
 // Both levels' bilerp_rgb8 of one sample and sample_trilinear's blend, out[0..2]; `wide`
@@ -585,7 +590,10 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
             std::fill(lod_dense + n, lod_dense + n8, 0.0f);
             u_in = u_dense, v_in = v_dense, l_in = lod_dense;
         }
-        trilinear_taps(u_in, v_in, l_in, n8, pyramid, std::int32_t(L), divide_p, tile, b);
+        // A batch whose samples all take one level (a magnified or exactly mip-matched
+        // painting: a close look) reads, addresses and blends the fine level only; its blend
+        // would add 0 x 0 to every value.
+        const int levels = trilinear_taps(u_in, v_in, l_in, n8, pyramid, std::int32_t(L), divide_p, tile, b) ? 2 : 1;
         // Page entries, fallbacks, addresses and prefetches of both levels. A run of 16
         // samples whose taps lie in one resident tile at each level (the common case: the
         // display's samples are neighbouring pixels) takes its slots' bases once, in a loop
@@ -593,7 +601,7 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
         for (std::size_t k0 = 0; k0 < n; k0 += kRun) {
             const std::size_t k1 = std::min(n, k0 + kRun);
             const std::uint8_t* base[2] = {nullptr, nullptr};
-            for (int c = 0; c < 2 && k1 - k0 == kRun; ++c) {
+            for (int c = 0; c < levels && k1 - k0 == kRun; ++c) {
                 const std::uint32_t l = b.level[c][k0], cx = b.cx[c][k0], cy = b.cy[c][k0];
                 std::uint32_t differ = 0;
                 for (std::size_t k = k0; k < k1; ++k)
@@ -603,8 +611,8 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
                 if (e.level() != l) break;  // a fallback (or no entry)
                 base[c] = physical + std::size_t(e.slot()) * slot_bytes;
             }
-            if (base[0] && base[1]) {
-                for (int c = 0; c < 2; ++c) {
+            if (base[0] && (levels == 1 || base[1])) {
+                for (int c = 0; c < levels; ++c) {
                     const std::int32_t* __restrict offset = b.offset[c];
                     const std::uint8_t** __restrict out = texel[c];
                     for (std::size_t k = k0; k < k1; ++k) out[k] = base[c] + std::uint32_t(offset[k]);
@@ -618,7 +626,7 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
                 continue;
             }
             for (std::size_t k = k0; k < k1; ++k) {
-                for (int c = 0; c < 2; ++c) {
+                for (int c = 0; c < levels; ++c) {
                     const std::uint32_t l = b.level[c][k], cx = b.cx[c][k], cy = b.cy[c][k];
                     const PageEntry e = finders[c].entry(l, cx, cy);
                     const std::uint32_t al = e.level(), s = al - l;
@@ -638,6 +646,15 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
             }
         }
         float* out = r.out + 3 * b0;
+        if (levels == 1) {  // blend_levels_rgb8's fine half: the same products in the same order
+            std::size_t k = 0;
+#if defined(__SSE2__)
+            for (; k < n && b0 + k + 1 < end; ++k)
+                bilerp_rgb8_wide(texel[0][k], row, b.fx[0][k], b.fy[0][k], out + 3 * k);
+#endif
+            for (; k < n; ++k) bilerp_rgb8(texel[0][k], row, 3, 1, b.fx[0][k], b.fy[0][k], out + 3 * k);
+            continue;
+        }
         for (std::size_t k = 0; k < n; ++k)
             blend_levels_rgb8(texel[0][k], texel[1][k], row, b.fx[0][k], b.fy[0][k], b.fx[1][k],
                               b.fy[1][k], b.blend[k], b0 + k + 1 < end, out + 3 * k);

@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
@@ -289,15 +291,18 @@ TEST(VirtualTexture, BatchedTrilinearEqualsPerSampleArithmetic) {
 // whose taps are padded to whole vectors, and whole ones): each run must equal the per-sample
 // trilinear reference bit for bit, with half the tiles resident (fallbacks) and with all of
 // them (where 16 samples' taps lie in one tile at both levels, the sampler takes the two
-// slots' bases once).
-class TrilinearRuns : public ::testing::TestWithParam<double> {};
+// slots' bases once); and with every sample of a run at one level (a whole integer level, a
+// magnified painting below level 0, or beyond the coarsest: the sampler reads the fine
+// level alone).
+class TrilinearRuns : public ::testing::TestWithParam<std::tuple<double, bool>> {};
 
 TEST_P(TrilinearRuns, OfAnyLengthEqualPerSampleArithmetic) {
     const CutPainting painting(777, 1301, 32, 3, 31);
     const std::uint32_t L = painting.level_count();
     VirtualTexture vt(painting.layout, 40, 40, painting.source());
     std::mt19937 rng(37);
-    painting.insert_random(vt, GetParam(), rng);
+    const auto [resident, one_level] = GetParam();
+    painting.insert_random(vt, resident, rng);
     std::uniform_real_distribution<double> unit(-0.02, 1.02);
     std::vector<double> u, v;
     std::vector<float> lod;
@@ -306,9 +311,11 @@ TEST_P(TrilinearRuns, OfAnyLengthEqualPerSampleArithmetic) {
         run_start.push_back(u.size());
         double u0 = unit(rng), v0 = unit(rng);
         const float lod0 = float(unit(rng) * L);
+        // One level per run: a whole level, below 0 or beyond the coarsest.
+        const float one = std::array<float, 3>{std::round(lod0), -0.4f, float(L) + 0.5f}[len % 3];
         for (std::size_t k = 0; k < len; ++k) {  // a row of pixels across the painting
             u.push_back(u0 + 0.0011 * double(k)), v.push_back(v0 + 0.0002 * double(k));
-            lod.push_back(lod0 + 0.003f * float(k));
+            lod.push_back(one_level ? one : lod0 + 0.003f * float(k));
         }
     }
     run_start.push_back(u.size());
@@ -332,7 +339,8 @@ TEST_P(TrilinearRuns, OfAnyLengthEqualPerSampleArithmetic) {
     ASSERT_EQ(got_level, ref_level);
     for (std::size_t i = 0; i < 3 * n; ++i) ASSERT_EQ(got[i], ref[i]) << "value " << i;
 }
-INSTANTIATE_TEST_SUITE_P(VirtualTexture, TrilinearRuns, ::testing::Values(0.5, 1.0));
+INSTANTIATE_TEST_SUITE_P(VirtualTexture, TrilinearRuns,
+                         ::testing::Combine(::testing::Values(0.5, 1.0), ::testing::Bool()));
 
 // Interleaved (u, v) pairs (the display pass's layout), a scalar lod and NaN inputs: NaN
 // coordinates sample at 0 and a NaN lod at level 0, in both filters' code.
