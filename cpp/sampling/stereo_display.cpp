@@ -1553,7 +1553,6 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     // wavefront (run_wavefront), the right eye's render_eye set up inside the left one's so
     // that both passes' rows are ready together. Otherwise the whole left eye first.
     const bool interleave = o.interleave_eyes && rows_align(left, right);
-    double wall = 0;
     auto right_eye_pass = [&](const RunRows* run) {
         reusing_ = true;
         try {
@@ -1572,9 +1571,8 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         };
         right_eye_pass(&run_right);
     };
-    wall = render_eye(scene, lighting, vt, left, o, gl, &right, nullptr, left_rgb, sl,
-                      interleave ? &run_left : nullptr);
-    // The left eye's claims on right pixels are the right eye's reuse work.
+    const double wall = render_eye(scene, lighting, vt, left, o, gl, &right, nullptr, left_rgb, sl,
+                                   interleave ? &run_left : nullptr);
     if (interleave) {
         EyeStats* const both[2] = {&sl, &sr};
         split_wall(wall, both, 2);
@@ -1582,6 +1580,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         split_wall(wall, left_eye, 1);
         right_eye_pass(nullptr);
     }
+    // The left eye's claims on right pixels are the right eye's reuse work.
     sr.reuse_seconds += sl.reuse_seconds;
     sl.reuse_seconds = 0;
 }
