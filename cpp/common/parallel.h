@@ -168,4 +168,56 @@ void parallel_for(std::size_t n, std::size_t chunk, Body&& body, unsigned thread
     if (error) std::rethrow_exception(error);
 }
 
+// Two passes over the same chunks [0, chunks), where second(c) may start only once first(c - 1),
+// first(c) and first(c + 1) (those that exist) are done: a wavefront, for a second pass that
+// reads what the first wrote on and beside its chunk (the right eye's rows read the left
+// eye's claims). Both passes' chunks are handed out in one sequence, second(c) kLag chunks
+// after first(c) (kLag >= 2, so a second-pass chunk rarely waits), on `threads` threads as
+// parallel_for. A waiting chunk waits only for chunks handed out before it, which never wait
+// themselves: no deadlock. A first-pass chunk that throws still counts as done, so nobody
+// waits for it forever; the first exception is rethrown once every started chunk stopped.
+template <typename First, typename Second>
+void parallel_wavefront(std::size_t chunks, First&& first, Second&& second, unsigned threads = 0) {
+    constexpr std::size_t kLag = 3;
+    std::vector<std::atomic<std::uint8_t>> done(chunks);
+    for (auto& d : done) d.store(0, std::memory_order_relaxed);
+    // Task t: first-pass chunks 0 .. kLag - 1, then alternately first-pass chunk c and
+    // second-pass chunk c - kLag, then the second pass's last kLag chunks.
+    auto task = [&](std::size_t t, bool& is_second) {
+        if (t < kLag || chunks <= kLag) {
+            is_second = t >= chunks;
+            return is_second ? t - chunks : t;
+        }
+        const std::size_t u = t - kLag;
+        if (u < 2 * (chunks - kLag)) {
+            is_second = u % 2 == 1;
+            return is_second ? u / 2 : kLag + u / 2;
+        }
+        is_second = true;
+        return chunks - kLag + (u - 2 * (chunks - kLag));
+    };
+    parallel_for(2 * chunks, 1, [&](std::size_t t0, std::size_t t1) {
+        for (std::size_t t = t0; t < t1; ++t) {
+            bool is_second = false;
+            const std::size_t c = task(t, is_second);
+            if (!is_second) {
+                try {
+                    first(c);
+                } catch (...) {
+                    done[c].store(1, std::memory_order_release);
+                    throw;
+                }
+                done[c].store(1, std::memory_order_release);
+                continue;
+            }
+            for (std::size_t d = c == 0 ? 0 : c - 1; d <= std::min(chunks - 1, c + 1); ++d)
+                for (unsigned spins = 0; !done[d].load(std::memory_order_acquire); ++spins) {
+                    if (spins < 64) continue;  // a short spin first: the wait is usually brief
+                    std::this_thread::yield();
+                }
+            second(c);
+        }
+    }, threads);
+}
+
 }  // namespace gigascroll

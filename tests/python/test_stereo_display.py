@@ -395,3 +395,30 @@ def test_gallery_one_eye_display_keeps_no_hit_points(lit_gallery, small_scroll_p
     np.testing.assert_array_equal(np.asarray(d.lods(0)), lods)
     p = d.hit_points(0).reshape(-1, 3)
     assert np.isfinite(p).all(axis=1).mean() > 0.5
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_painting_missing_from_the_texture_stops_the_pair_cleanly(setup, threads):
+    """A scene painting the texture does not hold is found mid-frame, in a row's texel
+    samples: with reuse both eyes' rows run in one wavefront, and the error must reach the
+    caller (no right row left waiting for a left row that failed), after which the same pass
+    renders a good frame equal to a fresh pass's."""
+    ex, vt = setup
+    left, right = eyes()
+    spec, tiles = ex.specs[0], ex.tiles[0]
+    wrong = _core.ExhibitionScene()
+    wrong.add_painting(3, tiles, (spec.width_m, 1.5 + spec.height_m / 2, 0.0), (-1.0, 0.0, 0.0),
+                       (0.0, -1.0, 0.0), spec.width_m, spec.height_m)
+    wrong.add_box((-2.0, 0.0, 0.005), (spec.width_m + 2.0, 3.0, 0.2))
+    wrong.commit()
+    d = _core.DisplayPass()
+    for _ in range(2):
+        with pytest.raises(ValueError, match="not in the virtual texture"):
+            d.render_stereo(wrong, _core.UnlitLighting(), vt, left, right, threads=threads)
+    got = d.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, threads=threads)
+    fresh = _core.DisplayPass()
+    want = fresh.render_stereo(ex.scene, _core.UnlitLighting(), vt, left, right, threads=threads)
+    for a, b in zip(got, want):
+        assert np.array_equal(a, b)
+    assert np.array_equal(d.reuse_sources(), fresh.reuse_sources())
+    assert d.right_stats["reused"] == fresh.right_stats["reused"] > 0

@@ -1,7 +1,9 @@
 // parallel_for: every index once, exceptions, real parallelism, nesting and pool reuse.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <mutex>
 #include <set>
@@ -87,5 +89,40 @@ TEST(ParallelFor, CallsTheCallerFinishesAloneLeaveThePoolUsable) {
             for (std::size_t i = b; i < e; ++i) hits[i].fetch_add(1);
         }, 2);
         ASSERT_EQ(hits[0].load() + 10 * hits[1].load() + 100 * hits[2].load(), 111) << "call " << call;
+    }
+}
+
+// parallel_wavefront: second(c) only after first(c - 1 .. c + 1), on one thread and several,
+// for chunk counts around the lag; and a first-pass chunk that throws late (while the other
+// threads run ahead to second-pass chunks that wait for it) reaches the caller, no hang.
+TEST(ParallelWavefront, SecondChunksStartAfterTheFirstChunksBesideThem) {
+    for (unsigned threads : {1u, 2u, 4u})
+        for (std::size_t chunks : {1u, 2u, 3u, 4u, 5u, 17u}) {
+            std::vector<std::atomic<int>> first_done(chunks), second_done(chunks);
+            std::atomic<int> early{0};
+            parallel_wavefront(chunks, [&](std::size_t c) { first_done[c].fetch_add(1); },
+                               [&](std::size_t c) {
+                                   for (std::size_t d = c == 0 ? 0 : c - 1; d <= std::min(chunks - 1, c + 1); ++d)
+                                       if (first_done[d].load() != 1) early.fetch_add(1);
+                                   second_done[c].fetch_add(1);
+                               }, threads);
+            EXPECT_EQ(early.load(), 0) << threads << " threads, " << chunks << " chunks";
+            for (std::size_t c = 0; c < chunks; ++c) {
+                EXPECT_EQ(first_done[c].load(), 1);
+                EXPECT_EQ(second_done[c].load(), 1);
+            }
+        }
+}
+
+TEST(ParallelWavefront, AFirstChunkThatThrowsLateReachesTheCaller) {
+    for (unsigned threads : {1u, 2u, 3u}) {
+        std::atomic<int> seconds{0};
+        EXPECT_THROW(parallel_wavefront(40, [&](std::size_t c) {
+            if (c == 5) {  // the others meanwhile take the next chunks, some waiting for this one
+                std::this_thread::sleep_for(std::chrono::milliseconds(50));
+                throw std::runtime_error("chunk 5");
+            }
+        }, [&](std::size_t) { seconds.fetch_add(1); }, threads), std::runtime_error);
+        EXPECT_LT(seconds.load(), 40);
     }
 }
