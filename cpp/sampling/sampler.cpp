@@ -220,6 +220,20 @@ void bilinear_taps(const double* __restrict u_in, const double* __restrict v_in,
         b.cy[k] = divide_p.by_double_below_2_31(j + (g >= 0.5f ? 1 : 0));
     }
 }
+// The bilinear blends of n RGB8 footprints (texel[k], weights fx[k], fy[k]) into out[3k..];
+// four-float stores overlap the next sample's first channel, which is written after, so the
+// last sample is stored wide only when more_after (another thread may own the next sample).
+inline void bilerp_rgb8_run(const std::uint8_t* const* texel, std::size_t row, const float* fx,
+                            const float* fy, std::size_t n, bool more_after, float* out) {
+    std::size_t k = 0;
+#if defined(__SSE2__)
+    for (; k + 1 < n || (k < n && more_after); ++k) bilerp_rgb8_wide(texel[k], row, fx[k], fy[k], out + 3 * k);
+#else
+    (void)more_after;
+#endif
+    for (; k < n; ++k) bilerp_rgb8(texel[k], row, 3, 1, fx[k], fy[k], out + 3 * k);
+}
+
 // Seed 000 eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
 // its padded page table and eq (5,6) normalise by the merged table; we instead keep the
 // level-0 texel position x0 = u W in double, derive the level-l position x0 2^-l exactly, and
@@ -363,23 +377,16 @@ void sample_bilinear(const VirtualTexture& vt, const SampleRequest& r, std::size
             if (r.level_out) r.level_out[b0 + k] = static_cast<std::int8_t>(al);
         }
         // (3)
-        // Four-float stores overlap the next sample's first channel, which is written
-        // after; not past this range's end (another thread may own the next sample).
         float* out = r.out + 3 * b0;
-        std::size_t k = 0;
         if constexpr (F == TexelFormat::Bc1) {
-            for (; k < n; ++k) {
+            for (std::size_t k = 0; k < n; ++k) {
                 std::uint32_t quad[4];
                 bc1_footprint.quad(texel[k], jx_of[k], jy_of[k], quad);
                 bilerp_words(quad, b.fx[k], b.fy[k], out + 3 * k);
             }
-            continue;
+        } else {
+            bilerp_rgb8_run(texel, row, b.fx, b.fy, n, b0 + n < end, out);
         }
-#if defined(__SSE2__)
-        for (; k + 1 < n || (k < n && b0 + n < end); ++k)
-            bilerp_rgb8_wide(texel[k], row, b.fx[k], b.fy[k], out + 3 * k);
-#endif
-        for (; k < n; ++k) bilerp_rgb8(texel[k], row, 3, 1, b.fx[k], b.fy[k], out + 3 * k);
     }
 }
 
@@ -594,7 +601,7 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
         // painting: a close look) reads, addresses and blends the fine level only; its blend
         // would add 0 x 0 to every value.
         const int levels = trilinear_taps(u_in, v_in, l_in, n8, pyramid, std::int32_t(L), divide_p, tile, b) ? 2 : 1;
-        // Page entries, fallbacks, addresses and prefetches of both levels. A run of 16
+        // Page entries, fallbacks, addresses and prefetches of the levels used. A run of 16
         // samples whose taps lie in one resident tile at each level (the common case: the
         // display's samples are neighbouring pixels) takes its slots' bases once, in a loop
         // that vectorises; the others sample by sample.
@@ -647,12 +654,7 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
         }
         float* out = r.out + 3 * b0;
         if (levels == 1) {  // blend_levels_rgb8's fine half: the same products in the same order
-            std::size_t k = 0;
-#if defined(__SSE2__)
-            for (; k < n && b0 + k + 1 < end; ++k)
-                bilerp_rgb8_wide(texel[0][k], row, b.fx[0][k], b.fy[0][k], out + 3 * k);
-#endif
-            for (; k < n; ++k) bilerp_rgb8(texel[0][k], row, 3, 1, b.fx[0][k], b.fy[0][k], out + 3 * k);
+            bilerp_rgb8_run(texel[0], row, b.fx[0], b.fy[0], n, b0 + n < end, out);
             continue;
         }
         for (std::size_t k = 0; k < n; ++k)

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string>
@@ -1418,14 +1419,12 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
 namespace {
 // The stages interleave in each thread: a pass's wall time is split among the eyes' stages in
 // the proportion of the timed rows' thread time in each.
-void split_wall(double wall, EyeStats* const* eyes, int count) {
+void split_wall(double wall, std::initializer_list<EyeStats*> eyes) {
     double sum = 0;
-    for (int e = 0; e < count; ++e) sum += eyes[e]->total_seconds();
+    for (const EyeStats* st : eyes) sum += st->total_seconds();
     const double f = sum > 0 ? wall / sum : 0.0;
-    for (int e = 0; e < count; ++e) {
-        EyeStats& st = *eyes[e];
-        st.rays_seconds *= f, st.vt_seconds *= f, st.shade_seconds *= f, st.reuse_seconds *= f;
-    }
+    for (EyeStats* st : eyes)
+        st->rays_seconds *= f, st->vt_seconds *= f, st->shade_seconds *= f, st->reuse_seconds *= f;
 }
 
 }  // namespace
@@ -1442,8 +1441,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
     hits_kept_ = o.keep_hit_points;
-    EyeStats* const eyes[1] = {&st};
-    split_wall(render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st), eyes, 1);
+    split_wall(render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st), {&st});
     sources_.clear();
 }
 
@@ -1479,12 +1477,10 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     gr.resize(right.width, right.height, false);
     EyeStats& sr = stats_[1] = EyeStats{};
     sr.pixels = std::uint64_t(right.width) * right.height;
-    EyeStats* const left_eye[1] = {&sl};
-    EyeStats* const right_eye[1] = {&sr};
     if (!use_reuse) {
         sources_.clear();
-        split_wall(render_eye(scene, lighting, vt, left, o, gl, nullptr, nullptr, left_rgb, sl), left_eye, 1);
-        split_wall(render_eye(scene, lighting, vt, right, o, gr, nullptr, nullptr, right_rgb, sr), right_eye, 1);
+        split_wall(render_eye(scene, lighting, vt, left, o, gl, nullptr, nullptr, left_rgb, sl), {&sl});
+        split_wall(render_eye(scene, lighting, vt, right, o, gr, nullptr, nullptr, right_rgb, sr), {&sr});
         return;
     }
     // The right eye with reuse. Where a point projects into the same row of both eyes, the
@@ -1496,7 +1492,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
         reusing_ = true;
         try {
             const double w = render_eye(scene, lighting, vt, right, o, gr, nullptr, left_rgb, right_rgb, sr, run);
-            if (!run) split_wall(w, right_eye, 1);
+            if (!run) split_wall(w, {&sr});
         } catch (...) {
             reusing_ = false;
             throw;
@@ -1522,10 +1518,9 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     const double wall = render_eye(scene, lighting, vt, left, o, gl, &right, nullptr, left_rgb, sl,
                                    interleave ? &run_left : nullptr);
     if (interleave) {
-        EyeStats* const both[2] = {&sl, &sr};
-        split_wall(wall, both, 2);
+        split_wall(wall, {&sl, &sr});  // one wall time for both eyes' interleaved rows
     } else {
-        split_wall(wall, left_eye, 1);
+        split_wall(wall, {&sl});
         right_eye_pass(nullptr);
     }
     // The left eye's claims on right pixels are the right eye's reuse work.
