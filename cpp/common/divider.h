@@ -28,6 +28,8 @@ public:
         return static_cast<std::uint32_t>(static_cast<std::int32_t>((double(n) + 0.5) * inv_));
     }
     std::uint32_t divisor() const { return d_; }
+    // fl(1 / d), by_double's factor (for SIMD lanes doing the same arithmetic).
+    double inverse() const { return inv_; }
 
 private:
     std::uint32_t d_;

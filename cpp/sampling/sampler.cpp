@@ -665,6 +665,245 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
 
 }  // namespace
 
+// sample_trilinear_rgb8's run of 16 in one resident tile per level, all in 16 lanes: the same
+// taps (trilinear_taps' operations, in registers), texels (the 4-byte words at the same
+// addresses) and products, summed and blended in the same order as blend_levels_rgb8, so the
+// same floats. A sample that blends nothing (blend 0) takes its coarse taps at its fine level
+// (as trilinear_taps leaves them) and adds 0 x (g - f) = -0 or 0 to f, which leaves f as the
+// batch's fine-only path gives it; so only the samples that blend two levels must share the
+// coarse tile.
+struct TrilinearLanes::State {
+    const PageTable& table;
+    const std::uint8_t* physical;
+    std::size_t slot_bytes;
+    PyramidExtent pyramid;
+    std::int32_t levels;
+    Divider divide_p;
+    TileExtent tile;
+    std::uint32_t last_key[2] = {~0u, ~0u};  // level << 26 | cx << 13 | cy, if that fits
+    const std::uint8_t* last_base[2] = {nullptr, nullptr};
+
+    // The slot of level l's resident tile (cx, cy), nullptr for a fallback.
+    const std::uint8_t* base(int c, std::uint32_t painting, std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
+        const bool keyed = cx < (1u << 13) && cy < (1u << 13);
+        const std::uint32_t key = l << 26 | cx << 13 | cy;
+        if (keyed && key == last_key[c]) return last_base[c];
+        const PageEntry e = table.lookup(painting, l, cx, cy);
+        const std::uint8_t* p = e.level() == l ? physical + std::size_t(e.slot()) * slot_bytes : nullptr;
+        if (keyed) last_key[c] = key, last_base[c] = p;
+        return p;
+    }
+};
+
+TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting) : painting_(painting) {
+#if defined(__AVX512F__)
+    // Disabled for a painting the texture does not hold: sample() says so.
+    if (vt.format() != TexelFormat::Rgb8 || painting >= vt.layout().paintings.size()) return;
+    const PaintingGeometry& pt = vt.layout().paintings[painting];
+    const std::uint32_t L = pt.levels();
+    const std::int32_t row = std::int32_t(vt.layout().tile_size) * 3;
+    state_.reset(new State{vt.page_table(), vt.physical(), vt.slot_bytes(),
+                           PyramidExtent{pt.width(), pt.height(), float(L - 1)}, std::int32_t(L),
+                           Divider(vt.layout().payload()),
+                           TileExtent{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
+                                      std::int32_t(vt.layout().tile_size), row}});
+#endif
+}
+TrilinearLanes::~TrilinearLanes() = default;
+TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
+
+#if defined(__AVX512F__)
+// GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
+// used uninitialized (GCC bug 105593, fixed in GCC 13).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// 16 doubles (two vectors of 8) from 16 int32 lanes, and back (truncating), and 16 floats
+// from two vectors of 8 doubles: the conversions of trilinear_taps' scalar arithmetic.
+namespace {
+struct Lanes64 {
+    __m512d lo, hi;
+};
+inline Lanes64 to_double(__m512i x) {
+    return {_mm512_cvtepi32_pd(_mm512_castsi512_si256(x)), _mm512_cvtepi32_pd(_mm512_extracti64x4_epi64(x, 1))};
+}
+inline __m512i truncate(Lanes64 x) {
+    return _mm512_inserti64x4(_mm512_castsi256_si512(_mm512_cvttpd_epi32(x.lo)), _mm512_cvttpd_epi32(x.hi), 1);
+}
+inline __m512 to_float(Lanes64 x) {
+    return _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castps_pd(_mm512_castps256_ps512(_mm512_cvtpd_ps(x.lo))),
+                                               _mm256_castps_pd(_mm512_cvtpd_ps(x.hi)), 1));
+}
+// One level's taps for 16 lanes (trilinear_taps' second loop): weights, tile and in-tile
+// byte offset.
+struct LevelTaps {
+    __m512 fx, fy;
+    __m512i level, cx, cy, row, offset;  // row: the footprint's first texel row in its tile
+};
+}  // namespace
+
+bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod, float* r,
+                              float* g, float* b) {
+    if (!state_) return false;
+    State& st = *state_;
+    // trilinear_taps in registers, operation for operation: the level rule (lo0 is max with
+    // 0 second, which maps NaN to 0 as the select does; below is min), then per level the
+    // clamped position, texel, weight, tile (Divider::by_double_below_2_31) and offset.
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512i one_i = _mm512_set1_epi32(1);
+    const __m512 lod_c = _mm512_min_ps(_mm512_max_ps(_mm512_loadu_ps(lod), zero), _mm512_set1_ps(st.pyramid.top));
+    const __m512i l0 = _mm512_cvttps_epi32(lod_c);
+    const __m512 frac = _mm512_sub_ps(lod_c, _mm512_cvtepi32_ps(l0));
+    const __mmask16 blending = _mm512_cmp_ps_mask(frac, zero, _CMP_GT_OQ) &
+                               _mm512_cmplt_epi32_mask(_mm512_add_epi32(l0, one_i), _mm512_set1_epi32(st.levels));
+    const __m512 blend = _mm512_maskz_mov_ps(blending, frac);
+    const __m512d zero_d = _mm512_setzero_pd(), one_d = _mm512_set1_pd(1.0), half = _mm512_set1_pd(0.5);
+    auto position = [&](const double* c, double extent) {
+        const __m512d e = _mm512_set1_pd(extent);
+        return Lanes64{_mm512_mul_pd(_mm512_min_pd(_mm512_max_pd(_mm512_loadu_pd(c), zero_d), one_d), e),
+                       _mm512_mul_pd(_mm512_min_pd(_mm512_max_pd(_mm512_loadu_pd(c + 8), zero_d), one_d), e)};
+    };
+    const Lanes64 x0 = position(u, double(st.pyramid.width)), y0 = position(v, double(st.pyramid.height));
+    const double inv_p = st.divide_p.inverse();
+    const TileExtent t = st.tile;
+    auto taps = [&](__m512i l) {
+        // 2^-l from its exponent bits, level l's extent, as trilinear_taps.
+        const Lanes64 scale{
+            _mm512_castsi512_pd(_mm512_slli_epi64(_mm512_sub_epi64(_mm512_set1_epi64(1023),
+                                                                   _mm512_cvtepi32_epi64(_mm512_castsi512_si256(l))), 52)),
+            _mm512_castsi512_pd(_mm512_slli_epi64(_mm512_sub_epi64(_mm512_set1_epi64(1023),
+                                                                   _mm512_cvtepi32_epi64(_mm512_extracti64x4_epi64(l, 1))), 52))};
+        const __m512i round_up = _mm512_sub_epi32(_mm512_sllv_epi32(one_i, l), one_i);
+        auto axis = [&](const Lanes64& p0, std::uint32_t extent, __m512& f, __m512i& cell, __m512i& in_tile) {
+            const Lanes64 n = to_double(_mm512_srlv_epi32(_mm512_add_epi32(_mm512_set1_epi32(int(extent)), round_up), l));
+            const Lanes64 tx = {
+                _mm512_sub_pd(_mm512_min_pd(_mm512_max_pd(_mm512_mul_pd(p0.lo, scale.lo), half), _mm512_sub_pd(n.lo, half)), half),
+                _mm512_sub_pd(_mm512_min_pd(_mm512_max_pd(_mm512_mul_pd(p0.hi, scale.hi), half), _mm512_sub_pd(n.hi, half)), half)};
+            const __m512i i = truncate(tx);
+            const Lanes64 id = to_double(i);
+            f = to_float({_mm512_sub_pd(tx.lo, id.lo), _mm512_sub_pd(tx.hi, id.hi)});
+            const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
+            const Lanes64 q = to_double(n_up);
+            cell = truncate({_mm512_mul_pd(_mm512_add_pd(q.lo, half), _mm512_set1_pd(inv_p)),
+                             _mm512_mul_pd(_mm512_add_pd(q.hi, half), _mm512_set1_pd(inv_p))});
+            const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
+                                               _mm512_set1_epi32(t.border));
+            in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
+        };
+        LevelTaps lt;
+        lt.level = l;
+        __m512i jx, jy;
+        axis(x0, st.pyramid.width, lt.fx, lt.cx, jx);
+        axis(y0, st.pyramid.height, lt.fy, lt.cy, jy);
+        lt.row = jy;
+        lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
+                                     _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
+        return lt;
+    };
+    // The slot of the tile the lanes in mask share at their level (the first of them is the
+    // reference), nullptr if they do not share one or it is not resident.
+    auto shared_tile = [&](const LevelTaps& lt, int c, __mmask16 mask) -> const std::uint8_t* {
+        auto first = [&](__m512i x) {
+            return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_maskz_compress_epi32(mask, x))));
+        };
+        const std::uint32_t l = first(lt.level), cx = first(lt.cx), cy = first(lt.cy);
+        const __m512i differ = _mm512_or_si512(
+            _mm512_xor_si512(lt.level, _mm512_set1_epi32(int(l))),
+            _mm512_or_si512(_mm512_xor_si512(lt.cx, _mm512_set1_epi32(int(cx))),
+                            _mm512_xor_si512(lt.cy, _mm512_set1_epi32(int(cy)))));
+        if (_mm512_mask_test_epi32_mask(mask, differ, differ)) return nullptr;
+        return st.base(c, painting_, l, cx, cy);
+    };
+    const LevelTaps fine_taps = taps(l0);
+    const std::uint8_t* fine = shared_tile(fine_taps, 0, 0xFFFF);
+    if (!fine) return false;
+    // The lanes that blend nothing take their coarse taps at the fine level, as trilinear_taps.
+    LevelTaps coarse_taps;
+    const std::uint8_t* coarse = nullptr;
+    if (blending) {
+        coarse_taps = taps(_mm512_mask_add_epi32(l0, blending, l0, one_i));
+        coarse = shared_tile(coarse_taps, 1, blending);
+        if (!coarse) return false;
+    }
+    const std::int32_t row = t.row_bytes;
+    // The 4-byte words at each lane's footprint corners (offset, + 3, + row, + row + 3: the
+    // texel and its right neighbour in two rows), q[0..3]. When the lanes in mask share the
+    // footprint's texel rows and their corners span at most 128 bytes (nearly always: a
+    // packet of neighbouring pixels reads one stretch of two rows), the two stretches are
+    // loaded (masked to the bytes the gathers would read) and the words picked out with byte
+    // permutes; otherwise gathered. The lanes outside mask get some word of the stretch.
+    auto corners = [&](const LevelTaps& lt, const std::uint8_t* base, __mmask16 mask, __m512i (&q)[4]) {
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+        const int lo = _mm512_mask_reduce_min_epi32(mask, lt.offset);
+        const int hi = _mm512_mask_reduce_max_epi32(mask, lt.offset);
+        const int span = hi - lo + 7;  // bytes lo .. hi + 6
+        const int first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_maskz_compress_epi32(mask, lt.row)));
+        if (span <= 128 && !_mm512_mask_cmpneq_epi32_mask(mask, lt.row, _mm512_set1_epi32(first_row))) {
+            const __m512i rel = _mm512_maskz_sub_epi32(mask, lt.offset, _mm512_set1_epi32(lo));
+            // Each lane's byte index rel + 0..3 (rel < 128: one byte).
+            const __m512i spread = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
+            const __m512i idx = _mm512_add_epi8(_mm512_shuffle_epi8(rel, spread), _mm512_set1_epi32(0x03020100));
+            const __m512i idx3 = _mm512_add_epi8(idx, _mm512_set1_epi8(3));
+            const __mmask64 m0 = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
+            const __mmask64 m1 = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
+            for (int r = 0; r < 2; ++r) {
+                const std::uint8_t* p = base + lo + r * row;
+                const __m512i a = _mm512_maskz_loadu_epi8(m0, p), b = _mm512_maskz_loadu_epi8(m1, p + 64);
+                q[2 * r] = _mm512_permutex2var_epi8(a, idx, b);
+                q[2 * r + 1] = _mm512_permutex2var_epi8(a, idx3, b);
+            }
+            return;
+        }
+#else
+        (void)mask;
+#endif
+        const std::int32_t delta[4] = {0, 3, row, row + 3};
+        for (int k = 0; k < 4; ++k)
+            q[k] = _mm512_i32gather_epi32(_mm512_add_epi32(lt.offset, _mm512_set1_epi32(delta[k])),
+                                          static_cast<const void*>(base), 1);
+    };
+    // One level's bilinear blend: channels R, G, B of 16 lanes.
+    auto bilinear = [&](const LevelTaps& lt, const std::uint8_t* base, __mmask16 mask, __m512& R, __m512& G, __m512& B) {
+        const __m512 one = _mm512_set1_ps(1.0f);
+        const __m512 fx = lt.fx, fy = lt.fy;
+        const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
+        const __m512i byte = _mm512_set1_epi32(0xff);
+        const __m512 w[4] = {_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy), _mm512_mul_ps(gx, fy),
+                             _mm512_mul_ps(fx, fy)};
+        __m512i words[4];
+        corners(lt, base, mask, words);
+        for (int q = 0; q < 4; ++q) {
+            const __m512i texel = words[q];
+            const __m512 tr = _mm512_cvtepi32_ps(_mm512_and_si512(texel, byte));
+            const __m512 tg = _mm512_cvtepi32_ps(_mm512_and_si512(_mm512_srli_epi32(texel, 8), byte));
+            const __m512 tb = _mm512_cvtepi32_ps(_mm512_and_si512(_mm512_srli_epi32(texel, 16), byte));
+            if (q == 0) {
+                R = _mm512_mul_ps(w[0], tr), G = _mm512_mul_ps(w[0], tg), B = _mm512_mul_ps(w[0], tb);
+            } else {
+                R = _mm512_add_ps(R, _mm512_mul_ps(w[q], tr));
+                G = _mm512_add_ps(G, _mm512_mul_ps(w[q], tg));
+                B = _mm512_add_ps(B, _mm512_mul_ps(w[q], tb));
+            }
+        }
+    };
+    __m512 R, G, B;
+    bilinear(fine_taps, fine, 0xFFFF, R, G, B);
+    if (coarse) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
+        __m512 R1, G1, B1;
+        bilinear(coarse_taps, coarse, blending, R1, G1, B1);
+        R = _mm512_add_ps(R, _mm512_mul_ps(blend, _mm512_sub_ps(R1, R)));
+        G = _mm512_add_ps(G, _mm512_mul_ps(blend, _mm512_sub_ps(G1, G)));
+        B = _mm512_add_ps(B, _mm512_mul_ps(blend, _mm512_sub_ps(B1, B)));
+    }
+    _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
+    return true;
+}
+#pragma GCC diagnostic pop
+#else
+bool TrilinearLanes::sample16(const double*, const double*, const float*, float*, float*, float*) {
+    return false;
+}
+#endif
+
 void sample_trilinear_reference(const VirtualTexture& vt, const SampleRequest& r) {
     check_request(vt, r);
     const auto lock = vt.read_lock();

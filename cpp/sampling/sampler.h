@@ -4,6 +4,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "cache/virtual_texture.h"
@@ -40,6 +41,30 @@ void sample_serial(const VirtualTexture& vt, const SampleRequest& r);
 // The same for a caller that already holds vt.read_lock() for all its calls (the display
 // pass takes it once per frame instead of once per run of samples).
 void sample_serial_locked(const VirtualTexture& vt, const SampleRequest& r);
+// Trilinear on RGB8 slots for 16 samples of one painting at once in SIMD lanes: the display
+// pass's packets of 16 neighbouring pixels, whose footprints nearly always lie in one tile at
+// each level. When they do and those tiles are resident, sample16 writes the 16 samples'
+// channels (0..255) to r, g, b and returns true: the same floats as sample() gives them (its
+// taps, products and blend). Otherwise (a footprint across tiles, a fallback to a coarser
+// tile, BC1 slots, or a build without AVX-512) it writes nothing and returns false, and the
+// caller takes sample() (which also reports a painting the texture does not hold). The caller
+// holds vt.read_lock(); one object per thread.
+class TrilinearLanes {
+public:
+    TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting);
+    ~TrilinearLanes();
+    TrilinearLanes(TrilinearLanes&&) noexcept;
+    TrilinearLanes& operator=(TrilinearLanes&&) = delete;
+    bool sample16(const double* u, const double* v, const float* lod, float* r, float* g, float* b);
+    // Whether sample16 can succeed at all (AVX-512 build, RGB8 slots).
+    bool enabled() const { return state_ != nullptr; }
+
+private:
+    std::uint32_t painting_;
+    struct State;                   // the constants and the last page entries
+    std::unique_ptr<State> state_;  // nullptr: disabled
+};
+
 // Trilinear on the calling thread one sample at a time (r.filter ignored): the plain path
 // that sample()'s batched trilinear must reproduce, for tests.
 void sample_trilinear_reference(const VirtualTexture& vt, const SampleRequest& r);

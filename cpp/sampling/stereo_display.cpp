@@ -766,6 +766,60 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
 }
 
 namespace {
+#if defined(__AVX512F__)
+// 16 pixels' channels (R, G, B in lanes) stored interleaved at out[0..47], with two
+// two-source permutes per output vector: R and G into place, then B.
+inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out) {
+    struct Indices {
+        alignas(64) std::int32_t rg[3][16], b[3][16];
+        constexpr Indices() : rg{}, b{} {
+            for (int o = 0; o < 3; ++o)
+                for (int j = 0; j < 16; ++j) {
+                    const int g = 16 * o + j, pixel = g / 3, channel = g % 3;
+                    rg[o][j] = channel == 0 ? pixel : (channel == 1 ? 16 + pixel : 0);
+                    b[o][j] = channel == 2 ? 16 + pixel : j;
+                }
+        }
+    };
+    static constexpr Indices kIdx;
+    for (int o = 0; o < 3; ++o) {
+        const __m512 rg = _mm512_permutex2var_ps(R, _mm512_load_si512(kIdx.rg[o]), G);
+        _mm512_storeu_ps(out + 16 * o, _mm512_permutex2var_ps(rg, _mm512_load_si512(kIdx.b[o]), B));
+    }
+}
+
+// A packet of 16 painting pixels shaded in lanes from their texels (channels apart, 0..255)
+// and light into rgb (16 pixels x 3): the operations of the row's shading of its pending
+// pixels in the same order (SrgbTable's lookup on the same clamp, index and fraction; albedo
+// x reflectance; x irradiance / pi; + emission), so the same floats.
+void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const float (&M)[3][16],
+                  const DisplayOptions& o, const float* srgb_values, float* __restrict rgb) {
+    const __m512 reflectance = _mm512_set1_ps(o.painting_reflectance);
+    const __m512 inv_pi = _mm512_set1_ps(kInvPi);
+    __m512 L[3];
+    for (int c = 0; c < 3; ++c) {
+        __m512 albedo;
+        const __m512 code = _mm512_load_ps(tex[c]);
+        if (o.srgb_albedo) {
+            // std::clamp(code, 0, 255) as SrgbTable: the codes are finite, so max and min.
+            const __m512 x = _mm512_mul_ps(
+                _mm512_min_ps(_mm512_max_ps(code, _mm512_setzero_ps()), _mm512_set1_ps(255.0f)),
+                _mm512_set1_ps(float(SrgbTable::kSteps)));
+            const __m512i i = _mm512_cvttps_epi32(x);
+            const __m512 f = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
+            const __m512 v0 = _mm512_i32gather_ps(i, srgb_values, 4);
+            const __m512 v1 = _mm512_i32gather_ps(_mm512_add_epi32(i, _mm512_set1_epi32(1)), srgb_values, 4);
+            albedo = _mm512_mul_ps(_mm512_add_ps(v0, _mm512_mul_ps(f, _mm512_sub_ps(v1, v0))), reflectance);
+        } else {
+            albedo = _mm512_mul_ps(_mm512_mul_ps(code, _mm512_set1_ps(1.0f / 255.0f)), reflectance);
+        }
+        const __m512 scale = _mm512_mul_ps(_mm512_load_ps(E[c]), inv_pi);
+        L[c] = _mm512_add_ps(_mm512_mul_ps(albedo, scale), _mm512_load_ps(M[c]));
+    }
+    store_rgb16(L[0], L[1], L[2], rgb);
+}
+#endif
+
 // A painting pixel of the row waiting for its texel: radiance = linear albedo x scale + add.
 struct PendingPixel {
     std::uint32_t x;
@@ -775,8 +829,21 @@ struct PendingPixel {
 }  // namespace
 
 namespace {
+// A packet of 16 painting pixels of the row (one painting) waiting for its texels: uv, level,
+// irradiance and emission per lane, and once sampled (TrilinearLanes) its texels.
+struct PacketToSample {
+    alignas(64) double u[16], v[16];
+    alignas(64) float lod[16];
+    alignas(64) float E[3][16], M[3][16];
+    alignas(64) float tex[3][16];
+    std::uint32_t x0;
+    int placement;
+    bool sampled;
+};
+
 // A worker's per-row arrays (see render_eye), kept between calls in each thread.
 struct RowScratch {
+    std::vector<PacketToSample> packets;
     std::vector<PendingPixel> pending;
     std::vector<double> us, vs;
     std::vector<float> lods, texels;
@@ -793,6 +860,7 @@ struct RowScratch {
 
     void fit(std::size_t w, bool reused) {
         if (pending.size() < w) pending.resize(w), us.resize(w), vs.resize(w), lods.resize(w);
+        if (packets.size() < (w + 15) / 16) packets.resize((w + 15) / 16);
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
@@ -939,6 +1007,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         sc.fit(w, left != nullptr);
         std::vector<PendingPixel>& pending = sc.pending;
         std::size_t pending_count = 0;
+        std::size_t packet_count = 0;  // the row's packets in sc.packets
         std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
         std::vector<double>&us = sc.us, &vs = sc.vs;  // u and v apart: the sampler's batches read them densely
         std::vector<float>&lods = sc.lods, &texels = sc.texels;
@@ -969,8 +1038,12 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             if (row == current_row) return;
             current_row = row;
             directions.row = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            pending_count = 0;
+            pending_count = 0, packet_count = 0;
         };
+        // Per placement, the sampler of whole packets on one painting (TrilinearLanes).
+        std::vector<TrilinearLanes> packet_samplers;
+        packet_samplers.reserve(scene.paintings.size());
+        for (const PaintingPlacement& pp : scene.paintings) packet_samplers.emplace_back(vt, pp.painting);
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
         std::array<std::uint32_t, 16> lane;
@@ -1134,6 +1207,20 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             } else if (m && baked) {
                 lattice.blend(*baked, ll);
             }
+#if defined(__AVX512F__)
+            // A whole packet on one room surface: the loop below in lanes.
+            if (dense && !dense_painting) {
+                const __m512 inv_pi = _mm512_set1_ps(kInvPi);
+                auto L = [&](const float* a, const float* E, const float* M) {
+                    return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(a), _mm512_load_ps(E)), inv_pi),
+                                         _mm512_load_ps(M));
+                };
+                store_rgb16(L(ll.ax, ll.Ex, ll.mx), L(ll.ay, ll.Ey, ll.my), L(ll.az, ll.Ez, ll.mz),
+                            rgb_out + 3 * row_start);
+                _mm512_storeu_ps(lod_out + row_start, _mm512_set1_ps(kNaN));
+                m = 0;  // nothing left for the loop below
+            }
+#endif
             for (std::uint32_t j = 0; j < m && !dense_painting; ++j) {
                 if (lane_pl[j] >= 0) continue;
                 const std::uint32_t k = lane[j];
@@ -1152,6 +1239,31 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             double* __restrict const vs_out = vs.data();
             float* __restrict const lods_out = lods.data();
             const float bias = o.lod_bias;
+#if defined(__AVX512F__)
+            // A packet wholly on one painting whose footprints lie in one resident tile per
+            // level (most packets) is sampled and shaded here in lanes, straight into the
+            // image: the same texels (TrilinearLanes) and the same operations as the row's
+            // pending pixels below, without queueing them.
+            if (dense_painting && packet_samplers[std::size_t(lane_pl[0])].enabled()) {
+                PacketToSample& d = sc.packets[packet_count++];
+                std::copy_n(pu, 16, d.u), std::copy_n(pv, 16, d.v);
+                for (std::uint32_t k = 0; k < 16; ++k) d.lod[k] = sampled_lod(plod[k], bias);
+                std::copy_n(ll.Ex, 16, d.E[0]), std::copy_n(ll.Ey, 16, d.E[1]), std::copy_n(ll.Ez, 16, d.E[2]);
+                std::copy_n(ll.mx, 16, d.M[0]), std::copy_n(ll.my, 16, d.M[1]), std::copy_n(ll.mz, 16, d.M[2]);
+                d.x0 = i0, d.placement = lane_pl[0];
+                std::copy_n(d.lod, 16, lod_out + row_start);
+                if (keep_light) {
+                    for (std::uint32_t k = 0; k < 16; ++k) {
+                        Vec3f& sc_k = scale_out[row_start + k];
+                        sc_k.x = ll.Ex[k] * kInvPi, sc_k.y = ll.Ey[k] * kInvPi, sc_k.z = ll.Ez[k] * kInvPi;
+                        Vec3f& add_k = add_out[row_start + k];
+                        add_k.x = ll.mx[k], add_k.y = ll.my[k], add_k.z = ll.mz[k];
+                    }
+                }
+                lap(t_vt);
+                return;
+            }
+#endif
             std::size_t pc = pending_count;
             GS_CHECK(pc + np <= w);  // one pixel per column and row
             for (std::uint32_t q = 0; q < np; ++q) {
@@ -1329,6 +1441,24 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 }
                 copied_count += copied;
             }
+#if defined(__AVX512F__)
+            // The row's whole painting packets sampled in lanes, one after another (their
+            // latencies overlap); one that TrilinearLanes cannot take joins the pending pixels.
+            for (std::size_t q = 0; q < packet_count; ++q) {
+                PacketToSample& d = sc.packets[q];
+                d.sampled = packet_samplers[std::size_t(d.placement)].sample16(d.u, d.v, d.lod, d.tex[0], d.tex[1], d.tex[2]);
+                if (d.sampled) continue;
+                GS_CHECK(pending_count + 16 <= w);  // one pixel per column and row
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    const std::size_t pc = pending_count++;
+                    PendingPixel& pp = pending[pc];
+                    pp.x = d.x0 + k, pp.placement = d.placement;
+                    pp.scale = Vec3f{d.E[0][k], d.E[1][k], d.E[2][k]} * kInvPi;
+                    pp.add = Vec3f{d.M[0][k], d.M[1][k], d.M[2][k]};
+                    us[pc] = d.u[k], vs[pc] = d.v[k], lods[pc] = d.lod[k];
+                }
+            }
+#endif
             // Runs of one painting sampled in one call.
             for (std::size_t k0 = 0; k0 < pending_count;) {
                 const int pl = pending[k0].placement;
@@ -1376,6 +1506,14 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     }
                 }
             }
+#if defined(__AVX512F__)
+            for (std::size_t q = 0; q < packet_count; ++q) {
+                const PacketToSample& d = sc.packets[q];
+                if (!d.sampled) continue;
+                shade_packet(d.tex, d.E, d.M, o, srgb_decode.value.data(), rgb + 3 * (row * w + d.x0));
+                painting_count += 16;
+            }
+#endif
             painting_count += pending_count + copied_count;
             copied_count = 0;
             lap(t_shade);

@@ -17,8 +17,11 @@
 // One fused sweep per eye (issue 14 §5): per row, 16-ray packets are traced and, while their
 // hits are in cache, lit in one DisplayLighting::light_batch call (with Embree's
 // barycentrics) and mapped to painting coordinates and level of detail (a per-eye plane map
-// of each painting, double precision); the row's painting pixels are then sampled in runs of
-// one painting (trilinear, under one VT read lock for the frame) and shaded. Within a packet
+// of each painting, double precision); the row's painting pixels are then sampled (trilinear,
+// under one VT read lock for the frame) and shaded: a packet wholly on one painting in 16
+// lanes (TrilinearLanes, the packets of a row one after another so that their latencies
+// overlap), the other pixels in runs of one painting; a packet wholly on a room surface is
+// shaded in lanes at once. Within a packet
 // the per-pixel arithmetic runs in SIMD lanes: hit points and eye-facing normals for all 16
 // rays, and the painting pixels' uv and level (a libm-free log2) per run of one painting. Per pixel the
 // pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right

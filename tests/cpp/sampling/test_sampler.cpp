@@ -443,3 +443,69 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     for (std::size_t i = 0; i < u.size(); ++i) worst32 = std::max(worst32, std::abs(out32[3 * i] - expect[i]));
     EXPECT_GT(worst32, 1.0);
 }
+
+// The display pass's packets: TrilinearLanes::sample16 on 16 neighbouring samples (a row of
+// pixels across the painting, at every scale from magnified to minified, sloped rows, rows
+// across tile edges, coordinates outside [0, 1], NaN levels, half or all tiles resident)
+// either declines or gives the per-sample trilinear reference's floats bit for bit; with all
+// tiles resident it accepts most packets (those whose footprints share one tile per level).
+TEST(TrilinearLanes, PacketsEqualPerSampleArithmeticOrDecline) {
+    const CutPainting painting(1777, 901, 64, 4, 41);
+    const std::uint32_t L = painting.level_count();
+    for (double resident : {1.0, 0.5}) {
+        VirtualTexture vt(painting.layout, 24, 24, painting.source());
+        std::mt19937 rng(43);
+        painting.insert_random(vt, resident, rng);
+        TrilinearLanes lanes(vt, 0);
+        if (!lanes.enabled()) GTEST_SKIP() << "built without AVX-512: sample16 always declines";
+        std::uniform_real_distribution<double> unit(-0.03, 1.03), slope(-1.0, 1.0);
+        std::size_t accepted = 0, blended = 0;
+        const std::size_t packets = 6000;
+        for (std::size_t q = 0; q < packets; ++q) {
+            alignas(64) double u[16], v[16];
+            alignas(64) float lod[16], r[16], g[16], b[16];
+            // Texels per sample along the row: 1/8 to 8; the level mostly follows it.
+            const double step = std::exp2(slope(rng) * 3.0) / 1777.0;
+            const double tilt = q % 5 == 0 ? slope(rng) * 4 : slope(rng) * 0.05;
+            const double u0 = unit(rng), v0 = unit(rng);
+            const float lod0 = q % 7 == 0 ? float(slope(rng) * L) : float(std::log2(step * 1777.0) + 0.2 * slope(rng));
+            for (int k = 0; k < 16; ++k) {
+                u[k] = u0 + step * k, v[k] = v0 + tilt * step * k;
+                lod[k] = lod0 + 0.01f * float(k);
+                if (q % 11 == 0) lod[k] = std::floor(lod0);  // one level
+            }
+            if (q % 13 == 0) lod[q % 16] = std::numeric_limits<float>::quiet_NaN();
+            std::vector<float> ref(48);
+            SampleRequest s;
+            s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = ref.data();
+            sample_trilinear_reference(vt, s);
+            bool ok;
+            {
+                const auto lock = vt.read_lock();
+                ok = lanes.sample16(u, v, lod, r, g, b);
+            }
+            if (!ok) continue;
+            ++accepted;
+            for (int k = 0; k < 16; ++k) {
+                blended += lod[k] > 0 && lod[k] < float(L - 1) && lod[k] != std::floor(lod[k]);
+                ASSERT_EQ(r[k], ref[3 * k]) << "packet " << q << " lane " << k;
+                ASSERT_EQ(g[k], ref[3 * k + 1]) << "packet " << q << " lane " << k;
+                ASSERT_EQ(b[k], ref[3 * k + 2]) << "packet " << q << " lane " << k;
+            }
+        }
+        EXPECT_GT(blended, 16 * accepted / 8);  // two levels blended in a good share of lanes
+        if (resident == 1.0) EXPECT_GT(accepted, packets / 2);
+        else EXPECT_LT(accepted, packets * 9 / 10);  // fallbacks decline
+    }
+}
+
+// Nothing to sample in lanes for a painting the texture does not hold: sample() reports it.
+TEST(TrilinearLanes, DisabledForAPaintingNotInTheTexture) {
+    const CutPainting painting(300, 200, 32, 2, 23);
+    VirtualTexture vt(painting.layout, 16, 16, painting.source());
+    TrilinearLanes lanes(vt, 1);
+    EXPECT_FALSE(lanes.enabled());
+    alignas(64) double u[16] = {}, v[16] = {};
+    alignas(64) float lod[16] = {}, out[3][16];
+    EXPECT_FALSE(lanes.sample16(u, v, lod, out[0], out[1], out[2]));
+}
