@@ -767,6 +767,9 @@ void DisplayPass::GBuffer::resize(std::uint32_t w, std::uint32_t h, bool keep_li
 
 namespace {
 #if defined(__AVX512F__)
+// GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics (bug 105593), muted.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // 16 pixels' channels (R, G, B in lanes) stored interleaved at out[0..47], with two
 // two-source permutes per output vector: R and G into place, then B.
 inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out) {
@@ -818,6 +821,7 @@ void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const floa
     }
     store_rgb16(L[0], L[1], L[2], rgb);
 }
+#pragma GCC diagnostic pop
 #endif
 
 // A painting pixel of the row waiting for its texel: radiance = linear albedo x scale + add.
