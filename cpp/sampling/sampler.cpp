@@ -665,7 +665,7 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
 
 }  // namespace
 
-// sample_trilinear_rgb8's run of 16 in one resident tile per level, all in 16 lanes: the same
+// sample_trilinear_rgb8's run of 16 in one or two resident tiles per level, all in 16 lanes: the same
 // taps (trilinear_taps' operations, in registers), texels (the 4-byte words at the same
 // addresses) and products, summed and blended in the same order as blend_levels_rgb8, so the
 // same floats. A sample that blends nothing (blend 0) takes its coarse taps at its fine level
@@ -680,10 +680,11 @@ struct TrilinearLanes::State {
     std::int32_t levels;
     Divider divide_p;
     TileExtent tile;
-    std::uint32_t last_key[2] = {~0u, ~0u};  // level << 26 | cx << 13 | cy, if that fits
-    const std::uint8_t* last_base[2] = {nullptr, nullptr};
+    // Per level (fine, coarse) and tile of a packet (first, other): the last slot looked up.
+    std::uint32_t last_key[4] = {~0u, ~0u, ~0u, ~0u};  // level << 26 | cx << 13 | cy, if that fits
+    const std::uint8_t* last_base[4] = {nullptr, nullptr, nullptr, nullptr};
 
-    // The slot of level l's resident tile (cx, cy), nullptr for a fallback.
+    // The slot of level l's resident tile (cx, cy), nullptr for a fallback; c: the cache entry.
     const std::uint8_t* base(int c, std::uint32_t painting, std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
         const bool keyed = cx < (1u << 13) && cy < (1u << 13);
         const std::uint32_t key = l << 26 | cx << 13 | cy;
@@ -799,30 +800,39 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
                                      _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
         return lt;
     };
-    // The slot of the tile the lanes in mask share at their level (the first of them is the
-    // reference), nullptr if they do not share one or it is not resident.
-    auto shared_tile = [&](const LevelTaps& lt, int c, __mmask16 mask) -> const std::uint8_t* {
-        auto first = [&](__m512i x) {
-            return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_maskz_compress_epi32(mask, x))));
-        };
-        const std::uint32_t l = first(lt.level), cx = first(lt.cx), cy = first(lt.cy);
-        const __m512i differ = _mm512_or_si512(
-            _mm512_xor_si512(lt.level, _mm512_set1_epi32(int(l))),
-            _mm512_or_si512(_mm512_xor_si512(lt.cx, _mm512_set1_epi32(int(cx))),
-                            _mm512_xor_si512(lt.cy, _mm512_set1_epi32(int(cy)))));
-        if (_mm512_mask_test_epi32_mask(mask, differ, differ)) return nullptr;
-        return st.base(c, painting_, l, cx, cy);
+    // The tiles of the lanes in mask at their level: the first lane's and, for a packet across a
+    // tile edge, one other, each resident (its slot) with the lanes it holds; false for a third
+    // tile or a tile that is not resident (a fallback).
+    struct LevelTiles {
+        const std::uint8_t* base[2];
+        __mmask16 lanes[2];
+        int count;
+    };
+    auto tiles = [&](const LevelTaps& lt, int c, __mmask16 mask, LevelTiles& out) {
+        out.count = 0;
+        for (int k = 0; k < 2 && mask; ++k) {
+            auto first = [&](__m512i x) {
+                return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_maskz_compress_epi32(mask, x))));
+            };
+            const std::uint32_t l = first(lt.level), cx = first(lt.cx), cy = first(lt.cy);
+            const __mmask16 same = _mm512_mask_cmpeq_epi32_mask(mask, lt.level, _mm512_set1_epi32(int(l))) &
+                                   _mm512_mask_cmpeq_epi32_mask(mask, lt.cx, _mm512_set1_epi32(int(cx))) &
+                                   _mm512_mask_cmpeq_epi32_mask(mask, lt.cy, _mm512_set1_epi32(int(cy)));
+            out.base[k] = st.base(2 * c + k, painting_, l, cx, cy);
+            if (!out.base[k]) return false;
+            out.lanes[k] = same, out.count = k + 1;
+            mask &= ~same;
+        }
+        return mask == 0;
     };
     const LevelTaps fine_taps = taps(l0);
-    const std::uint8_t* fine = shared_tile(fine_taps, 0, 0xFFFF);
-    if (!fine) return false;
+    LevelTiles fine, coarse;
+    if (!tiles(fine_taps, 0, 0xFFFF, fine)) return false;
     // The lanes that blend nothing take their coarse taps at the fine level, as trilinear_taps.
     LevelTaps coarse_taps;
-    const std::uint8_t* coarse = nullptr;
     if (blending) {
         coarse_taps = taps(_mm512_mask_add_epi32(l0, blending, l0, one_i));
-        coarse = shared_tile(coarse_taps, 1, blending);
-        if (!coarse) return false;
+        if (!tiles(coarse_taps, 1, blending, coarse)) return false;
     }
     const std::int32_t row = t.row_bytes;
     // The 4-byte words at each lane's footprint corners (offset, + 3, + row, + row + 3: the
@@ -862,7 +872,7 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
                                           static_cast<const void*>(base), 1);
     };
     // One level's bilinear blend: channels R, G, B of 16 lanes.
-    auto bilinear = [&](const LevelTaps& lt, const std::uint8_t* base, __mmask16 mask, __m512& R, __m512& G, __m512& B) {
+    auto bilinear = [&](const LevelTaps& lt, const LevelTiles& lv, __m512& R, __m512& G, __m512& B) {
         const __m512 one = _mm512_set1_ps(1.0f);
         const __m512 fx = lt.fx, fy = lt.fy;
         const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
@@ -870,7 +880,12 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
         const __m512 w[4] = {_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy), _mm512_mul_ps(gx, fy),
                              _mm512_mul_ps(fx, fy)};
         __m512i words[4];
-        corners(lt, base, mask, words);
+        corners(lt, lv.base[0], lv.lanes[0], words);
+        if (lv.count == 2) {  // the lanes in the other tile
+            __m512i other[4];
+            corners(lt, lv.base[1], lv.lanes[1], other);
+            for (int q = 0; q < 4; ++q) words[q] = _mm512_mask_mov_epi32(words[q], lv.lanes[1], other[q]);
+        }
         for (int q = 0; q < 4; ++q) {
             const __m512i texel = words[q];
             const __m512 tr = _mm512_cvtepi32_ps(_mm512_and_si512(texel, byte));
@@ -886,10 +901,10 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
         }
     };
     __m512 R, G, B;
-    bilinear(fine_taps, fine, 0xFFFF, R, G, B);
-    if (coarse) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
+    bilinear(fine_taps, fine, R, G, B);
+    if (blending) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
         __m512 R1, G1, B1;
-        bilinear(coarse_taps, coarse, blending, R1, G1, B1);
+        bilinear(coarse_taps, coarse, R1, G1, B1);
         R = _mm512_add_ps(R, _mm512_mul_ps(blend, _mm512_sub_ps(R1, R)));
         G = _mm512_add_ps(G, _mm512_mul_ps(blend, _mm512_sub_ps(G1, G)));
         B = _mm512_add_ps(B, _mm512_mul_ps(blend, _mm512_sub_ps(B1, B)));

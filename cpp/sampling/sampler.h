@@ -42,11 +42,12 @@ void sample_serial(const VirtualTexture& vt, const SampleRequest& r);
 // pass takes it once per frame instead of once per run of samples).
 void sample_serial_locked(const VirtualTexture& vt, const SampleRequest& r);
 // Trilinear on RGB8 slots for 16 samples of one painting at once in SIMD lanes: the display
-// pass's packets of 16 neighbouring pixels, whose footprints nearly always lie in one tile at
-// each level. When they do and those tiles are resident, sample16 writes the 16 samples'
-// channels (0..255) to r, g, b and returns true: the same floats as sample() gives them (its
-// taps, products and blend). Otherwise (a footprint across tiles, a fallback to a coarser
-// tile, BC1 slots, or a build without AVX-512) it writes nothing and returns false, and the
+// pass's packets of 16 neighbouring pixels, whose footprints nearly always lie in one tile
+// (or two, across a tile edge) at each level. When they do and those tiles are resident,
+// sample16 writes the 16 samples' channels (0..255) to r, g, b and returns true: the same
+// floats as sample() gives them (its taps, products and blend). Otherwise (footprints in
+// three or more tiles, a fallback to a coarser tile, BC1 slots, or a build without AVX-512)
+// it writes nothing and returns false, and the
 // caller takes sample() (which also reports a painting the texture does not hold). The caller
 // holds vt.read_lock(); one object per thread.
 class TrilinearLanes {

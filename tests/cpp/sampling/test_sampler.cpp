@@ -448,7 +448,8 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
 // pixels across the painting, at every scale from magnified to minified, sloped rows, rows
 // across tile edges, coordinates outside [0, 1], NaN levels, half or all tiles resident)
 // either declines or gives the per-sample trilinear reference's floats bit for bit; with all
-// tiles resident it accepts most packets (those whose footprints share one tile per level).
+// tiles resident it accepts most packets (those whose footprints lie in one or two tiles per
+// level).
 TEST(TrilinearLanes, PacketsEqualPerSampleArithmeticOrDecline) {
     const CutPainting painting(1777, 901, 64, 4, 41);
     const std::uint32_t L = painting.level_count();
@@ -494,7 +495,9 @@ TEST(TrilinearLanes, PacketsEqualPerSampleArithmeticOrDecline) {
             }
         }
         EXPECT_GT(blended, 16 * accepted / 8);  // two levels blended in a good share of lanes
-        if (resident == 1.0) EXPECT_GT(accepted, packets / 2);
+        // All resident: packets on one tile per level and those across one tile edge (about
+        // a fifth more than on one tile alone) are accepted.
+        if (resident == 1.0) EXPECT_GT(accepted, packets * 6 / 10);
         else EXPECT_LT(accepted, packets * 9 / 10);  // fallbacks decline
     }
 }
