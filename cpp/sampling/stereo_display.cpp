@@ -997,7 +997,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     const Vec3f origin(eye.position);
     const SrgbTable& srgb_decode = srgb_table();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
-    std::atomic<std::int64_t> rays_ns{0}, vt_ns{0}, shade_ns{0}, reuse_ns{0};
+    std::atomic<std::uint64_t> rays_ticks{0}, vt_ticks{0}, shade_ticks{0}, reuse_ticks{0};
     std::vector<double> column_sx(w);  // screen x of each column's centre
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
@@ -1027,14 +1027,15 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         RowDirections directions{{}, eye.right, column_sx.data()};
         std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0, reused_count = 0;
         // Thread time per stage: laps between the stages of the fused loop, taken on every
-        // kTimedRow-th row only (a clock read per stage and packet costs a few percent).
+        // kTimedRow-th row only, in stage_ticks (split_wall needs only their proportions; a
+        // clock read per stage and packet cost a few percent of the pass).
         constexpr std::size_t kTimedRow = 8;
-        std::chrono::nanoseconds t_rays{0}, t_vt{0}, t_shade{0}, t_reuse{0};
+        std::uint64_t t_rays = 0, t_vt = 0, t_shade = 0, t_reuse = 0;
         bool timed = rb % kTimedRow == 0;
-        auto mark = Clock::now();
-        auto lap = [&](std::chrono::nanoseconds& acc) {
+        std::uint64_t mark = stage_ticks();
+        auto lap = [&](std::uint64_t& acc) {
             if (!timed) return;
-            const auto now = Clock::now();
+            const std::uint64_t now = stage_ticks();
             acc += now - mark;
             mark = now;
         };
@@ -1522,17 +1523,17 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             copied_count = 0;
             lap(t_shade);
             timed = (row + 1) % kTimedRow == 0;
-            if (timed) mark = Clock::now();
+            if (timed) mark = stage_ticks();
         };
 
         cast_rows(scene.handle, eye, rb, re, sources, on_row_start, on_packet, on_row);
         traced.fetch_add(traced_count, std::memory_order_relaxed);
         hits.fetch_add(hit_count, std::memory_order_relaxed);
         on_paintings.fetch_add(painting_count, std::memory_order_relaxed);
-        rays_ns.fetch_add(t_rays.count(), std::memory_order_relaxed);
-        vt_ns.fetch_add(t_vt.count(), std::memory_order_relaxed);
-        shade_ns.fetch_add(t_shade.count(), std::memory_order_relaxed);
-        reuse_ns.fetch_add(t_reuse.count(), std::memory_order_relaxed);
+        rays_ticks.fetch_add(t_rays, std::memory_order_relaxed);
+        vt_ticks.fetch_add(t_vt, std::memory_order_relaxed);
+        shade_ticks.fetch_add(t_shade, std::memory_order_relaxed);
+        reuse_ticks.fetch_add(t_reuse, std::memory_order_relaxed);
         reused.fetch_add(reused_count, std::memory_order_relaxed);
     };
     if (run)
@@ -1551,10 +1552,11 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     st.traced = traced.load();
     st.hits = hits.load();
     st.painting_pixels = on_paintings.load();
-    st.rays_seconds = 1e-9 * double(rays_ns.load());
-    st.vt_seconds = 1e-9 * double(vt_ns.load());
-    st.shade_seconds = 1e-9 * double(shade_ns.load());
-    st.reuse_seconds = 1e-9 * double(reuse_ns.load());  // the claims, or the edge release
+    // In ticks until split_wall turns them into shares of the pass's wall time.
+    st.rays_seconds = double(rays_ticks.load());
+    st.vt_seconds = double(vt_ticks.load());
+    st.shade_seconds = double(shade_ticks.load());
+    st.reuse_seconds = double(reuse_ticks.load());  // the claims, or the edge release
     return seconds_since(t0);
 }
 

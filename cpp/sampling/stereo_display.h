@@ -232,8 +232,9 @@ private:
     // in one wavefront (see render_stereo).
     using RowsBody = std::function<void(std::size_t, std::size_t)>;
     using RunRows = std::function<void(std::size_t chunk_rows, const RowsBody& body)>;
-    // st's stage seconds are left as thread time of the timed rows; the wall time of the call
-    // is returned for the caller to split among the stages (split_wall).
+    // st's stage seconds are left as thread time of the timed rows in stage_ticks
+    // (common/timing.h); the wall time of the call is returned for the caller to split among
+    // the stages (split_wall).
     double render_eye(const PaintingSceneView& scene, const DisplayLighting& lighting,
                       const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
                       GBuffer& g, const Camera* claim_into, const float* left_rgb, float* rgb,
