@@ -708,6 +708,8 @@ TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting)
                            Divider(vt.layout().payload()),
                            TileExtent{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
                                       std::int32_t(vt.layout().tile_size), row}});
+#else
+    (void)vt;  // no lanes to sample in: always disabled
 #endif
 }
 TrilinearLanes::~TrilinearLanes() = default;
