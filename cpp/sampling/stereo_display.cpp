@@ -848,6 +848,8 @@ struct PacketToSample {
 // A worker's per-row arrays (see render_eye), kept between calls in each thread.
 struct RowScratch {
     std::vector<PacketToSample> packets;
+    std::vector<TrilinearLanes> samplers;  // per placement, for frame samplers_call
+    std::uint64_t samplers_call = 0;
     std::vector<PendingPixel> pending;
     std::vector<double> us, vs;
     std::vector<float> lods, texels;
@@ -952,6 +954,12 @@ std::uint64_t release_claims(std::uint64_t* __restrict claims, const float* up, 
     return kept;
 }
 
+// A number for each frame any DisplayPass renders (never 0).
+std::uint64_t next_frame() {
+    static std::atomic<std::uint64_t> frames{0};
+    return frames.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
 RowScratch& row_scratch() {
     thread_local RowScratch scratch;
     return scratch;
@@ -1002,6 +1010,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
+    const std::uint64_t call = frame_;  // each worker makes its packet samplers once per frame
     auto rows = [&](std::size_t rb, std::size_t re) {
         // The row's painting pixels waiting for their texels (at most one per column, so
         // arrays of the row's width and a count: no push_back's capacity test per pixel), in
@@ -1045,10 +1054,15 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             directions.row = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending_count = 0, packet_count = 0;
         };
-        // Per placement, the sampler of whole packets on one painting (TrilinearLanes).
-        std::vector<TrilinearLanes> packet_samplers;
-        packet_samplers.reserve(scene.paintings.size());
-        for (const PaintingPlacement& pp : scene.paintings) packet_samplers.emplace_back(vt, pp.painting);
+        // Per placement, the sampler of whole packets on one painting (TrilinearLanes), made
+        // once per frame and thread (the frame's eyes share the scene and the VT, whose read
+        // lock keeps the samplers' page entries valid).
+        if (sc.samplers_call != call) {
+            sc.samplers.clear();
+            for (const PaintingPlacement& pp : scene.paintings) sc.samplers.emplace_back(vt, pp.painting);
+            sc.samplers_call = call;
+        }
+        std::vector<TrilinearLanes>& packet_samplers = sc.samplers;
         std::array<LightQuery, 16> queries;
         std::array<SurfaceLight, 16> lights;
         std::array<std::uint32_t, 16> lane;
@@ -1585,6 +1599,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
     hits_kept_ = o.keep_hit_points;
+    frame_ = next_frame();
     split_wall(render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st), {&st});
     sources_.clear();
 }
@@ -1605,6 +1620,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
             "display: reuse_lod_tolerance must be finite and >= 0");
     reusing_ = false;
     hits_kept_ = true;
+    frame_ = next_frame();
     const std::size_t n = std::size_t(right.width) * right.height;
     if (use_reuse) {
         // The last frame's right eye left every claim unclaimed again (no 8-byte fill of the

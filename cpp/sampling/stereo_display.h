@@ -246,6 +246,7 @@ private:
     bool claims_clear_ = false;  // every claim is kUnclaimed (left so by the last right eye)
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     bool hits_kept_ = true;  // the last frame kept the hit points (geom, p) of both eyes
+    std::uint64_t frame_ = 0;  // this frame's number among all passes' (the workers' scratch)
     std::vector<std::int32_t> sources_;
 };
 
