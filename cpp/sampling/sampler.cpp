@@ -712,6 +712,9 @@ TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting)
     (void)vt;  // no lanes to sample in: always disabled
 #endif
 }
+void TrilinearLanes::forget_tiles() {
+    if (state_) std::fill(std::begin(state_->last_key), std::end(state_->last_key), ~0u);
+}
 TrilinearLanes::~TrilinearLanes() = default;
 TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
 

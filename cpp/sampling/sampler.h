@@ -59,6 +59,9 @@ public:
     bool sample16(const double* u, const double* v, const float* lod, float* r, float* g, float* b);
     // Whether sample16 can succeed at all (AVX-512 build, RGB8 slots).
     bool enabled() const { return state_ != nullptr; }
+    // Forgets the page entries sample16 keeps from call to call (valid only while the caller
+    // holds one read lock: a new lock, a new residency).
+    void forget_tiles();
 
 private:
     std::uint32_t painting_;

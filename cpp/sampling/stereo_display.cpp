@@ -848,8 +848,8 @@ struct PacketToSample {
 // A worker's per-row arrays (see render_eye), kept between calls in each thread.
 struct RowScratch {
     std::vector<PacketToSample> packets;
-    std::vector<TrilinearLanes> samplers;  // per placement, for frame samplers_call
-    std::uint64_t samplers_call = 0;
+    std::vector<TrilinearLanes> samplers;  // per placement, for frame samplers_frame
+    std::uint64_t samplers_frame = 0, samplers_call = 0;  // their frame, and render_eye call
     std::vector<PendingPixel> pending;
     std::vector<double> us, vs;
     std::vector<float> lods, texels;
@@ -954,10 +954,10 @@ std::uint64_t release_claims(std::uint64_t* __restrict claims, const float* up, 
     return kept;
 }
 
-// A number for each frame any DisplayPass renders (never 0).
-std::uint64_t next_frame() {
-    static std::atomic<std::uint64_t> frames{0};
-    return frames.fetch_add(1, std::memory_order_relaxed) + 1;
+// A fresh number (never 0) for each frame any DisplayPass renders and each render_eye call.
+std::uint64_t next_serial() {
+    static std::atomic<std::uint64_t> serial{0};
+    return serial.fetch_add(1, std::memory_order_relaxed) + 1;
 }
 
 RowScratch& row_scratch() {
@@ -1010,7 +1010,9 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
-    const std::uint64_t call = frame_;  // each worker makes its packet samplers once per frame
+    // Each worker makes its packet samplers once per frame and has them forget their cached
+    // page entries once per call (this call's read lock).
+    const std::uint64_t frame = frame_, call = next_serial();
     auto rows = [&](std::size_t rb, std::size_t re) {
         // The row's painting pixels waiting for their texels (at most one per column, so
         // arrays of the row's width and a count: no push_back's capacity test per pixel), in
@@ -1055,11 +1057,13 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             pending_count = 0, packet_count = 0;
         };
         // Per placement, the sampler of whole packets on one painting (TrilinearLanes), made
-        // once per frame and thread (the frame's eyes share the scene and the VT, whose read
-        // lock keeps the samplers' page entries valid).
-        if (sc.samplers_call != call) {
+        // once per frame and thread (the frame's eyes share the scene and the VT).
+        if (sc.samplers_frame != frame) {
             sc.samplers.clear();
             for (const PaintingPlacement& pp : scene.paintings) sc.samplers.emplace_back(vt, pp.painting);
+            sc.samplers_frame = frame, sc.samplers_call = call;
+        } else if (sc.samplers_call != call) {
+            for (TrilinearLanes& s : sc.samplers) s.forget_tiles();
             sc.samplers_call = call;
         }
         std::vector<TrilinearLanes>& packet_samplers = sc.samplers;
@@ -1599,7 +1603,7 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
     st.pixels = std::uint64_t(eye.width) * eye.height;
     reusing_ = false;
     hits_kept_ = o.keep_hit_points;
-    frame_ = next_frame();
+    frame_ = next_serial();
     split_wall(render_eye(scene, lighting, vt, eye, o, g, nullptr, nullptr, rgb, st), {&st});
     sources_.clear();
 }
@@ -1620,7 +1624,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
             "display: reuse_lod_tolerance must be finite and >= 0");
     reusing_ = false;
     hits_kept_ = true;
-    frame_ = next_frame();
+    frame_ = next_serial();
     const std::size_t n = std::size_t(right.width) * right.height;
     if (use_reuse) {
         // The last frame's right eye left every claim unclaimed again (no 8-byte fill of the

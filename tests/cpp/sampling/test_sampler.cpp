@@ -512,3 +512,61 @@ TEST(TrilinearLanes, DisabledForAPaintingNotInTheTexture) {
     alignas(64) float lod[16] = {}, out[3][16];
     EXPECT_FALSE(lanes.sample16(u, v, lod, out[0], out[1], out[2]));
 }
+
+// The page entries sample16 keeps between calls are only as current as the caller's read
+// lock: after the packet's tiles are evicted (their slots now hold other tiles) and
+// forget_tiles(), it declines (the tiles fell back to an ancestor) or equals the reference
+// again, never the evicted tiles' texels.
+TEST(TrilinearLanes, ForgetsItsTilesWhenTheResidencyChanges) {
+    const CutPainting painting(600, 400, 32, 2, 47);
+    VirtualTexture vt(painting.layout, 8, 8, painting.source());
+    TrilinearLanes lanes(vt, 0);
+    if (!lanes.enabled()) GTEST_SKIP() << "built without AVX-512: sample16 always declines";
+    const std::uint32_t P = painting.layout.payload();
+    // A magnified packet in the middle of level 0's tile (5, 4) and level 1's (2, 2).
+    alignas(64) double u[16], v[16];
+    alignas(64) float lod[16], r[16], g[16], b[16];
+    for (int k = 0; k < 16; ++k) {
+        u[k] = (5.3 * P + 0.2 * k) / 600.0, v[k] = (4.5 * P) / 400.0, lod[k] = 0.4f;
+    }
+    std::vector<std::uint8_t> tile(painting.layout.tile_bytes());
+    auto put = [&](std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
+        const TileKey k{0, l, tx, ty};
+        painting.source()(k, tile.data());
+        vt.insert(k, tile.data());
+    };
+    put(0, 5, 4), put(1, 2, 2);
+    auto reference = [&] {
+        std::vector<float> out(48);
+        SampleRequest s;
+        s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = out.data();
+        sample_trilinear_reference(vt, s);
+        return out;
+    };
+    auto lanes_equal = [&](const std::vector<float>& ref) {
+        for (int k = 0; k < 16; ++k)
+            if (r[k] != ref[3 * k] || g[k] != ref[3 * k + 1] || b[k] != ref[3 * k + 2]) return false;
+        return true;
+    };
+    const std::vector<float> before = reference();
+    {
+        const auto lock = vt.read_lock();
+        ASSERT_TRUE(lanes.sample16(u, v, lod, r, g, b));
+    }
+    EXPECT_TRUE(lanes_equal(before));
+    // Every other level-0 tile of the painting's first rows: the cache's least recently used
+    // slots go first, the packet's two tiles among them.
+    for (std::uint32_t ty = 0; ty < 3; ++ty)
+        for (std::uint32_t tx = 0; tx < 22; ++tx) put(0, tx, ty);
+    ASSERT_FALSE(vt.is_resident(TileKey{0, 0, 5, 4}));
+    ASSERT_FALSE(vt.is_resident(TileKey{0, 1, 2, 2}));
+    const std::vector<float> after = reference();
+    ASSERT_NE(after, before);  // a coarser ancestor answers now
+    lanes.forget_tiles();
+    bool ok;
+    {
+        const auto lock = vt.read_lock();
+        ok = lanes.sample16(u, v, lod, r, g, b);
+    }
+    if (ok) EXPECT_TRUE(lanes_equal(after));
+}
