@@ -80,6 +80,9 @@ public:
 
     std::size_t row_bytes() const { return std::size_t(T_) * 3; }
 
+    // Forgets the last entry (the next lookup reads the table: its residency may be new).
+    void forget() { last_l_ = ~0u; }
+
     // Entry of tile (cx, cy) at level l: the level and slot of its finest resident ancestor.
     PageEntry entry(std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
         if (l != last_l_ || cx != last_cx_ || cy != last_cy_)
@@ -673,47 +676,45 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
 // batch's fine-only path gives it; so only the samples that blend two levels must share the
 // coarse tile.
 struct TrilinearLanes::State {
-    const PageTable& table;
+    State(const VirtualTexture& vt, std::uint32_t painting)
+        : finders{TexelFinder(vt, painting), TexelFinder(vt, painting), TexelFinder(vt, painting),
+                  TexelFinder(vt, painting)},
+          physical(vt.physical()), slot_bytes(vt.slot_bytes()),
+          pyramid{vt.layout().paintings[painting].width(), vt.layout().paintings[painting].height(),
+                  float(vt.layout().paintings[painting].levels() - 1)},
+          levels(std::int32_t(vt.layout().paintings[painting].levels())),
+          divide_p(vt.layout().payload()),
+          tile{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
+               std::int32_t(vt.layout().tile_size), std::int32_t(finders[0].row_bytes())} {}
+
+    // Per level (fine, coarse) and tile of a packet (first, other), the last page entry.
+    TexelFinder finders[4];
     const std::uint8_t* physical;
     std::size_t slot_bytes;
     PyramidExtent pyramid;
     std::int32_t levels;
     Divider divide_p;
     TileExtent tile;
-    // Per level (fine, coarse) and tile of a packet (first, other): the last slot looked up.
-    std::uint32_t last_key[4] = {~0u, ~0u, ~0u, ~0u};  // level << 26 | cx << 13 | cy, if that fits
-    const std::uint8_t* last_base[4] = {nullptr, nullptr, nullptr, nullptr};
 
-    // The slot of level l's resident tile (cx, cy), nullptr for a fallback; c: the cache entry.
-    const std::uint8_t* base(int c, std::uint32_t painting, std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
-        const bool keyed = cx < (1u << 13) && cy < (1u << 13);
-        const std::uint32_t key = l << 26 | cx << 13 | cy;
-        if (keyed && key == last_key[c]) return last_base[c];
-        const PageEntry e = table.lookup(painting, l, cx, cy);
-        const std::uint8_t* p = e.level() == l ? physical + std::size_t(e.slot()) * slot_bytes : nullptr;
-        if (keyed) last_key[c] = key, last_base[c] = p;
-        return p;
+    // The slot of level l's resident tile (cx, cy) through finder c, nullptr for a fallback.
+    const std::uint8_t* base(int c, std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
+        const PageEntry e = finders[c].entry(l, cx, cy);
+        return e.level() == l ? physical + std::size_t(e.slot()) * slot_bytes : nullptr;
     }
 };
 
-TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting) : painting_(painting) {
+TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting) {
 #if defined(__AVX512F__)
     // Disabled for a painting the texture does not hold: sample() says so.
-    if (vt.format() != TexelFormat::Rgb8 || painting >= vt.layout().paintings.size()) return;
-    const PaintingGeometry& pt = vt.layout().paintings[painting];
-    const std::uint32_t L = pt.levels();
-    const std::int32_t row = std::int32_t(vt.layout().tile_size) * 3;
-    state_.reset(new State{vt.page_table(), vt.physical(), vt.slot_bytes(),
-                           PyramidExtent{pt.width(), pt.height(), float(L - 1)}, std::int32_t(L),
-                           Divider(vt.layout().payload()),
-                           TileExtent{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
-                                      std::int32_t(vt.layout().tile_size), row}});
+    if (vt.format() == TexelFormat::Rgb8 && painting < vt.layout().paintings.size())
+        state_ = std::make_unique<State>(vt, painting);
 #else
-    (void)vt;  // no lanes to sample in: always disabled
+    (void)vt, (void)painting;  // no lanes to sample in: always disabled
 #endif
 }
 void TrilinearLanes::forget_tiles() {
-    if (state_) std::fill(std::begin(state_->last_key), std::end(state_->last_key), ~0u);
+    if (state_)
+        for (TexelFinder& f : state_->finders) f.forget();
 }
 TrilinearLanes::~TrilinearLanes() = default;
 TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
@@ -823,7 +824,7 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
             const __mmask16 same = _mm512_mask_cmpeq_epi32_mask(mask, lt.level, _mm512_set1_epi32(int(l))) &
                                    _mm512_mask_cmpeq_epi32_mask(mask, lt.cx, _mm512_set1_epi32(int(cx))) &
                                    _mm512_mask_cmpeq_epi32_mask(mask, lt.cy, _mm512_set1_epi32(int(cy)));
-            out.base[k] = st.base(2 * c + k, painting_, l, cx, cy);
+            out.base[k] = st.base(2 * c + k, l, cx, cy);
             if (!out.base[k]) return false;
             out.lanes[k] = same, out.count = k + 1;
             mask &= ~same;

@@ -64,7 +64,6 @@ public:
     void forget_tiles();
 
 private:
-    std::uint32_t painting_;
     struct State;                   // the constants and the last page entries
     std::unique_ptr<State> state_;  // nullptr: disabled
 };
