@@ -125,13 +125,22 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
 // detail are a few multiply-adds on its ray direction D (unnormalised, D . forward = 1):
 // t = h / (D . n), uv = ((eye - origin) . axis + t D . axis) / size, and the footprint of
 // feedback.h's texel_footprint, dP/dx = t (dD/dx - (dD/dx . n) / (D . n) D), expanded on the
-// axes. The same arithmetic as texel_footprint in another order (double throughout: a 12 m
-// scroll of 150k texels needs more than float for uv).
+// axes. The same arithmetic as texel_footprint in another order. uv in double (a 12 m scroll
+// of 150k texels needs more than float), the footprint in float from t, 1 / (D . n) and
+// D . axis rounded to float (the level is stored as a float, and a SIMD instruction takes
+// twice as many float lanes as double ones): the level is texel_footprint's to about 1e-6.
 struct PlaneMap {
     Vec3d n, u_axis, v_axis;
     double h = 0, cu = 0, cv = 0, inv_width = 0, inv_height = 0;
     double xn = 0, xu = 0, xv = 0, yn = 0, yu = 0, yv = 0;  // ddx, ddy . (n, u, v)
     double su = 0, sv = 0;                                  // texels per metre along u, v
+    float fxn = 0, fxu = 0, fxv = 0, fyn = 0, fyu = 0, fyv = 0, fsu = 0, fsv = 0;  // as float
+
+    // A row's directions D(x) = row + screen_x(x) right on the plane's normal and axes:
+    // D . n = rn + screen_x qn and the same for u and v, a multiply-add per pixel each.
+    struct Row {
+        double rn = 0, ru = 0, rv = 0, qn = 0, qu = 0, qv = 0;
+    };
 
     PlaneMap(const PaintingPlacement& pp, const Camera& eye)
         : n(pp.normal()), u_axis(pp.u_axis), v_axis(pp.v_axis) {
@@ -142,61 +151,91 @@ struct PlaneMap {
         xn = dot(dx, n), xu = dot(dx, u_axis), xv = dot(dx, v_axis);
         yn = dot(dy, n), yu = dot(dy, u_axis), yv = dot(dy, v_axis);
         su = pp.tiles.width() / pp.width_m, sv = pp.tiles.height() / pp.height_m;
+        fxn = float(xn), fxu = float(xu), fxv = float(xv), fyn = float(yn), fyu = float(yu);
+        fyv = float(yv), fsu = float(su), fsv = float(sv);
     }
 
-    // uv clamped to [0, 1] and lambda = log2(footprint in texels) for n rays at once (D as
-    // three arrays): a loop the compiler vectorises (the painting pixels in SIMD lanes), with
-    // log2 by fast_log2f and its rare non-normal footprints patched after the loop.
+    Row row(const Vec3d& row_direction, const Vec3d& right) const {
+        return {dot(row_direction, n), dot(row_direction, u_axis), dot(row_direction, v_axis),
+                dot(right, n), dot(right, u_axis), dot(right, v_axis)};
+    }
+
+    // uv clamped to [0, 1] and lambda = log2(footprint in texels) of count pixels of a row at
+    // screen x sx[k]: a loop the compiler vectorises (the painting pixels in SIMD lanes), with
+    // log2 by fast_log2f and its rare non-normal footprints patched after the loop. kUv =
+    // false: the level alone (the same operations: the same bits as with uv).
+    template <bool kUv>
+    __attribute__((always_inline)) void map_columns(const Row& r, std::size_t count,
+                                                    const double* __restrict sx, double* __restrict u,
+                                                    double* __restrict v, float* __restrict lod) const {
+        std::uint32_t odd = 0;
+        for (std::size_t k = 0; k < count; ++k) {
+            const double s = sx[k];
+            const double dn = r.rn + s * r.qn, du = r.ru + s * r.qu, dv = r.rv + s * r.qv;
+            std::uint32_t normal;
+            lod[k] = at<kUv>(dn, du, dv, u + k, v + k, normal);
+            odd |= normal ^ 1u;
+        }
+        if (odd) [[unlikely]]
+            for (std::size_t k = 0; k < count; ++k) {
+                const double s = sx[k];
+                const double dn = r.rn + s * r.qn, du = r.ru + s * r.qu, dv = r.rv + s * r.qv;
+                patch(dn, du, dv, lod[k]);
+            }
+    }
+
+    // The same for rays of any directions D (three arrays).
     __attribute__((always_inline)) void map_lanes(std::size_t count, const double* __restrict Dx,
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
                                                   double* __restrict v, float* __restrict lod) const {
-        map<true>(count, Dx, Dy, Dz, u, v, lod);
-    }
-    // The level of detail alone (the same operations: the same bits as map_lanes' lod).
-    __attribute__((always_inline)) void lod_lanes(std::size_t count, const double* __restrict Dx,
-                                                  const double* __restrict Dy,
-                                                  const double* __restrict Dz,
-                                                  float* __restrict lod) const {
-        map<false>(count, Dx, Dy, Dz, nullptr, nullptr, lod);
-    }
-
-    template <bool kUv>
-    __attribute__((always_inline)) void map(std::size_t count, const double* __restrict Dx,
-                                            const double* __restrict Dy, const double* __restrict Dz,
-                                            double* __restrict u, double* __restrict v,
-                                            float* __restrict lod) const {
         std::uint32_t odd = 0;
         for (std::size_t k = 0; k < count; ++k) {
             const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
             const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
             const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
-            const double kk = 1.0 / dn, t = h * kk;
-            if constexpr (kUv) {
-                u[k] = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
-                v[k] = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
-            }
-            const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
-            const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
-            const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
             std::uint32_t normal;
-            lod[k] = 0.5f * fast_log2f(float(rho2), normal);
+            lod[k] = at<true>(dn, du, dv, u + k, v + k, normal);
             odd |= normal ^ 1u;
         }
-        if (odd) [[unlikely]] {  // zero, subnormal, infinite or NaN footprints: the libm value
+        if (odd) [[unlikely]]
             for (std::size_t k = 0; k < count; ++k) {
                 const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
                 const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
                 const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
-                const double kk = 1.0 / dn, t = h * kk;
-                const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
-                const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
-                const double rho2 = std::max(ax * ax + bx * bx, ay * ay + by * by);
-                std::uint32_t normal;
-                fast_log2f(float(rho2), normal);
-                if (!normal) lod[k] = float(0.5 * std::log2(rho2));
+                patch(dn, du, dv, lod[k]);
             }
+    }
+
+    // One pixel from its D . n, D . u, D . v: uv (kUv) and the level (normal = 0: patch it).
+    template <bool kUv>
+    __attribute__((always_inline)) float at(double dn, double du, double dv, double* __restrict u,
+                                            double* __restrict v, std::uint32_t& normal) const {
+        const double kk = 1.0 / dn, t = h * kk;
+        if constexpr (kUv) {
+            *u = std::max(0.0, std::min((cu + t * du) * inv_width, 1.0));
+            *v = std::max(0.0, std::min((cv + t * dv) * inv_height, 1.0));
         }
+        return 0.5f * fast_log2f(footprint2(float(t), float(kk), float(du), float(dv)), normal);
+    }
+
+    // The squared footprint in texels, max(|dP/dx|^2, |dP/dy|^2) on the axes, in float.
+    __attribute__((always_inline)) float footprint2(float t, float kk, float du, float dv) const {
+        const float ax = t * fsu * (fxu - fxn * kk * du), bx = t * fsv * (fxv - fxn * kk * dv);
+        const float ay = t * fsu * (fyu - fyn * kk * du), by = t * fsv * (fyv - fyn * kk * dv);
+        return std::max(ax * ax + bx * bx, ay * ay + by * by);
+    }
+
+    // A footprint that fast_log2f cannot take (zero, subnormal, infinite or NaN in float, such
+    // as at a grazing angle): its level from the footprint in double and libm's log2.
+    void patch(double dn, double du, double dv, float& lod) const {
+        std::uint32_t normal;
+        at<false>(dn, du, dv, nullptr, nullptr, normal);
+        if (normal) return;
+        const double kk = 1.0 / dn, t = h * kk;
+        const double ax = t * su * (xu - xn * kk * du), bx = t * sv * (xv - xn * kk * dv);
+        const double ay = t * su * (yu - yn * kk * du), by = t * sv * (yv - yn * kk * dv);
+        lod = float(0.5 * std::log2(std::max(ax * ax + bx * bx, ay * ay + by * by)));
     }
 
     // log2(x) for a positive normal float without a libm call so the lanes' loop vectorises:
@@ -725,17 +764,6 @@ bool rows_align(const Camera& left, const Camera& right) {
            std::abs(dot(offset, left.up)) <= 1e-9 * apart && std::abs(dot(offset, left.forward)) <= 1e-9 * apart;
 }
 
-// The unnormalised ray direction D (D . forward = 1) through the centre of column x of one
-// row, as the packets cast it: the row's direction + the column's screen x along right.
-struct RowDirections {
-    Vec3d row, right;
-    const double* screen_x = nullptr;  // per column
-    [[gnu::always_inline]] void at(std::size_t x, double& dx, double& dy, double& dz) const {
-        const double c = screen_x[x];
-        dx = row.x + c * right.x, dy = row.y + c * right.y, dz = row.z + c * right.z;
-    }
-};
-
 // A painting pixel's level as sampled: the plane map's with the bias; a non-finite one
 // samples level 0.
 [[gnu::always_inline]] inline float sampled_lod(float lod, float bias) {
@@ -851,12 +879,13 @@ struct RowScratch {
     std::vector<TrilinearLanes> samplers;  // per placement, for frame samplers_frame
     std::uint64_t samplers_frame = 0, samplers_call = 0;  // their frame, and render_eye call
     std::vector<PendingPixel> pending;
+    std::vector<PlaneMap::Row> planes;
     std::vector<double> us, vs;
     std::vector<float> lods, texels;
     std::vector<std::uint32_t> rx;
     std::vector<int> rpl;
     std::vector<std::int32_t> rsrc;
-    std::vector<double> rDx, rDy, rDz;
+    std::vector<double> rsx;  // their screen x
     std::vector<float> rlod;
     // The right eye's edge release: one row of claimed depths (with an infinite depth either
     // side) and the row minima of the last three claim rows (row r in slot r % 3).
@@ -870,7 +899,7 @@ struct RowScratch {
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
-            for (auto* a : {&rDx, &rDy, &rDz}) a->resize(w);
+            rsx.resize(w);
             depths.resize(w + 2);
             for (auto& m : row_min) m.resize(w);
         }
@@ -1033,11 +1062,11 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         std::vector<std::uint32_t>& rx = sc.rx;
         std::vector<int>& rpl = sc.rpl;
         std::vector<std::int32_t>& rsrc = sc.rsrc;
-        std::vector<double>&rDx = sc.rDx, &rDy = sc.rDy,
-                          &rDz = sc.rDz;
+        std::vector<double>& rsx = sc.rsx;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
-        RowDirections directions{{}, eye.right, column_sx.data()};
+        std::vector<PlaneMap::Row>& planes = sc.planes;  // the row's, per placement
+        planes.resize(maps.size());
         std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0, reused_count = 0;
         // Thread time per stage: laps between the stages of the fused loop, taken on every
         // kTimedRow-th row only, in stage_ticks (split_wall needs only their proportions; a
@@ -1055,7 +1084,9 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         auto start_row = [&](std::size_t row) {
             if (row == current_row) return;
             current_row = row;
-            directions.row = eye.forward + eye.screen_y(row + 0.5) * eye.up;
+            // The row's plane maps: its directions D = row_direction + screen x along right.
+            const Vec3d row_direction = eye.forward + eye.screen_y(row + 0.5) * eye.up;
+            for (std::size_t pl = 0; pl < maps.size(); ++pl) planes[pl] = maps[pl].row(row_direction, eye.right);
             pending_count = 0, packet_count = 0;
         };
 #if defined(__AVX512F__)
@@ -1195,36 +1226,34 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                                claim->claim_rows(rows_aligned, row, rb, re));
                 lap(t_reuse);
             }
-            // Room surfaces shaded here; the painting lanes' ray directions gathered and mapped
-            // to uv and level in runs of one painting, in SIMD lanes (PlaneMap::map_lanes).
-            alignas(64) double Dx[16], Dy[16], Dz[16], pu[16], pv[16];
+            // Room surfaces shaded here; the painting lanes mapped to uv and level from their
+            // columns' screen x in runs of one painting, in SIMD lanes (PlaneMap::map_columns).
+            alignas(64) double psx[16], pu[16], pv[16];
             alignas(64) float plod[16];
             alignas(64) std::uint32_t pj[16];
             alignas(64) int ppl[16];
             std::uint32_t np = 0;
-            const RowDirections rays = directions;  // a local copy: stores cannot alias it
             const bool dense_painting = dense && lane_pl[0] >= 0;
             if (dense_painting) {
-                for (std::uint32_t k = 0; k < 16; ++k) {
-                    rays.at(i0 + k, Dx[k], Dy[k], Dz[k]);
-                    pj[k] = k, ppl[k] = lane_pl[0];
-                }
+                for (std::uint32_t k = 0; k < 16; ++k) pj[k] = k, ppl[k] = lane_pl[0];
+                maps[std::size_t(lane_pl[0])].map_columns<true>(planes[std::size_t(lane_pl[0])], 16,
+                                                                column_sx.data() + i0, pu, pv, plod);
                 np = 16;
             }
             for (std::uint32_t j = 0; j < m && !dense_painting; ++j) {
                 const std::uint32_t k = lane[j];
                 const int pl = lane_pl[j];
                 if (pl < 0) continue;
-                rays.at(i0 + k, Dx[np], Dy[np], Dz[np]);
+                psx[np] = column_sx[i0 + k];
                 pj[np] = j, ppl[np] = pl;
                 ++np;
             }
-            for (std::uint32_t r0 = 0; r0 < np;) {
+            for (std::uint32_t r0 = 0; r0 < np && !dense_painting;) {
                 const int pl = ppl[r0];
                 std::uint32_t r1 = r0 + 1;
                 while (r1 < np && ppl[r1] == pl) ++r1;
-                maps[std::size_t(pl)].map_lanes(r1 - r0, Dx + r0, Dy + r0, Dz + r0, pu + r0,
-                                                pv + r0, plod + r0);
+                maps[std::size_t(pl)].map_columns<true>(planes[std::size_t(pl)], r1 - r0, psx + r0,
+                                                        pu + r0, pv + r0, plod + r0);
                 r0 = r1;
             }
             if (m && lanes16) {
@@ -1342,7 +1371,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             start_row(row);
             // The right eye's claimed pixels: the left hit and its light, the level of this eye
             // at the pixel (along its centre ray, as a traced pixel's), the painting pixels'
-            // level in SIMD lanes per run of one painting (PlaneMap::lod_lanes, as the left
+            // level in SIMD lanes per run of one painting (PlaneMap::map_columns, as the left
             // eye's packets). The buffers in restrict locals: through the captured references every
             // store forced their reload.
             if (left) {
@@ -1378,10 +1407,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     const int pl = geom < placements ? placement[geom] : -1;
                     alignas(64) float lod16[16];
                     if (pl >= 0) {
-                        alignas(64) double Dx[16], Dy[16], Dz[16];
-                        const RowDirections rays = directions;
-                        for (std::uint32_t k = 0; k < 16; ++k) rays.at(x0 + k, Dx[k], Dy[k], Dz[k]);
-                        maps[std::size_t(pl)].lod_lanes(16, Dx, Dy, Dz, lod16);
+                        maps[std::size_t(pl)].map_columns<false>(planes[std::size_t(pl)], 16, column_sx.data() + x0,
+                                                                 nullptr, nullptr, lod16);
                         for (std::uint32_t k = 0; k < 16; ++k) {
                             lod16[k] = sampled_lod(lod16[k], bias);
                             same &= -int(std::abs(llod[si + k] - lod16[k]) <= tolerance);
@@ -1422,19 +1449,15 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 // The level along this eye's ray through the pixel's centre, as the packets
                 // compute a traced pixel's (D = row direction + screen x along right, D . forward
                 // = 1): no point gathered and no division per pixel.
-                double* __restrict dx = rDx.data();
-                double* __restrict dy = rDy.data();
-                double* __restrict dz = rDz.data();
-                {
-                    const RowDirections rays = directions;
-                    for (std::size_t k = 0; k < nr; ++k) rays.at(rxs[k], dx[k], dy[k], dz[k]);
-                }
+                double* __restrict sxs = rsx.data();
+                for (std::size_t k = 0; k < nr; ++k) sxs[k] = column_sx[rxs[k]];
                 float* __restrict lods_r = rlod.data();
                 for (std::size_t r0 = 0; r0 < nr;) {
                     const int pl = rpls[r0];
                     std::size_t r1 = r0 + 1;
                     while (r1 < nr && rpls[r1] == pl) ++r1;
-                    maps[std::size_t(pl)].lod_lanes(r1 - r0, dx + r0, dy + r0, dz + r0, lods_r + r0);
+                    maps[std::size_t(pl)].map_columns<false>(planes[std::size_t(pl)], r1 - r0, sxs + r0, nullptr,
+                                                             nullptr, lods_r + r0);
                     r0 = r1;
                 }
                 // A reused point whose level here is the left eye's to within the tolerance keeps
