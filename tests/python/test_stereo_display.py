@@ -359,22 +359,23 @@ def test_gallery_display_refuses_read_only_and_shared_output_arrays(lit_gallery,
         src.display_stereo(d, vt, left, right, True, out_left=both, out_right=both)
 
 
-@pytest.mark.parametrize("yaw", [0.0, 0.9])
-def test_left_eye_levels_equal_the_feedback_pass(setup, yaw):
-    """The display's levels (per packet in SIMD lanes, log2 without libm) against the
-    feedback pass's (texel_footprint and std::log2, one pixel at a time), head-on and at a
-    grazing angle where the level changes fast across a packet."""
+@pytest.mark.parametrize("yaw,distance", [(0.0, 0.25), (0.9, 0.25), (1.5, 0.05)])
+def test_left_eye_levels_equal_the_feedback_pass(setup, yaw, distance):
+    """The display's levels (per packet in SIMD lanes, the footprint in float, log2 without
+    libm) against the feedback pass's (texel_footprint in double and std::log2, one pixel at a
+    time), head-on, obliquely where the level changes fast across a packet, and 5 cm from the
+    painting looking nearly along it (86 degrees off its normal), to 1e-5."""
     ex, vt = setup
     hs = v.HEADSET
-    cam = v.Camera((0.3 - 0.3 * yaw, 1.5, -0.25), (np.sin(yaw), 0.0, np.cos(yaw)), (0.0, 1.0, 0.0),
+    cam = v.Camera((0.3 - 0.3 * yaw, 1.5, -distance), (np.sin(yaw), 0.0, np.cos(yaw)), (0.0, 1.0, 0.0),
                    hs.tan_half_x, hs.tan_half_x, 97, 90)
     d = _core.DisplayPass()
     d.render(ex.scene, _core.UnlitLighting(), vt, cam)
     fb = v.render_view(ex.scene, cam, 97, 90)
     ours = np.asarray(d.lods(0)).reshape(90, 97)
     sees = fb["keys"] != v.NO_REQUEST
-    assert sees.sum() > 1000
-    assert np.allclose(ours[sees], fb["lod"][sees], atol=1e-4)
+    assert sees.sum() > 200
+    assert np.allclose(ours[sees], fb["lod"][sees], rtol=0, atol=1e-5)
 
 
 def test_gallery_one_eye_display_keeps_no_hit_points(lit_gallery, small_scroll_pack):
