@@ -168,20 +168,10 @@ struct PlaneMap {
     __attribute__((always_inline)) void map_columns(const Row& r, std::size_t count,
                                                     const double* __restrict sx, double* __restrict u,
                                                     double* __restrict v, float* __restrict lod) const {
-        std::uint32_t odd = 0;
-        for (std::size_t k = 0; k < count; ++k) {
+        map<kUv>(count, u, v, lod, [&](std::size_t k, double& dn, double& du, double& dv) {
             const double s = sx[k];
-            const double dn = r.rn + s * r.qn, du = r.ru + s * r.qu, dv = r.rv + s * r.qv;
-            std::uint32_t normal;
-            lod[k] = at<kUv>(dn, du, dv, u + k, v + k, normal);
-            odd |= normal ^ 1u;
-        }
-        if (odd) [[unlikely]]
-            for (std::size_t k = 0; k < count; ++k) {
-                const double s = sx[k];
-                const double dn = r.rn + s * r.qn, du = r.ru + s * r.qu, dv = r.rv + s * r.qv;
-                patch(dn, du, dv, lod[k]);
-            }
+            dn = r.rn + s * r.qn, du = r.ru + s * r.qu, dv = r.rv + s * r.qv;
+        });
     }
 
     // The same for rays of any directions D (three arrays).
@@ -189,20 +179,29 @@ struct PlaneMap {
                                                   const double* __restrict Dy,
                                                   const double* __restrict Dz, double* __restrict u,
                                                   double* __restrict v, float* __restrict lod) const {
+        map<true>(count, u, v, lod, [&](std::size_t k, double& dn, double& du, double& dv) {
+            dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
+            du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
+            dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+        });
+    }
+
+    // The loop of both: dots(k, dn, du, dv) gives pixel k's D . n, D . u and D . v.
+    template <bool kUv, typename Dots>
+    __attribute__((always_inline)) void map(std::size_t count, double* __restrict u, double* __restrict v,
+                                            float* __restrict lod, Dots&& dots) const {
         std::uint32_t odd = 0;
         for (std::size_t k = 0; k < count; ++k) {
-            const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
-            const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
-            const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+            double dn, du, dv;
+            dots(k, dn, du, dv);
             std::uint32_t normal;
-            lod[k] = at<true>(dn, du, dv, u + k, v + k, normal);
+            lod[k] = at<kUv>(dn, du, dv, u + k, v + k, normal);
             odd |= normal ^ 1u;
         }
         if (odd) [[unlikely]]
             for (std::size_t k = 0; k < count; ++k) {
-                const double dn = Dx[k] * n.x + Dy[k] * n.y + Dz[k] * n.z;
-                const double du = Dx[k] * u_axis.x + Dy[k] * u_axis.y + Dz[k] * u_axis.z;
-                const double dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
+                double dn, du, dv;
+                dots(k, dn, du, dv);
                 patch(dn, du, dv, lod[k]);
             }
     }
@@ -880,6 +879,7 @@ struct RowScratch {
     std::uint64_t samplers_frame = 0, samplers_call = 0;  // their frame, and render_eye call
     std::vector<PendingPixel> pending;
     std::vector<PlaneMap::Row> planes;
+    std::vector<std::size_t> plane_of;
     std::vector<double> us, vs;
     std::vector<float> lods, texels;
     std::vector<std::uint32_t> rx;
@@ -1065,8 +1065,21 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         std::vector<double>& rsx = sc.rsx;
         std::vector<float>& rlod = sc.rlod;
         std::size_t current_row = ~std::size_t(0);
-        std::vector<PlaneMap::Row>& planes = sc.planes;  // the row's, per placement
+        // Per placement, its plane map's Row for the row plane_of[pl] (made when the row first
+        // needs it: a room of 40 paintings shows a few in most rows).
+        std::vector<PlaneMap::Row>& planes = sc.planes;
+        std::vector<std::size_t>& plane_of = sc.plane_of;
         planes.resize(maps.size());
+        plane_of.assign(maps.size(), ~std::size_t(0));
+        Vec3d row_direction;  // D . forward = 1 at the row's centre, screen x 0
+        auto plane = [&](int pl) -> const PlaneMap::Row& {
+            const std::size_t p = std::size_t(pl);
+            if (plane_of[p] != current_row) {
+                planes[p] = maps[p].row(row_direction, eye.right);
+                plane_of[p] = current_row;
+            }
+            return planes[p];
+        };
         std::uint64_t traced_count = 0, hit_count = 0, painting_count = 0, reused_count = 0;
         // Thread time per stage: laps between the stages of the fused loop, taken on every
         // kTimedRow-th row only, in stage_ticks (split_wall needs only their proportions; a
@@ -1084,9 +1097,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         auto start_row = [&](std::size_t row) {
             if (row == current_row) return;
             current_row = row;
-            // The row's plane maps: its directions D = row_direction + screen x along right.
-            const Vec3d row_direction = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            for (std::size_t pl = 0; pl < maps.size(); ++pl) planes[pl] = maps[pl].row(row_direction, eye.right);
+            // The row's directions D = row_direction + screen x along right.
+            row_direction = eye.forward + eye.screen_y(row + 0.5) * eye.up;
             pending_count = 0, packet_count = 0;
         };
 #if defined(__AVX512F__)
@@ -1236,7 +1248,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             const bool dense_painting = dense && lane_pl[0] >= 0;
             if (dense_painting) {
                 for (std::uint32_t k = 0; k < 16; ++k) pj[k] = k, ppl[k] = lane_pl[0];
-                maps[std::size_t(lane_pl[0])].map_columns<true>(planes[std::size_t(lane_pl[0])], 16,
+                maps[std::size_t(lane_pl[0])].map_columns<true>(plane(lane_pl[0]), 16,
                                                                 column_sx.data() + i0, pu, pv, plod);
                 np = 16;
             }
@@ -1252,7 +1264,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 const int pl = ppl[r0];
                 std::uint32_t r1 = r0 + 1;
                 while (r1 < np && ppl[r1] == pl) ++r1;
-                maps[std::size_t(pl)].map_columns<true>(planes[std::size_t(pl)], r1 - r0, psx + r0,
+                maps[std::size_t(pl)].map_columns<true>(plane(pl), r1 - r0, psx + r0,
                                                         pu + r0, pv + r0, plod + r0);
                 r0 = r1;
             }
@@ -1407,7 +1419,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     const int pl = geom < placements ? placement[geom] : -1;
                     alignas(64) float lod16[16];
                     if (pl >= 0) {
-                        maps[std::size_t(pl)].map_columns<false>(planes[std::size_t(pl)], 16, column_sx.data() + x0,
+                        maps[std::size_t(pl)].map_columns<false>(plane(pl), 16, column_sx.data() + x0,
                                                                  nullptr, nullptr, lod16);
                         for (std::uint32_t k = 0; k < 16; ++k) {
                             lod16[k] = sampled_lod(lod16[k], bias);
@@ -1456,7 +1468,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     const int pl = rpls[r0];
                     std::size_t r1 = r0 + 1;
                     while (r1 < nr && rpls[r1] == pl) ++r1;
-                    maps[std::size_t(pl)].map_columns<false>(planes[std::size_t(pl)], r1 - r0, sxs + r0, nullptr,
+                    maps[std::size_t(pl)].map_columns<false>(plane(pl), r1 - r0, sxs + r0, nullptr,
                                                              nullptr, lods_r + r0);
                     r0 = r1;
                 }
