@@ -9,6 +9,7 @@ when complete, so a failed or interrupted run never leaves a directory that look
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
 from pathlib import Path
@@ -137,10 +138,17 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
         return results
     except BaseException:
         if writer is not None:
+            # The video is deleted with tmp: the writer's "no frames written" warning on close
+            # would be a second, misleading message beside the error.
+            logger = logging.getLogger("imageio_ffmpeg")
+            level = logger.level
+            logger.setLevel(logging.ERROR)
             try:
                 writer.close()
             except Exception:  # noqa: BLE001 (the original error is the one to report)
                 pass
+            finally:
+                logger.setLevel(level)
         shutil.rmtree(tmp, ignore_errors=True)
         raise
 

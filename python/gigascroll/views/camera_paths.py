@@ -17,10 +17,31 @@ from .exhibition import (FPS, HEADSET, MAGNIFIER, SCROLL, TABLE4_PAINTINGS, Exhi
 __all__ = ["CameraPath", "scroll_path", "multi_route", "frame_cameras"]
 
 
+# The core's bound on coordinates (cpp/common/limits.h: kMaxCoordinate), checked here so that a
+# path is refused when it is made, not at the frame that reaches the bad pose.
+MAX_COORDINATE = 1e12
+# A frame rate beyond any display's (and beyond what an MP4's time base can hold).
+MAX_FPS = 1000.0
+
+
 def _finite(name: str, a: np.ndarray) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise ValueError(f"camera path {name} contains NaN or infinite values")
     return a
+
+
+def _unit_rows(a: np.ndarray) -> np.ndarray:
+    """Rows of `a` scaled to unit length without overflow or underflow (each row divided by
+    its largest component first); rows of zeros or subnormals (no direction the core can
+    normalise) become zero."""
+    scale = np.max(np.abs(a), axis=1, keepdims=True)
+    b = np.divide(a, scale, out=np.zeros_like(a), where=scale >= np.finfo(np.float64).tiny)
+    norm = np.linalg.norm(b, axis=1, keepdims=True)
+    return np.divide(b, norm, out=np.zeros_like(b), where=norm > 0)
+
+
+def _first_bad(mask: np.ndarray) -> int:
+    return int(np.flatnonzero(mask)[0])
 
 
 @dataclass
@@ -45,10 +66,18 @@ class CameraPath:
         n = len(self.position)
         if len(self.forward) != n or len(self.up) != n:
             raise ValueError("camera path arrays differ in length")
-        if np.any(np.linalg.norm(self.forward, axis=1) == 0):
+        far = np.max(np.abs(self.position), axis=1) > MAX_COORDINATE
+        if np.any(far):
+            raise ValueError(f"camera path position of frame {_first_bad(far)} is beyond "
+                             f"+-{MAX_COORDINATE:g}")
+        f, u = _unit_rows(self.forward), _unit_rows(self.up)
+        if np.any(~f.any(axis=1)):
             raise ValueError("camera path has a zero forward vector")
-        if np.any(np.linalg.norm(self.up, axis=1) == 0):
+        if np.any(~u.any(axis=1)):
             raise ValueError("camera path has a zero up vector")
+        parallel = np.linalg.norm(np.cross(f, u), axis=1) < 1e-6
+        if np.any(parallel):
+            raise ValueError(f"camera path forward and up are parallel at frame {_first_bad(parallel)}")
         if (self.magnifier_target is None) != (self.magnifier_normal is None):
             raise ValueError("camera path has magnifier_target without magnifier_normal (or the "
                              "reverse): give both or neither")
@@ -61,8 +90,20 @@ class CameraPath:
                 if np.any(np.isinf(a)):
                     raise ValueError(f"camera path {attr} contains infinite values")
                 setattr(self, attr, a)
-        if not (math.isfinite(self.fps) and self.fps > 0):
-            raise ValueError("camera path fps must be positive")
+        if self.magnifier_target is not None:
+            # A frame has a magnifier when its target is finite; its normal must then be too.
+            on = np.all(np.isfinite(self.magnifier_target), axis=1)
+            far = on & (np.max(np.abs(np.nan_to_num(self.magnifier_target)), axis=1) > MAX_COORDINATE)
+            if np.any(far):
+                raise ValueError(f"camera path magnifier_target of frame {_first_bad(far)} is beyond "
+                                 f"+-{MAX_COORDINATE:g}")
+            normal = np.nan_to_num(self.magnifier_normal, nan=0.0)
+            bad = on & ~(np.all(np.isfinite(self.magnifier_normal), axis=1) & _unit_rows(normal).any(axis=1))
+            if np.any(bad):
+                raise ValueError(f"camera path magnifier_normal of frame {_first_bad(bad)} must be "
+                                 "finite and non-zero where magnifier_target is given")
+        if not (math.isfinite(self.fps) and 0 < self.fps <= MAX_FPS):
+            raise ValueError(f"camera path fps must be positive and at most {MAX_FPS:g}")
 
     def __len__(self) -> int:
         return len(self.position)
@@ -202,8 +243,13 @@ def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
     if not 0 <= frame < len(path):
         raise ValueError(f"frame {frame} outside the camera path's {len(path)} frames")
     p, f, u = path.position[frame], path.forward[frame], path.up[frame]
-    right = np.cross(f, u)
-    right /= np.linalg.norm(right)
+    with np.errstate(all="ignore"):
+        right = np.cross(f, u)
+        length = np.linalg.norm(right)
+    if not (np.isfinite(length) and length > 0):  # vectors so long or short that it overflowed
+        right = np.cross(_unit_rows(f[None])[0], _unit_rows(u[None])[0])
+        length = np.linalg.norm(right)
+    right = right / length
     fw, fh = headset.width // headset.feedback_scale, headset.height // headset.feedback_scale
     views = []
     for side in (-1, 1):
@@ -213,7 +259,9 @@ def frame_cameras(path: CameraPath, frame: int, headset: Headset = HEADSET,
     if magnifier is not None and path.magnifier_target is not None \
             and np.all(np.isfinite(path.magnifier_target[frame])):
         target, normal = path.magnifier_target[frame], path.magnifier_normal[frame]
-        normal = normal / np.linalg.norm(normal)
+        with np.errstate(all="ignore"):
+            length = np.linalg.norm(normal)
+        normal = normal / length if np.isfinite(length) and length > 0 else _unit_rows(normal[None])[0]
         cam_pos = target + magnifier.lens_distance * normal
         up_hint = u if abs(np.dot(u, normal)) < 0.99 else right
         tan_half = magnifier.field / 2 / magnifier.lens_distance
