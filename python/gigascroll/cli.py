@@ -43,8 +43,16 @@ def _check_int_options(parser: argparse.ArgumentParser) -> None:
             action.type = _checked_int(action.dest)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its usage errors as one line (the usage itself is one --help away), as
+    every other error of the command; subcommands' parsers are of the same class."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="gigascroll",
         description="Gigapixel paintings in VR: virtual texturing and photon mapping.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

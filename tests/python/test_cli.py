@@ -24,6 +24,21 @@ def test_unknown_command_fails_cleanly(gigascroll_cli):
     assert "invalid choice" in r.stderr
 
 
+@pytest.mark.parametrize("args,match", [
+    ((), "required: COMMAND"),
+    (("gallery", "--threads", "-1"), "out of range"),
+    (("gallery", "--lighting", "sunny"), "invalid choice"),
+    (("pack", "--no-such-option"), "required"),
+    (("render", "-o", "x.png", "--photons", "many"), "invalid int value"),
+])
+def test_usage_errors_are_one_line(args, match, gigascroll_cli):
+    """A usage error is one line on stderr naming the problem and --help, exit code 2."""
+    r = gigascroll_cli(*args)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and match in lines[0] and "--help" in lines[0], r.stderr
+
+
 def test_cli_synth_pack_info(tmp_path, capsys, gigascroll_cli):
     tif = tmp_path / "s.tif"
     r = gigascroll_cli("synth", "--width", 900, "--height", 130, "-o", tif)
