@@ -272,6 +272,14 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
         raise OSError(f"{out.parent}: not writable")
     tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
+    try:  # the output's place is writable (os.access passes for root on a read-only mount)
+        if fmt == "tiff":
+            tmp.touch(exist_ok=False)
+            tmp.unlink()
+        else:
+            tmp.mkdir()
+    except OSError as e:
+        raise OSError(f"cannot write {out}: {e.strerror or e}") from None
     pp = pack.paintings[p]
     bar = _Progress(progress, sum(nx * ny for nx, ny in pp.level_tiles), f"export {fmt}")
     workers = threads or os.cpu_count() or 1
@@ -280,7 +288,6 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
             if fmt == "tiff":
                 _export_tiff(pack, p, tmp, quality, compression, pool, bar)
             else:
-                tmp.mkdir()
                 if fmt == "iiif":
                     _export_iiif(pack, p, tmp, quality, pool, bar, service_id or pp.name)
                 else:

@@ -153,6 +153,9 @@ def test_export_errors_and_atomic_output(pack, tmp_path, gigascroll_cli):
         export_pack(pack.path, tmp_path / "x", "iiif", quality=0)
     with pytest.raises(OSError, match="no such directory"):
         export_pack(pack.path, tmp_path / "missing" / "x", "tiff")
+    for fmt in ("iiif", "dzi", "tiff"):  # a directory nobody can create files in (even root)
+        with pytest.raises(OSError, match="cannot write /proc/x"):
+            export_pack(pack.path, "/proc/x", fmt)
     export_pack(pack.path, tmp_path / "small", "iiif", painting="small")
     with pytest.raises(OSError, match="already exists"):
         export_pack(pack.path, tmp_path / "small", "iiif", painting="small")
