@@ -102,6 +102,26 @@ def test_render_command_progressive_is_the_api_render(tmp_path, gigascroll_cli):
     assert not np.array_equal(sphere, want)  # the default (disc) was the one the CLI used
 
 
+def test_render_command_camera_on_a_builtin_scene(tmp_path, gigascroll_cli):
+    """--camera moves a built-in scene's camera (it applied to --room only, and was ignored):
+    the CLI's image is the API's render through Camera(eye, target, +y, fov), and not the
+    scene's own view."""
+    oiio = pytest.importorskip("OpenImageIO")
+    import gigascroll as g
+    out = tmp_path / "c.exr"
+    r = gigascroll_cli("render", "cornell", "-o", out, "--width", 24, "--height", 20,
+                       "--photons", 4000, "--camera", "0.3,0.2,3.5,0,-0.1,0,35", "--seed", 3)
+    assert r.returncode == 0, r.stderr
+    img = oiio.ImageInput.open(str(out))
+    got = img.read_image("float")
+    img.close()
+    scene, own = g.builtin_scene("cornell", resolution=(24, 20))
+    cam = g.Camera((0.3, 0.2, 3.5), (0, -0.1, 0), (0, 1, 0), 35.0, (24, 20))
+    want = g.render(scene, cam, photons=4000, radius=0.02, spp=4, seed=3)
+    np.testing.assert_array_equal(got, want)
+    assert not np.array_equal(got, g.render(scene, own, photons=4000, radius=0.02, spp=4, seed=3))
+
+
 @pytest.mark.parametrize("args,match", [
     (["render", "cornell", "-o", "x.exr", "--progressive", "--passes", "0"], "passes"),
     (["render", "cornell", "-o", "x.exr", "--progressive", "--spp", "4"], "spp"),
@@ -111,6 +131,9 @@ def test_render_command_progressive_is_the_api_render(tmp_path, gigascroll_cli):
     (["render", "cornell", "-o", "x.bmpx"], "format"),
     (["render", "cornell", "-o", "/nonexistent-dir/x.exr", "--width", "8", "--height", "8",
       "--photons", "100"], "directory"),
+    (["render", "cornell", "-o", "x.exr", "--camera", "nan,0,0,0,0,1"], "finite numbers"),
+    (["render", "cornell", "-o", "x.exr", "--camera", "0,1,0,0,1,0"], "must differ"),
+    (["render", "cornell", "-o", "x.exr", "--camera", "0,5,0,0,0,0", "--photons", "100"], "parallel"),
 ])
 def test_render_command_bad_input(args, match, tmp_path, gigascroll_cli):
     r = gigascroll_cli(*args, cwd=tmp_path)

@@ -21,8 +21,8 @@ def register(sub) -> None:
     p.add_argument("--room", help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply)")
     p.add_argument("--pack", help="tile pack whose paintings hang in --room")
     p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
-                   help="--room: eye and target in metres and the vertical field of view in degrees "
-                        "(default: the room's suggested view, 60 degrees)")
+                   help="eye and target in metres and the vertical field of view in degrees "
+                        "(default: the scene's camera, or the room's suggested view at 60 degrees)")
     p.add_argument("--lighting", choices=["baked", "full", "unlit"], default="baked",
                    help="--room: irradiance baked once per lighting (default), per pixel (full), or none")
     p.add_argument("-o", "--output", required=True, help="output image (.exr, .hdr: linear; .png, .jpg: sRGB)")
@@ -145,6 +145,14 @@ def run(args) -> int:
     radius = args.radius if args.radius is not None else 0.02 * BUILTIN_SCENES[args.scene]
     spp = args.spp if args.spp is not None else (1 if args.progressive else 4)
     scene, camera = builtin_scene(args.scene, resolution=(args.width, args.height))
+    if args.camera:  # the scene's own camera's field of view unless given; up is +y
+        from .._core import Camera
+        cam = _camera_numbers(args.camera)
+        try:
+            camera = Camera(tuple(cam[:3]), tuple(cam[3:6]), (0.0, 1.0, 0.0),
+                            cam[6] if len(cam) == 7 else camera.fov, (args.width, args.height))
+        except ValueError as e:
+            raise UserError(f"--camera: {e}") from None
     image, st = render(scene, camera, photons=args.photons, radius=radius, grid=args.grid,
                        gather=args.gather, k=args.k, kernel=args.kernel, spp=spp, seed=args.seed,
                        pipeline=args.pipeline, cooperative=args.cooperative,
