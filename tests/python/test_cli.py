@@ -132,6 +132,8 @@ def test_render_command_camera_on_a_builtin_scene(tmp_path, gigascroll_cli):
     (["render", "cornell", "-o", "/nonexistent-dir/x.exr", "--width", "8", "--height", "8",
       "--photons", "100"], "directory"),
     (["render", "cornell", "-o", "x.exr", "--camera", "nan,0,0,0,0,1"], "finite numbers"),
+    (["render", "cornell", "-o", "x.exr", "--lighting", "full"], "--lighting applies to --room"),
+    (["render", "cornell", "-o", "x.exr", "--pack", "p"], "--pack applies to --room"),
     (["render", "cornell", "-o", "x.exr", "--camera", "0,1,0,0,1,0"], "must differ"),
     (["render", "cornell", "-o", "x.exr", "--camera", "0,5,0,0,0,0", "--photons", "100"], "parallel"),
 ])

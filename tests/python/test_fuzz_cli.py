@@ -194,6 +194,9 @@ def test_fuzz_cli_long(fork_worker, files, tmp_path_factory, data):
     ["render", "cornell", "-o", "{out}.png", "--threads", "99999999999", "--photons", "10"],
     ["render", "cornell", "-o", "{out}.png", "--width", "30000", "--height", "30000",
      "--photons", "10"],  # more than the case's 4 GB: one line, not a MemoryError traceback
+    ["render", "cornell", "-o", "{out}.png", "--camera", "1e308,0,0,-1e308,0,0", "--photons", "10"],
+    ["render", "cornell", "-o", "{out}.png", "--camera", "0,5,0,0,0,0,179.99999", "--photons", "10"],
+    ["render", "cornell", "-o", "{out}.png", "--camera", "0,0,3,0,0,0,1e-300", "--photons", "10"],
     ["synth", "-o", "{out}.tif", "--width", "99999999999"],
     ["synth", "-o", "{out}.tif", "--seed", "-5", "--width", "40", "--height", "20"],
     ["scenario", "single", "--quick", "--path", "{path}", "--pack", "{pack}", "--out", "{out}"],

@@ -23,7 +23,7 @@ def register(sub) -> None:
     p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
                    help="eye and target in metres and the vertical field of view in degrees "
                         "(default: the scene's camera, or the room's suggested view at 60 degrees)")
-    p.add_argument("--lighting", choices=["baked", "full", "unlit"], default="baked",
+    p.add_argument("--lighting", choices=["baked", "full", "unlit"], default=None,
                    help="--room: irradiance baked once per lighting (default), per pixel (full), or none")
     p.add_argument("-o", "--output", required=True, help="output image (.exr, .hdr: linear; .png, .jpg: sRGB)")
     p.add_argument("--width", type=int, default=256)
@@ -105,7 +105,7 @@ def run_room(args, out: Path) -> int:
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
     t0 = time.perf_counter()
     try:
-        image = gallery.still(camera, lighting=args.lighting, progress=True, photons=args.photons, seed=args.seed,
+        image = gallery.still(camera, lighting=args.lighting or "baked", progress=True, photons=args.photons, seed=args.seed,
                               threads=args.threads, **({} if args.radius is None else {"radius": args.radius}))
     except ValueError as e:
         raise UserError(str(e)) from None
@@ -114,7 +114,7 @@ def run_room(args, out: Path) -> int:
     st = gallery.stats
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"room {spec.name}: {gallery.triangle_count} triangles, {gallery.painting_count} paintings, "
-          f"{args.width}x{args.height}, lighting {args.lighting}")
+          f"{args.width}x{args.height}, lighting {args.lighting or 'baked'}")
     if gallery.lit:
         print(f"photons   {ms(st['photon_seconds'])}  ({args.photons} emitted, {st['photons_stored']} stored, "
               f"radius {st['radius']:.4g} m)")
@@ -142,6 +142,10 @@ def run(args) -> int:
         return run_room(args, out)
     if args.scene is None:
         raise UserError("give a built-in SCENE or --room ROOM --pack PACK")
+    for given, option in ((args.pack, "--pack"), (args.lighting, "--lighting")):
+        if given is not None:
+            raise UserError(f"{option} applies to --room; the built-in scene {args.scene} is "
+                            "lit by the photon mapper's gather")
     radius = args.radius if args.radius is not None else 0.02 * BUILTIN_SCENES[args.scene]
     spp = args.spp if args.spp is not None else (1 if args.progressive else 4)
     scene, camera = builtin_scene(args.scene, resolution=(args.width, args.height))
