@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, given, settings, strategies as st
+from hypothesis import HealthCheck, assume, example, given, settings, strategies as st
 
 from gigascroll import _core
 from gigascroll import views as v
@@ -71,14 +71,21 @@ def test_compose_frame_any_lens(h, w, m, lens, inset):
 
 @settings(max_examples=200, deadline=None)
 @given(text=st.one_of(st.text(max_size=20),
-                      st.builds(lambda a, b: f"{a}x{b}", st.integers(-5, 40000), st.integers(-5, 40000))))
-def test_eye_option_any_text(text):
+                      st.builds(lambda a, b: f"{a}x{b}", st.integers(-5, 40000), st.integers(-5, 40000)),
+                      # digit strings past Python's int() limit and zero-padded ones
+                      st.builds(lambda a, b: f"{a}x{b}", st.text("0123456789", min_size=1, max_size=6000),
+                                st.text("0123456789", min_size=1, max_size=30))),
+       option=st.sampled_from(["--eye", "--window"]))
+@example(text="0" * 5000 + "64x64", option="--eye").via("Python's int() limit counts zeros")
+@example(text="1" * 5000 + "x64", option="--window")
+def test_eye_option_any_text(text, option):
     try:
-        w, h = parse_eye(text)
+        w, h = parse_eye(text, option)
     except UserError as e:
-        assert "--eye" in str(e)
+        assert str(e).startswith(option) and len(str(e)) < 200
         return
-    assert 16 <= w <= 16384 and 16 <= h <= 16384
+    a, b = (int(x.strip().lstrip("0") or "0") for x in text.lower().split("x"))  # what it says
+    assert (w, h) == (a, b) and 16 <= w <= 16384 and 16 <= h <= 16384
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=FIXTURES)

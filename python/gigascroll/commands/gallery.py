@@ -50,13 +50,17 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def parse_eye(text: str) -> tuple[int, int]:
+def parse_eye(text: str, option: str = "--eye") -> tuple[int, int]:
+    """A WIDTHxHEIGHT option (--eye, view's --window) as (width, height), 16..16384 each."""
     m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
     if not m:
-        raise UserError(f"--eye must be WIDTHxHEIGHT, e.g. 1800x1920, got {text!r}")
-    w, h = int(m.group(1)), int(m.group(2))
+        raise UserError(f"{option} must be WIDTHxHEIGHT, e.g. 1800x1920, got {str(text)[:40]!r}")
+    # Sides of more than 9 digits are out of range whatever they are (and int() of thousands
+    # of digits is refused by Python itself).
+    w, h = (int(g.lstrip("0") or "0") if len(g.lstrip("0")) <= 9 else 10**9 for g in m.groups())
     if not (16 <= w <= 16384 and 16 <= h <= 16384):
-        raise UserError(f"--eye must be between 16x16 and 16384x16384 pixels, got {w}x{h}")
+        raise UserError(f"{option} must be between 16x16 and 16384x16384 pixels, got "
+                        f"{w if w < 10**9 else 'huge'}x{h if h < 10**9 else 'huge'}")
     return w, h
 
 

@@ -44,18 +44,10 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _size(text: str, what: str) -> tuple[int, int]:
-    from .gallery import parse_eye
-    try:
-        return parse_eye(text)
-    except UserError:
-        raise UserError(f"{what} must be WIDTHxHEIGHT with sides 16..16384, got {text!r}") from None
-
-
 def run(args) -> int:
-    from .gallery import parse_foveation
-    win_w, win_h = _size(args.window, "--window")
-    eye = _size(args.eye, "--eye") if args.eye else (win_w // 2, win_h)
+    from .gallery import parse_eye, parse_foveation
+    win_w, win_h = parse_eye(args.window, "--window")
+    eye = parse_eye(args.eye) if args.eye else (win_w // 2, win_h)
     if not (args.target_fps > 0 and math.isfinite(args.target_fps)):
         raise UserError("--target-fps must be positive")
     # Bad options fail before the display is looked for, so they are reported everywhere.
