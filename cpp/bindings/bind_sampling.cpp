@@ -128,15 +128,19 @@ void bind_stereo_display(nb::module_& m) {
             "Both eyes: (left, right) float32 images; reuse=False traces the right eye in full.\n"
             "A reused right pixel keeps the left eye's texel where its level of detail is within\n"
             "reuse_lod_tolerance of the left eye's (0: it always samples its own).")
-        .def_prop_ro("left_stats", [](const DisplayPass& d) { return eye_stats(d.left_stats()); })
-        .def_prop_ro("right_stats", [](const DisplayPass& d) { return eye_stats(d.right_stats()); })
+        // The accessors wait for a render under way in another thread: without the GIL.
+        .def_prop_ro("left_stats", [](const DisplayPass& d) {
+            return eye_stats(without_gil([&] { return d.left_stats(); })); })
+        .def_prop_ro("right_stats", [](const DisplayPass& d) {
+            return eye_stats(without_gil([&] { return d.right_stats(); })); })
         .def("reuse_sources", [](const DisplayPass& d) {
-            std::vector<std::int32_t> s = d.reuse_sources();
-            return to_numpy(std::move(s)); },
+            return to_numpy(without_gil([&] { return d.reuse_sources(); })); },
             "Per right pixel (flat), the left pixel whose hit it reuses (-1: traced).")
-        .def("hit_points", [](const DisplayPass& d, int eye) { return to_numpy(d.hit_points(eye)); },
+        .def("hit_points", [](const DisplayPass& d, int eye) {
+            return to_numpy(without_gil([&] { return d.hit_points(eye); })); },
              "eye"_a, "Flat (x, y, z) per pixel of eye 0 (left) or 1 (right); NaN where no hit.")
-        .def("lods", [](const DisplayPass& d, int eye) { return to_numpy(d.lods(eye)); },
+        .def("lods", [](const DisplayPass& d, int eye) {
+            return to_numpy(without_gil([&] { return d.lods(eye); })); },
              "eye"_a, "Flat level of detail per pixel (NaN off paintings).");
 
     m.def("cast_primary_rays", [](const ExhibitionScene& scene, const Camera& eye, unsigned threads) {

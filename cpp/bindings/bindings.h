@@ -4,6 +4,14 @@
 #include <nanobind/nanobind.h>
 
 namespace gigascroll::bindings {
+// f() run without the GIL (a call that may wait on the core, e.g. for another thread's
+// frame), its result returned once the GIL is held again.
+template <typename F>
+auto without_gil(F&& f) {
+    nanobind::gil_scoped_release release;
+    return f();
+}
+
 void bind_common(nanobind::module_& m);    // errors, threads
 void bind_pack(nanobind::module_& m);      // tile pack reader and builder, geometry, tile keys
 void bind_views(nanobind::module_& m);     // cameras, exhibition scene, feedback, request processing

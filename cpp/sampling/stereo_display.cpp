@@ -9,6 +9,7 @@
 #include <cstring>
 #include <initializer_list>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <string>
 #if defined(__AVX__)
@@ -1635,6 +1636,7 @@ void split_wall(double wall, std::initializer_list<EyeStats*> eyes) {
 void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& lighting,
                          const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
                          float* rgb) {
+    const std::scoped_lock lock(mutex_);
     require(scene.handle != nullptr, "display: the scene has no BVH");
     require(rgb != nullptr, "display: no output image");
     check_camera(eye);
@@ -1653,6 +1655,7 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
                                 const VirtualTexture& vt, const Camera& left, const Camera& right,
                                 bool use_reuse, const DisplayOptions& o, float* left_rgb,
                                 float* right_rgb) {
+    const std::scoped_lock lock(mutex_);
     require(scene.handle != nullptr, "display: the scene has no BVH");
     require(left_rgb != nullptr && right_rgb != nullptr, "display: no output image");
     check_camera(left);
@@ -1733,7 +1736,23 @@ void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLig
     sl.reuse_seconds = 0;
 }
 
+EyeStats DisplayPass::left_stats() const {
+    const std::scoped_lock lock(mutex_);
+    return stats_[0];
+}
+
+EyeStats DisplayPass::right_stats() const {
+    const std::scoped_lock lock(mutex_);
+    return stats_[1];
+}
+
+std::vector<std::int32_t> DisplayPass::reuse_sources() const {
+    const std::scoped_lock lock(mutex_);
+    return sources_;
+}
+
 std::vector<float> DisplayPass::hit_points(int eye) const {
+    const std::scoped_lock lock(mutex_);
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
     require(hits_kept_, "display: the last render kept no hit points (keep_hit_points=False)");
     const GBuffer& g = g_[eye];
@@ -1749,6 +1768,7 @@ std::vector<float> DisplayPass::hit_points(int eye) const {
 }
 
 std::vector<float> DisplayPass::lods(int eye) const {
+    const std::scoped_lock lock(mutex_);
     require(eye == 0 || eye == 1, "eye must be 0 (left) or 1 (right)");
     return g_[eye].lod;
 }

@@ -29,14 +29,16 @@
 // run in one wavefront of 16-row chunks: a right chunk starts once the left chunks beside it
 // have made their claims, while those claims and left rows are still in cache.
 //
-// The pass keeps its buffers between frames (one DisplayPass per stream of frames); render()
-// is not reentrant.
+// The pass keeps its buffers between frames (one DisplayPass per stream of frames). Calls on
+// one pass from several threads run one at a time (a render waits for the one under way),
+// and its accessors wait for a render under way: its buffers are the frame's.
 #pragma once
 #include <embree3/rtcore.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <vector>
 
 #include "cache/virtual_texture.h"
@@ -196,12 +198,13 @@ public:
                        const VirtualTexture& vt, const Camera& left, const Camera& right,
                        bool reuse, const DisplayOptions& options, float* left_rgb, float* right_rgb);
 
-    const EyeStats& left_stats() const { return stats_[0]; }
-    const EyeStats& right_stats() const { return stats_[1]; }
+    // Copies of the last frame's (taken under the pass's lock).
+    EyeStats left_stats() const;
+    EyeStats right_stats() const;
     // After render_stereo with reuse: per right pixel, the left pixel whose hit it reuses
     // (-1: traced), and the hit points of either eye (x, y, z per pixel; NaN where no hit;
     // InvalidArgument after a render() with keep_hit_points false).
-    const std::vector<std::int32_t>& reuse_sources() const { return sources_; }
+    std::vector<std::int32_t> reuse_sources() const;
     std::vector<float> hit_points(int eye) const;
     // Per pixel of either eye: the level of detail sampled (NaN off paintings).
     std::vector<float> lods(int eye) const;
@@ -240,6 +243,8 @@ private:
                       GBuffer& g, const Camera* claim_into, const float* left_rgb, float* rgb,
                       EyeStats& st, const RunRows* run = nullptr);
 
+    // Held by render, render_stereo and the accessors: one frame at a time per pass.
+    mutable std::mutex mutex_;
     GBuffer g_[2];
     EyeStats stats_[2];
     std::vector<std::uint64_t> claims_;

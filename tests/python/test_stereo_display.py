@@ -423,3 +423,33 @@ def test_a_painting_missing_from_the_texture_stops_the_pair_cleanly(setup, threa
         assert np.array_equal(a, b)
     assert np.array_equal(d.reuse_sources(), fresh.reuse_sources())
     assert d.right_stats["reused"] == fresh.right_stats["reused"] > 0
+
+
+def test_one_pass_shared_by_threads_gives_the_serial_frames(lit_gallery, small_scroll_pack):
+    """Several threads on one DisplayPass (frames of different sizes, one eye and stereo, and
+    its accessors between them): each call gets the frame a pass of its own gives, never a
+    torn frame or an abort (they used to resize each other's buffers mid-frame)."""
+    from concurrent.futures import ThreadPoolExecutor
+    src, _ = lit_gallery
+    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    pairs = [eyes(path_x=3.0, distance=0.5, w=64, h=72), eyes(path_x=2.0, distance=0.8, w=40, h=48)]
+    want = []  # per job, from a pass of its own
+    jobs = [(i % 2, i % 3 == 0) for i in range(12)]
+    for pair, stereo in jobs:
+        left, right = pairs[pair]
+        d = _core.DisplayPass()
+        want.append(src.display_stereo(d, vt, left, right, True) if stereo else (src.display(d, vt, left),))
+    shared = _core.DisplayPass()
+
+    def run(job):
+        pair, stereo = job
+        left, right = pairs[pair]
+        got = src.display_stereo(shared, vt, left, right, True) if stereo else (src.display(shared, vt, left),)
+        shared.lods(0), shared.left_stats, shared.reuse_sources()
+        return got
+
+    for _ in range(3):
+        with ThreadPoolExecutor(4) as pool:
+            for got, expected in zip(pool.map(run, jobs), want):
+                for g, e in zip(got, expected):
+                    np.testing.assert_array_equal(g, e)

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <thread>
 #include <vector>
 
 #include "cache/virtual_texture.h"
@@ -50,14 +51,15 @@ TEST(StereoDisplay, ReusedPixelsShowWhatTheRightEyeTraces) {
     DisplayPass reuse, full;
     reuse.render_stereo(room.scene.view(), lighting, room.vt, left, right, true, o, l.data(), r.data());
     full.render_stereo(room.scene.view(), lighting, room.vt, left, right, false, o, l0.data(), r0.data());
-    const EyeStats& st = reuse.right_stats();
+    const EyeStats st = reuse.right_stats();
+    const std::vector<std::int32_t> sources = reuse.reuse_sources();
     EXPECT_EQ(st.traced + st.reused, st.pixels);
     EXPECT_GT(st.reused, st.pixels / 2);
     EXPECT_EQ(full.right_stats().traced, st.pixels);
     EXPECT_EQ(l, l0);  // the left eye does not depend on reuse
     std::size_t reused = 0, differ = 0;
     for (std::size_t i = 0; i < std::size_t(w) * h; ++i) {
-        if (reuse.reuse_sources()[i] < 0) continue;
+        if (sources[i] < 0) continue;
         ++reused;
         bool same = true;
         for (int c = 0; c < 3; ++c) same &= std::abs(r[3 * i + c] - r0[3 * i + c]) < 1e-6f;
@@ -70,7 +72,7 @@ TEST(StereoDisplay, ReusedPixelsShowWhatTheRightEyeTraces) {
     // The post occludes part of the painting for the right eye but not for the left: no reused
     // pixel may show the painting where the traced right eye sees the post (dark grey).
     for (std::size_t i = 0; i < std::size_t(w) * h; ++i) {
-        if (reuse.reuse_sources()[i] < 0) continue;
+        if (sources[i] < 0) continue;
         const bool traced_post = std::abs(r0[3 * i] - 0.5f) < 1e-6f && std::abs(r0[3 * i + 2] - 0.5f) < 1e-6f;
         const bool reused_painting = r[3 * i] > 0.5f && r[3 * i + 2] < 0.1f;
         const std::size_t x = i % w;
@@ -121,4 +123,45 @@ TEST(StereoDisplay, BareRaysSeeWhatTheDisplaySees) {
     d.render(room.scene.view(), UnlitLighting{}, room.vt, c, DisplayOptions{}, rgb.data());
     EXPECT_EQ(d.left_stats().hits, hits);
     EXPECT_GT(d.left_stats().painting_pixels, 0u);
+}
+
+// One pass shared by threads (render, render_stereo and the accessors at two sizes): each
+// call's frame equals a pass of its own (they used to resize each other's buffers; TSan
+// checks the lock under `make sanitize`).
+TEST(StereoDisplay, OnePassSharedByThreadsGivesTheSerialFrames) {
+    Wall room;
+    const std::uint32_t sizes[2][2] = {{96, 64}, {40, 32}};
+    DisplayOptions o;
+    o.threads = 1;
+    std::vector<float> want[2][2];  // [size][eye] from a pass of its own
+    for (int s = 0; s < 2; ++s) {
+        const std::uint32_t w = sizes[s][0], h = sizes[s][1];
+        want[s][0].resize(3 * w * h), want[s][1].resize(3 * w * h);
+        DisplayPass own;
+        own.render_stereo(room.scene.view(), UnlitLighting{}, room.vt, eye(0.37, w, h), eye(0.43, w, h), true, o,
+                          want[s][0].data(), want[s][1].data());
+    }
+    DisplayPass shared;
+    std::vector<int> wrong(4, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back([&, t] {
+            const int s = t % 2;
+            const std::uint32_t w = sizes[s][0], h = sizes[s][1];
+            std::vector<float> l(3 * w * h), r(3 * w * h);
+            for (int k = 0; k < 6; ++k) {
+                if ((k + t) % 2) {
+                    shared.render_stereo(room.scene.view(), UnlitLighting{}, room.vt, eye(0.37, w, h),
+                                         eye(0.43, w, h), true, o, l.data(), r.data());
+                    wrong[std::size_t(t)] += l != want[s][0] || r != want[s][1];
+                } else {
+                    shared.render(room.scene.view(), UnlitLighting{}, room.vt, eye(0.37, w, h), o, l.data());
+                    wrong[std::size_t(t)] += l != want[s][0];
+                }
+                wrong[std::size_t(t)] += shared.lods(0).empty() || shared.left_stats().pixels == 0;
+                (void)shared.reuse_sources();
+            }
+        });
+    for (std::thread& th : threads) th.join();
+    EXPECT_EQ(wrong, std::vector<int>(4, 0));
 }
