@@ -34,6 +34,7 @@ void HashProcessor::clear_used() {
 
 RequestSets HashProcessor::process(std::span<const FeedbackBuffer> buffers,
                                    const ResidencyLookup& lookup, std::uint64_t frame) {
+    const std::scoped_lock lock(mutex_);
     const std::uint64_t salt = frame_salt(frame);
     for_each_request(buffers, threads_, [&](std::uint64_t key) {
         const std::uint64_t s = slot(key, salt);

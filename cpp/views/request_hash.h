@@ -15,6 +15,7 @@
 #pragma once
 #include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "views/request_processing.h"
@@ -47,6 +48,8 @@ private:
 
     unsigned shift_;
     unsigned threads_;
+    // Held by process(): the table is one frame's, so calls from several threads take turns.
+    std::mutex mutex_;
     // Slots hold a request key or kNoRequest. Insertion is a CAS loop keeping the minimum
     // (level, key); relaxed order suffices because the table is only read after the
     // inserting threads joined. A slot leaves kNoRequest at most once per frame; the thread

@@ -68,6 +68,7 @@ FlagArrayProcessor::FlagArrayProcessor(std::vector<PaintingGeometry> paintings, 
 
 RequestSets FlagArrayProcessor::process(std::span<const FeedbackBuffer> buffers,
                                         const ResidencyLookup& lookup) {
+    const std::scoped_lock lock(mutex_);
     mark_flags(index_, flags_, buffers, threads_);
     // Compaction: each chunk collects (and clears) its set flags; chunks concatenate in order.
     const std::size_t chunks = (flags_.size() + kFlagChunk - 1) / kFlagChunk;
@@ -161,6 +162,7 @@ VisibilityLists::VisibilityLists(std::vector<PaintingGeometry> paintings, unsign
       previous_(index_.size(), 0) {}
 
 VisibilityLists::Lists VisibilityLists::process(std::span<const FeedbackBuffer> buffers) {
+    const std::scoped_lock lock(mutex_);
     mark_flags(index_, current_, buffers, threads_);
     // Seed 002's ProcessVisibility: alive if visible now, else remove if visible before;
     // then previous = current, current = 0. Per-chunk lists replace its atomic counters.

@@ -114,6 +114,8 @@ public:
 private:
     TileIndex index_;
     unsigned threads_;
+    // Held by process(): the flags are one frame's, so calls from several threads take turns.
+    std::mutex mutex_;
     // One flag per tile. Marking stores 1 through std::atomic_ref (relaxed) from many
     // threads; the compaction scan runs after the marking threads joined, which orders it
     // after them, and reads eight flags per word to skip empty stretches.
@@ -175,6 +177,7 @@ public:
 private:
     TileIndex index_;
     unsigned threads_;
+    std::mutex mutex_;  // held by process(): one frame at a time against the previous one
     std::vector<std::uint8_t> current_;  // marked like FlagArrayProcessor's flags
     std::vector<std::uint8_t> previous_;
 };
