@@ -668,13 +668,48 @@ void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std
 
 }  // namespace
 
-// sample_trilinear_rgb8's run of 16 in one or two resident tiles per level, all in 16 lanes: the same
-// taps (trilinear_taps' operations, in registers), texels (the 4-byte words at the same
-// addresses) and products, summed and blended in the same order as blend_levels_rgb8, so the
-// same floats. A sample that blends nothing (blend 0) takes its coarse taps at its fine level
-// (as trilinear_taps leaves them) and adds 0 x (g - f) = -0 or 0 to f, which leaves f as the
-// batch's fine-only path gives it; so only the samples that blend two levels must share the
+// sample_trilinear_rgb8 for a packet of 16 samples in one or two resident tiles per level, all
+// in 16 lanes: trilinear_taps' level rule and taps (in float from the packet's origin, see
+// sample16), the texels at the same addresses (the 4-byte words of each footprint's corners),
+// and blend_levels_rgb8's bilinear blends and blend of the levels. A sample that blends
+// nothing (blend 0) takes its coarse taps at its fine level (as trilinear_taps leaves them)
+// and adds 0 x (g - f) to f; so only the samples that blend two levels must share the
 // coarse tile.
+#if defined(__AVX512F__)
+// GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
+// used uninitialized (GCC bug 105593, fixed in GCC 13).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"  // the same, in _mm512_reduce_*_epi32
+namespace {
+// One level's taps for 16 lanes (trilinear_taps' second loop): weights, tile and in-tile
+// byte offset.
+struct LevelTaps {
+    __m512 fx, fy;
+    __m512i level, cx, cy, row, offset;  // row: the footprint's first texel row in its tile
+};
+// trilinear_taps' level rule: each lane's fine level l0 (lo0 is max with 0 second, which
+// maps NaN to 0 as the select does; below is min), which lanes blend two levels and their
+// weight.
+struct LaneLevels {
+    __m512i l0;
+    __mmask16 blending;
+    __m512 blend;
+};
+inline LaneLevels lane_levels(const float* lod, float top, std::int32_t levels) {
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 lod_c = _mm512_min_ps(_mm512_max_ps(_mm512_loadu_ps(lod), zero), _mm512_set1_ps(top));
+    LaneLevels v;
+    v.l0 = _mm512_cvttps_epi32(lod_c);
+    const __m512 frac = _mm512_sub_ps(lod_c, _mm512_cvtepi32_ps(v.l0));
+    v.blending = _mm512_cmp_ps_mask(frac, zero, _CMP_GT_OQ) &
+                 _mm512_cmplt_epi32_mask(_mm512_add_epi32(v.l0, _mm512_set1_epi32(1)), _mm512_set1_epi32(levels));
+    v.blend = _mm512_maskz_mov_ps(v.blending, frac);
+    return v;
+}
+}  // namespace
+#endif
+
 struct TrilinearLanes::State {
     State(const VirtualTexture& vt, std::uint32_t painting)
         : finders{TexelFinder(vt, painting), TexelFinder(vt, painting), TexelFinder(vt, painting),
@@ -701,6 +736,12 @@ struct TrilinearLanes::State {
         const PageEntry e = finders[c].entry(l, cx, cy);
         return e.level() == l ? physical + std::size_t(e.slot()) * slot_bytes : nullptr;
     }
+#if defined(__AVX512F__)
+    // The samples from their fine and (for the lanes in levels.blending) coarse taps: each
+    // level's tiles, texels and bilinear blend, then the blend of the two levels.
+    bool sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& levels,
+                float* r, float* g, float* b);
+#endif
 };
 
 TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting) {
@@ -720,92 +761,12 @@ TrilinearLanes::~TrilinearLanes() = default;
 TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
 
 #if defined(__AVX512F__)
-// GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
-// used uninitialized (GCC bug 105593, fixed in GCC 13).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-// 16 doubles (two vectors of 8) from 16 int32 lanes, and back (truncating), and 16 floats
-// from two vectors of 8 doubles: the conversions of trilinear_taps' scalar arithmetic.
-namespace {
-struct Lanes64 {
-    __m512d lo, hi;
-};
-inline Lanes64 to_double(__m512i x) {
-    return {_mm512_cvtepi32_pd(_mm512_castsi512_si256(x)), _mm512_cvtepi32_pd(_mm512_extracti64x4_epi64(x, 1))};
-}
-inline __m512i truncate(Lanes64 x) {
-    return _mm512_inserti64x4(_mm512_castsi256_si512(_mm512_cvttpd_epi32(x.lo)), _mm512_cvttpd_epi32(x.hi), 1);
-}
-inline __m512 to_float(Lanes64 x) {
-    return _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castps_pd(_mm512_castps256_ps512(_mm512_cvtpd_ps(x.lo))),
-                                               _mm256_castps_pd(_mm512_cvtpd_ps(x.hi)), 1));
-}
-// One level's taps for 16 lanes (trilinear_taps' second loop): weights, tile and in-tile
-// byte offset.
-struct LevelTaps {
-    __m512 fx, fy;
-    __m512i level, cx, cy, row, offset;  // row: the footprint's first texel row in its tile
-};
-}  // namespace
-
-bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod, float* r,
-                              float* g, float* b) {
-    if (!state_) return false;
-    State& st = *state_;
-    // trilinear_taps in registers, operation for operation: the level rule (lo0 is max with
-    // 0 second, which maps NaN to 0 as the select does; below is min), then per level the
-    // clamped position, texel, weight, tile (Divider::by_double_below_2_31) and offset.
-    const __m512 zero = _mm512_setzero_ps();
-    const __m512i one_i = _mm512_set1_epi32(1);
-    const __m512 lod_c = _mm512_min_ps(_mm512_max_ps(_mm512_loadu_ps(lod), zero), _mm512_set1_ps(st.pyramid.top));
-    const __m512i l0 = _mm512_cvttps_epi32(lod_c);
-    const __m512 frac = _mm512_sub_ps(lod_c, _mm512_cvtepi32_ps(l0));
-    const __mmask16 blending = _mm512_cmp_ps_mask(frac, zero, _CMP_GT_OQ) &
-                               _mm512_cmplt_epi32_mask(_mm512_add_epi32(l0, one_i), _mm512_set1_epi32(st.levels));
-    const __m512 blend = _mm512_maskz_mov_ps(blending, frac);
-    const __m512d zero_d = _mm512_setzero_pd(), one_d = _mm512_set1_pd(1.0), half = _mm512_set1_pd(0.5);
-    auto position = [&](const double* c, double extent) {
-        const __m512d e = _mm512_set1_pd(extent);
-        return Lanes64{_mm512_mul_pd(_mm512_min_pd(_mm512_max_pd(_mm512_loadu_pd(c), zero_d), one_d), e),
-                       _mm512_mul_pd(_mm512_min_pd(_mm512_max_pd(_mm512_loadu_pd(c + 8), zero_d), one_d), e)};
-    };
-    const Lanes64 x0 = position(u, double(st.pyramid.width)), y0 = position(v, double(st.pyramid.height));
-    const double inv_p = st.divide_p.inverse();
+bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps,
+                                   const LaneLevels& lv, float* r, float* g, float* b) {
+    State& st = *this;
+    const __mmask16 blending = lv.blending;
+    const __m512 blend = lv.blend;
     const TileExtent t = st.tile;
-    auto taps = [&](__m512i l) {
-        // 2^-l from its exponent bits, level l's extent, as trilinear_taps.
-        const Lanes64 scale{
-            _mm512_castsi512_pd(_mm512_slli_epi64(_mm512_sub_epi64(_mm512_set1_epi64(1023),
-                                                                   _mm512_cvtepi32_epi64(_mm512_castsi512_si256(l))), 52)),
-            _mm512_castsi512_pd(_mm512_slli_epi64(_mm512_sub_epi64(_mm512_set1_epi64(1023),
-                                                                   _mm512_cvtepi32_epi64(_mm512_extracti64x4_epi64(l, 1))), 52))};
-        const __m512i round_up = _mm512_sub_epi32(_mm512_sllv_epi32(one_i, l), one_i);
-        auto axis = [&](const Lanes64& p0, std::uint32_t extent, __m512& f, __m512i& cell, __m512i& in_tile) {
-            const Lanes64 n = to_double(_mm512_srlv_epi32(_mm512_add_epi32(_mm512_set1_epi32(int(extent)), round_up), l));
-            const Lanes64 tx = {
-                _mm512_sub_pd(_mm512_min_pd(_mm512_max_pd(_mm512_mul_pd(p0.lo, scale.lo), half), _mm512_sub_pd(n.lo, half)), half),
-                _mm512_sub_pd(_mm512_min_pd(_mm512_max_pd(_mm512_mul_pd(p0.hi, scale.hi), half), _mm512_sub_pd(n.hi, half)), half)};
-            const __m512i i = truncate(tx);
-            const Lanes64 id = to_double(i);
-            f = to_float({_mm512_sub_pd(tx.lo, id.lo), _mm512_sub_pd(tx.hi, id.hi)});
-            const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
-            const Lanes64 q = to_double(n_up);
-            cell = truncate({_mm512_mul_pd(_mm512_add_pd(q.lo, half), _mm512_set1_pd(inv_p)),
-                             _mm512_mul_pd(_mm512_add_pd(q.hi, half), _mm512_set1_pd(inv_p))});
-            const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
-                                               _mm512_set1_epi32(t.border));
-            in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
-        };
-        LevelTaps lt;
-        lt.level = l;
-        __m512i jx, jy;
-        axis(x0, st.pyramid.width, lt.fx, lt.cx, jx);
-        axis(y0, st.pyramid.height, lt.fy, lt.cy, jy);
-        lt.row = jy;
-        lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
-                                     _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
-        return lt;
-    };
     // The tiles of the lanes in mask at their level: the first lane's and, for a packet across a
     // tile edge, one other, each resident (its slot) with the lanes it holds; false for a third
     // tile or a tile that is not resident (a fallback).
@@ -831,15 +792,9 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
         }
         return mask == 0;
     };
-    const LevelTaps fine_taps = taps(l0);
     LevelTiles fine, coarse;
     if (!tiles(fine_taps, 0, 0xFFFF, fine)) return false;
-    // The lanes that blend nothing take their coarse taps at the fine level, as trilinear_taps.
-    LevelTaps coarse_taps;
-    if (blending) {
-        coarse_taps = taps(_mm512_mask_add_epi32(l0, blending, l0, one_i));
-        if (!tiles(coarse_taps, 1, blending, coarse)) return false;
-    }
+    if (blending && !tiles(coarse_taps, 1, blending, coarse)) return false;
     const std::int32_t row = t.row_bytes;
     // The 4-byte words at each lane's footprint corners (offset, + 3, + row, + row + 3: the
     // texel and its right neighbour in two rows), q[0..3]. When the lanes in mask share the
@@ -918,11 +873,101 @@ bool TrilinearLanes::sample16(const double* u, const double* v, const float* lod
     _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
     return true;
 }
+
+bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float* b) {
+    if (!state_) return false;
+    State& st = *state_;
+    const std::uint32_t width = st.pyramid.width, height = st.pyramid.height;
+    // Below 2^22 texels a side the float tile division below is exact (see cell) and every
+    // texel index and level extent is a float.
+    constexpr std::uint32_t kMaxSide = 1u << 22;
+    if (width >= kMaxSide || height >= kMaxSide) return false;
+    const LaneLevels lv = lane_levels(packet.lod, st.pyramid.top, st.levels);
+    // The packet's levels: its finest L and at most L + 1 at the fine level (so L + 2 at the
+    // coarse one).
+    const std::int32_t L = _mm512_reduce_min_epi32(lv.l0);
+    if (_mm512_reduce_max_epi32(lv.l0) > L + 1) return false;
+    const __m512i one_i = _mm512_set1_epi32(1);
+    const TileExtent t = st.tile;
+    const __m512 du = _mm512_load_ps(packet.du), dv = _mm512_load_ps(packet.dv);
+    // One axis at level L: lane 0's continuous texel position less 1/2 (trilinear_taps' tx
+    // before its clamp), X = c0 extent 2^-L - 1/2, as an integer origin and a fraction; each
+    // lane's position relative to the origin is frac + d extent 2^-L in float. Level L + k's
+    // position is (X + 1/2) 2^-k - 1/2 = origin_k + (rel 2^-k + frac_k), with origin_k and
+    // frac_k the same split of (origin + 1/2) 2^-k - 1/2 (exact in double).
+    struct Axis {
+        __m512 rel;          // per lane, at level L
+        __m512 frac[3];      // per level L + k, broadcast
+        std::int32_t origin[3];
+    };
+    // 2^-L from its exponent bits (ldexp is a libm call).
+    const double two_minus_L = std::bit_cast<double>(std::uint64_t(1023 - L) << 52);
+    auto axis = [&](double c0, std::uint32_t extent, __m512 d, Axis& a) {
+        const double scale = double(extent) * two_minus_L;  // extent 2^-L, exact
+        const double X = c0 * double(extent) * two_minus_L - 0.5;
+        const double o = std::floor(X);
+        if (!(std::abs(o) < double(kMaxSide))) return false;  // NaN or far outside
+        a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(scale)), _mm512_set1_ps(float(X - o)));
+        // Two texels inside the painting at level L, so that at levels L, L + 1 and L + 2 no
+        // lane reaches trilinear_taps' clamps (to [0, w_l - 1], and of uv to [0, 1]):
+        // X_{L+k} = (X + 1/2) 2^-k - 1/2 >= 5/8 - 1/2 > 0 and <= w_{L+k} - 1.
+        const std::uint32_t wl = (extent + (1u << L) - 1) >> L;
+        const double hi = std::min(double(wl), scale) - 2.5 - o;
+        if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
+            _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
+            return false;
+        for (int k = 0; k < 3; ++k) {
+            const double Xk = (o + 0.5) * (k == 0 ? 1.0 : k == 1 ? 0.5 : 0.25) - 0.5, ok = std::floor(Xk);
+            a.origin[k] = std::int32_t(ok);
+            a.frac[k] = _mm512_set1_ps(float(Xk - ok));
+        }
+        return true;
+    };
+    Axis ax, ay;
+    if (!axis(packet.u0, width, du, ax) || !axis(packet.v0, height, dv, ay)) return false;
+    // NaN positions fail neither comparison above: refuse them here.
+    if (_mm512_cmp_ps_mask(ax.rel, ay.rel, _CMP_UNORD_Q)) return false;
+    const __m512 inv_p = _mm512_set1_ps(1.0f / float(t.payload));
+    // A level's taps from the lanes' levels l (L or L + 1 or L + 2).
+    auto taps = [&](__m512i l) {
+        const __m512i k = _mm512_sub_epi32(l, _mm512_set1_epi32(L));
+        const __mmask16 k1 = _mm512_cmpeq_epi32_mask(k, one_i), k2 = _mm512_cmpeq_epi32_mask(k, _mm512_set1_epi32(2));
+        const __m512 minus_k = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_setzero_si512(), k));
+        auto one_axis = [&](const Axis& a, __m512& f, __m512i& cell, __m512i& in_tile) {
+            __m512 frac = _mm512_mask_blend_ps(k1, a.frac[0], a.frac[1]);
+            frac = _mm512_mask_blend_ps(k2, frac, a.frac[2]);
+            __m512i origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin[0]), _mm512_set1_epi32(a.origin[1]));
+            origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(a.origin[2]));
+            const __m512 x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);  // >= 0
+            const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            f = _mm512_sub_ps(x, fl);
+            const __m512i i = _mm512_add_epi32(origin, _mm512_cvttps_epi32(fl));
+            const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
+            // floor(n_up / P) as Divider::by_double in float: (n + 1/2) fl(1/P) is within
+            // 2^-23 (n + 1/2) / P of (n + 1/2) / P, below 1 / (2P) for n < 2^22.
+            cell = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(n_up), _mm512_set1_ps(0.5f)), inv_p));
+            const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
+                                               _mm512_set1_epi32(t.border));
+            in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
+        };
+        LevelTaps lt;
+        lt.level = l;
+        __m512i jx, jy;
+        one_axis(ax, lt.fx, lt.cx, jx);
+        one_axis(ay, lt.fy, lt.cy, jy);
+        lt.row = jy;
+        lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
+                                     _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
+        return lt;
+    };
+    const LevelTaps fine_taps = taps(lv.l0);
+    LevelTaps coarse_taps = fine_taps;
+    if (lv.blending) coarse_taps = taps(_mm512_mask_add_epi32(lv.l0, lv.blending, lv.l0, one_i));
+    return st.sample(fine_taps, coarse_taps, lv, r, g, b);
+}
 #pragma GCC diagnostic pop
 #else
-bool TrilinearLanes::sample16(const double*, const double*, const float*, float*, float*, float*) {
-    return false;
-}
+bool TrilinearLanes::sample16(const PacketUv&, float*, float*, float*) { return false; }
 #endif
 
 void sample_trilinear_reference(const VirtualTexture& vt, const SampleRequest& r) {

@@ -41,22 +41,36 @@ void sample_serial(const VirtualTexture& vt, const SampleRequest& r);
 // The same for a caller that already holds vt.read_lock() for all its calls (the display
 // pass takes it once per frame instead of once per run of samples).
 void sample_serial_locked(const VirtualTexture& vt, const SampleRequest& r);
+// 16 neighbouring samples of one painting as the display pass maps a packet of pixels: lane
+// 0's uv in double (a 150k-texel painting needs it) and every lane's offset from it in float
+// (a packet spans a few texels, so its offsets keep float's relative precision: 1e-5 texel),
+// and the levels of detail.
+struct PacketUv {
+    double u0 = 0, v0 = 0;
+    alignas(64) float du[16] = {}, dv[16] = {};
+    alignas(64) float lod[16] = {};
+};
+
 // Trilinear on RGB8 slots for 16 samples of one painting at once in SIMD lanes: the display
 // pass's packets of 16 neighbouring pixels, whose footprints nearly always lie in one tile
 // (or two, across a tile edge) at each level. When they do and those tiles are resident,
-// sample16 writes the 16 samples' channels (0..255) to r, g, b and returns true: the same
-// floats as sample() gives them (its taps, products and blend). Otherwise (footprints in
-// three or more tiles, a fallback to a coarser tile, BC1 slots, or a build without AVX-512)
-// it writes nothing and returns false, and the
-// caller takes sample() (which also reports a painting the texture does not hold). The caller
-// holds vt.read_lock(); one object per thread.
+// sample16 writes the 16 samples' channels (0..255) to r, g, b and returns true: sample()'s
+// taps, texels and blend, the taps in float from the packet's origin, so the footprints'
+// weights agree with sample()'s to about 1e-5 and the samples to about 1e-3 of a code (the
+// texels are the same unless a position lies that close to a texel's centre, where both
+// choices blend to the same value). Otherwise (footprints in three or more tiles, a fallback
+// to a coarser tile, levels more than one apart, lanes within two texels of the painting's
+// edge, where sample() clamps, paintings of 2^22 texels or more a side, BC1 slots, or a build
+// without AVX-512) it writes nothing and returns false, and the caller takes sample() (which
+// also reports a painting the texture does not hold). The caller holds vt.read_lock(); one
+// object per thread.
 class TrilinearLanes {
 public:
     TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting);
     ~TrilinearLanes();
     TrilinearLanes(TrilinearLanes&&) noexcept;
     TrilinearLanes& operator=(TrilinearLanes&&) = delete;
-    bool sample16(const double* u, const double* v, const float* lod, float* r, float* g, float* b);
+    bool sample16(const PacketUv& packet, float* r, float* g, float* b);
     // Whether sample16 can succeed at all (AVX-512 build, RGB8 slots).
     bool enabled() const { return state_ != nullptr; }
     // Forgets the page entries sample16 keeps from call to call (valid only while the caller

@@ -22,6 +22,7 @@
 #include "common/error.h"
 #include "common/parallel.h"
 #include "sampling/sampler.h"
+#include "sampling/srgb_curve.h"
 #include "views/feedback.h"
 
 namespace gigascroll {
@@ -29,30 +30,6 @@ namespace gigascroll {
 namespace {
 constexpr unsigned kNoHit = RTC_INVALID_GEOMETRY_ID;
 constexpr std::uint64_t kUnclaimed = ~std::uint64_t(0);
-
-// sRGB-encoded 0..255 to linear [0, 1] (IEC 61966-2-1): the exact curve tabulated every 1/16
-// of a code and interpolated linearly (the filtered value is not an integer). Three pow()
-// calls per pixel were a third of the shading; the table's error is below 1e-7.
-struct SrgbTable {
-    static constexpr int kSteps = 16;
-    SrgbTable() {
-        for (int i = 0; i <= 255 * kSteps + 1; ++i) {
-            const double c = std::min(double(i) / kSteps, 255.0) / 255.0;
-            value[std::size_t(i)] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
-        }
-    }
-    float operator()(float code) const {
-        const float x = std::clamp(code, 0.0f, 255.0f) * kSteps;
-        const int i = int(x);
-        const float f = x - float(i);
-        return value[std::size_t(i)] + f * (value[std::size_t(i) + 1] - value[std::size_t(i)]);
-    }
-    std::array<float, 255 * kSteps + 2> value;
-};
-const SrgbTable& srgb_table() {
-    static const SrgbTable table;
-    return table;
-}
 
 // Casts the primary rays of rows [row_begin, row_end) in 16-ray packets along each row; a
 // pixel with reused[i] >= 0 (the right eye's pixels that reuse a left hit) is left out of its
@@ -186,6 +163,71 @@ struct PlaneMap {
             dv = Dx[k] * v_axis.x + Dy[k] * v_axis.y + Dz[k] * v_axis.z;
         });
     }
+
+#if defined(__AVX512F__)
+// GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics (bug 105593), muted.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    // A packet of 16 columns from screen x s0 (ds[k]: column k's screen x less s0) as
+    // TrilinearLanes takes it: lane 0's uv in double, not clamped (the sampler declines a
+    // packet that reaches the painting's edge), the lanes' offsets from it in float, and each
+    // lane's level plus bias (sampled_lod). The offset of column s from s0 is
+    // du = (s - s0) h (qu rn - ru qn) / (width D.n(s) D.n(s0)) (the same for v): the
+    // difference of two uv's without their cancellation, to float's relative precision. The
+    // level is footprint2's of t, 1 / (D . n), D . u and D . v in float, as map_columns'.
+    // False (out half written) where a footprint is not a normal float: the caller then
+    // takes map_columns, which patches it in double.
+    bool map_packet(const Row& r, double s0, const float* ds, float bias, PacketUv& out) const {
+        const double dn0 = r.rn + s0 * r.qn, du0 = r.ru + s0 * r.qu, dv0 = r.rv + s0 * r.qv;
+        const double kk0 = 1.0 / dn0, t0 = h * kk0;
+        out.u0 = (cu + t0 * du0) * inv_width, out.v0 = (cv + t0 * dv0) * inv_height;
+        const __m512 S = _mm512_loadu_ps(ds);
+        const __m512 dn = _mm512_fmadd_ps(S, _mm512_set1_ps(float(r.qn)), _mm512_set1_ps(float(dn0)));
+        const __m512 kk = _mm512_div_ps(_mm512_set1_ps(1.0f), dn);
+        const __m512 S_kk = _mm512_mul_ps(S, kk);
+        _mm512_store_ps(out.du, _mm512_mul_ps(S_kk, _mm512_set1_ps(float(h * inv_width * (r.qu * r.rn - r.ru * r.qn) * kk0))));
+        _mm512_store_ps(out.dv, _mm512_mul_ps(S_kk, _mm512_set1_ps(float(h * inv_height * (r.qv * r.rn - r.rv * r.qn) * kk0))));
+        // footprint2 in lanes.
+        const __m512 t = _mm512_mul_ps(_mm512_set1_ps(float(h)), kk);
+        const __m512 Du = _mm512_fmadd_ps(S, _mm512_set1_ps(float(r.qu)), _mm512_set1_ps(float(du0)));
+        const __m512 Dv = _mm512_fmadd_ps(S, _mm512_set1_ps(float(r.qv)), _mm512_set1_ps(float(dv0)));
+        const __m512 kDu = _mm512_mul_ps(kk, Du), kDv = _mm512_mul_ps(kk, Dv);
+        const __m512 tu = _mm512_mul_ps(t, _mm512_set1_ps(fsu)), tv = _mm512_mul_ps(t, _mm512_set1_ps(fsv));
+        auto term = [](__m512 scale, float a, float b, __m512 kd) {  // scale (a - b kd)
+            return _mm512_mul_ps(scale, _mm512_fnmadd_ps(_mm512_set1_ps(b), kd, _mm512_set1_ps(a)));
+        };
+        const __m512 ax = term(tu, fxu, fxn, kDu), bx = term(tv, fxv, fxn, kDv);
+        const __m512 ay = term(tu, fyu, fyn, kDu), by = term(tv, fyv, fyn, kDv);
+        const __m512 fp2 = _mm512_max_ps(_mm512_fmadd_ps(ax, ax, _mm512_mul_ps(bx, bx)),
+                                         _mm512_fmadd_ps(ay, ay, _mm512_mul_ps(by, by)));
+        // fast_log2f in lanes; zero, subnormal, infinite, NaN or negative: refused.
+        constexpr int kNotNormal = 0x01 | 0x02 | 0x04 | 0x08 | 0x10 | 0x20 | 0x40 | 0x80;
+        if (_mm512_fpclass_ps_mask(fp2, kNotNormal)) return false;
+        const __m512i bits = _mm512_castps_si512(fp2);
+        const __m512i field = _mm512_and_si512(bits, _mm512_set1_epi32(0x7fffff));
+        const __mmask16 high = _mm512_cmpgt_epi32_mask(field, _mm512_set1_epi32(0x3504f3));
+        const __m512 m = _mm512_castsi512_ps(_mm512_mask_sub_epi32(_mm512_or_si512(field, _mm512_set1_epi32(0x3f800000)), high,
+                                                                   _mm512_or_si512(field, _mm512_set1_epi32(0x3f800000)),
+                                                                   _mm512_set1_epi32(1 << 23)));
+        const __m512i biased = _mm512_srli_epi32(bits, 23);
+        const __m512 e = _mm512_cvtepi32_ps(_mm512_mask_add_epi32(_mm512_sub_epi32(biased, _mm512_set1_epi32(127)), high,
+                                                                  _mm512_sub_epi32(biased, _mm512_set1_epi32(127)),
+                                                                  _mm512_set1_epi32(1)));
+        const __m512 one = _mm512_set1_ps(1.0f);
+        const __m512 sr = _mm512_div_ps(_mm512_sub_ps(m, one), _mm512_add_ps(m, one)), s2 = _mm512_mul_ps(sr, sr);
+        __m512 series = _mm512_fmadd_ps(s2, _mm512_set1_ps(1.0f / 9), _mm512_set1_ps(1.0f / 7));
+        series = _mm512_fmadd_ps(s2, series, _mm512_set1_ps(1.0f / 5));
+        series = _mm512_fmadd_ps(s2, series, _mm512_set1_ps(1.0f / 3));
+        series = _mm512_fmadd_ps(s2, series, one);
+        const __m512 log2_fp2 = _mm512_fmadd_ps(_mm512_mul_ps(sr, series), _mm512_set1_ps(2.88539008f), e);
+        // lod = log2(footprint) + bias, 0 where that is not finite (sampled_lod).
+        const __m512 lod = _mm512_add_ps(_mm512_mul_ps(log2_fp2, _mm512_set1_ps(0.5f)), _mm512_set1_ps(bias));
+        _mm512_store_ps(out.lod, _mm512_mask_blend_ps(_mm512_fpclass_ps_mask(lod, 0x01 | 0x08 | 0x10 | 0x80), lod,
+                                                      _mm512_setzero_ps()));
+        return true;
+    }
+#pragma GCC diagnostic pop
+#endif
 
     // The loop of both: dots(k, dn, du, dv) gives pixel k's D . n, D . u and D . v.
     template <bool kUv, typename Dots>
@@ -460,7 +502,9 @@ struct ClaimProjection {
 
 // A packet's light in SoA lanes: per lane the irradiance E, the albedo and the emission.
 struct LaneLight {
-    alignas(64) float Ex[16], Ey[16], Ez[16], ax[16], ay[16], az[16], mx[16], my[16], mz[16];
+    alignas(64) float E[3][16];  // irradiance, per channel
+    alignas(64) float a[3][16];  // albedo
+    alignas(64) float M[3][16];  // emission
 };
 
 // The baked lattice at a packet's 16 lanes in two steps, so that the lattice points' cache
@@ -472,17 +516,19 @@ struct LatticeLanes {
     alignas(64) std::uint32_t tri[16];
     alignas(64) std::int32_t front[16];
 
-    // Lanes with hit[k] != 0 (Embree's geometry, primitive and barycentrics, and the
-    // eye-facing normal n): Gallery's lattice_lerp (the clamps, the cell, the sub-triangle
+    // Lanes with hit[k] != 0 (Embree's geometry, primitive, barycentrics and geometric normal
+    // Ng, and back[k] != 0 where the ray runs along Ng, i.e. sees the side Ng points away
+    // from): Gallery's lattice_lerp (the clamps, the cell, the sub-triangle
     // and its weights) in straight loops over the lanes, lanes without a hit reading
     // triangle 0 (ignored). No trapping math, as Gallery's lattice_cells: with it GCC keeps
     // the selects as branches.
     [[gnu::optimize("no-trapping-math"), gnu::noinline]]
-    void locate(const BakedLattice& b, const unsigned* __restrict geom_in,
-                const unsigned* __restrict prim_in, const float* __restrict b1_in,
-                const float* __restrict b2_in, const int* __restrict hit,
-                const float* __restrict nx, const float* __restrict ny,
-                const float* __restrict nz) {
+    void locate(const BakedLattice& b, const RTCHit16& h, const int* __restrict hit,
+                const std::int32_t* __restrict back) {
+        const unsigned* __restrict geom_in = h.geomID;
+        const unsigned* __restrict prim_in = h.primID;
+        const float* __restrict b1_in = h.u;
+        const float* __restrict b2_in = h.v;
         alignas(64) std::int32_t segments[16], cell_i[16], cell_j[16], upper_of[16];
         // A lane without a hit holds whatever Embree left in its u, v (NaN or huge after a
         // miss): its cell would index far outside the lattice, and blend() reads every lane.
@@ -492,7 +538,8 @@ struct LatticeLanes {
             const std::uint32_t t = b.first_triangle[g] + p;
             const Vec3f w = b.normal[t];
             tri[k] = t, segments[k] = std::int32_t(b.segments[t]);
-            front[k] = w.x * nx[k] + w.y * ny[k] + w.z * nz[k] > 0;  // n faces the eye
+            // The eye sees the front: the normal agrees with Embree's on the side the ray hits.
+            front[k] = (w.x * h.Ng_x[k] + w.y * h.Ng_y[k] + w.z * h.Ng_z[k] > 0) != (back[k] != 0);
             b1[k] = hit[k] ? b1_in[k] : 0.0f, b2[k] = hit[k] ? b2_in[k] : 0.0f;
         }
         int k0 = 0;
@@ -574,13 +621,13 @@ struct LatticeLanes {
         for (int k = 0; k < 16; ++k) {
             const Vec3f a = *corner[0][k], c = *corner[1][k], d = *corner[2][k];
             const float w0 = weight[0][k], w1 = weight[1][k], w2 = weight[2][k];
-            out.Ex[k] = a.x * w0 + c.x * w1 + d.x * w2;
-            out.Ey[k] = a.y * w0 + c.y * w1 + d.y * w2;
-            out.Ez[k] = a.z * w0 + c.z * w1 + d.z * w2;
+            out.E[0][k] = a.x * w0 + c.x * w1 + d.x * w2;
+            out.E[1][k] = a.y * w0 + c.y * w1 + d.y * w2;
+            out.E[2][k] = a.z * w0 + c.z * w1 + d.z * w2;
             const std::uint32_t t = tri[k];
             const Vec3f al = b.albedo[t], em = front[k] ? b.emission[t] : zero;
-            out.ax[k] = al.x, out.ay[k] = al.y, out.az[k] = al.z;
-            out.mx[k] = em.x, out.my[k] = em.y, out.mz[k] = em.z;
+            out.a[0][k] = al.x, out.a[1][k] = al.y, out.a[2][k] = al.z;
+            out.M[0][k] = em.x, out.M[1][k] = em.y, out.M[2][k] = em.z;
         }
     }
 
@@ -589,6 +636,7 @@ struct LatticeLanes {
 // used uninitialized (GCC bug 105593, fixed in GCC 13).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
     // locate() and blend() in 16 lanes of one vector each: the arrays gathered with 32-bit
     // float indices (the caller checks lanes16(): 3 x the triangles and the points below
     // 2^31), the cell arithmetic as locate's, the corners' indices in uint32 (n < 2^16, so
@@ -605,10 +653,10 @@ struct LatticeLanes {
         return b.triangles > 0 && b.triangles < kLimit && b.points < kLimit;
     }
 
-    void locate16(const BakedLattice& b, const unsigned* __restrict geom_in,
-                  const unsigned* __restrict prim_in, const float* __restrict b1_in,
-                  const float* __restrict b2_in, const int* __restrict hit,
-                  const float* __restrict nx, const float* __restrict ny, const float* __restrict nz) {
+    void locate16(const BakedLattice& b, const RTCHit16& h, const int* __restrict hit,
+                  const std::int32_t* __restrict back) {
+        const unsigned* __restrict geom_in = h.geomID;
+        const unsigned* __restrict prim_in = h.primID;
         const __m512i hits = _mm512_load_si512(hit);
         const __mmask16 hm = _mm512_test_epi32_mask(hits, hits);
         hit_lanes = hm;
@@ -642,22 +690,25 @@ struct LatticeLanes {
             first = _mm512_i32gather_epi32(_mm512_add_epi32(t, t), b.offset, 4);
         }
         _mm512_store_si512(tri, t);
-        const __m512 facing = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(wx, _mm512_load_ps(nx)),
-                                                          _mm512_mul_ps(wy, _mm512_load_ps(ny))),
-                                            _mm512_mul_ps(wz, _mm512_load_ps(nz)));
+        const __m512 facing = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(wx, _mm512_load_ps(h.Ng_x)),
+                                                          _mm512_mul_ps(wy, _mm512_load_ps(h.Ng_y))),
+                                            _mm512_mul_ps(wz, _mm512_load_ps(h.Ng_z)));
         const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
-        front_lanes = _mm512_cmp_ps_mask(facing, zero, _CMP_GT_OQ);
+        const __m512i back_i = _mm512_load_si512(back);
+        front_lanes = _mm512_cmp_ps_mask(facing, zero, _CMP_GT_OQ) ^ _mm512_test_epi32_mask(back_i, back_i);
         const __m512i n1 = _mm512_sub_epi32(n, _mm512_set1_epi32(1));
-        __m512 c1 = _mm512_maskz_loadu_ps(hm, b1_in), c2 = _mm512_maskz_loadu_ps(hm, b2_in);
+        __m512 c1 = _mm512_maskz_loadu_ps(hm, h.u), c2 = _mm512_maskz_loadu_ps(hm, h.v);
         // c < 0 ? 0 : (1 < c ? 1 : c)
         c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c1, _CMP_LT_OQ), c1, one);
         c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(c1, zero, _CMP_LT_OQ), c1, zero);
         c2 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c2, _CMP_LT_OQ), c2, one);
         c2 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(c2, zero, _CMP_LT_OQ), c2, zero);
         const __m512 s = _mm512_add_ps(c1, c2);
-        const __mmask16 over = _mm512_cmp_ps_mask(s, one, _CMP_GT_OQ);
-        c1 = _mm512_mask_div_ps(c1, over, c1, s);
-        c2 = _mm512_mask_div_ps(c2, over, c2, s);
+        // Barycentrics past the far edge (rare: Embree's rounding) scaled back onto it.
+        if (const __mmask16 over = _mm512_cmp_ps_mask(s, one, _CMP_GT_OQ)) {
+            c1 = _mm512_mask_div_ps(c1, over, c1, s);
+            c2 = _mm512_mask_div_ps(c2, over, c2, s);
+        }
         const __m512 nf = _mm512_cvtepi32_ps(n);
         const __m512 x = _mm512_mul_ps(c1, nf), y = _mm512_mul_ps(c2, nf);
         const __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
@@ -670,9 +721,11 @@ struct LatticeLanes {
         const __mmask16 room = _mm512_cmple_epi32_mask(
             _mm512_add_epi32(_mm512_add_epi32(i, j), _mm512_set1_epi32(2)), n);  // i + j + 2 <= n
         const __mmask16 upper = past & room, rescale = past & ~upper;
-        const __m512 inv = _mm512_div_ps(one, sum);
-        fx = _mm512_mask_mul_ps(fx, rescale, fx, inv);
-        fy = _mm512_mask_mul_ps(fy, rescale, fy, inv);
+        if (rescale) {  // rare: only on the far edge's cells
+            const __m512 inv = _mm512_div_ps(one, sum);
+            fx = _mm512_mask_mul_ps(fx, rescale, fx, inv);
+            fy = _mm512_mask_mul_ps(fy, rescale, fy, inv);
+        }
         _mm512_store_ps(weight[0], _mm512_mask_blend_ps(upper, _mm512_sub_ps(_mm512_sub_ps(one, fx), fy),
                                                          _mm512_sub_ps(_mm512_add_ps(fx, fy), one)));
         _mm512_store_ps(weight[1], _mm512_mask_blend_ps(upper, fx, _mm512_sub_ps(one, fx)));
@@ -712,6 +765,77 @@ struct LatticeLanes {
             }
     }
 
+    // The common packet in one step instead of locate16 and blend16: all 16 lanes hit one
+    // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in one
+    // sub-triangle of one lattice cell, so the light is one affine function of the cell
+    // coordinates: its three corners read once (scalar loads, no gathers) and two fused
+    // multiply-adds per channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower; upper:
+    // (c1 + c2 - c0) + fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 +
+    // E2 w2 to float rounding. Returns false, having written nothing, for any other packet
+    // (the caller then takes locate16 and blend16).
+    bool light16_one_cell(const BakedLattice& b, const RTCHit16& h, const std::int32_t* __restrict back,
+                          LaneLight& __restrict out) const {
+        const unsigned g0 = h.geomID[0], p0 = h.primID[0];
+        const __m512i prim = _mm512_loadu_si512(h.primID);
+        if (_mm512_cmpneq_epi32_mask(prim, _mm512_set1_epi32(int(p0)))) return false;
+        const std::uint64_t t0 = std::uint64_t(b.first_triangle[g0]) + p0;
+        const Vec3f w = b.normal[t0];
+        const __m512 facing = _mm512_add_ps(
+            _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(w.x), _mm512_loadu_ps(h.Ng_x)),
+                          _mm512_mul_ps(_mm512_set1_ps(w.y), _mm512_loadu_ps(h.Ng_y))),
+            _mm512_mul_ps(_mm512_set1_ps(w.z), _mm512_loadu_ps(h.Ng_z)));
+        const __m512i back_i = _mm512_loadu_si512(back);
+        const __mmask16 front = _mm512_cmp_ps_mask(facing, _mm512_setzero_ps(), _CMP_GT_OQ) ^
+                                _mm512_test_epi32_mask(back_i, back_i);
+        if (front != 0 && front != 0xFFFF) return false;
+        const __m512 b1 = _mm512_loadu_ps(h.u), b2 = _mm512_loadu_ps(h.v);
+        const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
+        // Inside: b1, b2 >= 0 and b1 + b2 <= 1 (false for NaN), so lattice_cell's clamps and
+        // its scaling back onto the far edge change nothing.
+        const __mmask16 inside = _mm512_cmp_ps_mask(b1, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(b2, zero, _CMP_GE_OQ) &
+                                 _mm512_cmp_ps_mask(_mm512_add_ps(b1, b2), one, _CMP_LE_OQ);
+        if (inside != 0xFFFF) return false;
+        const std::int32_t n = std::int32_t(b.segments[t0]);
+        const __m512 nf = _mm512_set1_ps(float(n));
+        const __m512 x = _mm512_mul_ps(b1, nf), y = _mm512_mul_ps(b2, nf);
+        const __m512i n1 = _mm512_set1_epi32(n - 1);
+        const __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
+        const __m512i j = _mm512_min_epi32(_mm512_cvttps_epi32(y), _mm512_sub_epi32(n1, i));
+        const __m512 fx = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i)), fy = _mm512_sub_ps(y, _mm512_cvtepi32_ps(j));
+        const __mmask16 past = _mm512_cmp_ps_mask(_mm512_add_ps(fx, fy), one, _CMP_GT_OQ);
+        const __mmask16 room = _mm512_cmple_epi32_mask(
+            _mm512_add_epi32(_mm512_add_epi32(i, j), _mm512_set1_epi32(2)), _mm512_set1_epi32(n));
+        const __mmask16 upper = past & room;
+        if (past & ~room) return false;  // on the far edge: lattice_cell scales back onto it
+        if (upper != 0 && upper != 0xFFFF) return false;
+        const std::int32_t i0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(i));
+        const std::int32_t j0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(j));
+        if (_mm512_cmpneq_epi32_mask(i, _mm512_set1_epi32(i0)) | _mm512_cmpneq_epi32_mask(j, _mm512_set1_epi32(j0)))
+            return false;
+        // The corners as locate() finds them (rows i and i + 1 start at row_i, row_next).
+        const std::uint64_t nn = std::uint64_t(n), ci = std::uint64_t(i0), cj = std::uint64_t(j0);
+        const std::uint64_t row_i = ci * (nn + 1) - ci * (ci - 1) / 2, row_next = row_i + (nn + 1 - ci);
+        const std::uint64_t right = row_next + cj, up = row_i + cj + 1;
+        const Vec3f* E = (front ? b.front : b.back) + b.offset[t0];
+        const Vec3f c0 = E[upper ? row_next + cj + 1 : row_i + cj];
+        const Vec3f c1 = E[upper ? up : right], c2 = E[upper ? right : up];
+        auto channel = [&](float a0, float a1, float a2, float* e) {
+            const float base = upper ? a1 + a2 - a0 : a0;
+            const float dx = upper ? a0 - a1 : a1 - a0, dy = upper ? a0 - a2 : a2 - a0;
+            _mm512_store_ps(e, _mm512_fmadd_ps(fy, _mm512_set1_ps(dy),
+                                               _mm512_fmadd_ps(fx, _mm512_set1_ps(dx), _mm512_set1_ps(base))));
+        };
+        channel(c0.x, c1.x, c2.x, out.E[0]);
+        channel(c0.y, c1.y, c2.y, out.E[1]);
+        channel(c0.z, c1.z, c2.z, out.E[2]);
+        const Vec3f al = b.albedo[t0], em = front ? b.emission[t0] : Vec3f{0.0f, 0.0f, 0.0f};
+        _mm512_store_ps(out.a[0], _mm512_set1_ps(al.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(al.y));
+        _mm512_store_ps(out.a[2], _mm512_set1_ps(al.z));
+        _mm512_store_ps(out.M[0], _mm512_set1_ps(em.x)), _mm512_store_ps(out.M[1], _mm512_set1_ps(em.y));
+        _mm512_store_ps(out.M[2], _mm512_set1_ps(em.z));
+        return true;
+    }
+
     void blend16(const BakedLattice& b, LaneLight& __restrict out) const {
         const __mmask16 on_front = hit_lanes & front_lanes, on_back = hit_lanes & ~front_lanes;
         const float *F = &b.front->x, *B = &b.back->x;
@@ -726,14 +850,14 @@ struct LatticeLanes {
             return v;
         };
         const __m512 w0 = _mm512_load_ps(weight[0]), w1 = _mm512_load_ps(weight[1]), w2 = _mm512_load_ps(weight[2]);
-        float* E[3] = {out.Ex, out.Ey, out.Ez};
+        float* E[3] = {out.E[0], out.E[1], out.E[2]};
         for (int axis = 0; axis < 3; ++axis)
             _mm512_store_ps(E[axis], _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(corner(0, axis), w0),
                                                                  _mm512_mul_ps(corner(1, axis), w1)),
                                                    _mm512_mul_ps(corner(2, axis), w2)));
         const float *albedo = &b.albedo->x, *emission = &b.emission->x;
-        float* A[3] = {out.ax, out.ay, out.az};
-        float* M[3] = {out.mx, out.my, out.mz};
+        float* A[3] = {out.a[0], out.a[1], out.a[2]};
+        float* M[3] = {out.M[0], out.M[1], out.M[2]};
         if (one_triangle) {
             const std::size_t t0 = 3 * std::size_t(tri[k0]);
             for (int axis = 0; axis < 3; ++axis) {
@@ -821,29 +945,18 @@ inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out) {
 
 // A packet of 16 painting pixels shaded in lanes from their texels (channels apart, 0..255)
 // and light into rgb (16 pixels x 3): the operations of the row's shading of its pending
-// pixels in the same order (SrgbTable's lookup on the same clamp, index and fraction; albedo
-// x reflectance; x irradiance / pi; + emission), so the same floats.
+// pixels in the same order (SrgbCurve's decode; albedo x reflectance; x irradiance / pi;
+// + emission), so the same floats.
 void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const float (&M)[3][16],
-                  const DisplayOptions& o, const float* srgb_values, float* __restrict rgb) {
+                  const DisplayOptions& o, const SrgbCurve& srgb, float* __restrict rgb) {
     const __m512 reflectance = _mm512_set1_ps(o.painting_reflectance);
     const __m512 inv_pi = _mm512_set1_ps(kInvPi);
     __m512 L[3];
     for (int c = 0; c < 3; ++c) {
-        __m512 albedo;
         const __m512 code = _mm512_load_ps(tex[c]);
-        if (o.srgb_albedo) {
-            // std::clamp(code, 0, 255) as SrgbTable: the codes are finite, so max and min.
-            const __m512 x = _mm512_mul_ps(
-                _mm512_min_ps(_mm512_max_ps(code, _mm512_setzero_ps()), _mm512_set1_ps(255.0f)),
-                _mm512_set1_ps(float(SrgbTable::kSteps)));
-            const __m512i i = _mm512_cvttps_epi32(x);
-            const __m512 f = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i));
-            const __m512 v0 = _mm512_i32gather_ps(i, srgb_values, 4);
-            const __m512 v1 = _mm512_i32gather_ps(_mm512_add_epi32(i, _mm512_set1_epi32(1)), srgb_values, 4);
-            albedo = _mm512_mul_ps(_mm512_add_ps(v0, _mm512_mul_ps(f, _mm512_sub_ps(v1, v0))), reflectance);
-        } else {
-            albedo = _mm512_mul_ps(_mm512_mul_ps(code, _mm512_set1_ps(1.0f / 255.0f)), reflectance);
-        }
+        const __m512 albedo = o.srgb_albedo
+                                  ? _mm512_mul_ps(srgb.decode16(code), reflectance)
+                                  : _mm512_mul_ps(_mm512_mul_ps(code, _mm512_set1_ps(1.0f / 255.0f)), reflectance);
         const __m512 scale = _mm512_mul_ps(_mm512_load_ps(E[c]), inv_pi);
         L[c] = _mm512_add_ps(_mm512_mul_ps(albedo, scale), _mm512_load_ps(M[c]));
     }
@@ -861,21 +974,26 @@ struct PendingPixel {
 }  // namespace
 
 namespace {
-// A packet of 16 painting pixels of the row (one painting) waiting for its texels: uv, level,
-// irradiance and emission per lane, and once sampled (TrilinearLanes) its texels.
-struct PacketToSample {
-    alignas(64) double u[16], v[16];
-    alignas(64) float lod[16];
-    alignas(64) float E[3][16], M[3][16];
+// A packet of 16 pixels of the row wholly on one surface whose light is a baked lattice,
+// waiting for the row's end: Embree's hits and the side each lane sees, then its light, and
+// on a painting its origin's uv and its lanes' offsets and levels, and its texels.
+struct DeferredPacket {
+    RTCHit16 hit;  // geomID, primID, u, v and Ng (instID unused)
+    alignas(64) std::int32_t back[16];
+    LaneLight light;
+    PacketUv uv;
     alignas(64) float tex[3][16];
     std::uint32_t x0;
-    int placement;
-    bool sampled;
+    int placement;        // -1: a room surface
+    bool mapped, sampled;  // uv, tex hold them
 };
+// Deferred packets per stage of the row's end: short enough that a batch's data stay in the
+// first-level cache, long enough that the packets' latencies overlap.
+constexpr std::size_t kStageBatch = 8;
 
 // A worker's per-row arrays (see render_eye), kept between calls in each thread.
 struct RowScratch {
-    std::vector<PacketToSample> packets;
+    std::vector<DeferredPacket> packets;
     std::vector<TrilinearLanes> samplers;  // per placement, for frame samplers_frame
     std::uint64_t samplers_frame = 0, samplers_call = 0;  // their frame, and render_eye call
     std::vector<PendingPixel> pending;
@@ -1033,11 +1151,14 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     std::atomic<std::uint64_t> reused{0};
     GS_CHECK(!left || left_rgb != nullptr);
     const Vec3f origin(eye.position);
-    const SrgbTable& srgb_decode = srgb_table();
+    const SrgbCurve& srgb_decode = srgb_curve();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
     std::atomic<std::uint64_t> rays_ticks{0}, vt_ticks{0}, shade_ticks{0}, reuse_ticks{0};
     std::vector<double> column_sx(w);  // screen x of each column's centre
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
+    // Per column, its screen x less that of its packet's first column (PlaneMap::map_packet).
+    std::vector<float> column_ds((std::size_t(w) + 15) / 16 * 16, 0.0f);
+    for (std::uint32_t x = 0; x < w; ++x) column_ds[x] = float(column_sx[x] - column_sx[x & ~15u]);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
 #if defined(__AVX512F__)
@@ -1125,23 +1246,32 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                              const RTCRayHit16& h) {
             lap(t_rays);
             start_row(row);
-            // The packet's hit points and eye-facing unit normals in SIMD lanes (all 16, hit
-            // or not: the lanes are independent), then the hits compacted into the queries.
+            // The side of each hit the eye sees (back: the ray runs along Embree's geometric
+            // normal), in SIMD lanes (all 16, hit or not: the lanes are independent); the hit
+            // points and eye-facing unit normals only where something reads them (the G-buffer,
+            // the right eye's claims, a lighting that is not a baked lattice).
             alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16], inv_len[16];
-            for (std::uint32_t k = 0; k < 16; ++k) {
-                const float gx = h.hit.Ng_x[k], gy = h.hit.Ng_y[k], gz = h.hit.Ng_z[k];
-                inv_len[k] = gx * gx + gy * gy + gz * gz;
-            }
-            inverse_sqrt_16(inv_len);
-            for (std::uint32_t k = 0; k < 16; ++k) {
-                const float dx = h.ray.dir_x[k], dy = h.ray.dir_y[k], dz = h.ray.dir_z[k];
-                const float t = h.ray.tfar[k];
-                hx[k] = origin.x + dx * t, hy[k] = origin.y + dy * t, hz[k] = origin.z + dz * t;
-                const float gx = h.hit.Ng_x[k] * inv_len[k], gy = h.hit.Ng_y[k] * inv_len[k],
-                            gz = h.hit.Ng_z[k] * inv_len[k];
-                // Two-sided: the side the eye sees.
-                const bool back = gx * dx + gy * dy + gz * dz > 0;
-                nx[k] = back ? -gx : gx, ny[k] = back ? -gy : gy, nz[k] = back ? -gz : gz;
+            alignas(64) std::int32_t back[16];
+            for (std::uint32_t k = 0; k < 16; ++k)
+                back[k] = -std::int32_t(h.hit.Ng_x[k] * h.ray.dir_x[k] + h.hit.Ng_y[k] * h.ray.dir_y[k] +
+                                            h.hit.Ng_z[k] * h.ray.dir_z[k] > 0);
+            if (keep_hits || claim || !baked)
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    const float t = h.ray.tfar[k];
+                    hx[k] = origin.x + h.ray.dir_x[k] * t, hy[k] = origin.y + h.ray.dir_y[k] * t;
+                    hz[k] = origin.z + h.ray.dir_z[k] * t;
+                }
+            if (claim || !baked) {
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    const float gx = h.hit.Ng_x[k], gy = h.hit.Ng_y[k], gz = h.hit.Ng_z[k];
+                    inv_len[k] = gx * gx + gy * gy + gz * gz;
+                }
+                inverse_sqrt_16(inv_len);
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    const float gx = h.hit.Ng_x[k] * inv_len[k], gy = h.hit.Ng_y[k] * inv_len[k],
+                                gz = h.hit.Ng_z[k] * inv_len[k];
+                    nx[k] = back[k] ? -gx : gx, ny[k] = back[k] ? -gy : gy, nz[k] = back[k] ? -gz : gz;
+                }
             }
             // The buffers and the counts in restrict locals: through the captured references,
             // every store forced their reload (it might alias them).
@@ -1213,24 +1343,45 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
                 lap(t_reuse);
             }
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+            // A packet wholly on one surface with its light in the baked lattice (nearly every
+            // packet) waits whole for the row's end, where the row's packets are lit, mapped,
+            // sampled and shaded stage by stage (done here, one packet after another between
+            // Embree's calls, each stage's latencies stalled the packet).
+            if (dense && lanes16) {
+                if (claim) {
+                    claim->claim16(claim_target, claim_depth, std::uint32_t(row_start),
+                                   claim->claim_rows(rows_aligned, row, rb, re));
+                    lap(t_reuse);
+                }
+                DeferredPacket& d = sc.packets[packet_count++];
+                std::copy_n(h.hit.geomID, 16, d.hit.geomID), std::copy_n(h.hit.primID, 16, d.hit.primID);
+                std::copy_n(h.hit.u, 16, d.hit.u), std::copy_n(h.hit.v, 16, d.hit.v);
+                std::copy_n(h.hit.Ng_x, 16, d.hit.Ng_x), std::copy_n(h.hit.Ng_y, 16, d.hit.Ng_y);
+                std::copy_n(h.hit.Ng_z, 16, d.hit.Ng_z);
+                std::copy_n(back, 16, d.back);
+                d.x0 = i0, d.placement = lane_pl[0];
+                return;
+            }
+#endif
             // The hits' light per lane: the baked lattice read in lanes (its points fetched
             // now, blended after the plane map below), else the lighting's batch call, its
             // records spread onto their lanes.
             LaneLight& ll = lane_light;
             if (m && lanes16) {
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
-                lattice.locate16(*baked, h.hit.geomID, h.hit.primID, h.hit.u, h.hit.v, hit, nx, ny, nz);
+                lattice.locate16(*baked, h.hit, hit, back);
 #endif
             } else if (m && baked) {
-                lattice.locate(*baked, h.hit.geomID, h.hit.primID, h.hit.u, h.hit.v, hit, nx, ny, nz);
+                lattice.locate(*baked, h.hit, hit, back);
             } else if (m) {
                 lighting.light_batch(queries.data(), m, lights.data());
                 for (std::uint32_t j = 0; j < m; ++j) {
                     const SurfaceLight& sl = lights[j];
                     const std::uint32_t k = lane[j];
-                    ll.Ex[k] = sl.irradiance.x, ll.Ey[k] = sl.irradiance.y, ll.Ez[k] = sl.irradiance.z;
-                    ll.ax[k] = sl.albedo.x, ll.ay[k] = sl.albedo.y, ll.az[k] = sl.albedo.z;
-                    ll.mx[k] = sl.emission.x, ll.my[k] = sl.emission.y, ll.mz[k] = sl.emission.z;
+                    ll.E[0][k] = sl.irradiance.x, ll.E[1][k] = sl.irradiance.y, ll.E[2][k] = sl.irradiance.z;
+                    ll.a[0][k] = sl.albedo.x, ll.a[1][k] = sl.albedo.y, ll.a[2][k] = sl.albedo.z;
+                    ll.M[0][k] = sl.emission.x, ll.M[1][k] = sl.emission.y, ll.M[2][k] = sl.emission.z;
                 }
             }
             lap(t_shade);
@@ -1284,7 +1435,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(a), _mm512_load_ps(E)), inv_pi),
                                          _mm512_load_ps(M));
                 };
-                store_rgb16(L(ll.ax, ll.Ex, ll.mx), L(ll.ay, ll.Ey, ll.my), L(ll.az, ll.Ez, ll.mz),
+                store_rgb16(L(ll.a[0], ll.E[0], ll.M[0]), L(ll.a[1], ll.E[1], ll.M[1]), L(ll.a[2], ll.E[2], ll.M[2]),
                             rgb_out + 3 * row_start);
                 _mm512_storeu_ps(lod_out + row_start, _mm512_set1_ps(kNaN));
                 m = 0;  // nothing left for the loop below
@@ -1294,8 +1445,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 if (lane_pl[j] >= 0) continue;
                 const std::uint32_t k = lane[j];
                 const std::size_t i = row_start + k;
-                const Vec3f L = Vec3f{ll.ax[k], ll.ay[k], ll.az[k]} * Vec3f{ll.Ex[k], ll.Ey[k], ll.Ez[k]} * kInvPi +
-                                Vec3f{ll.mx[k], ll.my[k], ll.mz[k]};
+                const Vec3f L = Vec3f{ll.a[0][k], ll.a[1][k], ll.a[2][k]} * Vec3f{ll.E[0][k], ll.E[1][k], ll.E[2][k]} * kInvPi +
+                                Vec3f{ll.M[0][k], ll.M[1][k], ll.M[2][k]};
                 rgb_out[3 * i] = L.x, rgb_out[3 * i + 1] = L.y, rgb_out[3 * i + 2] = L.z;
                 lod_out[i] = kNaN;
             }
@@ -1308,40 +1459,13 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             double* __restrict const vs_out = vs.data();
             float* __restrict const lods_out = lods.data();
             const float bias = o.lod_bias;
-#if defined(__AVX512F__)
-            // A packet wholly on one painting is not queued pixel by pixel: it waits whole for
-            // the row's end, where the row's packets are sampled in lanes (TrilinearLanes) one
-            // after another and shaded in lanes, the same floats as the pending pixels below;
-            // one that TrilinearLanes declines joins them then. (Its level and light stores
-            // are apart from the loop below: folded into it, with the loop skipping the queue
-            // for such a packet, the left eye took 7 % longer.)
-            if (dense_painting && packet_samplers[std::size_t(lane_pl[0])].enabled()) {
-                PacketToSample& d = sc.packets[packet_count++];
-                std::copy_n(pu, 16, d.u), std::copy_n(pv, 16, d.v);
-                for (std::uint32_t k = 0; k < 16; ++k) d.lod[k] = sampled_lod(plod[k], bias);
-                std::copy_n(ll.Ex, 16, d.E[0]), std::copy_n(ll.Ey, 16, d.E[1]), std::copy_n(ll.Ez, 16, d.E[2]);
-                std::copy_n(ll.mx, 16, d.M[0]), std::copy_n(ll.my, 16, d.M[1]), std::copy_n(ll.mz, 16, d.M[2]);
-                d.x0 = i0, d.placement = lane_pl[0];
-                std::copy_n(d.lod, 16, lod_out + row_start);
-                if (keep_light) {
-                    for (std::uint32_t k = 0; k < 16; ++k) {
-                        Vec3f& sc_k = scale_out[row_start + k];
-                        sc_k.x = ll.Ex[k] * kInvPi, sc_k.y = ll.Ey[k] * kInvPi, sc_k.z = ll.Ez[k] * kInvPi;
-                        Vec3f& add_k = add_out[row_start + k];
-                        add_k.x = ll.mx[k], add_k.y = ll.my[k], add_k.z = ll.mz[k];
-                    }
-                }
-                lap(t_vt);
-                return;
-            }
-#endif
             std::size_t pc = pending_count;
             GS_CHECK(pc + np <= w);  // one pixel per column and row
             for (std::uint32_t q = 0; q < np; ++q) {
                 const std::uint32_t j = pj[q], k = lane[j];
                 const std::size_t i = row_start + k;
-                const Vec3f scale = Vec3f{ll.Ex[k], ll.Ey[k], ll.Ez[k]} * kInvPi;
-                const Vec3f emission{ll.mx[k], ll.my[k], ll.mz[k]};
+                const Vec3f scale = Vec3f{ll.E[0][k], ll.E[1][k], ll.E[2][k]} * kInvPi;
+                const Vec3f emission{ll.M[0][k], ll.M[1][k], ll.M[2][k]};
                 if (keep_light) {
                     scale_out[i].x = scale.x, scale_out[i].y = scale.y, scale_out[i].z = scale.z;
                     add_out[i].x = emission.x, add_out[i].y = emission.y, add_out[i].z = emission.z;
@@ -1507,20 +1631,78 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 copied_count += copied;
             }
 #if defined(__AVX512F__)
-            // The row's whole painting packets sampled in lanes, one after another (their
-            // latencies overlap); one that TrilinearLanes cannot take joins the pending pixels.
-            for (std::size_t q = 0; q < packet_count; ++q) {
-                PacketToSample& d = sc.packets[q];
-                d.sampled = packet_samplers[std::size_t(d.placement)].sample16(d.u, d.v, d.lod, d.tex[0], d.tex[1], d.tex[2]);
-                if (d.sampled) continue;
-                GS_CHECK(pending_count + 16 <= w);  // one pixel per column and row
-                for (std::uint32_t k = 0; k < 16; ++k) {
-                    const std::size_t pc = pending_count++;
-                    PendingPixel& pp = pending[pc];
-                    pp.x = d.x0 + k, pp.placement = d.placement;
-                    pp.scale = Vec3f{d.E[0][k], d.E[1][k], d.E[2][k]} * kInvPi;
-                    pp.add = Vec3f{d.M[0][k], d.M[1][k], d.M[2][k]};
-                    us[pc] = d.u[k], vs[pc] = d.v[k], lods[pc] = d.lod[k];
+            // The row's deferred packets, in batches stage by stage: each packet's light (the
+            // baked lattice in lanes), shaded at once on a room surface; a painting packet's
+            // origin uv, offsets and levels (PlaneMap::map_packet), then its texels
+            // (TrilinearLanes); it is shaded after the pending pixels' sampling below. A
+            // painting packet either declines joins the pending pixels.
+            {
+                float* __restrict const lod_row = g.lod.data() + row * w;
+                float* __restrict const rgb_row = rgb + 3 * row * w;
+                Vec3f* __restrict const scale_row = keep_light ? g.scale.data() + row * w : nullptr;
+                Vec3f* __restrict const add_row = keep_light ? g.add.data() + row * w : nullptr;
+                // A packet's 16 pixels queued as pending pixels at uv (u, v) and level lod.
+                auto pend16 = [&](const DeferredPacket& d, const double* u, const double* v, const float* lod) {
+                    GS_CHECK(pending_count + 16 <= w);  // one pixel per column and row
+                    for (std::uint32_t k = 0; k < 16; ++k) {
+                        const std::size_t pc = pending_count++, x = d.x0 + k;
+                        PendingPixel& pp = pending[pc];
+                        pp.x = std::uint32_t(x), pp.placement = d.placement;
+                        pp.scale = Vec3f{d.light.E[0][k], d.light.E[1][k], d.light.E[2][k]} * kInvPi;
+                        pp.add = Vec3f{d.light.M[0][k], d.light.M[1][k], d.light.M[2][k]};
+                        us[pc] = u[k], vs[pc] = v[k], lods[pc] = lod[k];
+                        lod_row[x] = lod[k];
+                        if (keep_light) scale_row[x] = pp.scale, add_row[x] = pp.add;
+                    }
+                };
+                const __m512i all_hit = _mm512_set1_epi32(-1);
+                alignas(64) int all_hits[16];
+                _mm512_store_si512(all_hits, all_hit);
+                const __m512 inv_pi = _mm512_set1_ps(kInvPi);
+                for (std::size_t q0 = 0; q0 < packet_count; q0 += kStageBatch) {
+                    const std::size_t q1 = std::min(packet_count, q0 + kStageBatch);
+                    for (std::size_t q = q0; q < q1; ++q) {
+                        DeferredPacket& d = sc.packets[q];
+                        LaneLight& L = d.light;
+                        if (!lattice.light16_one_cell(*baked, d.hit, d.back, L)) {
+                            lattice.locate16(*baked, d.hit, all_hits, d.back);
+                            lattice.blend16(*baked, L);
+                        }
+                        if (d.placement >= 0) continue;
+                        auto radiance = [&](int c) {
+                            return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(L.a[c]), _mm512_load_ps(L.E[c])), inv_pi),
+                                                 _mm512_load_ps(L.M[c]));
+                        };
+                        store_rgb16(radiance(0), radiance(1), radiance(2), rgb_row + 3 * std::size_t(d.x0));
+                        _mm512_storeu_ps(lod_row + d.x0, _mm512_set1_ps(kNaN));
+                    }
+                    lap(t_shade);
+                    for (std::size_t q = q0; q < q1; ++q) {
+                        DeferredPacket& d = sc.packets[q];
+                        d.mapped = d.sampled = false;
+                        if (d.placement < 0) continue;
+                        const std::size_t pl = std::size_t(d.placement);
+                        d.mapped = packet_samplers[pl].enabled() &&
+                                   maps[pl].map_packet(plane(d.placement), column_sx[d.x0], column_ds.data() + d.x0,
+                                                       o.lod_bias, d.uv);
+                        if (d.mapped) continue;
+                        // Not a normal footprint (a grazing view): map_columns patches it in double.
+                        alignas(64) double u[16], v[16];
+                        alignas(64) float lod[16];
+                        maps[pl].map_columns<true>(plane(d.placement), 16, column_sx.data() + d.x0, u, v, lod);
+                        for (std::uint32_t k = 0; k < 16; ++k) lod[k] = sampled_lod(lod[k], o.lod_bias);
+                        pend16(d, u, v, lod);
+                    }
+                    for (std::size_t q = q0; q < q1; ++q) {
+                        DeferredPacket& d = sc.packets[q];
+                        if (!d.mapped) continue;
+                        d.sampled = packet_samplers[std::size_t(d.placement)].sample16(d.uv, d.tex[0], d.tex[1], d.tex[2]);
+                        if (d.sampled) continue;
+                        alignas(64) double u[16], v[16];
+                        for (std::uint32_t k = 0; k < 16; ++k) u[k] = d.uv.u0 + d.uv.du[k], v[k] = d.uv.v0 + d.uv.dv[k];
+                        pend16(d, u, v, d.uv.lod);
+                    }
+                    lap(t_vt);
                 }
             }
 #endif
@@ -1573,9 +1755,20 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             }
 #if defined(__AVX512F__)
             for (std::size_t q = 0; q < packet_count; ++q) {
-                const PacketToSample& d = sc.packets[q];
+                const DeferredPacket& d = sc.packets[q];
                 if (!d.sampled) continue;
-                shade_packet(d.tex, d.E, d.M, o, srgb_decode.value.data(), rgb + 3 * (row * w + d.x0));
+                const std::size_t at = row * w + d.x0;
+                shade_packet(d.tex, d.light.E, d.light.M, o, srgb_decode, rgb + 3 * at);
+                std::copy_n(d.uv.lod, 16, g.lod.data() + at);
+                if (keep_light) {
+                    Vec3f* __restrict const scale_out = g.scale.data() + at;
+                    Vec3f* __restrict const add_out = g.add.data() + at;
+                    for (std::uint32_t k = 0; k < 16; ++k) {
+                        scale_out[k].x = d.light.E[0][k] * kInvPi, scale_out[k].y = d.light.E[1][k] * kInvPi;
+                        scale_out[k].z = d.light.E[2][k] * kInvPi;
+                        add_out[k].x = d.light.M[0][k], add_out[k].y = d.light.M[1][k], add_out[k].z = d.light.M[2][k];
+                    }
+                }
                 painting_count += 16;
             }
 #endif

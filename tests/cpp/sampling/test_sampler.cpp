@@ -444,38 +444,43 @@ TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
     EXPECT_GT(worst32, 1.0);
 }
 
-// The display pass's packets: TrilinearLanes::sample16 on 16 neighbouring samples (a row of
-// pixels across the painting, at every scale from magnified to minified, sloped rows, rows
-// across tile edges, coordinates outside [0, 1], NaN levels, half or all tiles resident)
-// either declines or gives the per-sample trilinear reference's floats bit for bit; with all
-// tiles resident it accepts most packets (those whose footprints lie in one or two tiles per
-// level).
-TEST(TrilinearLanes, PacketsEqualPerSampleArithmeticOrDecline) {
+// The display pass's packets: TrilinearLanes::sample16 on 16 neighbouring samples given as
+// the display maps them (lane 0's uv in double, the lanes' offsets in float: a row of pixels
+// across the painting, at every scale from magnified to minified, sloped rows, rows across
+// tile edges, coordinates outside [0, 1], NaN levels, half or all tiles resident) either
+// declines or gives the per-sample trilinear reference's samples within 0.01 of a code (the
+// same texels and weights to float rounding); with all tiles resident it accepts the packets
+// whose footprints lie in one or two tiles per level away from the painting's edges (about
+// half of them).
+TEST(TrilinearLanes, PacketsFromTheirOriginAgreeWithTheReferenceOrDecline) {
     const CutPainting painting(1777, 901, 64, 4, 41);
     const std::uint32_t L = painting.level_count();
     for (double resident : {1.0, 0.5}) {
         VirtualTexture vt(painting.layout, 24, 24, painting.source());
-        std::mt19937 rng(43);
+        std::mt19937 rng(53);
         painting.insert_random(vt, resident, rng);
         TrilinearLanes lanes(vt, 0);
         if (!lanes.enabled()) GTEST_SKIP() << "built without AVX-512: sample16 always declines";
         std::uniform_real_distribution<double> unit(-0.03, 1.03), slope(-1.0, 1.0);
         std::size_t accepted = 0, blended = 0;
+        double worst = 0;
         const std::size_t packets = 6000;
         for (std::size_t q = 0; q < packets; ++q) {
             alignas(64) double u[16], v[16];
             alignas(64) float lod[16], r[16], g[16], b[16];
-            // Texels per sample along the row: 1/8 to 8; the level mostly follows it.
             const double step = std::exp2(slope(rng) * 3.0) / 1777.0;
             const double tilt = q % 5 == 0 ? slope(rng) * 4 : slope(rng) * 0.05;
             const double u0 = unit(rng), v0 = unit(rng);
             const float lod0 = q % 7 == 0 ? float(slope(rng) * L) : float(std::log2(step * 1777.0) + 0.2 * slope(rng));
+            PacketUv packet;
+            packet.u0 = u0, packet.v0 = v0;
             for (int k = 0; k < 16; ++k) {
                 u[k] = u0 + step * k, v[k] = v0 + tilt * step * k;
                 lod[k] = lod0 + 0.01f * float(k);
                 if (q % 11 == 0) lod[k] = std::floor(lod0);  // one level
+                packet.du[k] = float(step * k), packet.dv[k] = float(tilt * step * k), packet.lod[k] = lod[k];
             }
-            if (q % 13 == 0) lod[q % 16] = std::numeric_limits<float>::quiet_NaN();
+            if (q % 13 == 0) lod[q % 16] = packet.lod[q % 16] = std::numeric_limits<float>::quiet_NaN();
             std::vector<float> ref(48);
             SampleRequest s;
             s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = ref.data();
@@ -483,23 +488,50 @@ TEST(TrilinearLanes, PacketsEqualPerSampleArithmeticOrDecline) {
             bool ok;
             {
                 const auto lock = vt.read_lock();
-                ok = lanes.sample16(u, v, lod, r, g, b);
+                ok = lanes.sample16(packet, r, g, b);
             }
             if (!ok) continue;
             ++accepted;
             for (int k = 0; k < 16; ++k) {
                 blended += lod[k] > 0 && lod[k] < float(L - 1) && lod[k] != std::floor(lod[k]);
-                ASSERT_EQ(r[k], ref[3 * k]) << "packet " << q << " lane " << k;
-                ASSERT_EQ(g[k], ref[3 * k + 1]) << "packet " << q << " lane " << k;
-                ASSERT_EQ(b[k], ref[3 * k + 2]) << "packet " << q << " lane " << k;
+                const float got[3] = {r[k], g[k], b[k]};
+                for (int c = 0; c < 3; ++c) {
+                    worst = std::max(worst, double(std::abs(got[c] - ref[3 * k + c])));
+                    ASSERT_NEAR(got[c], ref[3 * k + c], 0.01) << "packet " << q << " lane " << k;
+                }
             }
         }
         EXPECT_GT(blended, 16 * accepted / 8);  // two levels blended in a good share of lanes
-        // All resident: packets on one tile per level and those across one tile edge (about
-        // a fifth more than on one tile alone) are accepted.
-        if (resident == 1.0) EXPECT_GT(accepted, packets * 6 / 10);
-        else EXPECT_LT(accepted, packets * 9 / 10);  // fallbacks decline
+        // All resident: about half the packets are accepted (the others reach the painting's
+        // edges, span levels more than one apart or three tiles); half resident: fallbacks
+        // decline.
+        if (resident == 1.0) EXPECT_GT(accepted, packets * 4 / 10);
+        else EXPECT_LT(accepted, packets * 9 / 10);
+        RecordProperty("largest_difference_codes_" + std::to_string(int(resident * 100)), std::to_string(worst));
     }
+}
+
+// A packet whose lanes reach the painting's edge, where sample() clamps, is declined.
+TEST(TrilinearLanes, PacketsFromTheirOriginDeclineAtTheEdges) {
+    const CutPainting painting(600, 400, 32, 2, 29);
+    VirtualTexture vt(painting.layout, 64, 64, painting.source());
+    painting.insert_all(vt);
+    TrilinearLanes lanes(vt, 0);
+    if (!lanes.enabled()) GTEST_SKIP() << "built without AVX-512: sample16 always declines";
+    alignas(64) float r[16], g[16], b[16];
+    const auto lock = vt.read_lock();
+    for (double u0 : {0.0, 0.5 / 600, 1.0 - 16.0 / 600, 0.4}) {
+        PacketUv packet;
+        packet.u0 = u0, packet.v0 = 0.5;
+        for (int k = 0; k < 16; ++k) packet.du[k] = float(k / 600.0), packet.lod[k] = 0.25f;
+        EXPECT_EQ(lanes.sample16(packet, r, g, b), u0 == 0.4) << "u0 " << u0;
+    }
+    PacketUv nan;
+    nan.u0 = 0.5, nan.v0 = 0.5;
+    nan.du[3] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_FALSE(lanes.sample16(nan, r, g, b));
+    nan.du[3] = 0, nan.v0 = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_FALSE(lanes.sample16(nan, r, g, b));
 }
 
 // Nothing to sample in lanes for a painting the texture does not hold: sample() reports it.
@@ -508,9 +540,10 @@ TEST(TrilinearLanes, DisabledForAPaintingNotInTheTexture) {
     VirtualTexture vt(painting.layout, 16, 16, painting.source());
     TrilinearLanes lanes(vt, 1);
     EXPECT_FALSE(lanes.enabled());
-    alignas(64) double u[16] = {}, v[16] = {};
-    alignas(64) float lod[16] = {}, out[3][16];
-    EXPECT_FALSE(lanes.sample16(u, v, lod, out[0], out[1], out[2]));
+    PacketUv packet;
+    packet.u0 = packet.v0 = 0.5;
+    alignas(64) float out[3][16];
+    EXPECT_FALSE(lanes.sample16(packet, out[0], out[1], out[2]));
 }
 
 // The page entries sample16 keeps between calls are only as current as the caller's read
@@ -526,9 +559,12 @@ TEST(TrilinearLanes, ForgetsItsTilesWhenTheResidencyChanges) {
     // A magnified packet in the middle of level 0's tile (5, 4) and level 1's (2, 2).
     alignas(64) double u[16], v[16];
     alignas(64) float lod[16], r[16], g[16], b[16];
+    PacketUv packet;
     for (int k = 0; k < 16; ++k) {
         u[k] = (5.3 * P + 0.2 * k) / 600.0, v[k] = (4.5 * P) / 400.0, lod[k] = 0.4f;
+        packet.du[k] = float(u[k] - u[0]), packet.lod[k] = lod[k];
     }
+    packet.u0 = u[0], packet.v0 = v[0];
     std::vector<std::uint8_t> tile(painting.layout.tile_bytes());
     auto put = [&](std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
         const TileKey k{0, l, tx, ty};
@@ -543,15 +579,17 @@ TEST(TrilinearLanes, ForgetsItsTilesWhenTheResidencyChanges) {
         sample_trilinear_reference(vt, s);
         return out;
     };
-    auto lanes_equal = [&](const std::vector<float>& ref) {
+    auto lanes_equal = [&](const std::vector<float>& ref) {  // to the packets' 0.01 of a code
         for (int k = 0; k < 16; ++k)
-            if (r[k] != ref[3 * k] || g[k] != ref[3 * k + 1] || b[k] != ref[3 * k + 2]) return false;
+            if (std::abs(r[k] - ref[3 * k]) > 0.01f || std::abs(g[k] - ref[3 * k + 1]) > 0.01f ||
+                std::abs(b[k] - ref[3 * k + 2]) > 0.01f)
+                return false;
         return true;
     };
     const std::vector<float> before = reference();
     {
         const auto lock = vt.read_lock();
-        ASSERT_TRUE(lanes.sample16(u, v, lod, r, g, b));
+        ASSERT_TRUE(lanes.sample16(packet, r, g, b));
     }
     EXPECT_TRUE(lanes_equal(before));
     // Every other level-0 tile of the painting's first rows: the cache's least recently used
@@ -566,7 +604,7 @@ TEST(TrilinearLanes, ForgetsItsTilesWhenTheResidencyChanges) {
     bool ok;
     {
         const auto lock = vt.read_lock();
-        ok = lanes.sample16(u, v, lod, r, g, b);
+        ok = lanes.sample16(packet, r, g, b);
     }
     if (ok) EXPECT_TRUE(lanes_equal(after));
 }
