@@ -1242,37 +1242,95 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         LaneLight lane_light;
         LatticeLanes lattice;
 
+        // The side of each of a packet's hits the eye sees (back: the ray runs along Embree's
+        // geometric normal), in SIMD lanes (all 16, hit or not: the lanes are independent).
+        auto back_sides = [](const RTCRayHit16& h, std::int32_t* back) {
+            for (std::uint32_t k = 0; k < 16; ++k)
+                back[k] = -std::int32_t(h.hit.Ng_x[k] * h.ray.dir_x[k] + h.hit.Ng_y[k] * h.ray.dir_y[k] +
+                                            h.hit.Ng_z[k] * h.ray.dir_z[k] > 0);
+        };
+        // The packet's hit points, and their eye-facing unit normals (with_normals), in lanes.
+        auto hit_points = [&](const RTCRayHit16& h, const std::int32_t* back, bool with_normals, float* hx,
+                              float* hy, float* hz, float* nx, float* ny, float* nz) {
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float t = h.ray.tfar[k];
+                hx[k] = origin.x + h.ray.dir_x[k] * t, hy[k] = origin.y + h.ray.dir_y[k] * t;
+                hz[k] = origin.z + h.ray.dir_z[k] * t;
+            }
+            if (!with_normals) return;
+            alignas(64) float inv_len[16];
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float gx = h.hit.Ng_x[k], gy = h.hit.Ng_y[k], gz = h.hit.Ng_z[k];
+                inv_len[k] = gx * gx + gy * gy + gz * gz;
+            }
+            inverse_sqrt_16(inv_len);
+            for (std::uint32_t k = 0; k < 16; ++k) {
+                const float gx = h.hit.Ng_x[k] * inv_len[k], gy = h.hit.Ng_y[k] * inv_len[k],
+                            gz = h.hit.Ng_z[k] * inv_len[k];
+                nx[k] = back[k] ? -gx : gx, ny[k] = back[k] ? -gy : gy, nz[k] = back[k] ? -gz : gz;
+            }
+        };
+
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+        // A packet wholly on one surface with its light in the baked lattice (nearly every
+        // packet): its hits kept (and the right eye's claims made) now, the rest deferred to
+        // the row's end, where the row's packets are lit, mapped, sampled and shaded stage by
+        // stage (done here, one packet after another between Embree's calls, each stage's
+        // latencies stalled the packet).
+        auto defer = [&](std::size_t row, std::uint32_t i0, const RTCRayHit16& h, unsigned g0) {
+            DeferredPacket& d = sc.packets[packet_count++];
+            back_sides(h, d.back);
+            std::copy_n(h.hit.geomID, 16, d.hit.geomID), std::copy_n(h.hit.primID, 16, d.hit.primID);
+            std::copy_n(h.hit.u, 16, d.hit.u), std::copy_n(h.hit.v, 16, d.hit.v);
+            std::copy_n(h.hit.Ng_x, 16, d.hit.Ng_x), std::copy_n(h.hit.Ng_y, 16, d.hit.Ng_y);
+            std::copy_n(h.hit.Ng_z, 16, d.hit.Ng_z);
+            d.x0 = i0, d.placement = g0 < scene.geom_placement.size() ? scene.geom_placement[g0] : -1;
+            traced_count += 16, hit_count += 16;
+            if (!keep_hits && !claim) return;
+            alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16];
+            hit_points(h, d.back, bool(claim), hx, hy, hz, nx, ny, nz);
+            const std::size_t row_start = row * w + i0;
+            if (keep_hits) {
+                std::fill_n(g.geom.data() + row_start, 16, g0);
+                Vec3f* __restrict const p_out = g.p.data() + row_start;
+                for (std::uint32_t k = 0; k < 16; ++k) p_out[k].x = hx[k], p_out[k].y = hy[k], p_out[k].z = hz[k];
+            }
+            if (claim) {
+                alignas(64) std::uint32_t claim_target[16];
+                alignas(64) float claim_depth[16];
+                alignas(64) int hit[16];
+                std::fill_n(hit, 16, -1);
+                lap(t_shade);
+                claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
+                claim->claim16(claim_target, claim_depth, std::uint32_t(row_start),
+                               claim->claim_rows(rows_aligned, row, rb, re));
+                lap(t_reuse);
+            }
+        };
+#endif
+
         auto on_packet = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
                              const RTCRayHit16& h) {
             lap(t_rays);
             start_row(row);
-            // The side of each hit the eye sees (back: the ray runs along Embree's geometric
-            // normal), in SIMD lanes (all 16, hit or not: the lanes are independent); the hit
-            // points and eye-facing unit normals only where something reads them (the G-buffer,
-            // the right eye's claims, a lighting that is not a baked lattice).
-            alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16], inv_len[16];
-            alignas(64) std::int32_t back[16];
-            for (std::uint32_t k = 0; k < 16; ++k)
-                back[k] = -std::int32_t(h.hit.Ng_x[k] * h.ray.dir_x[k] + h.hit.Ng_y[k] * h.ray.dir_y[k] +
-                                            h.hit.Ng_z[k] * h.ray.dir_z[k] > 0);
-            if (keep_hits || claim || !baked)
-                for (std::uint32_t k = 0; k < 16; ++k) {
-                    const float t = h.ray.tfar[k];
-                    hx[k] = origin.x + h.ray.dir_x[k] * t, hy[k] = origin.y + h.ray.dir_y[k] * t;
-                    hz[k] = origin.z + h.ray.dir_z[k] * t;
-                }
-            if (claim || !baked) {
-                for (std::uint32_t k = 0; k < 16; ++k) {
-                    const float gx = h.hit.Ng_x[k], gy = h.hit.Ng_y[k], gz = h.hit.Ng_z[k];
-                    inv_len[k] = gx * gx + gy * gy + gz * gz;
-                }
-                inverse_sqrt_16(inv_len);
-                for (std::uint32_t k = 0; k < 16; ++k) {
-                    const float gx = h.hit.Ng_x[k] * inv_len[k], gy = h.hit.Ng_y[k] * inv_len[k],
-                                gz = h.hit.Ng_z[k] * inv_len[k];
-                    nx[k] = back[k] ? -gx : gx, ny[k] = back[k] ? -gy : gy, nz[k] = back[k] ? -gz : gz;
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+            if (n == 16 && lanes16) {
+                const unsigned g0 = h.hit.geomID[0];
+                const __m512i valid16 = _mm512_load_si512(valid);
+                if (g0 != kNoHit && _mm512_test_epi32_mask(valid16, valid16) == 0xFFFF &&
+                    _mm512_cmpeq_epi32_mask(_mm512_loadu_si512(h.hit.geomID), _mm512_set1_epi32(int(g0))) == 0xFFFF) {
+                    defer(row, i0, h, g0);
+                    return;
                 }
             }
+#endif
+            // Every other packet: the side each hit sees; the hit points and eye-facing unit
+            // normals only where something reads them (the G-buffer, the right eye's claims, a
+            // lighting that is not a baked lattice).
+            alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16];
+            alignas(64) std::int32_t back[16];
+            back_sides(h, back);
+            if (keep_hits || claim || !baked) hit_points(h, back, claim || !baked, hx, hy, hz, nx, ny, nz);
             // The buffers and the counts in restrict locals: through the captured references,
             // every store forced their reload (it might alias them).
             unsigned* __restrict const geom_out = g.geom.data();
@@ -1343,27 +1401,6 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
                 lap(t_reuse);
             }
-#if defined(__AVX512F__) && defined(__AVX512DQ__)
-            // A packet wholly on one surface with its light in the baked lattice (nearly every
-            // packet) waits whole for the row's end, where the row's packets are lit, mapped,
-            // sampled and shaded stage by stage (done here, one packet after another between
-            // Embree's calls, each stage's latencies stalled the packet).
-            if (dense && lanes16) {
-                if (claim) {
-                    claim->claim16(claim_target, claim_depth, std::uint32_t(row_start),
-                                   claim->claim_rows(rows_aligned, row, rb, re));
-                    lap(t_reuse);
-                }
-                DeferredPacket& d = sc.packets[packet_count++];
-                std::copy_n(h.hit.geomID, 16, d.hit.geomID), std::copy_n(h.hit.primID, 16, d.hit.primID);
-                std::copy_n(h.hit.u, 16, d.hit.u), std::copy_n(h.hit.v, 16, d.hit.v);
-                std::copy_n(h.hit.Ng_x, 16, d.hit.Ng_x), std::copy_n(h.hit.Ng_y, 16, d.hit.Ng_y);
-                std::copy_n(h.hit.Ng_z, 16, d.hit.Ng_z);
-                std::copy_n(back, 16, d.back);
-                d.x0 = i0, d.placement = lane_pl[0];
-                return;
-            }
-#endif
             // The hits' light per lane: the baked lattice read in lanes (its points fetched
             // now, blended after the plane map below), else the lighting's batch call, its
             // records spread onto their lanes.
