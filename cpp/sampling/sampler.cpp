@@ -778,8 +778,9 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
     auto tiles = [&](const LevelTaps& lt, int c, __mmask16 mask, LevelTiles& out) {
         out.count = 0;
         for (int k = 0; k < 2 && mask; ++k) {
-            auto first = [&](__m512i x) {
-                return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_maskz_compress_epi32(mask, x))));
+            auto first = [&](__m512i x) {  // the value of mask's first lane (lane 0 nearly always)
+                return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(
+                    mask & 1 ? x : _mm512_maskz_compress_epi32(mask, x))));
             };
             const std::uint32_t l = first(lt.level), cx = first(lt.cx), cy = first(lt.cy);
             const __mmask16 same = _mm512_mask_cmpeq_epi32_mask(mask, lt.level, _mm512_set1_epi32(int(l))) &
@@ -807,7 +808,7 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
         const int lo = _mm512_mask_reduce_min_epi32(mask, lt.offset);
         const int hi = _mm512_mask_reduce_max_epi32(mask, lt.offset);
         const int span = hi - lo + 7;  // bytes lo .. hi + 6
-        const int first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_maskz_compress_epi32(mask, lt.row)));
+        const int first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(mask & 1 ? lt.row : _mm512_maskz_compress_epi32(mask, lt.row)));
         if (span <= 128 && !_mm512_mask_cmpneq_epi32_mask(mask, lt.row, _mm512_set1_epi32(first_row))) {
             const __m512i rel = _mm512_maskz_sub_epi32(mask, lt.offset, _mm512_set1_epi32(lo));
             // Each lane's byte index rel + 0..3 (rel < 128: one byte).
@@ -855,9 +856,7 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
             if (q == 0) {
                 R = _mm512_mul_ps(w[0], tr), G = _mm512_mul_ps(w[0], tg), B = _mm512_mul_ps(w[0], tb);
             } else {
-                R = _mm512_add_ps(R, _mm512_mul_ps(w[q], tr));
-                G = _mm512_add_ps(G, _mm512_mul_ps(w[q], tg));
-                B = _mm512_add_ps(B, _mm512_mul_ps(w[q], tb));
+                R = _mm512_fmadd_ps(w[q], tr, R), G = _mm512_fmadd_ps(w[q], tg, G), B = _mm512_fmadd_ps(w[q], tb, B);
             }
         }
     };
@@ -866,9 +865,9 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
     if (blending) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
         __m512 R1, G1, B1;
         bilinear(coarse_taps, coarse, R1, G1, B1);
-        R = _mm512_add_ps(R, _mm512_mul_ps(blend, _mm512_sub_ps(R1, R)));
-        G = _mm512_add_ps(G, _mm512_mul_ps(blend, _mm512_sub_ps(G1, G)));
-        B = _mm512_add_ps(B, _mm512_mul_ps(blend, _mm512_sub_ps(B1, B)));
+        R = _mm512_fmadd_ps(blend, _mm512_sub_ps(R1, R), R);
+        G = _mm512_fmadd_ps(blend, _mm512_sub_ps(G1, G), G);
+        B = _mm512_fmadd_ps(blend, _mm512_sub_ps(B1, B), B);
     }
     _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
     return true;
@@ -916,10 +915,13 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
             _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
             return false;
+        // (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1): its floor by an arithmetic shift,
+        // its fraction in eighths.
+        const std::int32_t oi = std::int32_t(o);
         for (int k = 0; k < 3; ++k) {
-            const double Xk = (o + 0.5) * (k == 0 ? 1.0 : k == 1 ? 0.5 : 0.25) - 0.5, ok = std::floor(Xk);
-            a.origin[k] = std::int32_t(ok);
-            a.frac[k] = _mm512_set1_ps(float(Xk - ok));
+            const std::int32_t num = 2 * oi + 1 - (1 << k);
+            a.origin[k] = num >> (k + 1);
+            a.frac[k] = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
         }
         return true;
     };
@@ -934,11 +936,17 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         const __mmask16 k1 = _mm512_cmpeq_epi32_mask(k, one_i), k2 = _mm512_cmpeq_epi32_mask(k, _mm512_set1_epi32(2));
         const __m512 minus_k = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_setzero_si512(), k));
         auto one_axis = [&](const Axis& a, __m512& f, __m512i& cell, __m512i& in_tile) {
-            __m512 frac = _mm512_mask_blend_ps(k1, a.frac[0], a.frac[1]);
-            frac = _mm512_mask_blend_ps(k2, frac, a.frac[2]);
-            __m512i origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin[0]), _mm512_set1_epi32(a.origin[1]));
-            origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(a.origin[2]));
-            const __m512 x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);  // >= 0
+            __m512 x;
+            __m512i origin;
+            if (!(k1 | k2)) {  // every lane at level L (nearly always)
+                x = a.rel, origin = _mm512_set1_epi32(a.origin[0]);
+            } else {
+                __m512 frac = _mm512_mask_blend_ps(k1, a.frac[0], a.frac[1]);
+                frac = _mm512_mask_blend_ps(k2, frac, a.frac[2]);
+                origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin[0]), _mm512_set1_epi32(a.origin[1]));
+                origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(a.origin[2]));
+                x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);
+            }
             const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             f = _mm512_sub_ps(x, fl);
             const __m512i i = _mm512_add_epi32(origin, _mm512_cvttps_epi32(fl));

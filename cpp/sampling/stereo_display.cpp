@@ -214,7 +214,10 @@ struct PlaneMap {
                                                                   _mm512_sub_epi32(biased, _mm512_set1_epi32(127)),
                                                                   _mm512_set1_epi32(1)));
         const __m512 one = _mm512_set1_ps(1.0f);
-        const __m512 sr = _mm512_div_ps(_mm512_sub_ps(m, one), _mm512_add_ps(m, one)), s2 = _mm512_mul_ps(sr, sr);
+        // s = (m - 1) / (m + 1) with the reciprocal's estimate and one Newton step (2^-28).
+        const __m512 m1 = _mm512_add_ps(m, one), r14 = _mm512_rcp14_ps(m1);
+        const __m512 inv_m1 = _mm512_fmadd_ps(r14, _mm512_fnmadd_ps(m1, r14, one), r14);
+        const __m512 sr = _mm512_mul_ps(_mm512_sub_ps(m, one), inv_m1), s2 = _mm512_mul_ps(sr, sr);
         __m512 series = _mm512_fmadd_ps(s2, _mm512_set1_ps(1.0f / 9), _mm512_set1_ps(1.0f / 7));
         series = _mm512_fmadd_ps(s2, series, _mm512_set1_ps(1.0f / 5));
         series = _mm512_fmadd_ps(s2, series, _mm512_set1_ps(1.0f / 3));
