@@ -834,7 +834,8 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
                                           static_cast<const void*>(base), 1);
     };
     // One level's bilinear blend: channels R, G, B of 16 lanes.
-    auto bilinear = [&](const LevelTaps& lt, const LevelTiles& lv, __m512& R, __m512& G, __m512& B) {
+    auto bilinear = [&](const LevelTaps& lt, const LevelTiles& lv, __m512& R, __m512& G, __m512& B)
+                        __attribute__((always_inline)) {
         const __m512 one = _mm512_set1_ps(1.0f);
         const __m512 fx = lt.fx, fy = lt.fy;
         const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);

@@ -776,17 +776,34 @@ struct LatticeLanes {
     // (c1 + c2 - c0) + fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 +
     // E2 w2 to float rounding. Returns false, having written nothing, for any other packet
     // (the caller then takes locate16 and blend16).
-    bool light16_one_cell(const BakedLattice& b, const RTCHit16& h, const std::int32_t* __restrict back,
-                          LaneLight& __restrict out) const {
+    // The common packet in one step instead of locate16 and blend16: all 16 lanes hit one
+    // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in at most
+    // two sub-triangles of the lattice's cells (a cell, or two across a cell's edge or
+    // diagonal: the first and the last lane's; a row of pixels crosses the lattice along a
+    // line). On a sub-triangle the light is an affine function of the cell coordinates: its
+    // three corners read once (scalar loads, no gathers) and two fused multiply-adds per
+    // channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower; upper: (c1 + c2 - c0) +
+    // fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 + E2 w2 to float
+    // rounding. Returns false, having written nothing, for any other packet (the caller then
+    // takes locate16 and blend16).
+    bool light16_cells(const BakedLattice& b, const RTCHit16& h, const std::int32_t* __restrict back,
+                       LaneLight& __restrict out) {
         const unsigned g0 = h.geomID[0], p0 = h.primID[0];
         const __m512i prim = _mm512_loadu_si512(h.primID);
         if (_mm512_cmpneq_epi32_mask(prim, _mm512_set1_epi32(int(p0)))) return false;
-        const std::uint64_t t0 = std::uint64_t(b.first_triangle[g0]) + p0;
-        const Vec3f w = b.normal[t0];
-        const __m512 facing = _mm512_add_ps(
-            _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(w.x), _mm512_loadu_ps(h.Ng_x)),
-                          _mm512_mul_ps(_mm512_set1_ps(w.y), _mm512_loadu_ps(h.Ng_y))),
-            _mm512_mul_ps(_mm512_set1_ps(w.z), _mm512_loadu_ps(h.Ng_z)));
+        TriangleCache& c = triangle_cache_;
+        if (g0 != c.geom || p0 != c.prim) {  // another triangle: its data
+            c.geom = g0, c.prim = p0;
+            c.t = std::uint64_t(b.first_triangle[g0]) + p0;
+            const Vec3f w = b.normal[c.t];
+            c.wx = _mm512_set1_ps(w.x), c.wy = _mm512_set1_ps(w.y), c.wz = _mm512_set1_ps(w.z);
+            c.n = std::int32_t(b.segments[c.t]);
+            c.front_points = b.front + b.offset[c.t], c.back_points = b.back + b.offset[c.t];
+            c.albedo = b.albedo[c.t], c.emission = b.emission[c.t];
+            for (CellLight& cl : c.cells) cl.i = -1;
+        }
+        const __m512 facing = _mm512_fmadd_ps(
+            c.wz, _mm512_loadu_ps(h.Ng_z), _mm512_fmadd_ps(c.wy, _mm512_loadu_ps(h.Ng_y), _mm512_mul_ps(c.wx, _mm512_loadu_ps(h.Ng_x))));
         const __m512i back_i = _mm512_loadu_si512(back);
         const __mmask16 front = _mm512_cmp_ps_mask(facing, _mm512_setzero_ps(), _CMP_GT_OQ) ^
                                 _mm512_test_epi32_mask(back_i, back_i);
@@ -798,7 +815,7 @@ struct LatticeLanes {
         const __mmask16 inside = _mm512_cmp_ps_mask(b1, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(b2, zero, _CMP_GE_OQ) &
                                  _mm512_cmp_ps_mask(_mm512_add_ps(b1, b2), one, _CMP_LE_OQ);
         if (inside != 0xFFFF) return false;
-        const std::int32_t n = std::int32_t(b.segments[t0]);
+        const std::int32_t n = c.n;
         const __m512 nf = _mm512_set1_ps(float(n));
         const __m512 x = _mm512_mul_ps(b1, nf), y = _mm512_mul_ps(b2, nf);
         const __m512i n1 = _mm512_set1_epi32(n - 1);
@@ -810,33 +827,80 @@ struct LatticeLanes {
             _mm512_add_epi32(_mm512_add_epi32(i, j), _mm512_set1_epi32(2)), _mm512_set1_epi32(n));
         const __mmask16 upper = past & room;
         if (past & ~room) return false;  // on the far edge: lattice_cell scales back onto it
-        if (upper != 0 && upper != 0xFFFF) return false;
-        const std::int32_t i0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(i));
-        const std::int32_t j0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(j));
-        if (_mm512_cmpneq_epi32_mask(i, _mm512_set1_epi32(i0)) | _mm512_cmpneq_epi32_mask(j, _mm512_set1_epi32(j0)))
-            return false;
-        // The corners as locate() finds them (rows i and i + 1 start at row_i, row_next).
-        const std::uint64_t nn = std::uint64_t(n), ci = std::uint64_t(i0), cj = std::uint64_t(j0);
-        const std::uint64_t row_i = ci * (nn + 1) - ci * (ci - 1) / 2, row_next = row_i + (nn + 1 - ci);
-        const std::uint64_t right = row_next + cj, up = row_i + cj + 1;
-        const Vec3f* E = (front ? b.front : b.back) + b.offset[t0];
-        const Vec3f c0 = E[upper ? row_next + cj + 1 : row_i + cj];
-        const Vec3f c1 = E[upper ? up : right], c2 = E[upper ? right : up];
-        auto channel = [&](float a0, float a1, float a2, float* e) {
-            const float base = upper ? a1 + a2 - a0 : a0;
-            const float dx = upper ? a0 - a1 : a1 - a0, dy = upper ? a0 - a2 : a2 - a0;
-            _mm512_store_ps(e, _mm512_fmadd_ps(fy, _mm512_set1_ps(dy),
-                                               _mm512_fmadd_ps(fx, _mm512_set1_ps(dx), _mm512_set1_ps(base))));
+        // The sub-triangles of the first and the last lane, and the lanes on each.
+        const bool seen_front = front != 0;
+        auto sub_triangle = [&](int lane, std::int32_t ci, std::int32_t cj, const CellLight* keep,
+                                __mmask16& lanes) -> const CellLight& {
+            const bool up = (upper >> lane) & 1;
+            lanes = _mm512_cmpeq_epi32_mask(i, _mm512_set1_epi32(ci)) & _mm512_cmpeq_epi32_mask(j, _mm512_set1_epi32(cj)) &
+                    (up ? upper : __mmask16(~upper));
+            return cell_light(ci, cj, up, seen_front, keep);
         };
-        channel(c0.x, c1.x, c2.x, out.E[0]);
-        channel(c0.y, c1.y, c2.y, out.E[1]);
-        channel(c0.z, c1.z, c2.z, out.E[2]);
-        const Vec3f al = b.albedo[t0], em = front ? b.emission[t0] : Vec3f{0.0f, 0.0f, 0.0f};
-        _mm512_store_ps(out.a[0], _mm512_set1_ps(al.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(al.y));
-        _mm512_store_ps(out.a[2], _mm512_set1_ps(al.z));
+        __mmask16 first_lanes, last_lanes;
+        const __m128i last4i = _mm512_extracti32x4_epi32(i, 3), last4j = _mm512_extracti32x4_epi32(j, 3);
+        const CellLight& first = sub_triangle(0, _mm_cvtsi128_si32(_mm512_castsi512_si128(i)),
+                                              _mm_cvtsi128_si32(_mm512_castsi512_si128(j)), nullptr, first_lanes);
+        if (first_lanes == 0xFFFF) {
+            for (int k = 0; k < 3; ++k)
+                _mm512_store_ps(out.E[k], _mm512_fmadd_ps(fy, first.dy[k], _mm512_fmadd_ps(fx, first.dx[k], first.base[k])));
+        } else {
+            const CellLight& last = sub_triangle(15, _mm_extract_epi32(last4i, 3), _mm_extract_epi32(last4j, 3), &first,
+                                                 last_lanes);
+            if ((first_lanes | last_lanes) != 0xFFFF) return false;
+            for (int k = 0; k < 3; ++k)
+                _mm512_store_ps(out.E[k], _mm512_mask_blend_ps(last_lanes & ~first_lanes,
+                                                               _mm512_fmadd_ps(fy, first.dy[k], _mm512_fmadd_ps(fx, first.dx[k], first.base[k])),
+                                                               _mm512_fmadd_ps(fy, last.dy[k], _mm512_fmadd_ps(fx, last.dx[k], last.base[k]))));
+        }
+        const Vec3f em = seen_front ? c.emission : Vec3f{0.0f, 0.0f, 0.0f};
+        _mm512_store_ps(out.a[0], _mm512_set1_ps(c.albedo.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(c.albedo.y));
+        _mm512_store_ps(out.a[2], _mm512_set1_ps(c.albedo.z));
         _mm512_store_ps(out.M[0], _mm512_set1_ps(em.x)), _mm512_store_ps(out.M[1], _mm512_set1_ps(em.y));
         _mm512_store_ps(out.M[2], _mm512_set1_ps(em.z));
         return true;
+    }
+    // A sub-triangle's light as E = base + fx dx + fy dy, per channel.
+    struct CellLight {
+        std::int32_t i = -1, j = -1;  // i < 0: empty
+        bool upper = false, front = false;
+        __m512 base[3], dx[3], dy[3];
+    };
+    // The last packets' triangle (consecutive packets of a row nearly always share it) and
+    // the last two sub-triangles of its lattice they were lit from.
+    struct TriangleCache {
+        unsigned geom = RTC_INVALID_GEOMETRY_ID, prim = 0;
+        std::uint64_t t = 0;
+        __m512 wx, wy, wz;  // the triangle's normal
+        std::int32_t n = 0;
+        const Vec3f *front_points = nullptr, *back_points = nullptr;
+        Vec3f albedo, emission;
+        CellLight cells[2];
+        int next = 0;  // the entry to replace next
+    } triangle_cache_;
+    // The light of sub-triangle (ci, cj, upper) of the cached triangle's lattice, seen from the
+    // front or the back: cached, or made from its corners as locate() finds them (rows i and
+    // i + 1 start at row_i, row_next) in the entry that is not keep.
+    const CellLight& cell_light(std::int32_t ci, std::int32_t cj, bool upper, bool front, const CellLight* keep) {
+        TriangleCache& c = triangle_cache_;
+        for (const CellLight& cl : c.cells)
+            if (cl.i == ci && cl.j == cj && cl.upper == upper && cl.front == front) return cl;
+        if (&c.cells[c.next] == keep) c.next ^= 1;
+        CellLight& cl = c.cells[c.next];
+        c.next ^= 1;
+        const std::uint64_t nn = std::uint64_t(c.n), i = std::uint64_t(ci), j = std::uint64_t(cj);
+        const std::uint64_t row_i = i * (nn + 1) - i * (i - 1) / 2, row_next = row_i + (nn + 1 - i);
+        const std::uint64_t right = row_next + j, up = row_i + j + 1;
+        const Vec3f* E = front ? c.front_points : c.back_points;
+        const Vec3f c0 = E[upper ? row_next + j + 1 : row_i + j];
+        const Vec3f c1 = E[upper ? up : right], c2 = E[upper ? right : up];
+        auto channel = [&](int k, float a0, float a1, float a2) {
+            cl.base[k] = _mm512_set1_ps(upper ? a1 + a2 - a0 : a0);
+            cl.dx[k] = _mm512_set1_ps(upper ? a0 - a1 : a1 - a0);
+            cl.dy[k] = _mm512_set1_ps(upper ? a0 - a2 : a2 - a0);
+        };
+        channel(0, c0.x, c1.x, c2.x), channel(1, c0.y, c1.y, c2.y), channel(2, c0.z, c1.z, c2.z);
+        cl.i = ci, cl.j = cj, cl.upper = upper, cl.front = front;
+        return cl;
     }
 
     void blend16(const BakedLattice& b, LaneLight& __restrict out) const {
@@ -1704,7 +1768,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     for (std::size_t q = q0; q < q1; ++q) {
                         DeferredPacket& d = sc.packets[q];
                         LaneLight& L = d.light;
-                        if (!lattice.light16_one_cell(*baked, d.hit, d.back, L)) {
+                        if (!lattice.light16_cells(*baked, d.hit, d.back, L)) {
                             lattice.locate16(*baked, d.hit, all_hits, d.back);
                             lattice.blend16(*baked, L);
                         }

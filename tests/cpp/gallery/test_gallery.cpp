@@ -630,11 +630,14 @@ private:
 }  // namespace
 
 TEST(Gallery, BakedLatticeGatheredInLanesEqualsItReadLaneByLane) {
-    // With AVX-512 the display pass gathers the lattice, its triangles' data and the corner
-    // points in 16 lanes; its lanes must give the lane loop's floats on either side of a
-    // surface, for one eye and for the left eye of a stereo pair (which keeps its light for
-    // the right eye), with rays that miss in the same packets as rays that hit. Room's panel
-    // gives a lit back lattice.
+    // With AVX-512 the display pass reads the lattice in 16 lanes: a packet on one triangle and
+    // at most two of its lattice's sub-triangles as one or two affine functions of the cell
+    // coordinates (from corners read once), other packets by gathering the triangles' data and
+    // the corner points. Its lanes must give the lane loop's light to float rounding on either
+    // side of a surface, for one eye and for the left eye of a stereo pair (which keeps its
+    // light for the right eye), with rays that miss in the same packets as rays that hit; the
+    // close looks at the floor and the panel put most packets on one or two sub-triangles.
+    // Room's panel gives a lit back lattice.
     Room room(true);
     Gallery& g = room.gallery;
     room.light_and_bake(0.2);
@@ -646,22 +649,33 @@ TEST(Gallery, BakedLatticeGatheredInLanesEqualsItReadLaneByLane) {
     const DisplayOptions o = GalleryLighting::options(2);
     // The floor and the painting from the front, the panel's lit back and the floor beyond,
     // the floor from below (its unlit back) with the light's.
-    for (const auto& [eye, target] : {std::pair{Vec3d(0.3, 0.75, 1.5), Vec3d(0, 0.2, -0.5)},
-                                      std::pair{Vec3d(-0.3, 0.9, 1.4), Vec3d(0.6, 0.6, 0)},
-                                      std::pair{Vec3d(-0.4, -0.6, 0.9), Vec3d(0, 0.2, -0.5)}}) {
-        const Camera left = Camera::look_at(eye, target, {0, 1, 0}, 100, 53, 29);
-        const Camera right = Camera::look_at(eye + Vec3d(0.064, 0, 0), target + Vec3d(0.064, 0, 0), {0, 1, 0}, 100, 53, 29);
+    auto near = [](const std::vector<float>& x, const std::vector<float>& y) {
+        if (x.size() != y.size()) return false;
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (!(std::abs(x[i] - y[i]) <= 1e-6f + 2e-6f * std::abs(y[i]))) return false;
+        return true;
+    };
+    std::size_t differing = 0;  // pixels whose floats the one-step packets changed
+    for (const auto& [eye, target, fov, width] : {std::tuple{Vec3d(0.3, 0.75, 1.5), Vec3d(0, 0.2, -0.5), 100.0, 53u},
+                                                  std::tuple{Vec3d(-0.3, 0.9, 1.4), Vec3d(0.6, 0.6, 0), 100.0, 53u},
+                                                  std::tuple{Vec3d(-0.4, -0.6, 0.9), Vec3d(0, 0.2, -0.5), 100.0, 53u},
+                                                  std::tuple{Vec3d(0.1, 0.6, 0.5), Vec3d(0.0, 0.0, 0.1), 25.0, 211u},
+                                                  std::tuple{Vec3d(-0.2, 0.6, 0.2), Vec3d(0.6, 0.5, 0.1), 30.0, 211u}}) {
+        const std::uint32_t height = width * 29 / 53;
+        const Camera left = Camera::look_at(eye, target, {0, 1, 0}, fov, width, height);
+        const Camera right = Camera::look_at(eye + Vec3d(0.064, 0, 0), target + Vec3d(0.064, 0, 0), {0, 1, 0}, fov, width, height);
         const std::size_t n = std::size_t(left.width) * left.height;
         std::vector<float> a(3 * n, -1.0f), b(3 * n, -2.0f), al(3 * n), ar(3 * n), bl(3 * n), br(3 * n);
         DisplayPass pa, pb;
         pa.render(view, gathered, room.vt, left, o, a.data());
         pb.render(view, lane_by_lane, room.vt, left, o, b.data());
-        EXPECT_EQ(a, b);
+        EXPECT_TRUE(near(a, b));
+        for (std::size_t i = 0; i < 3 * n; ++i) differing += a[i] != b[i];
         pa.render_stereo(view, gathered, room.vt, left, right, true, o, al.data(), ar.data());
         pb.render_stereo(view, lane_by_lane, room.vt, left, right, true, o, bl.data(), br.data());
-        EXPECT_EQ(al, bl);
-        EXPECT_EQ(ar, br);
-        EXPECT_EQ(al, a);
+        EXPECT_TRUE(near(al, bl));
+        EXPECT_TRUE(near(ar, br));
+        EXPECT_EQ(al, a);  // the left eye does not depend on the right eye's reuse
         // The hit points the stereo pass keeps (whole packets on one surface store them
         // apart from the others) against the per-pixel path's.
         std::vector<float> position(3 * n), unused(3 * n);
@@ -678,9 +692,12 @@ TEST(Gallery, BakedLatticeGatheredInLanesEqualsItReadLaneByLane) {
         }
         EXPECT_GT(compared, 3 * n / 8);
         EXPECT_GT(pa.left_stats().hits, n / 8);
-        EXPECT_LT(pa.left_stats().hits, n);  // rays that miss the open room
+        if (fov > 90) EXPECT_LT(pa.left_stats().hits, n);  // rays that miss the open room
         if (eye.y > 0) {  // lit surfaces in view
             EXPECT_GT(std::count_if(a.begin(), a.end(), [](float v) { return v > 0; }), std::ptrdiff_t(n / 4));
         }
     }
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+    EXPECT_GT(differing, 100u);  // the close looks took the one-step packets (else bit-equal)
+#endif
 }
