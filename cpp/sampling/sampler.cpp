@@ -885,8 +885,9 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     const LaneLevels lv = lane_levels(packet.lod, st.pyramid.top, st.levels);
     // The packet's levels: its finest L and at most L + 1 at the fine level (so L + 2 at the
     // coarse one).
-    const std::int32_t L = _mm512_reduce_min_epi32(lv.l0);
-    if (_mm512_reduce_max_epi32(lv.l0) > L + 1) return false;
+    const std::int32_t L = _mm512_reduce_min_epi32(lv.l0), L_max = _mm512_reduce_max_epi32(lv.l0);
+    if (L_max > L + 1) return false;
+    const bool max_above_L = L_max > L;
     const __m512i one_i = _mm512_set1_epi32(1);
     const TileExtent t = st.tile;
     const __m512 du = _mm512_load_ps(packet.du), dv = _mm512_load_ps(packet.dv);
@@ -930,6 +931,87 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     if (!axis(packet.u0, width, du, ax) || !axis(packet.v0, height, dv, ay)) return false;
     // NaN positions fail neither comparison above: refuse them here.
     if (_mm512_cmp_ps_mask(ax.rel, ay.rel, _CMP_UNORD_Q)) return false;
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+    // The common packet in fewer steps: every lane's fine level L, and at each level every
+    // lane's nearest texel in one tile (trilinear_taps' tile for every lane) and its footprint
+    // on one pair of texel rows. Per level, each row's stretch is loaded once and every
+    // channel of every corner picked into its own lane by one byte permute. The same taps,
+    // texels, products and sums as below.
+    if (!max_above_L) {
+        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
+            const __m512 half_k = _mm512_set1_ps(k ? 0.5f : 1.0f);
+            const __m512 x = _mm512_fmadd_ps(ax.rel, half_k, ax.frac[k]), y = _mm512_fmadd_ps(ay.rel, half_k, ay.frac[k]);
+            const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            const __m512 fx = _mm512_sub_ps(x, x_fl), fy = _mm512_sub_ps(y, y_fl);
+            const __m512i ix = _mm512_cvttps_epi32(x_fl), iy = _mm512_cvttps_epi32(y_fl);
+            // Lane 0's tile by its nearest texel, as trilinear_taps.
+            auto cell = [&](__m512i i, __m512 f, std::int32_t origin) {
+                const std::int32_t n_up = origin + _mm_cvtsi128_si32(_mm512_castsi512_si128(i)) +
+                                          (_mm_cvtss_f32(_mm512_castps512_ps128(f)) >= 0.5f ? 1 : 0);
+                return std::int32_t(st.divide_p(std::uint32_t(n_up)));
+            };
+            const std::int32_t cx = cell(ix, fx, ax.origin[k]), cy = cell(iy, fy, ay.origin[k]);
+            // In-tile texels (from the tile's first, border included) of every lane's footprint.
+            const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(cx * t.payload - t.border - ax.origin[k]));
+            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(cy * t.payload - t.border - ay.origin[k]));
+            const std::int32_t jy0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
+            const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
+            const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
+            const std::int32_t lo = std::min(jx_a, jx_b), hi = std::max(jx_a, jx_b);
+            const __m512i rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(lo));
+            const std::int32_t span = 3 * (hi - lo) + 6;  // bytes of the corners' channels
+            // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
+            // another tile would read this one's border where trilinear_taps might fall back),
+            // the rows the same, the stretch within 128 bytes.
+            auto payload_lanes = [&](__m512i j, __m512 f) {
+                const __m512i n = _mm512_mask_add_epi32(j, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), j,
+                                                        _mm512_set1_epi32(1));
+                return _mm512_cmple_epu32_mask(_mm512_sub_epi32(n, _mm512_set1_epi32(t.border)),
+                                               _mm512_set1_epi32(t.payload - 1));
+            };
+            if ((payload_lanes(jx, fx) & payload_lanes(jy, fy)) != 0xFFFF ||
+                _mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(jy0)) | _mm512_cmpgt_epu32_mask(rel, _mm512_set1_epi32(hi - lo)) ||
+                span > 128)
+                return false;
+            const std::uint8_t* base = st.base(finder, std::uint32_t(L + k), std::uint32_t(cx), std::uint32_t(cy));
+            if (!base) return false;
+            const std::uint8_t* p = base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
+            const __mmask64 m0 = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
+            const __mmask64 m1 = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
+            // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
+            const __m512i byte0 = _mm512_add_epi32(rel, _mm512_add_epi32(rel, rel));
+            constexpr __mmask64 kLowBytes = 0x1111111111111111ull;
+            const __m512 one = _mm512_set1_ps(1.0f);
+            const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
+            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy)}, {_mm512_mul_ps(gx, fy), _mm512_mul_ps(fx, fy)}};
+            __m512 sum[3];
+            for (int row = 0; row < 2; ++row) {
+                const std::uint8_t* q = p + row * t.row_bytes;
+                const __m512i a = _mm512_maskz_loadu_epi8(m0, q), b = _mm512_maskz_loadu_epi8(m1, q + 64);
+                for (int right = 0; right < 2; ++right)
+                    for (int c = 0; c < 3; ++c) {
+                        const __m512i idx = _mm512_add_epi32(byte0, _mm512_set1_epi32(3 * right + c));
+                        const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, a, idx, b));
+                        sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
+                                                        : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
+                    }
+            }
+            R = sum[0], G = sum[1], B = sum[2];
+            return true;
+        };
+        __m512 R, G, B, R1, G1, B1;
+        if (one_tile(0, 0, R, G, B) && (!lv.blending || one_tile(1, 2, R1, G1, B1))) {
+            if (lv.blending) {
+                R = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(R1, R), R);
+                G = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(G1, G), G);
+                B = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(B1, B), B);
+            }
+            _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
+            return true;
+        }
+    }
+#endif
     const __m512 inv_p = _mm512_set1_ps(1.0f / float(t.payload));
     // A level's taps from the lanes' levels l (L or L + 1 or L + 2).
     auto taps = [&](__m512i l) {

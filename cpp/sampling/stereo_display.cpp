@@ -1081,7 +1081,7 @@ struct RowScratch {
 
     void fit(std::size_t w, bool reused) {
         if (pending.size() < w) pending.resize(w), us.resize(w), vs.resize(w), lods.resize(w);
-        if (packets.size() < (w + 15) / 16) packets.resize((w + 15) / 16);
+        if (packets.size() < kStageBatch) packets.resize(kStageBatch);
         if (texels.size() < 3 * w) texels.resize(3 * w);
         if (reused && rx.size() < w) {
             rx.resize(w), rpl.resize(w), rsrc.resize(w), rlod.resize(w);
@@ -1242,7 +1242,6 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         sc.fit(w, left != nullptr);
         std::vector<PendingPixel>& pending = sc.pending;
         std::size_t pending_count = 0;
-        std::size_t packet_count = 0;  // the row's packets in sc.packets
         std::size_t copied_count = 0;  // the row's reused pixels that kept the left radiance
         std::vector<double>&us = sc.us, &vs = sc.vs;  // u and v apart: the sampler's batches read them densely
         std::vector<float>&lods = sc.lods, &texels = sc.texels;
@@ -1288,7 +1287,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             current_row = row;
             // The row's directions D = row_direction + screen x along right.
             row_direction = eye.forward + eye.screen_y(row + 0.5) * eye.up;
-            pending_count = 0, packet_count = 0;
+            pending_count = 0;
         };
 #if defined(__AVX512F__)
         // Per placement, the sampler of whole packets on one painting (TrilinearLanes), made
@@ -1339,23 +1338,108 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         };
 
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
+        // The deferred packets, stage by stage (each stage a short loop over the batch's
+        // independent packets, so their latencies overlap; the batch's data stay in the
+        // first-level cache): each packet's light (the baked lattice in lanes), shaded at once
+        // on a room surface; a painting packet's origin uv, offsets and levels
+        // (PlaneMap::map_packet), its texels (TrilinearLanes), its shading. A painting packet
+        // either declines joins the row's pending pixels.
+        std::size_t batch_count = 0;  // deferred packets waiting in sc.packets
+        const __m512 inv_pi = _mm512_set1_ps(kInvPi);
+        alignas(64) int all_hits[16];
+        std::fill_n(all_hits, 16, -1);
+        auto run_batch = [&] {
+            const std::size_t row = current_row;
+            float* __restrict const lod_row = g.lod.data() + row * w;
+            float* __restrict const rgb_row = rgb + 3 * row * w;
+            Vec3f* __restrict const scale_row = keep_light ? g.scale.data() + row * w : nullptr;
+            Vec3f* __restrict const add_row = keep_light ? g.add.data() + row * w : nullptr;
+            // A packet's 16 pixels queued as pending pixels at uv (u, v) and level lod.
+            auto pend16 = [&](const DeferredPacket& d, const double* u, const double* v, const float* lod) {
+                GS_CHECK(pending_count + 16 <= w);  // one pixel per column and row
+                for (std::uint32_t k = 0; k < 16; ++k) {
+                    const std::size_t pc = pending_count++, x = d.x0 + k;
+                    PendingPixel& pp = pending[pc];
+                    pp.x = std::uint32_t(x), pp.placement = d.placement;
+                    pp.scale = Vec3f{d.light.E[0][k], d.light.E[1][k], d.light.E[2][k]} * kInvPi;
+                    pp.add = Vec3f{d.light.M[0][k], d.light.M[1][k], d.light.M[2][k]};
+                    us[pc] = u[k], vs[pc] = v[k], lods[pc] = lod[k];
+                    lod_row[x] = lod[k];
+                    if (keep_light) scale_row[x] = pp.scale, add_row[x] = pp.add;
+                }
+            };
+            const std::size_t count = batch_count;
+            batch_count = 0;
+            for (std::size_t q = 0; q < count; ++q) {
+                DeferredPacket& d = sc.packets[q];
+                LaneLight& L = d.light;
+                if (!lattice.light16_cells(*baked, d.hit, d.back, L)) {
+                    lattice.locate16(*baked, d.hit, all_hits, d.back);
+                    lattice.blend16(*baked, L);
+                }
+                if (d.placement >= 0) continue;
+                auto radiance = [&](int c) {
+                    return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(L.a[c]), _mm512_load_ps(L.E[c])), inv_pi),
+                                         _mm512_load_ps(L.M[c]));
+                };
+                store_rgb16(radiance(0), radiance(1), radiance(2), rgb_row + 3 * std::size_t(d.x0));
+                _mm512_storeu_ps(lod_row + d.x0, _mm512_set1_ps(kNaN));
+            }
+            lap(t_shade);
+            for (std::size_t q = 0; q < count; ++q) {
+                DeferredPacket& d = sc.packets[q];
+                d.mapped = d.sampled = false;
+                if (d.placement < 0) continue;
+                const std::size_t pl = std::size_t(d.placement);
+                d.mapped = packet_samplers[pl].enabled() &&
+                           maps[pl].map_packet(plane(d.placement), column_sx[d.x0], column_ds.data() + d.x0,
+                                               o.lod_bias, d.uv);
+                if (d.mapped) continue;
+                // Not a normal footprint (a grazing view): map_columns patches it in double.
+                alignas(64) double u[16], v[16];
+                alignas(64) float lod[16];
+                maps[pl].map_columns<true>(plane(d.placement), 16, column_sx.data() + d.x0, u, v, lod);
+                for (std::uint32_t k = 0; k < 16; ++k) lod[k] = sampled_lod(lod[k], o.lod_bias);
+                pend16(d, u, v, lod);
+            }
+            for (std::size_t q = 0; q < count; ++q) {
+                DeferredPacket& d = sc.packets[q];
+                if (!d.mapped) continue;
+                d.sampled = packet_samplers[std::size_t(d.placement)].sample16(d.uv, d.tex[0], d.tex[1], d.tex[2]);
+                if (d.sampled) continue;
+                alignas(64) double u[16], v[16];
+                for (std::uint32_t k = 0; k < 16; ++k) u[k] = d.uv.u0 + d.uv.du[k], v[k] = d.uv.v0 + d.uv.dv[k];
+                pend16(d, u, v, d.uv.lod);
+            }
+            lap(t_vt);
+            for (std::size_t q = 0; q < count; ++q) {
+                const DeferredPacket& d = sc.packets[q];
+                if (!d.sampled) continue;
+                shade_packet(d.tex, d.light.E, d.light.M, o, srgb_decode, rgb_row + 3 * std::size_t(d.x0));
+                std::copy_n(d.uv.lod, 16, lod_row + d.x0);
+                if (keep_light)
+                    for (std::uint32_t k = 0; k < 16; ++k) {
+                        Vec3f& sc_k = scale_row[d.x0 + k];
+                        sc_k.x = d.light.E[0][k] * kInvPi, sc_k.y = d.light.E[1][k] * kInvPi, sc_k.z = d.light.E[2][k] * kInvPi;
+                        Vec3f& add_k = add_row[d.x0 + k];
+                        add_k.x = d.light.M[0][k], add_k.y = d.light.M[1][k], add_k.z = d.light.M[2][k];
+                    }
+                painting_count += 16;
+            }
+            lap(t_shade);
+        };
+#endif
+
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
         // A packet wholly on one surface with its light in the baked lattice (nearly every
         // packet): its hits kept (and the right eye's claims made) now, the rest deferred to
         // the row's end, where the row's packets are lit, mapped, sampled and shaded stage by
         // stage (done here, one packet after another between Embree's calls, each stage's
         // latencies stalled the packet).
-        auto defer = [&](std::size_t row, std::uint32_t i0, const RTCRayHit16& h, unsigned g0) {
-            DeferredPacket& d = sc.packets[packet_count++];
-            back_sides(h, d.back);
-            std::copy_n(h.hit.geomID, 16, d.hit.geomID), std::copy_n(h.hit.primID, 16, d.hit.primID);
-            std::copy_n(h.hit.u, 16, d.hit.u), std::copy_n(h.hit.v, 16, d.hit.v);
-            std::copy_n(h.hit.Ng_x, 16, d.hit.Ng_x), std::copy_n(h.hit.Ng_y, 16, d.hit.Ng_y);
-            std::copy_n(h.hit.Ng_z, 16, d.hit.Ng_z);
-            d.x0 = i0, d.placement = g0 < scene.geom_placement.size() ? scene.geom_placement[g0] : -1;
-            traced_count += 16, hit_count += 16;
-            if (!keep_hits && !claim) return;
+        auto keep_hits_and_claim = [&](std::size_t row, std::uint32_t i0, const RTCRayHit16& h, unsigned g0,
+                                       const std::int32_t* back) {
             alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16];
-            hit_points(h, d.back, bool(claim), hx, hy, hz, nx, ny, nz);
+            hit_points(h, back, bool(claim), hx, hy, hz, nx, ny, nz);
             const std::size_t row_start = row * w + i0;
             if (keep_hits) {
                 std::fill_n(g.geom.data() + row_start, 16, g0);
@@ -1373,6 +1457,18 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                                claim->claim_rows(rows_aligned, row, rb, re));
                 lap(t_reuse);
             }
+        };
+        auto defer = [&](std::size_t row, std::uint32_t i0, const RTCRayHit16& h, unsigned g0) {
+            DeferredPacket& d = sc.packets[batch_count++];
+            back_sides(h, d.back);
+            std::copy_n(h.hit.geomID, 16, d.hit.geomID), std::copy_n(h.hit.primID, 16, d.hit.primID);
+            std::copy_n(h.hit.u, 16, d.hit.u), std::copy_n(h.hit.v, 16, d.hit.v);
+            std::copy_n(h.hit.Ng_x, 16, d.hit.Ng_x), std::copy_n(h.hit.Ng_y, 16, d.hit.Ng_y);
+            std::copy_n(h.hit.Ng_z, 16, d.hit.Ng_z);
+            d.x0 = i0, d.placement = g0 < scene.geom_placement.size() ? scene.geom_placement[g0] : -1;
+            traced_count += 16, hit_count += 16;
+            if (keep_hits || claim) keep_hits_and_claim(row, i0, h, g0, d.back);
+            if (batch_count == kStageBatch) run_batch();
         };
 #endif
 
@@ -1734,81 +1830,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 }
                 copied_count += copied;
             }
-#if defined(__AVX512F__)
-            // The row's deferred packets, in batches stage by stage: each packet's light (the
-            // baked lattice in lanes), shaded at once on a room surface; a painting packet's
-            // origin uv, offsets and levels (PlaneMap::map_packet), then its texels
-            // (TrilinearLanes); it is shaded after the pending pixels' sampling below. A
-            // painting packet either declines joins the pending pixels.
-            {
-                float* __restrict const lod_row = g.lod.data() + row * w;
-                float* __restrict const rgb_row = rgb + 3 * row * w;
-                Vec3f* __restrict const scale_row = keep_light ? g.scale.data() + row * w : nullptr;
-                Vec3f* __restrict const add_row = keep_light ? g.add.data() + row * w : nullptr;
-                // A packet's 16 pixels queued as pending pixels at uv (u, v) and level lod.
-                auto pend16 = [&](const DeferredPacket& d, const double* u, const double* v, const float* lod) {
-                    GS_CHECK(pending_count + 16 <= w);  // one pixel per column and row
-                    for (std::uint32_t k = 0; k < 16; ++k) {
-                        const std::size_t pc = pending_count++, x = d.x0 + k;
-                        PendingPixel& pp = pending[pc];
-                        pp.x = std::uint32_t(x), pp.placement = d.placement;
-                        pp.scale = Vec3f{d.light.E[0][k], d.light.E[1][k], d.light.E[2][k]} * kInvPi;
-                        pp.add = Vec3f{d.light.M[0][k], d.light.M[1][k], d.light.M[2][k]};
-                        us[pc] = u[k], vs[pc] = v[k], lods[pc] = lod[k];
-                        lod_row[x] = lod[k];
-                        if (keep_light) scale_row[x] = pp.scale, add_row[x] = pp.add;
-                    }
-                };
-                const __m512i all_hit = _mm512_set1_epi32(-1);
-                alignas(64) int all_hits[16];
-                _mm512_store_si512(all_hits, all_hit);
-                const __m512 inv_pi = _mm512_set1_ps(kInvPi);
-                for (std::size_t q0 = 0; q0 < packet_count; q0 += kStageBatch) {
-                    const std::size_t q1 = std::min(packet_count, q0 + kStageBatch);
-                    for (std::size_t q = q0; q < q1; ++q) {
-                        DeferredPacket& d = sc.packets[q];
-                        LaneLight& L = d.light;
-                        if (!lattice.light16_cells(*baked, d.hit, d.back, L)) {
-                            lattice.locate16(*baked, d.hit, all_hits, d.back);
-                            lattice.blend16(*baked, L);
-                        }
-                        if (d.placement >= 0) continue;
-                        auto radiance = [&](int c) {
-                            return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(L.a[c]), _mm512_load_ps(L.E[c])), inv_pi),
-                                                 _mm512_load_ps(L.M[c]));
-                        };
-                        store_rgb16(radiance(0), radiance(1), radiance(2), rgb_row + 3 * std::size_t(d.x0));
-                        _mm512_storeu_ps(lod_row + d.x0, _mm512_set1_ps(kNaN));
-                    }
-                    lap(t_shade);
-                    for (std::size_t q = q0; q < q1; ++q) {
-                        DeferredPacket& d = sc.packets[q];
-                        d.mapped = d.sampled = false;
-                        if (d.placement < 0) continue;
-                        const std::size_t pl = std::size_t(d.placement);
-                        d.mapped = packet_samplers[pl].enabled() &&
-                                   maps[pl].map_packet(plane(d.placement), column_sx[d.x0], column_ds.data() + d.x0,
-                                                       o.lod_bias, d.uv);
-                        if (d.mapped) continue;
-                        // Not a normal footprint (a grazing view): map_columns patches it in double.
-                        alignas(64) double u[16], v[16];
-                        alignas(64) float lod[16];
-                        maps[pl].map_columns<true>(plane(d.placement), 16, column_sx.data() + d.x0, u, v, lod);
-                        for (std::uint32_t k = 0; k < 16; ++k) lod[k] = sampled_lod(lod[k], o.lod_bias);
-                        pend16(d, u, v, lod);
-                    }
-                    for (std::size_t q = q0; q < q1; ++q) {
-                        DeferredPacket& d = sc.packets[q];
-                        if (!d.mapped) continue;
-                        d.sampled = packet_samplers[std::size_t(d.placement)].sample16(d.uv, d.tex[0], d.tex[1], d.tex[2]);
-                        if (d.sampled) continue;
-                        alignas(64) double u[16], v[16];
-                        for (std::uint32_t k = 0; k < 16; ++k) u[k] = d.uv.u0 + d.uv.du[k], v[k] = d.uv.v0 + d.uv.dv[k];
-                        pend16(d, u, v, d.uv.lod);
-                    }
-                    lap(t_vt);
-                }
-            }
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+            if (batch_count) run_batch();
 #endif
             // Runs of one painting sampled in one call.
             for (std::size_t k0 = 0; k0 < pending_count;) {
@@ -1857,25 +1880,6 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     }
                 }
             }
-#if defined(__AVX512F__)
-            for (std::size_t q = 0; q < packet_count; ++q) {
-                const DeferredPacket& d = sc.packets[q];
-                if (!d.sampled) continue;
-                const std::size_t at = row * w + d.x0;
-                shade_packet(d.tex, d.light.E, d.light.M, o, srgb_decode, rgb + 3 * at);
-                std::copy_n(d.uv.lod, 16, g.lod.data() + at);
-                if (keep_light) {
-                    Vec3f* __restrict const scale_out = g.scale.data() + at;
-                    Vec3f* __restrict const add_out = g.add.data() + at;
-                    for (std::uint32_t k = 0; k < 16; ++k) {
-                        scale_out[k].x = d.light.E[0][k] * kInvPi, scale_out[k].y = d.light.E[1][k] * kInvPi;
-                        scale_out[k].z = d.light.E[2][k] * kInvPi;
-                        add_out[k].x = d.light.M[0][k], add_out[k].y = d.light.M[1][k], add_out[k].z = d.light.M[2][k];
-                    }
-                }
-                painting_count += 16;
-            }
-#endif
             painting_count += pending_count + copied_count;
             copied_count = 0;
             lap(t_shade);
