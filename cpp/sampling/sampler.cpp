@@ -884,10 +884,13 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     if (width >= kMaxSide || height >= kMaxSide) return false;
     const LaneLevels lv = lane_levels(packet.lod, st.pyramid.top, st.levels);
     // The packet's levels: its finest L and at most L + 1 at the fine level (so L + 2 at the
-    // coarse one).
-    const std::int32_t L = _mm512_reduce_min_epi32(lv.l0), L_max = _mm512_reduce_max_epi32(lv.l0);
-    if (L_max > L + 1) return false;
-    const bool max_above_L = L_max > L;
+    // coarse one). Nearly always every lane's is lane 0's: then no reduction over the lanes.
+    std::int32_t L = _mm_cvtsi128_si32(_mm512_castsi512_si128(lv.l0));
+    const bool levels_differ = _mm512_cmpneq_epi32_mask(lv.l0, _mm512_set1_epi32(L)) != 0;
+    if (levels_differ) {
+        L = _mm512_reduce_min_epi32(lv.l0);
+        if (_mm512_reduce_max_epi32(lv.l0) > L + 1) return false;
+    }
     const __m512i one_i = _mm512_set1_epi32(1);
     const TileExtent t = st.tile;
     const __m512 du = _mm512_load_ps(packet.du), dv = _mm512_load_ps(packet.dv);
@@ -937,7 +940,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     // on one pair of texel rows. Per level, each row's stretch is loaded once and every
     // channel of every corner picked into its own lane by one byte permute. The same taps,
     // texels, products and sums as below.
-    if (!max_above_L) {
+    if (!levels_differ) {
         auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
             const __m512 half_k = _mm512_set1_ps(k ? 0.5f : 1.0f);
             const __m512 x = _mm512_fmadd_ps(ax.rel, half_k, ax.frac[k]), y = _mm512_fmadd_ps(ay.rel, half_k, ay.frac[k]);

@@ -769,14 +769,6 @@ struct LatticeLanes {
     }
 
     // The common packet in one step instead of locate16 and blend16: all 16 lanes hit one
-    // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in one
-    // sub-triangle of one lattice cell, so the light is one affine function of the cell
-    // coordinates: its three corners read once (scalar loads, no gathers) and two fused
-    // multiply-adds per channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower; upper:
-    // (c1 + c2 - c0) + fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 +
-    // E2 w2 to float rounding. Returns false, having written nothing, for any other packet
-    // (the caller then takes locate16 and blend16).
-    // The common packet in one step instead of locate16 and blend16: all 16 lanes hit one
     // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in at most
     // two sub-triangles of the lattice's cells (a cell, or two across a cell's edge or
     // diagonal: the first and the last lane's; a row of pixels crosses the lattice along a
@@ -784,10 +776,11 @@ struct LatticeLanes {
     // three corners read once (scalar loads, no gathers) and two fused multiply-adds per
     // channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower; upper: (c1 + c2 - c0) +
     // fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 + E2 w2 to float
-    // rounding. Returns false, having written nothing, for any other packet (the caller then
-    // takes locate16 and blend16).
+    // rounding. The albedo only with_albedo (a painting's is its texture). Returns false,
+    // having written nothing, for any other packet (the caller then takes locate16 and
+    // blend16).
     bool light16_cells(const BakedLattice& b, const RTCHit16& h, const std::int32_t* __restrict back,
-                       LaneLight& __restrict out) {
+                       bool with_albedo, LaneLight& __restrict out) {
         const unsigned g0 = h.geomID[0], p0 = h.primID[0];
         const __m512i prim = _mm512_loadu_si512(h.primID);
         if (_mm512_cmpneq_epi32_mask(prim, _mm512_set1_epi32(int(p0)))) return false;
@@ -795,18 +788,16 @@ struct LatticeLanes {
         if (g0 != c.geom || p0 != c.prim) {  // another triangle: its data
             c.geom = g0, c.prim = p0;
             c.t = std::uint64_t(b.first_triangle[g0]) + p0;
-            const Vec3f w = b.normal[c.t];
-            c.wx = _mm512_set1_ps(w.x), c.wy = _mm512_set1_ps(w.y), c.wz = _mm512_set1_ps(w.z);
+            c.w = b.normal[c.t];
             c.n = std::int32_t(b.segments[c.t]);
             c.front_points = b.front + b.offset[c.t], c.back_points = b.back + b.offset[c.t];
             c.albedo = b.albedo[c.t], c.emission = b.emission[c.t];
             for (CellLight& cl : c.cells) cl.i = -1;
         }
-        const __m512 facing = _mm512_fmadd_ps(
-            c.wz, _mm512_loadu_ps(h.Ng_z), _mm512_fmadd_ps(c.wy, _mm512_loadu_ps(h.Ng_y), _mm512_mul_ps(c.wx, _mm512_loadu_ps(h.Ng_x))));
+        // One triangle: Embree's normal is the same in every lane (lane 0's, w . Ng as locate16's).
+        const bool normals_agree = c.w.x * h.Ng_x[0] + c.w.y * h.Ng_y[0] + c.w.z * h.Ng_z[0] > 0;
         const __m512i back_i = _mm512_loadu_si512(back);
-        const __mmask16 front = _mm512_cmp_ps_mask(facing, _mm512_setzero_ps(), _CMP_GT_OQ) ^
-                                _mm512_test_epi32_mask(back_i, back_i);
+        const __mmask16 front = __mmask16(normals_agree ? 0xFFFF : 0) ^ _mm512_test_epi32_mask(back_i, back_i);
         if (front != 0 && front != 0xFFFF) return false;
         const __m512 b1 = _mm512_loadu_ps(h.u), b2 = _mm512_loadu_ps(h.v);
         const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
@@ -853,8 +844,10 @@ struct LatticeLanes {
                                                                _mm512_fmadd_ps(fy, last.dy[k], _mm512_fmadd_ps(fx, last.dx[k], last.base[k]))));
         }
         const Vec3f em = seen_front ? c.emission : Vec3f{0.0f, 0.0f, 0.0f};
-        _mm512_store_ps(out.a[0], _mm512_set1_ps(c.albedo.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(c.albedo.y));
-        _mm512_store_ps(out.a[2], _mm512_set1_ps(c.albedo.z));
+        if (with_albedo) {
+            _mm512_store_ps(out.a[0], _mm512_set1_ps(c.albedo.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(c.albedo.y));
+            _mm512_store_ps(out.a[2], _mm512_set1_ps(c.albedo.z));
+        }
         _mm512_store_ps(out.M[0], _mm512_set1_ps(em.x)), _mm512_store_ps(out.M[1], _mm512_set1_ps(em.y));
         _mm512_store_ps(out.M[2], _mm512_set1_ps(em.z));
         return true;
@@ -870,7 +863,7 @@ struct LatticeLanes {
     struct TriangleCache {
         unsigned geom = RTC_INVALID_GEOMETRY_ID, prim = 0;
         std::uint64_t t = 0;
-        __m512 wx, wy, wz;  // the triangle's normal
+        Vec3f w;  // the triangle's normal
         std::int32_t n = 0;
         const Vec3f *front_points = nullptr, *back_points = nullptr;
         Vec3f albedo, emission;
@@ -1373,7 +1366,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             for (std::size_t q = 0; q < count; ++q) {
                 DeferredPacket& d = sc.packets[q];
                 LaneLight& L = d.light;
-                if (!lattice.light16_cells(*baked, d.hit, d.back, L)) {
+                if (!lattice.light16_cells(*baked, d.hit, d.back, d.placement < 0, L)) {
                     lattice.locate16(*baked, d.hit, all_hits, d.back);
                     lattice.blend16(*baked, L);
                 }
