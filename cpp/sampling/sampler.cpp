@@ -1003,8 +1003,90 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             R = sum[0], G = sum[1], B = sum[2];
             return true;
         };
+        // A level whose lanes take two tiles side by side (a packet across a tile's edge):
+        // lane 0's and lane 15's, by their nearest texels, each lane's in the payload of one of
+        // them, one tile row; per tile its stretches, its lanes' bytes picked by masked permutes.
+        auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
+            const __m512 half_k = _mm512_set1_ps(k ? 0.5f : 1.0f);
+            const __m512 x = _mm512_fmadd_ps(ax.rel, half_k, ax.frac[k]), y = _mm512_fmadd_ps(ay.rel, half_k, ay.frac[k]);
+            const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            const __m512 fx = _mm512_sub_ps(x, x_fl), fy = _mm512_sub_ps(y, y_fl);
+            // Texels from the origin, and the nearest ones (trilinear_taps' n_up).
+            const __m512i ix = _mm512_cvttps_epi32(x_fl), iy = _mm512_cvttps_epi32(y_fl);
+            const __m512i one_i = _mm512_set1_epi32(1);
+            const __m512i nx = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, _mm512_set1_ps(0.5f), _CMP_GE_OQ), ix, one_i);
+            const __m512i ny = _mm512_mask_add_epi32(iy, _mm512_cmp_ps_mask(fy, _mm512_set1_ps(0.5f), _CMP_GE_OQ), iy, one_i);
+            const std::int32_t ox = ax.origin[k], oy = ay.origin[k];
+            const std::int32_t first_x = _mm_cvtsi128_si32(_mm512_castsi512_si128(nx));
+            const std::int32_t last_x = _mm_extract_epi32(_mm512_extracti32x4_epi32(nx, 3), 3);
+            const std::int32_t cx[2] = {std::int32_t(st.divide_p(std::uint32_t(ox + first_x))),
+                                        std::int32_t(st.divide_p(std::uint32_t(ox + last_x)))};
+            const std::int32_t cy = std::int32_t(st.divide_p(std::uint32_t(oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(ny)))));
+            auto in_payload = [&](__m512i n, std::int32_t first) {  // n - first in [0, P)
+                return _mm512_cmplt_epu32_mask(_mm512_sub_epi32(n, _mm512_set1_epi32(first)), _mm512_set1_epi32(t.payload));
+            };
+            if (cx[0] == cx[1]) return false;  // one tile (one_tile declined it)
+            constexpr std::uint64_t kLowBytes = 0x1111111111111111ull;
+            __mmask16 lanes[2];
+            lanes[0] = in_payload(nx, cx[0] * t.payload - ox);
+            lanes[1] = __mmask16(in_payload(nx, cx[1] * t.payload - ox) & ~lanes[0]);
+            // The footprints' first texel row in the tile, the same for every lane.
+            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(cy * t.payload - t.border - oy));
+            const std::int32_t jy0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
+            if (__mmask16(lanes[0] | lanes[1]) != 0xFFFF || in_payload(ny, cy * t.payload - oy) != 0xFFFF ||
+                _mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(jy0)))
+                return false;
+            // Per tile: its lanes' in-tile texels, the stretch of each row they read (at most
+            // 128 bytes), and each lane's first byte in it; then the footprints' texels, a
+            // channel of a corner per byte permute (and per tile), and the bilinear sums.
+            const __m512 one = _mm512_set1_ps(1.0f);
+            const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
+            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy)}, {_mm512_mul_ps(gx, fy), _mm512_mul_ps(fx, fy)}};
+            const std::uint8_t* p[2];
+            __mmask64 m0[2], m1[2], bytes[2];
+            __m512i byte0[2];
+            for (int tile = 0; tile < 2; ++tile) {
+                const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(cx[tile] * t.payload - t.border - ox));
+                const std::int32_t lo = _mm512_mask_reduce_min_epi32(lanes[tile], jx);
+                const std::int32_t hi = _mm512_mask_reduce_max_epi32(lanes[tile], jx);
+                const std::int32_t span = 3 * (hi - lo) + 6;  // bytes of the corners' channels
+                if (span > 128) return false;
+                const std::uint8_t* base = st.base(finder + tile, std::uint32_t(L + k), std::uint32_t(cx[tile]), std::uint32_t(cy));
+                if (!base) return false;
+                const __m512i rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(lo));
+                p[tile] = base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
+                m0[tile] = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
+                m1[tile] = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
+                byte0[tile] = _mm512_add_epi32(rel, _mm512_add_epi32(rel, rel));
+                bytes[tile] = _pdep_u64(lanes[tile], kLowBytes);  // byte 0 of its lanes' dwords
+            }
+            __m512 sum[3];
+            for (int row = 0; row < 2; ++row) {
+                __m512i a[2], b[2];
+                for (int tile = 0; tile < 2; ++tile) {
+                    const std::uint8_t* q = p[tile] + row * t.row_bytes;
+                    a[tile] = _mm512_maskz_loadu_epi8(m0[tile], q), b[tile] = _mm512_maskz_loadu_epi8(m1[tile], q + 64);
+                }
+                for (int right = 0; right < 2; ++right)
+                    for (int c = 0; c < 3; ++c) {
+                        const __m512i corner = _mm512_set1_epi32(3 * right + c);
+                        // Each lane's channel in the low byte of its dword (from its tile's
+                        // stretch), the others zeroed.
+                        const __m512i texel_bytes = _mm512_or_si512(
+                            _mm512_maskz_permutex2var_epi8(bytes[0], a[0], _mm512_add_epi32(byte0[0], corner), b[0]),
+                            _mm512_maskz_permutex2var_epi8(bytes[1], a[1], _mm512_add_epi32(byte0[1], corner), b[1]));
+                        const __m512 texel = _mm512_cvtepi32_ps(texel_bytes);
+                        sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
+                                                        : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
+                    }
+            }
+            R = sum[0], G = sum[1], B = sum[2];
+            return true;
+        };
         __m512 R, G, B, R1, G1, B1;
-        if (one_tile(0, 0, R, G, B) && (!lv.blending || one_tile(1, 2, R1, G1, B1))) {
+        if ((one_tile(0, 0, R, G, B) || two_tiles(0, 0, R, G, B)) &&
+            (!lv.blending || one_tile(1, 2, R1, G1, B1) || two_tiles(1, 2, R1, G1, B1))) {
             if (lv.blending) {
                 R = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(R1, R), R);
                 G = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(G1, G), G);
