@@ -33,13 +33,15 @@ constexpr std::uint64_t kUnclaimed = ~std::uint64_t(0);
 
 // Casts the primary rays of rows [row_begin, row_end) in 16-ray packets along each row; a
 // pixel with reused[i] >= 0 (the right eye's pixels that reuse a left hit) is left out of its
-// packet, and a packet left empty is not cast. on_row_start(row) runs before each row's
-// packets, on_packet(row, i0, n, valid, packet) sees each packet after Embree filled it,
-// on_row(row) each row after its last packet.
+// packet, and a packet left empty is not cast. A row's last packet holds n < 16 pixels when
+// the width is not a multiple of 16; with whole_tail (and no reused pixels) its other lanes
+// cast its last pixel's ray again, so that the packet can be taken whole. on_row_start(row)
+// runs before each row's packets, on_packet(row, i0, n, valid, packet) sees each packet after
+// Embree filled it, on_row(row) each row after its last packet.
 template <typename OnRowStart, typename OnPacket, typename OnRow>
 void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::size_t row_end,
-               const std::int32_t* reused, OnRowStart&& on_row_start, OnPacket&& on_packet,
-               OnRow&& on_row) {
+               const std::int32_t* reused, bool whole_tail, OnRowStart&& on_row_start,
+               OnPacket&& on_packet, OnRow&& on_row) {
     const std::uint32_t w = eye.width;
     const std::size_t padded = (std::size_t(w) + 15) / 16 * 16;
     std::vector<float> dir_x(padded), dir_y(padded), dir_z(padded);
@@ -80,7 +82,7 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
                 if (!any) continue;
                 directions(row_dir, i0, i0 + 16);  // only for the packets that are cast
             } else {
-                for (std::uint32_t k = 0; k < 16; ++k) valid[k] = k < n ? -1 : 0;
+                for (std::uint32_t k = 0; k < 16; ++k) valid[k] = k < n || whole_tail ? -1 : 0;
             }
             for (std::uint32_t k = 0; k < 16; ++k) {
                 packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
@@ -982,9 +984,9 @@ namespace {
 // GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics (bug 105593), muted.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-// 16 pixels' channels (R, G, B in lanes) stored interleaved at out[0..47], with two
-// two-source permutes per output vector: R and G into place, then B.
-inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out) {
+// 16 pixels' channels (R, G, B in lanes) stored interleaved at out[0..47] (the first n pixels'
+// at out[0..3n-1]), with two two-source permutes per output vector: R and G into place, then B.
+inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out, std::uint32_t n = 16) {
     struct Indices {
         alignas(64) std::int32_t rg[3][16], b[3][16];
         constexpr Indices() : rg{}, b{} {
@@ -999,7 +1001,13 @@ inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out) {
     static constexpr Indices kIdx;
     for (int o = 0; o < 3; ++o) {
         const __m512 rg = _mm512_permutex2var_ps(R, _mm512_load_si512(kIdx.rg[o]), G);
-        _mm512_storeu_ps(out + 16 * o, _mm512_permutex2var_ps(rg, _mm512_load_si512(kIdx.b[o]), B));
+        const __m512 rgb = _mm512_permutex2var_ps(rg, _mm512_load_si512(kIdx.b[o]), B);
+        if (n == 16) {
+            _mm512_storeu_ps(out + 16 * o, rgb);
+        } else {  // the first n pixels only: 3n floats
+            const int floats = std::clamp(3 * int(n) - 16 * o, 0, 16);
+            _mm512_mask_storeu_ps(out + 16 * o, __mmask16((1u << floats) - 1), rgb);
+        }
     }
 }
 
@@ -1008,7 +1016,7 @@ inline void store_rgb16(__m512 R, __m512 G, __m512 B, float* out) {
 // pixels in the same order (SrgbCurve's decode; albedo x reflectance; x irradiance / pi;
 // + emission), so the same floats.
 void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const float (&M)[3][16],
-                  const DisplayOptions& o, const SrgbCurve& srgb, float* __restrict rgb) {
+                  const DisplayOptions& o, const SrgbCurve& srgb, float* __restrict rgb, std::uint32_t n = 16) {
     const __m512 reflectance = _mm512_set1_ps(o.painting_reflectance);
     const __m512 inv_pi = _mm512_set1_ps(kInvPi);
     __m512 L[3];
@@ -1020,7 +1028,7 @@ void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const floa
         const __m512 scale = _mm512_mul_ps(_mm512_load_ps(E[c]), inv_pi);
         L[c] = _mm512_add_ps(_mm512_mul_ps(albedo, scale), _mm512_load_ps(M[c]));
     }
-    store_rgb16(L[0], L[1], L[2], rgb);
+    store_rgb16(L[0], L[1], L[2], rgb, n);
 }
 #pragma GCC diagnostic pop
 #endif
@@ -1043,7 +1051,7 @@ struct DeferredPacket {
     LaneLight light;
     PacketUv uv;
     alignas(64) float tex[3][16];
-    std::uint32_t x0;
+    std::uint32_t x0, n;   // its first pixel's column, its pixels (16 but in a short last packet)
     int placement;        // -1: a room surface
     bool mapped, sampled;  // uv, tex hold them
 };
@@ -1214,11 +1222,15 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     const SrgbCurve& srgb_decode = srgb_curve();
     std::atomic<std::uint64_t> traced{0}, hits{0}, on_paintings{0};
     std::atomic<std::uint64_t> rays_ticks{0}, vt_ticks{0}, shade_ticks{0}, reuse_ticks{0};
-    std::vector<double> column_sx(w);  // screen x of each column's centre
+    // Screen x of each column's centre, and past the last column (a short last packet's other
+    // lanes, which cast its last ray again: cast_rows' whole_tail) the last's.
+    const std::size_t padded_w = (std::size_t(w) + 15) / 16 * 16;
+    std::vector<double> column_sx(padded_w);
     for (std::uint32_t x = 0; x < w; ++x) column_sx[x] = eye.screen_x(x + 0.5);
+    std::fill(column_sx.begin() + w, column_sx.end(), column_sx[w - 1]);
     // Per column, its screen x less that of its packet's first column (PlaneMap::map_packet).
-    std::vector<float> column_ds((std::size_t(w) + 15) / 16 * 16, 0.0f);
-    for (std::uint32_t x = 0; x < w; ++x) column_ds[x] = float(column_sx[x] - column_sx[x & ~15u]);
+    std::vector<float> column_ds(padded_w);
+    for (std::size_t x = 0; x < padded_w; ++x) column_ds[x] = float(column_sx[x] - column_sx[x & ~std::size_t(15)]);
     // One read lock for the frame: the workers' sampler calls run under it.
     const auto vt_lock = vt.read_lock();
 #if defined(__AVX512F__)
@@ -1349,8 +1361,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             Vec3f* __restrict const add_row = keep_light ? g.add.data() + row * w : nullptr;
             // A packet's 16 pixels queued as pending pixels at uv (u, v) and level lod.
             auto pend16 = [&](const DeferredPacket& d, const double* u, const double* v, const float* lod) {
-                GS_CHECK(pending_count + 16 <= w);  // one pixel per column and row
-                for (std::uint32_t k = 0; k < 16; ++k) {
+                GS_CHECK(pending_count + d.n <= w);  // one pixel per column and row
+                for (std::uint32_t k = 0; k < d.n; ++k) {
                     const std::size_t pc = pending_count++, x = d.x0 + k;
                     PendingPixel& pp = pending[pc];
                     pp.x = std::uint32_t(x), pp.placement = d.placement;
@@ -1375,8 +1387,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(L.a[c]), _mm512_load_ps(L.E[c])), inv_pi),
                                          _mm512_load_ps(L.M[c]));
                 };
-                store_rgb16(radiance(0), radiance(1), radiance(2), rgb_row + 3 * std::size_t(d.x0));
-                _mm512_storeu_ps(lod_row + d.x0, _mm512_set1_ps(kNaN));
+                store_rgb16(radiance(0), radiance(1), radiance(2), rgb_row + 3 * std::size_t(d.x0), d.n);
+                std::fill_n(lod_row + d.x0, d.n, kNaN);
             }
             lap(t_shade);
             for (std::size_t q = 0; q < count; ++q) {
@@ -1408,16 +1420,16 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             for (std::size_t q = 0; q < count; ++q) {
                 const DeferredPacket& d = sc.packets[q];
                 if (!d.sampled) continue;
-                shade_packet(d.tex, d.light.E, d.light.M, o, srgb_decode, rgb_row + 3 * std::size_t(d.x0));
-                std::copy_n(d.uv.lod, 16, lod_row + d.x0);
+                shade_packet(d.tex, d.light.E, d.light.M, o, srgb_decode, rgb_row + 3 * std::size_t(d.x0), d.n);
+                std::copy_n(d.uv.lod, d.n, lod_row + d.x0);
                 if (keep_light)
-                    for (std::uint32_t k = 0; k < 16; ++k) {
+                    for (std::uint32_t k = 0; k < d.n; ++k) {
                         Vec3f& sc_k = scale_row[d.x0 + k];
                         sc_k.x = d.light.E[0][k] * kInvPi, sc_k.y = d.light.E[1][k] * kInvPi, sc_k.z = d.light.E[2][k] * kInvPi;
                         Vec3f& add_k = add_row[d.x0 + k];
                         add_k.x = d.light.M[0][k], add_k.y = d.light.M[1][k], add_k.z = d.light.M[2][k];
                     }
-                painting_count += 16;
+                painting_count += d.n;
             }
             lap(t_shade);
         };
@@ -1429,21 +1441,21 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         // the row's end, where the row's packets are lit, mapped, sampled and shaded stage by
         // stage (done here, one packet after another between Embree's calls, each stage's
         // latencies stalled the packet).
-        auto keep_hits_and_claim = [&](std::size_t row, std::uint32_t i0, const RTCRayHit16& h, unsigned g0,
-                                       const std::int32_t* back) {
+        auto keep_hits_and_claim = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const RTCRayHit16& h,
+                                       unsigned g0, const std::int32_t* back) {
             alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16];
             hit_points(h, back, bool(claim), hx, hy, hz, nx, ny, nz);
             const std::size_t row_start = row * w + i0;
             if (keep_hits) {
-                std::fill_n(g.geom.data() + row_start, 16, g0);
+                std::fill_n(g.geom.data() + row_start, n, g0);
                 Vec3f* __restrict const p_out = g.p.data() + row_start;
-                for (std::uint32_t k = 0; k < 16; ++k) p_out[k].x = hx[k], p_out[k].y = hy[k], p_out[k].z = hz[k];
+                for (std::uint32_t k = 0; k < n; ++k) p_out[k].x = hx[k], p_out[k].y = hy[k], p_out[k].z = hz[k];
             }
             if (claim) {
                 alignas(64) std::uint32_t claim_target[16];
                 alignas(64) float claim_depth[16];
                 alignas(64) int hit[16];
-                std::fill_n(hit, 16, -1);
+                for (std::uint32_t k = 0; k < 16; ++k) hit[k] = k < n ? -1 : 0;
                 lap(t_shade);
                 claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
                 claim->claim16(claim_target, claim_depth, std::uint32_t(row_start),
@@ -1451,16 +1463,16 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                 lap(t_reuse);
             }
         };
-        auto defer = [&](std::size_t row, std::uint32_t i0, const RTCRayHit16& h, unsigned g0) {
+        auto defer = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const RTCRayHit16& h, unsigned g0) {
             DeferredPacket& d = sc.packets[batch_count++];
             back_sides(h, d.back);
             std::copy_n(h.hit.geomID, 16, d.hit.geomID), std::copy_n(h.hit.primID, 16, d.hit.primID);
             std::copy_n(h.hit.u, 16, d.hit.u), std::copy_n(h.hit.v, 16, d.hit.v);
             std::copy_n(h.hit.Ng_x, 16, d.hit.Ng_x), std::copy_n(h.hit.Ng_y, 16, d.hit.Ng_y);
             std::copy_n(h.hit.Ng_z, 16, d.hit.Ng_z);
-            d.x0 = i0, d.placement = g0 < scene.geom_placement.size() ? scene.geom_placement[g0] : -1;
-            traced_count += 16, hit_count += 16;
-            if (keep_hits || claim) keep_hits_and_claim(row, i0, h, g0, d.back);
+            d.x0 = i0, d.n = n, d.placement = g0 < scene.geom_placement.size() ? scene.geom_placement[g0] : -1;
+            traced_count += n, hit_count += n;
+            if (keep_hits || claim) keep_hits_and_claim(row, i0, n, h, g0, d.back);
             if (batch_count == kStageBatch) run_batch();
         };
 #endif
@@ -1470,12 +1482,12 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             lap(t_rays);
             start_row(row);
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
-            if (n == 16 && lanes16) {
+            if (lanes16) {  // (a short last packet casts all 16 lanes: whole_tail)
                 const unsigned g0 = h.hit.geomID[0];
                 const __m512i valid16 = _mm512_load_si512(valid);
                 if (g0 != kNoHit && _mm512_test_epi32_mask(valid16, valid16) == 0xFFFF &&
                     _mm512_cmpeq_epi32_mask(_mm512_loadu_si512(h.hit.geomID), _mm512_set1_epi32(int(g0))) == 0xFFFF) {
-                    defer(row, i0, h, g0);
+                    defer(row, i0, n, h, g0);
                     return;
                 }
             }
@@ -1551,7 +1563,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             alignas(64) std::uint32_t claim_target[16];
             alignas(64) float claim_depth[16];
             alignas(64) int hit[16];
-            for (std::uint32_t k = 0; k < 16; ++k) hit[k] = valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
+            for (std::uint32_t k = 0; k < 16; ++k) hit[k] = k < n && valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
             if (claim && m) {
                 lap(t_shade);
                 claim->project16(hx, hy, hz, nx, ny, nz, hit, claim_target, claim_depth);
@@ -1880,7 +1892,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             if (timed) mark = stage_ticks();
         };
 
-        cast_rows(scene.handle, eye, rb, re, sources, on_row_start, on_packet, on_row);
+        cast_rows(scene.handle, eye, rb, re, sources, lanes16, on_row_start, on_packet, on_row);
         traced.fetch_add(traced_count, std::memory_order_relaxed);
         hits.fetch_add(hit_count, std::memory_order_relaxed);
         on_paintings.fetch_add(painting_count, std::memory_order_relaxed);
@@ -2104,7 +2116,7 @@ double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, st
     std::atomic<std::uint64_t> total{0};
     parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
         std::uint64_t count = 0;
-        cast_rows(scene, eye, rb, re, nullptr, [](std::size_t) {},
+        cast_rows(scene, eye, rb, re, nullptr, false, [](std::size_t) {},
                   [&](std::size_t, std::uint32_t, std::uint32_t n,
                                                    const int*, const RTCRayHit16& h) {
             for (std::uint32_t k = 0; k < n; ++k) count += h.hit.geomID[k] != kNoHit;
