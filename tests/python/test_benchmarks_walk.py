@@ -25,6 +25,7 @@ def test_stereo_part_writes_a_consistent_ratio(tmp_path, small_scroll_pack):
         assert math.isfinite(row["ratio"]) and row["ratio"] > 0
         assert row["ratio"] == pytest.approx(disp / bare, rel=1e-12)
         assert row["cpu_ratio"] is None or (math.isfinite(row["cpu_ratio"]) and row["cpu_ratio"] > 0)
+        assert row["min_ratio"] is None or (math.isfinite(row["min_ratio"]) and row["min_ratio"] > 0)
         assert 0 < row["reused_share"] <= 1  # the right eye reuses left hits
 
 
