@@ -898,11 +898,17 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     // before its clamp), X = c0 extent 2^-L - 1/2, as an integer origin and a fraction; each
     // lane's position relative to the origin is frac + d extent 2^-L in float. Level L + k's
     // position is (X + 1/2) 2^-k - 1/2 = origin_k + (rel 2^-k + frac_k), with origin_k and
-    // frac_k the same split of (origin + 1/2) 2^-k - 1/2 (exact in double).
+    // frac_k the same split of (origin + 1/2) 2^-k - 1/2 (level_origin, exact).
     struct Axis {
-        __m512 rel;          // per lane, at level L
-        __m512 frac[3];      // per level L + k, broadcast
-        std::int32_t origin[3];
+        __m512 rel;           // per lane, at level L
+        std::int32_t origin;  // at level L
+    };
+    // Level L + k's origin and fraction: (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1), its
+    // floor by an arithmetic shift, its fraction in eighths (made where a level needs them).
+    auto level_origin = [](const Axis& a, int k, std::int32_t& origin, __m512& frac) {
+        const std::int32_t num = 2 * a.origin + 1 - (1 << k);
+        origin = num >> (k + 1);
+        frac = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
     };
     // 2^-L from its exponent bits (ldexp is a libm call).
     const double two_minus_L = std::bit_cast<double>(std::uint64_t(1023 - L) << 52);
@@ -920,14 +926,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
             _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
             return false;
-        // (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1): its floor by an arithmetic shift,
-        // its fraction in eighths.
-        const std::int32_t oi = std::int32_t(o);
-        for (int k = 0; k < 3; ++k) {
-            const std::int32_t num = 2 * oi + 1 - (1 << k);
-            a.origin[k] = num >> (k + 1);
-            a.frac[k] = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
-        }
+        a.origin = std::int32_t(o);
         return true;
     };
     Axis ax, ay;
@@ -942,8 +941,14 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     // texels, products and sums as below.
     if (!levels_differ) {
         auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const __m512 half_k = _mm512_set1_ps(k ? 0.5f : 1.0f);
-            const __m512 x = _mm512_fmadd_ps(ax.rel, half_k, ax.frac[k]), y = _mm512_fmadd_ps(ay.rel, half_k, ay.frac[k]);
+            std::int32_t ox = ax.origin, oy = ay.origin;
+            __m512 x = ax.rel, y = ay.rel;
+            if (k) {
+                __m512 fx0, fy0;
+                level_origin(ax, k, ox, fx0), level_origin(ay, k, oy, fy0);
+                const __m512 half = _mm512_set1_ps(0.5f);
+                x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
+            }
             const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             const __m512 fx = _mm512_sub_ps(x, x_fl), fy = _mm512_sub_ps(y, y_fl);
@@ -954,10 +959,10 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
                                           (_mm_cvtss_f32(_mm512_castps512_ps128(f)) >= 0.5f ? 1 : 0);
                 return std::int32_t(st.divide_p(std::uint32_t(n_up)));
             };
-            const std::int32_t cx = cell(ix, fx, ax.origin[k]), cy = cell(iy, fy, ay.origin[k]);
+            const std::int32_t cx = cell(ix, fx, ox), cy = cell(iy, fy, oy);
             // In-tile texels (from the tile's first, border included) of every lane's footprint.
-            const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(cx * t.payload - t.border - ax.origin[k]));
-            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(cy * t.payload - t.border - ay.origin[k]));
+            const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(cx * t.payload - t.border - ox));
+            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(cy * t.payload - t.border - oy));
             const std::int32_t jy0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
             const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
             const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
@@ -1007,8 +1012,14 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         // lane 0's and lane 15's, by their nearest texels, each lane's in the payload of one of
         // them, one tile row; per tile its stretches, its lanes' bytes picked by masked permutes.
         auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const __m512 half_k = _mm512_set1_ps(k ? 0.5f : 1.0f);
-            const __m512 x = _mm512_fmadd_ps(ax.rel, half_k, ax.frac[k]), y = _mm512_fmadd_ps(ay.rel, half_k, ay.frac[k]);
+            std::int32_t ox = ax.origin, oy = ay.origin;
+            __m512 x = ax.rel, y = ay.rel;
+            if (k) {
+                __m512 fx0, fy0;
+                level_origin(ax, k, ox, fx0), level_origin(ay, k, oy, fy0);
+                const __m512 half = _mm512_set1_ps(0.5f);
+                x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
+            }
             const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             const __m512 fx = _mm512_sub_ps(x, x_fl), fy = _mm512_sub_ps(y, y_fl);
@@ -1017,7 +1028,6 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             const __m512i one_i = _mm512_set1_epi32(1);
             const __m512i nx = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, _mm512_set1_ps(0.5f), _CMP_GE_OQ), ix, one_i);
             const __m512i ny = _mm512_mask_add_epi32(iy, _mm512_cmp_ps_mask(fy, _mm512_set1_ps(0.5f), _CMP_GE_OQ), iy, one_i);
-            const std::int32_t ox = ax.origin[k], oy = ay.origin[k];
             const std::int32_t first_x = _mm_cvtsi128_si32(_mm512_castsi512_si128(nx));
             const std::int32_t last_x = _mm_extract_epi32(_mm512_extracti32x4_epi32(nx, 3), 3);
             const std::int32_t cx[2] = {std::int32_t(st.divide_p(std::uint32_t(ox + first_x))),
@@ -1107,12 +1117,14 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             __m512 x;
             __m512i origin;
             if (!(k1 | k2)) {  // every lane at level L (nearly always)
-                x = a.rel, origin = _mm512_set1_epi32(a.origin[0]);
+                x = a.rel, origin = _mm512_set1_epi32(a.origin);
             } else {
-                __m512 frac = _mm512_mask_blend_ps(k1, a.frac[0], a.frac[1]);
-                frac = _mm512_mask_blend_ps(k2, frac, a.frac[2]);
-                origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin[0]), _mm512_set1_epi32(a.origin[1]));
-                origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(a.origin[2]));
+                std::int32_t o1, o2;
+                __m512 f1, f2;
+                level_origin(a, 1, o1, f1), level_origin(a, 2, o2, f2);
+                const __m512 frac = _mm512_mask_blend_ps(k2, _mm512_maskz_mov_ps(k1, f1), f2);
+                origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin), _mm512_set1_epi32(o1));
+                origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(o2));
                 x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);
             }
             const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
