@@ -940,19 +940,34 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
     // channel of every corner picked into its own lane by one byte permute. The same taps,
     // texels, products and sums as below.
     if (!levels_differ) {
-        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            std::int32_t ox = ax.origin, oy = ay.origin;
+        // Level L + k's origins, each lane's texel from them (the floor of its position) and
+        // its weights.
+        struct LevelPosition {
+            std::int32_t ox, oy;
+            __m512 fx, fy;
+            __m512i ix, iy;
+        };
+        auto level_position = [&](int k) __attribute__((always_inline)) {
+            LevelPosition p;
+            p.ox = ax.origin, p.oy = ay.origin;
             __m512 x = ax.rel, y = ay.rel;
             if (k) {
                 __m512 fx0, fy0;
-                level_origin(ax, k, ox, fx0), level_origin(ay, k, oy, fy0);
+                level_origin(ax, k, p.ox, fx0), level_origin(ay, k, p.oy, fy0);
                 const __m512 half = _mm512_set1_ps(0.5f);
                 x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
             }
             const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            const __m512 fx = _mm512_sub_ps(x, x_fl), fy = _mm512_sub_ps(y, y_fl);
-            const __m512i ix = _mm512_cvttps_epi32(x_fl), iy = _mm512_cvttps_epi32(y_fl);
+            p.fx = _mm512_sub_ps(x, x_fl), p.fy = _mm512_sub_ps(y, y_fl);
+            p.ix = _mm512_cvttps_epi32(x_fl), p.iy = _mm512_cvttps_epi32(y_fl);
+            return p;
+        };
+        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
+            const LevelPosition lp = level_position(k);
+            const std::int32_t ox = lp.ox, oy = lp.oy;
+            const __m512 fx = lp.fx, fy = lp.fy;
+            const __m512i ix = lp.ix, iy = lp.iy;
             // Lane 0's tile by its nearest texel, as trilinear_taps.
             auto cell = [&](__m512i i, __m512 f, std::int32_t origin) {
                 const std::int32_t n_up = origin + _mm_cvtsi128_si32(_mm512_castsi512_si128(i)) +
@@ -1012,19 +1027,11 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         // lane 0's and lane 15's, by their nearest texels, each lane's in the payload of one of
         // them, one tile row; per tile its stretches, its lanes' bytes picked by masked permutes.
         auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            std::int32_t ox = ax.origin, oy = ay.origin;
-            __m512 x = ax.rel, y = ay.rel;
-            if (k) {
-                __m512 fx0, fy0;
-                level_origin(ax, k, ox, fx0), level_origin(ay, k, oy, fy0);
-                const __m512 half = _mm512_set1_ps(0.5f);
-                x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
-            }
-            const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            const __m512 fx = _mm512_sub_ps(x, x_fl), fy = _mm512_sub_ps(y, y_fl);
-            // Texels from the origin, and the nearest ones (trilinear_taps' n_up).
-            const __m512i ix = _mm512_cvttps_epi32(x_fl), iy = _mm512_cvttps_epi32(y_fl);
+            const LevelPosition lp = level_position(k);
+            const std::int32_t ox = lp.ox, oy = lp.oy;
+            const __m512 fx = lp.fx, fy = lp.fy;
+            const __m512i ix = lp.ix, iy = lp.iy;
+            // The nearest texels (trilinear_taps' n_up).
             const __m512i one_i = _mm512_set1_epi32(1);
             const __m512i nx = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, _mm512_set1_ps(0.5f), _CMP_GE_OQ), ix, one_i);
             const __m512i ny = _mm512_mask_add_epi32(iy, _mm512_cmp_ps_mask(fy, _mm512_set1_ps(0.5f), _CMP_GE_OQ), iy, one_i);
