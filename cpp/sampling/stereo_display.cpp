@@ -1061,7 +1061,7 @@ constexpr std::size_t kStageBatch = 8;
 
 // A worker's per-row arrays (see render_eye), kept between calls in each thread.
 struct RowScratch {
-    std::vector<DeferredPacket> packets;
+    std::vector<DeferredPacket> packets;  // the deferred packets waiting for run_batch
     std::vector<TrilinearLanes> samplers;  // per placement, for frame samplers_frame
     std::uint64_t samplers_frame = 0, samplers_call = 0;  // their frame, and render_eye call
     std::vector<PendingPixel> pending;
@@ -1438,9 +1438,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
         // A packet wholly on one surface with its light in the baked lattice (nearly every
         // packet): its hits kept (and the right eye's claims made) now, the rest deferred to
-        // the row's end, where the row's packets are lit, mapped, sampled and shaded stage by
-        // stage (done here, one packet after another between Embree's calls, each stage's
-        // latencies stalled the packet).
+        // run_batch with the next packets (done here, one packet after another between
+        // Embree's calls, each stage's latencies stalled the packet).
         auto keep_hits_and_claim = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const RTCRayHit16& h,
                                        unsigned g0, const std::int32_t* back) {
             alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16];

@@ -14,20 +14,20 @@
 // level) at the left point (the left eye's sample when the levels agree to within
 // reuse_lod_tolerance), so the reused pixel is what the right eye computes for that point.
 //
-// One fused sweep per eye (issue 14 §5): per row, 16-ray packets are traced and, while their
-// hits are in cache, lit in one DisplayLighting::light_batch call (with Embree's
-// barycentrics) and mapped to painting coordinates and level of detail (a per-eye plane map
-// of each painting, double precision); the row's painting pixels are then sampled (trilinear,
-// under one VT read lock for the frame) and shaded: a packet wholly on one painting in 16
-// lanes (TrilinearLanes, the packets of a row one after another so that their latencies
-// overlap), the other pixels in runs of one painting; a packet wholly on a room surface is
-// shaded in lanes at once. Within a packet
-// the per-pixel arithmetic runs in SIMD lanes: hit points and eye-facing normals for all 16
-// rays, and the painting pixels' uv and level (a libm-free log2) per run of one painting. Per pixel the
-// pass keeps only the hit (point, normal, ids), the level, and for a left eye that the right
-// eye reuses, its light. With reuse, when the eyes' rows align (the headset's case), both eyes
-// run in one wavefront of 16-row chunks: a right chunk starts once the left chunks beside it
-// have made their claims, while those claims and left rows are still in cache.
+// One sweep per eye (issue 14 §5): per row, 16-ray packets are traced. With a baked lattice
+// on a CPU with AVX-512, a packet wholly on one surface (nearly every packet) is deferred and
+// eight at a time are, stage by stage: lit from the lattice in 16 lanes (one or two affine
+// functions of a lattice cell where the packet allows, else gathered), shaded at once on a
+// room surface; on a painting mapped to the packet's first pixel's uv in double and its lanes'
+// offsets in float (a per-eye plane map of each painting), sampled trilinearly in 16 lanes
+// from that origin (TrilinearLanes, under one VT read lock for the frame) and shaded. Other
+// packets are lit through DisplayLighting::light_batch (with Embree's barycentrics) or the
+// lattice's lanes, their painting pixels mapped in double and sampled in runs of one painting
+// at the row's end. Per pixel the pass keeps only the hit (point, normal, ids), the level, and
+// for a left eye that the right eye reuses, its light. With reuse, when the eyes' rows align
+// (the headset's case), both eyes run in one wavefront of 16-row chunks: a right chunk starts
+// once the left chunks beside it have made their claims, while those claims and left rows are
+// still in cache.
 //
 // The pass keeps its buffers between frames (one DisplayPass per stream of frames). Calls on
 // one pass from several threads run one at a time (a render waits for the one under way),
