@@ -91,9 +91,16 @@ def main():
     a = ap.parse_args()
     if a.eye is None:
         a.eye = "900x960" if a.mode == "right" else "1800x1920"
+    try:
+        w, h = map(int, a.eye.split("x"))
+        if w < 1 or h < 1 or a.rounds < 1 or a.alternations < 1:
+            raise ValueError
+    except ValueError:
+        print(f"alternate.py: --eye must be WxH with W, H >= 1 and --rounds, --alternations >= 1"
+              f" (got {a.eye}, {a.rounds}, {a.alternations})", file=sys.stderr)
+        sys.exit(2)
     if a.child:
         load_core(a.child)
-        w, h = map(int, a.eye.split("x"))
         if a.mode == "right":
             right_vs_left(w, h)
         else:

@@ -5,6 +5,9 @@ bench/RESULTS.md's display sections), e.g.
 
     .venv/bin/python bench/walk/frame_hashes.py 1800x1920 --core OLD_core.so
     .venv/bin/python bench/walk/frame_hashes.py 1800x1920 --core NEW_core.so
+
+`--save FILE.npz` also keeps what was hashed, for bench/walk/frame_diff.py to compare two builds
+whose frames differ in their last bits (1800 x 1920 an eye over the eight poses: 1.7 GB).
 """
 import argparse
 import hashlib
@@ -18,18 +21,29 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("eye", help="per-eye WxH")
     ap.add_argument("--core", help="a core module file to load instead of the installed one")
+    ap.add_argument("--save", metavar="FILE.npz", help="also save the hashed arrays, pose by pose")
     a = ap.parse_args()
+    try:
+        w, h = map(int, a.eye.split("x"))
+        if w < 1 or h < 1:
+            raise ValueError
+    except ValueError:
+        print(f"frame_hashes.py: the eye must be WxH with W, H >= 1, not {a.eye!r}", file=sys.stderr)
+        sys.exit(2)
+    if a.save and not os.access(os.path.dirname(os.path.abspath(a.save)), os.W_OK):
+        print(f"frame_hashes.py: cannot write {a.save}", file=sys.stderr)
+        sys.exit(2)
     sys.path.insert(0, HERE)
     if a.core:
         from alternate import load_core
         load_core(a.core)
     import numpy as np
     from single_pose import pose
-    w, h = map(int, a.eye.split("x"))
     p = pose(w, h)
     src, vt, d, outs, path = p["src"], p["vt"], p["display"], p["outs"], p["path"]
     digests = {k: hashlib.sha256() for k in ("images", "sources", "levels", "hits", "counts")}
-    for f in range(0, len(path), max(1, len(path) // 7)):  # seven poses along the walk
+    saved = {k: [] for k in ("left", "right", "sources", "levels", "hits")}
+    for f in range(0, len(path), max(1, len(path) // 7)):  # poses a seventh of the walk apart (eight)
         left, right = p["cameras"](f)
         for _ in range(2):  # the second frame reuses the first frame's cleared claims
             src.display_stereo(d, vt, left, right, True, 0, *outs)
@@ -39,9 +53,20 @@ def main():
         for eye in (0, 1):
             digests["levels"].update(np.asarray(d.lods(eye)).tobytes())
             digests["hits"].update(np.asarray(d.hit_points(eye)).tobytes())
+        if a.save:
+            saved["left"].append(outs[0].copy())
+            saved["right"].append(outs[1].copy())
+            saved["sources"].append(np.array(d.reuse_sources()))
+            saved["levels"].append(np.stack([np.array(d.lods(eye)) for eye in (0, 1)]))
+            saved["hits"].append(np.stack([np.array(d.hit_points(eye)) for eye in (0, 1)]))
         st = d.right_stats
         digests["counts"].update(repr((st["reused"], st["traced"], st["hits"], st["painting_pixels"])).encode())
     print(" ".join(f"{k}={v.hexdigest()[:16]}" for k, v in digests.items()))
+    if a.save:
+        part = a.save + ".part"  # renamed when whole, so a cut-off save is not taken for one
+        with open(part, "wb") as f:
+            np.savez(f, **{k: np.stack(v) for k, v in saved.items()})
+        os.replace(part, a.save)
 
 
 if __name__ == "__main__":
