@@ -964,10 +964,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             return p;
         };
         auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const LevelPosition lp = level_position(k);
-            const std::int32_t ox = lp.ox, oy = lp.oy;
-            const __m512 fx = lp.fx, fy = lp.fy;
-            const __m512i ix = lp.ix, iy = lp.iy;
+            const auto [ox, oy, fx, fy, ix, iy] = level_position(k);
             // Lane 0's tile by its nearest texel, as trilinear_taps.
             auto cell = [&](__m512i i, __m512 f, std::int32_t origin) {
                 const std::int32_t n_up = origin + _mm_cvtsi128_si32(_mm512_castsi512_si128(i)) +
@@ -1027,10 +1024,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         // lane 0's and lane 15's, by their nearest texels, each lane's in the payload of one of
         // them, one tile row; per tile its stretches, its lanes' bytes picked by masked permutes.
         auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const LevelPosition lp = level_position(k);
-            const std::int32_t ox = lp.ox, oy = lp.oy;
-            const __m512 fx = lp.fx, fy = lp.fy;
-            const __m512i ix = lp.ix, iy = lp.iy;
+            const auto [ox, oy, fx, fy, ix, iy] = level_position(k);
             // The nearest texels (trilinear_taps' n_up).
             const __m512i one_i = _mm512_set1_epi32(1);
             const __m512i nx = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, _mm512_set1_ps(0.5f), _CMP_GE_OQ), ix, one_i);
