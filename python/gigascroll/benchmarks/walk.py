@@ -39,6 +39,36 @@ def _num(x) -> str:
     return "-" if x is None else f"{x:.2f}"
 
 
+class _Alternation:
+    """A display and the bare cast of the same pixels, alternated and each timed the same way:
+    around the Python call, wall (per call) and process CPU time (summed, both threads)."""
+
+    def __init__(self):
+        self.display, self.bare, self.display_cpu, self.bare_cpu = [], [], 0.0, 0.0
+
+    def run(self, display, cast, repeats):
+        for _ in range(repeats):
+            t, c = time.perf_counter(), time.process_time()
+            display()
+            self.display.append(time.perf_counter() - t)
+            self.display_cpu += time.process_time() - c
+            t, c = time.perf_counter(), time.process_time()
+            cast()
+            self.bare.append(time.perf_counter() - t)
+            self.bare_cpu += time.process_time() - c
+
+    def row(self, eye, pixels):
+        """Per pixel, the median display and bare cast and their ratio; the same ratio in CPU
+        time (less exposed than wall time to the other jobs of a shared machine), and of the
+        fastest display to the fastest cast (the other jobs only ever add time)."""
+        row = {"eye": eye, "display_ns_per_pixel": 1e9 * statistics.median(self.display) / pixels,
+               "bare_rays_ns_per_pixel": 1e9 * statistics.median(self.bare) / pixels}
+        row["ratio"] = row["display_ns_per_pixel"] / row["bare_rays_ns_per_pixel"]
+        row["cpu_ratio"] = self.display_cpu / self.bare_cpu if self.bare_cpu > 0 else None
+        row["min_ratio"] = min(self.display) / min(self.bare) if min(self.bare) > 0 else None
+        return row
+
+
 def _pack(arg):
     from ..commands.gallery import builtin_pack
     from ..pack import TilePack
@@ -106,29 +136,13 @@ def run(args) -> int:
     for w, h in display_sizes if "display" in parts else ():
         d = DisplayPass()
         out = np.empty((h, w, 3), np.float32)  # kept between frames, as the walk keeps it
-        disp, bare, disp_cpu, bare_cpu = [], [], 0.0, 0.0
+        timing = _Alternation()
         for frame in poses[:3]:
             left, _ = eyes(frame, w, h)
             src.display(d, vt, left, thr, out=out)  # warm
-            # Both timed the same way: around the Python call, wall and process CPU time.
-            for _ in range(args.repeats):
-                t, c = time.perf_counter(), time.process_time()
-                src.display(d, vt, left, thr, out=out)
-                disp.append(time.perf_counter() - t)
-                disp_cpu += time.process_time() - c
-                t, c = time.perf_counter(), time.process_time()
-                src.primary_rays(left, thr)
-                bare.append(time.perf_counter() - t)
-                bare_cpu += time.process_time() - c
-        px = w * h
-        row = {"eye": f"{w}x{h}", "display_ns_per_pixel": 1e9 * statistics.median(disp) / px,
-               "bare_rays_ns_per_pixel": 1e9 * statistics.median(bare) / px}
-        row["ratio"] = row["display_ns_per_pixel"] / row["bare_rays_ns_per_pixel"]
-        # The same ratio in CPU time of the process (both threads): less exposed than wall
-        # time to the other jobs of a shared machine; and of the fastest display to the
-        # fastest cast (the other jobs only ever add time).
-        row["cpu_ratio"] = disp_cpu / bare_cpu if bare_cpu > 0 else None
-        row["min_ratio"] = min(disp) / min(bare) if min(bare) > 0 else None
+            timing.run(lambda: src.display(d, vt, left, thr, out=out),
+                       lambda: src.primary_rays(left, thr), args.repeats)
+        row = timing.row(f"{w}x{h}", w * h)
         split = d.left_stats
         row["split_ms"] = {k: 1e3 * split[f"{k}_seconds"] for k in ("rays", "vt", "shade")}
         rows.append(row)
@@ -145,27 +159,14 @@ def run(args) -> int:
     for w, h in display_sizes if "stereo" in parts else ():
         d = DisplayPass()
         outs = (np.empty((h, w, 3), np.float32), np.empty((h, w, 3), np.float32))
-        disp, bare, disp_cpu, bare_cpu = [], [], 0.0, 0.0
+        timing = _Alternation()
         for frame in poses[:3]:
             left, right = eyes(frame, w, h)
             src.display_stereo(d, vt, left, right, True, thr, *outs)  # warm
-            for _ in range(args.repeats):
-                t, c = time.perf_counter(), time.process_time()
-                src.display_stereo(d, vt, left, right, True, thr, *outs)
-                disp.append(time.perf_counter() - t)
-                disp_cpu += time.process_time() - c
-                t, c = time.perf_counter(), time.process_time()
-                src.primary_rays(left, thr)
-                src.primary_rays(right, thr)
-                bare.append(time.perf_counter() - t)
-                bare_cpu += time.process_time() - c
-        px = 2 * w * h
-        row = {"eye": f"{w}x{h}", "display_ns_per_pixel": 1e9 * statistics.median(disp) / px,
-               "bare_rays_ns_per_pixel": 1e9 * statistics.median(bare) / px,
-               "reused_share": d.right_stats["reused"] / d.right_stats["pixels"]}
-        row["ratio"] = row["display_ns_per_pixel"] / row["bare_rays_ns_per_pixel"]
-        row["cpu_ratio"] = disp_cpu / bare_cpu if bare_cpu > 0 else None
-        row["min_ratio"] = min(disp) / min(bare) if min(bare) > 0 else None
+            timing.run(lambda: src.display_stereo(d, vt, left, right, True, thr, *outs),
+                       lambda: (src.primary_rays(left, thr), src.primary_rays(right, thr)), args.repeats)
+        row = timing.row(f"{w}x{h}", 2 * w * h)
+        row["reused_share"] = d.right_stats["reused"] / d.right_stats["pixels"]
         stereo_rows.append(row)
         print(f"stereo display {w}x{h} per eye (both eyes with reuse): "
               f"{row['display_ns_per_pixel']:.1f} ns/px, bare rays (both eyes) "
