@@ -658,6 +658,26 @@ struct LatticeLanes {
         return b.triangles > 0 && b.triangles < kLimit && b.points < kLimit;
     }
 
+    // lattice_cell's cell in lanes, of clamped barycentrics (c1, c2) on triangles of n
+    // segments a side: the cell (i, j), the position in it (x, y, before locate's clamp at
+    // 0), and room: whether the cell has an upper sub-triangle (i + j + 2 <= n).
+    struct Cells16 {
+        __m512i i, j;
+        __m512 x, y;
+        __mmask16 room;
+    };
+    static Cells16 cells16(__m512 c1, __m512 c2, __m512i n) {
+        const __m512i n1 = _mm512_sub_epi32(n, _mm512_set1_epi32(1));
+        const __m512 nf = _mm512_cvtepi32_ps(n);
+        const __m512 x = _mm512_mul_ps(c1, nf), y = _mm512_mul_ps(c2, nf);
+        Cells16 c;
+        c.i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
+        c.j = _mm512_min_epi32(_mm512_cvttps_epi32(y), _mm512_sub_epi32(n1, c.i));
+        c.x = _mm512_sub_ps(x, _mm512_cvtepi32_ps(c.i)), c.y = _mm512_sub_ps(y, _mm512_cvtepi32_ps(c.j));
+        c.room = _mm512_cmple_epi32_mask(_mm512_add_epi32(_mm512_add_epi32(c.i, c.j), _mm512_set1_epi32(2)), n);
+        return c;
+    }
+
     void locate16(const BakedLattice& b, const RTCHit16& h, const int* __restrict hit,
                   const std::int32_t* __restrict back) {
         const unsigned* __restrict geom_in = h.geomID;
@@ -701,7 +721,6 @@ struct LatticeLanes {
         const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
         const __m512i back_i = _mm512_load_si512(back);
         front_lanes = _mm512_cmp_ps_mask(facing, zero, _CMP_GT_OQ) ^ _mm512_test_epi32_mask(back_i, back_i);
-        const __m512i n1 = _mm512_sub_epi32(n, _mm512_set1_epi32(1));
         __m512 c1 = _mm512_maskz_loadu_ps(hm, h.u), c2 = _mm512_maskz_loadu_ps(hm, h.v);
         // c < 0 ? 0 : (1 < c ? 1 : c)
         c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c1, _CMP_LT_OQ), c1, one);
@@ -714,17 +733,11 @@ struct LatticeLanes {
             c1 = _mm512_mask_div_ps(c1, over, c1, s);
             c2 = _mm512_mask_div_ps(c2, over, c2, s);
         }
-        const __m512 nf = _mm512_cvtepi32_ps(n);
-        const __m512 x = _mm512_mul_ps(c1, nf), y = _mm512_mul_ps(c2, nf);
-        const __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
-        const __m512i j = _mm512_min_epi32(_mm512_cvttps_epi32(y), _mm512_sub_epi32(n1, i));
-        const __m512 ex = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i)), ey = _mm512_sub_ps(y, _mm512_cvtepi32_ps(j));
+        const auto [i, j, ex, ey, room] = cells16(c1, c2, n);
         __m512 fx = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(ex, zero, _CMP_LT_OQ), ex, zero);
         __m512 fy = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(ey, zero, _CMP_LT_OQ), ey, zero);
         const __m512 sum = _mm512_add_ps(fx, fy);
         const __mmask16 past = _mm512_cmp_ps_mask(sum, one, _CMP_GT_OQ);
-        const __mmask16 room = _mm512_cmple_epi32_mask(
-            _mm512_add_epi32(_mm512_add_epi32(i, j), _mm512_set1_epi32(2)), n);  // i + j + 2 <= n
         const __mmask16 upper = past & room, rescale = past & ~upper;
         if (rescale) {  // rare: only on the far edge's cells
             const __m512 inv = _mm512_div_ps(one, sum);
@@ -808,16 +821,9 @@ struct LatticeLanes {
         const __mmask16 inside = _mm512_cmp_ps_mask(b1, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(b2, zero, _CMP_GE_OQ) &
                                  _mm512_cmp_ps_mask(_mm512_add_ps(b1, b2), one, _CMP_LE_OQ);
         if (inside != 0xFFFF) return false;
-        const std::int32_t n = c.n;
-        const __m512 nf = _mm512_set1_ps(float(n));
-        const __m512 x = _mm512_mul_ps(b1, nf), y = _mm512_mul_ps(b2, nf);
-        const __m512i n1 = _mm512_set1_epi32(n - 1);
-        const __m512i i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
-        const __m512i j = _mm512_min_epi32(_mm512_cvttps_epi32(y), _mm512_sub_epi32(n1, i));
-        const __m512 fx = _mm512_sub_ps(x, _mm512_cvtepi32_ps(i)), fy = _mm512_sub_ps(y, _mm512_cvtepi32_ps(j));
+        // Inside, no lane's position in its cell is negative: locate16's clamp is not needed.
+        const auto [i, j, fx, fy, room] = cells16(b1, b2, _mm512_set1_epi32(c.n));
         const __mmask16 past = _mm512_cmp_ps_mask(_mm512_add_ps(fx, fy), one, _CMP_GT_OQ);
-        const __mmask16 room = _mm512_cmple_epi32_mask(
-            _mm512_add_epi32(_mm512_add_epi32(i, j), _mm512_set1_epi32(2)), _mm512_set1_epi32(n));
         const __mmask16 upper = past & room;
         if (past & ~room) return false;  // on the far edge: lattice_cell scales back onto it
         // The sub-triangles of the first and the last lane, and the lanes on each.
@@ -1029,6 +1035,19 @@ void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const floa
         L[c] = _mm512_add_ps(_mm512_mul_ps(albedo, scale), _mm512_load_ps(M[c]));
     }
     store_rgb16(L[0], L[1], L[2], rgb, n);
+}
+
+// A packet of 16 pixels on a room surface shaded in lanes into rgb (the first n pixels):
+// albedo x irradiance / pi + emission, the operations of the row's per-pixel loop in its
+// order, so the same floats; their levels (lod) NaN, as every pixel off the paintings.
+void shade_room_packet(const LaneLight& L, float* __restrict rgb, float* __restrict lod, std::uint32_t n = 16) {
+    const __m512 inv_pi = _mm512_set1_ps(kInvPi);
+    auto radiance = [&](int c) {
+        return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(L.a[c]), _mm512_load_ps(L.E[c])), inv_pi),
+                             _mm512_load_ps(L.M[c]));
+    };
+    store_rgb16(radiance(0), radiance(1), radiance(2), rgb, n);
+    _mm512_mask_storeu_ps(lod, __mmask16((1u << n) - 1), _mm512_set1_ps(std::numeric_limits<float>::quiet_NaN()));
 }
 #pragma GCC diagnostic pop
 #endif
@@ -1348,9 +1367,8 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         // first-level cache): each packet's light (the baked lattice in lanes), shaded at once
         // on a room surface; a painting packet's origin uv, offsets and levels
         // (PlaneMap::map_packet), its texels (TrilinearLanes), its shading. A painting packet
-        // either declines joins the row's pending pixels.
+        // the sampler or the map declines joins the row's pending pixels.
         std::size_t batch_count = 0;  // deferred packets waiting in sc.packets
-        const __m512 inv_pi = _mm512_set1_ps(kInvPi);
         alignas(64) int all_hits[16];
         std::fill_n(all_hits, 16, -1);
         auto run_batch = [&] {
@@ -1382,13 +1400,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
                     lattice.locate16(*baked, d.hit, all_hits, d.back);
                     lattice.blend16(*baked, L);
                 }
-                if (d.placement >= 0) continue;
-                auto radiance = [&](int c) {
-                    return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(L.a[c]), _mm512_load_ps(L.E[c])), inv_pi),
-                                         _mm512_load_ps(L.M[c]));
-                };
-                store_rgb16(radiance(0), radiance(1), radiance(2), rgb_row + 3 * std::size_t(d.x0), d.n);
-                std::fill_n(lod_row + d.x0, d.n, kNaN);
+                if (d.placement < 0) shade_room_packet(L, rgb_row + 3 * std::size_t(d.x0), lod_row + d.x0, d.n);
             }
             lap(t_shade);
             for (std::size_t q = 0; q < count; ++q) {
@@ -1634,14 +1646,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
 #if defined(__AVX512F__)
             // A whole packet on one room surface: the loop below in lanes.
             if (dense && !dense_painting) {
-                const __m512 inv_pi = _mm512_set1_ps(kInvPi);
-                auto L = [&](const float* a, const float* E, const float* M) {
-                    return _mm512_add_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_load_ps(a), _mm512_load_ps(E)), inv_pi),
-                                         _mm512_load_ps(M));
-                };
-                store_rgb16(L(ll.a[0], ll.E[0], ll.M[0]), L(ll.a[1], ll.E[1], ll.M[1]), L(ll.a[2], ll.E[2], ll.M[2]),
-                            rgb_out + 3 * row_start);
-                _mm512_storeu_ps(lod_out + row_start, _mm512_set1_ps(kNaN));
+                shade_room_packet(ll, rgb_out + 3 * row_start, lod_out + row_start);
                 m = 0;  // nothing left for the loop below
             }
 #endif
