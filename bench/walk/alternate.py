@@ -91,16 +91,18 @@ def main():
     a = ap.parse_args()
     if a.eye is None:
         a.eye = "900x960" if a.mode == "right" else "1800x1920"
+    if a.child:  # before anything imports gigascroll (and with it the installed core)
+        load_core(a.child)
+    from gigascroll.commands.gallery import parse_eye
+    from gigascroll.errors import UserError
     try:
-        w, h = map(int, a.eye.split("x"))
-        if w < 1 or h < 1 or a.rounds < 1 or a.alternations < 1:
-            raise ValueError
-    except ValueError:
-        print(f"alternate.py: --eye must be WxH with W, H >= 1 and --rounds, --alternations >= 1"
-              f" (got {a.eye}, {a.rounds}, {a.alternations})", file=sys.stderr)
+        w, h = parse_eye(a.eye)
+        if a.rounds < 1 or a.alternations < 1:
+            raise UserError(f"--rounds and --alternations must be >= 1 (got {a.rounds}, {a.alternations})")
+    except UserError as e:
+        print(f"alternate.py: {e}", file=sys.stderr)
         sys.exit(2)
     if a.child:
-        load_core(a.child)
         if a.mode == "right":
             right_vs_left(w, h)
         else:

@@ -23,20 +23,20 @@ def main():
     ap.add_argument("--core", help="a core module file to load instead of the installed one")
     ap.add_argument("--save", metavar="FILE.npz", help="also save the hashed arrays, pose by pose")
     a = ap.parse_args()
-    try:
-        w, h = map(int, a.eye.split("x"))
-        if w < 1 or h < 1:
-            raise ValueError
-    except ValueError:
-        print(f"frame_hashes.py: the eye must be WxH with W, H >= 1, not {a.eye!r}", file=sys.stderr)
-        sys.exit(2)
     if a.save and not os.access(os.path.dirname(os.path.abspath(a.save)), os.W_OK):
         print(f"frame_hashes.py: cannot write {a.save}", file=sys.stderr)
         sys.exit(2)
     sys.path.insert(0, HERE)
-    if a.core:
+    if a.core:  # before anything imports gigascroll (and with it the installed core)
         from alternate import load_core
         load_core(a.core)
+    from gigascroll.commands.gallery import parse_eye
+    from gigascroll.errors import UserError
+    try:
+        w, h = parse_eye(a.eye, "the eye")
+    except UserError as e:
+        print(f"frame_hashes.py: {e}", file=sys.stderr)
+        sys.exit(2)
     import numpy as np
     from single_pose import pose
     p = pose(w, h)
@@ -47,18 +47,21 @@ def main():
         left, right = p["cameras"](f)
         for _ in range(2):  # the second frame reuses the first frame's cleared claims
             src.display_stereo(d, vt, left, right, True, 0, *outs)
+        sources = np.array(d.reuse_sources())
+        levels = [np.array(d.lods(eye)) for eye in (0, 1)]
+        hits = [np.array(d.hit_points(eye)) for eye in (0, 1)]
         digests["images"].update(outs[0].tobytes())
         digests["images"].update(outs[1].tobytes())
-        digests["sources"].update(np.asarray(d.reuse_sources()).tobytes())
+        digests["sources"].update(sources.tobytes())
         for eye in (0, 1):
-            digests["levels"].update(np.asarray(d.lods(eye)).tobytes())
-            digests["hits"].update(np.asarray(d.hit_points(eye)).tobytes())
+            digests["levels"].update(levels[eye].tobytes())
+            digests["hits"].update(hits[eye].tobytes())
         if a.save:
             saved["left"].append(outs[0].copy())
             saved["right"].append(outs[1].copy())
-            saved["sources"].append(np.array(d.reuse_sources()))
-            saved["levels"].append(np.stack([np.array(d.lods(eye)) for eye in (0, 1)]))
-            saved["hits"].append(np.stack([np.array(d.hit_points(eye)) for eye in (0, 1)]))
+            saved["sources"].append(sources)
+            saved["levels"].append(np.stack(levels))
+            saved["hits"].append(np.stack(hits))
         st = d.right_stats
         digests["counts"].update(repr((st["reused"], st["traced"], st["hits"], st["painting_pixels"])).encode())
     print(" ".join(f"{k}={v.hexdigest()[:16]}" for k, v in digests.items()))
