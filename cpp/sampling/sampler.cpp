@@ -724,6 +724,13 @@ struct TrilinearLanes::State {
 
     // Per level (fine, coarse) and tile of a packet (first, other), the last page entry.
     TexelFinder finders[4];
+    // Per finder, the one-tile path's last tile: its level, its payload's first texel (cx P,
+    // cy P) and its slot (nullptr: not resident). A packet whose lane 0 lies in it (most do:
+    // a tile spans several packets) takes it without a division or a page-table entry.
+    struct LastTile {
+        std::int32_t level = -1, x0 = 0, y0 = 0;
+        const std::uint8_t* base = nullptr;
+    } last_tile[4];
     const std::uint8_t* physical;
     std::size_t slot_bytes;
     PyramidExtent pyramid;
@@ -754,8 +761,9 @@ TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting)
 #endif
 }
 void TrilinearLanes::forget_tiles() {
-    if (state_)
-        for (TexelFinder& f : state_->finders) f.forget();
+    if (!state_) return;
+    for (TexelFinder& f : state_->finders) f.forget();
+    for (State::LastTile& t : state_->last_tile) t.level = -1;
 }
 TrilinearLanes::~TrilinearLanes() = default;
 TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
@@ -965,16 +973,23 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         };
         auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
             const auto [ox, oy, fx, fy, ix, iy] = level_position(k);
-            // Lane 0's tile by its nearest texel, as trilinear_taps.
-            auto cell = [&](__m512i i, __m512 f, std::int32_t origin) {
-                const std::int32_t n_up = origin + _mm_cvtsi128_si32(_mm512_castsi512_si128(i)) +
-                                          (_mm_cvtss_f32(_mm512_castps512_ps128(f)) >= 0.5f ? 1 : 0);
-                return std::int32_t(st.divide_p(std::uint32_t(n_up)));
+            // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's when it holds
+            // that texel (its cx = floor(n / P) exactly when n - cx P lies in [0, P)).
+            auto nearest = [&](__m512i i, __m512 f, std::int32_t origin) {
+                return origin + _mm_cvtsi128_si32(_mm512_castsi512_si128(i)) +
+                       (_mm_cvtss_f32(_mm512_castps512_ps128(f)) >= 0.5f ? 1 : 0);
             };
-            const std::int32_t cx = cell(ix, fx, ox), cy = cell(iy, fy, oy);
+            const std::int32_t nx = nearest(ix, fx, ox), ny = nearest(iy, fy, oy);
+            State::LastTile& tile = st.last_tile[finder];
+            if (tile.level != L + k || std::uint32_t(nx - tile.x0) >= std::uint32_t(t.payload) ||
+                std::uint32_t(ny - tile.y0) >= std::uint32_t(t.payload)) {
+                const std::uint32_t cx = st.divide_p(std::uint32_t(nx)), cy = st.divide_p(std::uint32_t(ny));
+                tile.level = L + k, tile.x0 = std::int32_t(cx) * t.payload, tile.y0 = std::int32_t(cy) * t.payload;
+                tile.base = st.base(finder, std::uint32_t(L + k), cx, cy);
+            }
             // In-tile texels (from the tile's first, border included) of every lane's footprint.
-            const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(cx * t.payload - t.border - ox));
-            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(cy * t.payload - t.border - oy));
+            const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(tile.x0 - t.border - ox));
+            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(tile.y0 - t.border - oy));
             const std::int32_t jy0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
             const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
             const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
@@ -994,9 +1009,8 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
                 _mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(jy0)) | _mm512_cmpgt_epu32_mask(rel, _mm512_set1_epi32(hi - lo)) ||
                 span > 128)
                 return false;
-            const std::uint8_t* base = st.base(finder, std::uint32_t(L + k), std::uint32_t(cx), std::uint32_t(cy));
-            if (!base) return false;
-            const std::uint8_t* p = base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
+            if (!tile.base) return false;
+            const std::uint8_t* p = tile.base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
             const __mmask64 m0 = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
             const __mmask64 m1 = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
             // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
