@@ -720,10 +720,25 @@ struct TrilinearLanes::State {
           levels(std::int32_t(vt.layout().paintings[painting].levels())),
           divide_p(vt.layout().payload()),
           tile{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
-               std::int32_t(vt.layout().tile_size), std::int32_t(finders[0].row_bytes())} {}
+               std::int32_t(vt.layout().tile_size), std::int32_t(finders[0].row_bytes())} {
+        const std::uint32_t extent[2] = {pyramid.width, pyramid.height};
+        for (int a = 0; a < 2; ++a)
+            for (std::int32_t L = 0; L < levels && L < 32; ++L) {
+                const double scale = std::ldexp(double(extent[a]), -L);  // exact
+                const std::uint64_t wl = (std::uint64_t(extent[a]) + (std::uint64_t(1) << L) - 1) >> L;
+                axis_levels[a].push_back({scale, std::min(double(wl), scale) - 2.5});
+            }
+    }
 
     // Per level (fine, coarse) and tile of a packet (first, other), the last page entry.
     TexelFinder finders[4];
+    // Per axis (x, y) and level L, sample16's constants: the extent 2^-L (exact) and the
+    // last position a packet's lanes may take at L less the origin, min(w_L, extent 2^-L) - 2.5
+    // (see its axis).
+    struct AxisLevel {
+        double scale, limit;
+    };
+    std::vector<AxisLevel> axis_levels[2];
     // Per finder, the one-tile path's last tile: its level, its payload's first texel (cx P,
     // cy P) and its slot (nullptr: not resident). A packet whose lane 0 lies in it (most do:
     // a tile spans several packets) takes it without a division or a page-table entry.
@@ -918,19 +933,16 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         origin = num >> (k + 1);
         frac = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
     };
-    // 2^-L from its exponent bits (ldexp is a libm call).
-    const double two_minus_L = std::bit_cast<double>(std::uint64_t(1023 - L) << 52);
-    auto axis = [&](double c0, std::uint32_t extent, __m512 d, Axis& a) {
-        const double scale = double(extent) * two_minus_L;  // extent 2^-L, exact
-        const double X = c0 * double(extent) * two_minus_L - 0.5;
+    auto axis = [&](double c0, const State::AxisLevel& level, __m512 d, Axis& a) {
+        // c0 extent 2^-L as (c0 extent) 2^-L: the scaling by a power of two is exact.
+        const double X = c0 * level.scale - 0.5;
         const double o = std::floor(X);
         if (!(std::abs(o) < double(kMaxSide))) return false;  // NaN or far outside
-        a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(scale)), _mm512_set1_ps(float(X - o)));
+        a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(level.scale)), _mm512_set1_ps(float(X - o)));
         // Two texels inside the painting at level L, so that at levels L, L + 1 and L + 2 no
         // lane reaches trilinear_taps' clamps (to [0, w_l - 1], and of uv to [0, 1]):
         // X_{L+k} = (X + 1/2) 2^-k - 1/2 >= 5/8 - 1/2 > 0 and <= w_{L+k} - 1.
-        const std::uint32_t wl = (extent + (1u << L) - 1) >> L;
-        const double hi = std::min(double(wl), scale) - 2.5 - o;
+        const double hi = level.limit - o;
         if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
             _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
             return false;
@@ -938,7 +950,9 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         return true;
     };
     Axis ax, ay;
-    if (!axis(packet.u0, width, du, ax) || !axis(packet.v0, height, dv, ay)) return false;
+    if (!axis(packet.u0, st.axis_levels[0][std::size_t(L)], du, ax) ||
+        !axis(packet.v0, st.axis_levels[1][std::size_t(L)], dv, ay))
+        return false;
     // NaN positions fail neither comparison above: refuse them here.
     if (_mm512_cmp_ps_mask(ax.rel, ay.rel, _CMP_UNORD_Q)) return false;
 #if defined(__AVX512VBMI__) && defined(__AVX512BW__)
