@@ -721,6 +721,7 @@ struct TrilinearLanes::State {
           divide_p(vt.layout().payload()),
           tile{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
                std::int32_t(vt.layout().tile_size), std::int32_t(finders[0].row_bytes())} {
+        for (int j = 0; j < 6; ++j) std::fill_n(corner_bytes[j], 16, j);
         const std::uint32_t extent[2] = {pyramid.width, pyramid.height};
         for (int a = 0; a < 2; ++a)
             for (std::int32_t L = 0; L < levels && L < 32; ++L) {
@@ -739,6 +740,9 @@ struct TrilinearLanes::State {
         double scale, limit;
     };
     std::vector<AxisLevel> axis_levels[2];
+    // Byte j of a texel's corners (j = 3 x right + channel) in every lane: the one-tile path's
+    // permute offsets, read as memory operands (as constants GCC made each anew at each use).
+    alignas(64) std::int32_t corner_bytes[6][16];
     // Per finder, the one-tile path's last tile: its level, its payload's first texel (cx P,
     // cy P) and its slot (nullptr: not resident). A packet whose lane 0 lies in it (most do:
     // a tile spans several packets) takes it without a division or a page-table entry.
@@ -987,13 +991,14 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         };
         auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
             const auto [ox, oy, fx, fy, ix, iy] = level_position(k);
+            // Every lane's nearest texel (trilinear_taps' n_up) less the origin.
+            const __m512 half = _mm512_set1_ps(0.5f);
+            const __m512i nx_lanes = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, half, _CMP_GE_OQ), ix, one_i);
+            const __m512i ny_lanes = _mm512_mask_add_epi32(iy, _mm512_cmp_ps_mask(fy, half, _CMP_GE_OQ), iy, one_i);
             // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's when it holds
             // that texel (its cx = floor(n / P) exactly when n - cx P lies in [0, P)).
-            auto nearest = [&](__m512i i, __m512 f, std::int32_t origin) {
-                return origin + _mm_cvtsi128_si32(_mm512_castsi512_si128(i)) +
-                       (_mm_cvtss_f32(_mm512_castps512_ps128(f)) >= 0.5f ? 1 : 0);
-            };
-            const std::int32_t nx = nearest(ix, fx, ox), ny = nearest(iy, fy, oy);
+            const std::int32_t nx = ox + _mm_cvtsi128_si32(_mm512_castsi512_si128(nx_lanes));
+            const std::int32_t ny = oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(ny_lanes));
             State::LastTile& tile = st.last_tile[finder];
             if (tile.level != L + k || std::uint32_t(nx - tile.x0) >= std::uint32_t(t.payload) ||
                 std::uint32_t(ny - tile.y0) >= std::uint32_t(t.payload)) {
@@ -1013,13 +1018,9 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
             // another tile would read this one's border where trilinear_taps might fall back),
             // the rows the same, the stretch within 128 bytes.
-            auto payload_lanes = [&](__m512i j, __m512 f) {
-                const __m512i n = _mm512_mask_add_epi32(j, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), j,
-                                                        _mm512_set1_epi32(1));
-                return _mm512_cmple_epu32_mask(_mm512_sub_epi32(n, _mm512_set1_epi32(t.border)),
-                                               _mm512_set1_epi32(t.payload - 1));
-            };
-            if ((payload_lanes(jx, fx) & payload_lanes(jy, fy)) != 0xFFFF ||
+            const __m512i payload = _mm512_set1_epi32(t.payload);
+            if ((_mm512_cmplt_epu32_mask(_mm512_sub_epi32(nx_lanes, _mm512_set1_epi32(tile.x0 - ox)), payload) &
+                 _mm512_cmplt_epu32_mask(_mm512_sub_epi32(ny_lanes, _mm512_set1_epi32(tile.y0 - oy)), payload)) != 0xFFFF ||
                 _mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(jy0)) | _mm512_cmpgt_epu32_mask(rel, _mm512_set1_epi32(hi - lo)) ||
                 span > 128)
                 return false;
@@ -1039,7 +1040,8 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
                 const __m512i a = _mm512_maskz_loadu_epi8(m0, q), b = _mm512_maskz_loadu_epi8(m1, q + 64);
                 for (int right = 0; right < 2; ++right)
                     for (int c = 0; c < 3; ++c) {
-                        const __m512i idx = _mm512_add_epi32(byte0, _mm512_set1_epi32(3 * right + c));
+                        const int corner = 3 * right + c;
+                        const __m512i idx = corner ? _mm512_add_epi32(byte0, _mm512_load_si512(st.corner_bytes[corner])) : byte0;
                         const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, a, idx, b));
                         sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
                                                         : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
