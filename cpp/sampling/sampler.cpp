@@ -707,6 +707,14 @@ inline LaneLevels lane_levels(const float* lod, float top, std::int32_t levels) 
     v.blend = _mm512_maskz_mov_ps(v.blending, frac);
     return v;
 }
+// The byte masks of a stretch of span <= 128 bytes loaded as two 64-byte halves.
+struct StretchMasks {
+    __mmask64 first, second;
+};
+inline StretchMasks stretch_masks(int span) {
+    return {span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1,
+            span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0};
+}
 }  // namespace
 #endif
 
@@ -722,13 +730,12 @@ struct TrilinearLanes::State {
           tile{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
                std::int32_t(vt.layout().tile_size), std::int32_t(finders[0].row_bytes())} {
         for (int j = 0; j < 6; ++j) std::fill_n(corner_bytes[j], 16, j);
-        const std::uint32_t extent[2] = {pyramid.width, pyramid.height};
-        for (int a = 0; a < 2; ++a)
-            for (std::int32_t L = 0; L < levels && L < 32; ++L) {
-                const double scale = std::ldexp(double(extent[a]), -L);  // exact
-                const std::uint64_t wl = (std::uint64_t(extent[a]) + (std::uint64_t(1) << L) - 1) >> L;
-                axis_levels[a].push_back({scale, std::min(double(wl), scale) - 2.5});
-            }
+        const PaintingGeometry& g = vt.layout().paintings[painting];
+        for (std::uint32_t L = 0; L < g.levels(); ++L) {
+            const double sx = std::ldexp(double(g.width()), -int(L)), sy = std::ldexp(double(g.height()), -int(L));
+            axis_levels[0].push_back({sx, std::min(double(g.level_width(L)), sx) - 2.5});  // exact scales
+            axis_levels[1].push_back({sy, std::min(double(g.level_height(L)), sy) - 2.5});
+        }
     }
 
     // Per level (fine, coarse) and tile of a packet (first, other), the last page entry.
@@ -842,8 +849,7 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
             const __m512i spread = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
             const __m512i idx = _mm512_add_epi8(_mm512_shuffle_epi8(rel, spread), _mm512_set1_epi32(0x03020100));
             const __m512i idx3 = _mm512_add_epi8(idx, _mm512_set1_epi8(3));
-            const __mmask64 m0 = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
-            const __mmask64 m1 = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
+            const auto [m0, m1] = stretch_masks(span);
             for (int r = 0; r < 2; ++r) {
                 const std::uint8_t* p = base + lo + r * row;
                 const __m512i a = _mm512_maskz_loadu_epi8(m0, p), b = _mm512_maskz_loadu_epi8(m1, p + 64);
@@ -1026,8 +1032,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
                 return false;
             if (!tile.base) return false;
             const std::uint8_t* p = tile.base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
-            const __mmask64 m0 = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
-            const __mmask64 m1 = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
+            const auto [m0, m1] = stretch_masks(span);
             // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
             const __m512i byte0 = _mm512_add_epi32(rel, _mm512_add_epi32(rel, rel));
             constexpr __mmask64 kLowBytes = 0x1111111111111111ull;
@@ -1097,8 +1102,8 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
                 if (!base) return false;
                 const __m512i rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(lo));
                 p[tile] = base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
-                m0[tile] = span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1;
-                m1[tile] = span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0;
+                const StretchMasks masks = stretch_masks(span);
+                m0[tile] = masks.first, m1[tile] = masks.second;
                 byte0[tile] = _mm512_add_epi32(rel, _mm512_add_epi32(rel, rel));
                 bytes[tile] = _pdep_u64(lanes[tile], kLowBytes);  // byte 0 of its lanes' dwords
             }
