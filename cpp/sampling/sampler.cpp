@@ -750,11 +750,13 @@ struct TrilinearLanes::State {
     // Byte j of a texel's corners (j = 3 x right + channel) in every lane: the one-tile path's
     // permute offsets, read as memory operands (as constants GCC made each anew at each use).
     alignas(64) std::int32_t corner_bytes[6][16];
-    // Per finder, the one-tile path's last tile: its level, its payload's first texel (cx P,
-    // cy P) and its slot (nullptr: not resident). A packet whose lane 0 lies in it (most do:
-    // a tile spans several packets) takes it without a division or a page-table entry.
+    // Per finder, the last tile it looked up: its level, tile (cx, cy), its payload's first
+    // texel (cx P, cy P) and its slot (nullptr: not resident). Finders 0 and 2 hold lane 0's
+    // tile at the fine and coarse level, 1 and 3 the neighbour a packet across a tile's edge
+    // took with it (or the tile lane 0 left). A packet whose lane 0 lies in either (most do: a
+    // tile spans several packets) takes it without a division or a page-table entry.
     struct LastTile {
-        std::int32_t level = -1, x0 = 0, y0 = 0;
+        std::int32_t level = -1, cx = 0, cy = 0, x0 = 0, y0 = 0;
         const std::uint8_t* base = nullptr;
     } last_tile[4];
     const std::uint8_t* physical;
@@ -774,6 +776,13 @@ struct TrilinearLanes::State {
     // level's tiles, texels and bilinear blend, then the blend of the two levels.
     bool sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& levels,
                 float* r, float* g, float* b);
+    // sample16's stretches of a level's pair of texel rows (see there) for a packet across a
+    // tile's edge: lane 0's tile last_tile[finder] (tile x0 in lane coordinates x0_lanes,
+    // in_tile its lanes) and its neighbour, into rows[r] = {bytes 0-63, 64-127}. False when
+    // the other lanes are not all in the payload of the neighbour on one side or it is not
+    // resident.
+    bool across_edge(int level, int finder, __m512i nx_lanes, std::int32_t x0_lanes, __mmask16 in_tile,
+                     std::int32_t lo, std::int32_t span, std::size_t row_start, __m512i (&rows)[2][2]);
 #endif
 };
 
@@ -907,6 +916,52 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
     return true;
 }
 
+// The neighbour is lane 0's tile's cx -+ 1 (a packet's lanes lie in a row of tiles), its
+// bytes addressed from lane 0's tile's lo: the neighbour's texel x is lane 0's tile's -+ P.
+// It exists: sample16's range check keeps every lane two texels inside the painting.
+[[gnu::always_inline]] inline bool TrilinearLanes::State::across_edge(int level, int finder, __m512i nx_lanes,
+                                                                     std::int32_t x0_lanes, __mmask16 in_tile,
+                                                                     std::int32_t lo, std::int32_t span,
+                                                                     std::size_t row_start, __m512i (&rows)[2][2]) {
+    const TileExtent t = tile;
+    const LastTile& own = last_tile[finder];
+    LastTile& other = last_tile[finder + 1];
+    const __mmask16 others = __mmask16(~in_tile);
+    // The other lanes in the right neighbour's payload, or all in the left one's.
+    const bool right = _mm512_mask_cmplt_epi32_mask(others, nx_lanes, _mm512_set1_epi32(x0_lanes + t.payload)) == 0;
+    const std::int32_t side = right ? 1 : -1;
+    if (_mm512_mask_cmpge_epu32_mask(others, _mm512_sub_epi32(nx_lanes, _mm512_set1_epi32(x0_lanes + side * t.payload)),
+                                     _mm512_set1_epi32(t.payload)))
+        return false;
+    if (other.level != level || other.x0 != own.x0 + side * t.payload || other.y0 != own.y0) {
+        const std::int32_t cx = own.cx + side;
+        other = {level, cx, own.cy, own.x0 + side * t.payload, own.y0,
+                 base(finder + 1, std::uint32_t(level), std::uint32_t(cx), std::uint32_t(own.cy))};
+    }
+    if (!other.base) return false;
+    // The row's bytes from lo on: the left tile's before byte `split` (the right tile's first
+    // payload texel), the right tile's from there (a border holds its neighbour's texels, so
+    // both tiles hold the same bytes around it). A tile's bytes before its slot, if any, are
+    // masked off: masked loads do not touch them.
+    const std::int32_t split = 3 * (t.border + (right ? t.payload : 0) - lo);  // in (0, span)
+    const StretchMasks all = stretch_masks(span), left = stretch_masks(split);
+    auto at = [](const std::uint8_t* slot, std::ptrdiff_t offset) {  // no out-of-object pointer formed
+        return reinterpret_cast<const std::uint8_t*>(reinterpret_cast<std::uintptr_t>(slot) + std::uintptr_t(offset));
+    };
+    const std::ptrdiff_t first = std::ptrdiff_t(row_start) + 3 * std::ptrdiff_t(lo), shift = 3 * std::ptrdiff_t(t.payload);
+    const std::ptrdiff_t left_at = first + (right ? 0 : shift), right_at = first - (right ? shift : 0);
+    const std::uint8_t* left_slot = right ? own.base : other.base;
+    const std::uint8_t* right_slot = right ? other.base : own.base;
+    for (int row = 0; row < 2; ++row) {
+        const std::ptrdiff_t l = left_at + row * t.row_bytes, r = right_at + row * t.row_bytes;
+        rows[row][0] = _mm512_mask_loadu_epi8(_mm512_maskz_loadu_epi8(all.first & left.first, at(left_slot, l)),
+                                              all.first & ~left.first, at(right_slot, r));
+        rows[row][1] = _mm512_mask_loadu_epi8(_mm512_maskz_loadu_epi8(all.second & left.second, at(left_slot, l + 64)),
+                                              all.second & ~left.second, at(right_slot, r + 64));
+    }
+    return true;
+}
+
 bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float* b) {
     if (!state_) return false;
     State& st = *state_;
@@ -977,7 +1032,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         struct LevelPosition {
             std::int32_t ox, oy;
             __m512 fx, fy;
-            __m512i ix, iy;
+            __m512i ix, iy, nx, ny;
         };
         auto level_position = [&](int k) __attribute__((always_inline)) {
             LevelPosition p;
@@ -993,141 +1048,120 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
             p.fx = _mm512_sub_ps(x, x_fl), p.fy = _mm512_sub_ps(y, y_fl);
             p.ix = _mm512_cvttps_epi32(x_fl), p.iy = _mm512_cvttps_epi32(y_fl);
+            // Every lane's nearest texel (trilinear_taps' n_up), less the origin.
+            const __m512 half = _mm512_set1_ps(0.5f);
+            p.nx = _mm512_mask_add_epi32(p.ix, _mm512_cmp_ps_mask(p.fx, half, _CMP_GE_OQ), p.ix, one_i);
+            p.ny = _mm512_mask_add_epi32(p.iy, _mm512_cmp_ps_mask(p.fy, half, _CMP_GE_OQ), p.iy, one_i);
             return p;
         };
-        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const auto [ox, oy, fx, fy, ix, iy] = level_position(k);
-            // Every lane's nearest texel (trilinear_taps' n_up) less the origin.
-            const __m512 half = _mm512_set1_ps(0.5f);
-            const __m512i nx_lanes = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, half, _CMP_GE_OQ), ix, one_i);
-            const __m512i ny_lanes = _mm512_mask_add_epi32(iy, _mm512_cmp_ps_mask(fy, half, _CMP_GE_OQ), iy, one_i);
-            // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's when it holds
-            // that texel (its cx = floor(n / P) exactly when n - cx P lies in [0, P)).
-            const std::int32_t nx = ox + _mm_cvtsi128_si32(_mm512_castsi512_si128(nx_lanes));
-            const std::int32_t ny = oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(ny_lanes));
-            State::LastTile& tile = st.last_tile[finder];
-            if (tile.level != L + k || std::uint32_t(nx - tile.x0) >= std::uint32_t(t.payload) ||
-                std::uint32_t(ny - tile.y0) >= std::uint32_t(t.payload)) {
-                const std::uint32_t cx = st.divide_p(std::uint32_t(nx)), cy = st.divide_p(std::uint32_t(ny));
-                tile.level = L + k, tile.x0 = std::int32_t(cx) * t.payload, tile.y0 = std::int32_t(cy) * t.payload;
-                tile.base = st.base(finder, std::uint32_t(L + k), cx, cy);
-            }
-            // In-tile texels (from the tile's first, border included) of every lane's footprint.
-            const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(tile.x0 - t.border - ox));
-            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(tile.y0 - t.border - oy));
-            const std::int32_t jy0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
+        // At a level's position p in lane 0's tile: each lane's footprint's first texel in the
+        // tile (border included), the stretch of bytes from lo on that the footprints' corners
+        // span on their rows, and whether it fits one byte permute: every footprint on the
+        // same pair of texel rows, within 128 bytes.
+        struct Stretch {
+            std::int32_t first_row, lo, span;
+            __m512i rel;  // each lane's first texel less lo
+            bool fits;
+        };
+        auto stretch_in = [&](const LevelPosition& p, const State::LastTile& tile) __attribute__((always_inline)) {
+            Stretch s;
+            const __m512i jx = _mm512_sub_epi32(p.ix, _mm512_set1_epi32(tile.x0 - t.border - p.ox));
+            const __m512i jy = _mm512_sub_epi32(p.iy, _mm512_set1_epi32(tile.y0 - t.border - p.oy));
+            s.first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
             const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
             const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
-            const std::int32_t lo = std::min(jx_a, jx_b), hi = std::max(jx_a, jx_b);
-            const __m512i rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(lo));
-            const std::int32_t span = 3 * (hi - lo) + 6;  // bytes of the corners' channels
-            // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
-            // another tile would read this one's border where trilinear_taps might fall back),
-            // the rows the same, the stretch within 128 bytes.
-            const __m512i payload = _mm512_set1_epi32(t.payload);
-            if ((_mm512_cmplt_epu32_mask(_mm512_sub_epi32(nx_lanes, _mm512_set1_epi32(tile.x0 - ox)), payload) &
-                 _mm512_cmplt_epu32_mask(_mm512_sub_epi32(ny_lanes, _mm512_set1_epi32(tile.y0 - oy)), payload)) != 0xFFFF ||
-                _mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(jy0)) | _mm512_cmpgt_epu32_mask(rel, _mm512_set1_epi32(hi - lo)) ||
-                span > 128)
-                return false;
-            if (!tile.base) return false;
-            const std::uint8_t* p = tile.base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
-            const auto [m0, m1] = stretch_masks(span);
+            s.lo = std::min(jx_a, jx_b);
+            const std::int32_t hi = std::max(jx_a, jx_b);
+            s.rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(s.lo));
+            s.span = 3 * (hi - s.lo) + 6;  // bytes of the corners' channels
+            s.fits = !(_mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(s.first_row)) |
+                       _mm512_cmpgt_epu32_mask(s.rel, _mm512_set1_epi32(hi - s.lo))) &&
+                     s.span <= 128;
+            return s;
+        };
+        // A level's bilinear blends of 16 lanes from each row's stretch (its two 64-byte
+        // halves): every channel of every corner picked into its lane by one byte permute.
+        auto blend_rows = [&](const __m512i (&rows)[2][2], const Stretch& s, const LevelPosition& p, __m512& R,
+                              __m512& G, __m512& B) __attribute__((always_inline)) {
             // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
-            const __m512i byte0 = _mm512_add_epi32(rel, _mm512_add_epi32(rel, rel));
+            const __m512i byte0 = _mm512_add_epi32(s.rel, _mm512_add_epi32(s.rel, s.rel));
             constexpr __mmask64 kLowBytes = 0x1111111111111111ull;
             const __m512 one = _mm512_set1_ps(1.0f);
-            const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
-            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy)}, {_mm512_mul_ps(gx, fy), _mm512_mul_ps(fx, fy)}};
+            const __m512 gx = _mm512_sub_ps(one, p.fx), gy = _mm512_sub_ps(one, p.fy);
+            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(p.fx, gy)},
+                                    {_mm512_mul_ps(gx, p.fy), _mm512_mul_ps(p.fx, p.fy)}};
             __m512 sum[3];
-            for (int row = 0; row < 2; ++row) {
-                const std::uint8_t* q = p + row * t.row_bytes;
-                const __m512i a = _mm512_maskz_loadu_epi8(m0, q), b = _mm512_maskz_loadu_epi8(m1, q + 64);
+            for (int row = 0; row < 2; ++row)
                 for (int right = 0; right < 2; ++right)
                     for (int c = 0; c < 3; ++c) {
                         const int corner = 3 * right + c;
                         const __m512i idx = corner ? _mm512_add_epi32(byte0, _mm512_load_si512(st.corner_bytes[corner])) : byte0;
-                        const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, a, idx, b));
+                        const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, rows[row][0], idx, rows[row][1]));
                         sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
                                                         : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
                     }
-            }
             R = sum[0], G = sum[1], B = sum[2];
+        };
+        // Whether the last tile c at level l holds texel (x, y) (its cx = floor(x / P) exactly
+        // when x - cx P lies in [0, P)).
+        auto holds = [&](const State::LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) {
+            return c.level == l && std::uint32_t(x - c.x0) < std::uint32_t(t.payload) &&
+                   std::uint32_t(y - c.y0) < std::uint32_t(t.payload);
+        };
+        // A level whose lanes' nearest texels (trilinear_taps' tile for each lane) all lie in
+        // lane 0's tile.
+        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
+            const LevelPosition p = level_position(k);
+            // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's, or the
+            // neighbour last taken with it, when either holds that texel.
+            const std::int32_t nx = p.ox + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.nx));
+            const std::int32_t ny = p.oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.ny));
+            State::LastTile& tile = st.last_tile[finder];
+            if (!holds(tile, L + k, nx, ny)) {
+                State::LastTile& other = st.last_tile[finder + 1];
+                if (holds(other, L + k, nx, ny)) {
+                    std::swap(tile, other);
+                } else {
+                    const std::uint32_t cx = st.divide_p(std::uint32_t(nx)), cy = st.divide_p(std::uint32_t(ny));
+                    tile = {L + k, std::int32_t(cx), std::int32_t(cy), std::int32_t(cx) * t.payload,
+                            std::int32_t(cy) * t.payload, st.base(finder, std::uint32_t(L + k), cx, cy)};
+                }
+            }
+            const Stretch s = stretch_in(p, tile);
+            // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
+            // another tile would read this one's border where trilinear_taps might fall back).
+            const __m512i payload = _mm512_set1_epi32(t.payload);
+            if ((_mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload) &
+                 _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload)) != 0xFFFF ||
+                !s.fits || !tile.base)
+                return false;
+            const std::uint8_t* first = tile.base + std::size_t(s.first_row) * std::size_t(t.row_bytes) + std::size_t(s.lo) * 3;
+            const auto [m0, m1] = stretch_masks(s.span);
+            __m512i rows[2][2];
+            for (int row = 0; row < 2; ++row) {
+                const std::uint8_t* q = first + row * t.row_bytes;
+                rows[row][0] = _mm512_maskz_loadu_epi8(m0, q), rows[row][1] = _mm512_maskz_loadu_epi8(m1, q + 64);
+            }
+            blend_rows(rows, s, p, R, G, B);
             return true;
         };
-        // A level whose lanes take two tiles side by side (a packet across a tile's edge):
-        // lane 0's and lane 15's, by their nearest texels, each lane's in the payload of one of
-        // them, one tile row; per tile its stretches, its lanes' bytes picked by masked permutes.
+        // A level whose lanes lie in lane 0's tile and its neighbour on the left or right (a
+        // packet across a tile's edge; one_tile declined it, leaving lane 0's tile in
+        // last_tile[finder]): one_tile's checks for the lanes' two tiles, each row's stretch
+        // as the level's bytes from both (State::across_edge).
         auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const auto [ox, oy, fx, fy, ix, iy] = level_position(k);
-            // The nearest texels (trilinear_taps' n_up).
-            const __m512i one_i = _mm512_set1_epi32(1);
-            const __m512i nx = _mm512_mask_add_epi32(ix, _mm512_cmp_ps_mask(fx, _mm512_set1_ps(0.5f), _CMP_GE_OQ), ix, one_i);
-            const __m512i ny = _mm512_mask_add_epi32(iy, _mm512_cmp_ps_mask(fy, _mm512_set1_ps(0.5f), _CMP_GE_OQ), iy, one_i);
-            const std::int32_t first_x = _mm_cvtsi128_si32(_mm512_castsi512_si128(nx));
-            const std::int32_t last_x = _mm_extract_epi32(_mm512_extracti32x4_epi32(nx, 3), 3);
-            const std::int32_t cx[2] = {std::int32_t(st.divide_p(std::uint32_t(ox + first_x))),
-                                        std::int32_t(st.divide_p(std::uint32_t(ox + last_x)))};
-            const std::int32_t cy = std::int32_t(st.divide_p(std::uint32_t(oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(ny)))));
-            auto in_payload = [&](__m512i n, std::int32_t first) {  // n - first in [0, P)
-                return _mm512_cmplt_epu32_mask(_mm512_sub_epi32(n, _mm512_set1_epi32(first)), _mm512_set1_epi32(t.payload));
-            };
-            if (cx[0] == cx[1]) return false;  // one tile (one_tile declined it)
-            constexpr std::uint64_t kLowBytes = 0x1111111111111111ull;
-            __mmask16 lanes[2];
-            lanes[0] = in_payload(nx, cx[0] * t.payload - ox);
-            lanes[1] = __mmask16(in_payload(nx, cx[1] * t.payload - ox) & ~lanes[0]);
-            // The footprints' first texel row in the tile, the same for every lane.
-            const __m512i jy = _mm512_sub_epi32(iy, _mm512_set1_epi32(cy * t.payload - t.border - oy));
-            const std::int32_t jy0 = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
-            if (__mmask16(lanes[0] | lanes[1]) != 0xFFFF || in_payload(ny, cy * t.payload - oy) != 0xFFFF ||
-                _mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(jy0)))
+            const LevelPosition p = level_position(k);
+            const State::LastTile& tile = st.last_tile[finder];
+            const Stretch s = stretch_in(p, tile);
+            const __m512i payload = _mm512_set1_epi32(t.payload);
+            const __mmask16 in_tile = _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload);
+            __m512i rows[2][2];
+            if (in_tile == 0xFFFF || tile.level != L + k || !tile.base || !s.fits ||
+                _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload) != 0xFFFF ||
+                !st.across_edge(L + k, finder, p.nx, tile.x0 - p.ox, in_tile, s.lo, s.span,
+                                std::size_t(s.first_row) * std::size_t(t.row_bytes), rows))
                 return false;
-            // Per tile: its lanes' in-tile texels, the stretch of each row they read (at most
-            // 128 bytes), and each lane's first byte in it; then the footprints' texels, a
-            // channel of a corner per byte permute (and per tile), and the bilinear sums.
-            const __m512 one = _mm512_set1_ps(1.0f);
-            const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
-            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy)}, {_mm512_mul_ps(gx, fy), _mm512_mul_ps(fx, fy)}};
-            const std::uint8_t* p[2];
-            __mmask64 m0[2], m1[2], bytes[2];
-            __m512i byte0[2];
-            for (int tile = 0; tile < 2; ++tile) {
-                const __m512i jx = _mm512_sub_epi32(ix, _mm512_set1_epi32(cx[tile] * t.payload - t.border - ox));
-                const std::int32_t lo = _mm512_mask_reduce_min_epi32(lanes[tile], jx);
-                const std::int32_t hi = _mm512_mask_reduce_max_epi32(lanes[tile], jx);
-                const std::int32_t span = 3 * (hi - lo) + 6;  // bytes of the corners' channels
-                if (span > 128) return false;
-                const std::uint8_t* base = st.base(finder + tile, std::uint32_t(L + k), std::uint32_t(cx[tile]), std::uint32_t(cy));
-                if (!base) return false;
-                const __m512i rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(lo));
-                p[tile] = base + std::size_t(jy0) * std::size_t(t.row_bytes) + std::size_t(lo) * 3;
-                const StretchMasks masks = stretch_masks(span);
-                m0[tile] = masks.first, m1[tile] = masks.second;
-                byte0[tile] = _mm512_add_epi32(rel, _mm512_add_epi32(rel, rel));
-                bytes[tile] = _pdep_u64(lanes[tile], kLowBytes);  // byte 0 of its lanes' dwords
-            }
-            __m512 sum[3];
-            for (int row = 0; row < 2; ++row) {
-                __m512i a[2], b[2];
-                for (int tile = 0; tile < 2; ++tile) {
-                    const std::uint8_t* q = p[tile] + row * t.row_bytes;
-                    a[tile] = _mm512_maskz_loadu_epi8(m0[tile], q), b[tile] = _mm512_maskz_loadu_epi8(m1[tile], q + 64);
-                }
-                for (int right = 0; right < 2; ++right)
-                    for (int c = 0; c < 3; ++c) {
-                        const __m512i corner = _mm512_set1_epi32(3 * right + c);
-                        // Each lane's channel in the low byte of its dword (from its tile's
-                        // stretch), the others zeroed.
-                        const __m512i texel_bytes = _mm512_or_si512(
-                            _mm512_maskz_permutex2var_epi8(bytes[0], a[0], _mm512_add_epi32(byte0[0], corner), b[0]),
-                            _mm512_maskz_permutex2var_epi8(bytes[1], a[1], _mm512_add_epi32(byte0[1], corner), b[1]));
-                        const __m512 texel = _mm512_cvtepi32_ps(texel_bytes);
-                        sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
-                                                        : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
-                    }
-            }
-            R = sum[0], G = sum[1], B = sum[2];
+            blend_rows(rows, s, p, R, G, B);
             return true;
         };
         __m512 R, G, B, R1, G1, B1;

@@ -534,6 +534,62 @@ TEST(TrilinearLanes, PacketsFromTheirOriginDeclineAtTheEdges) {
     EXPECT_FALSE(lanes.sample16(nan, r, g, b));
 }
 
+// A packet across a tile's edge, running right or left (a painting seen mirrored), at one and
+// two levels: sampled from both tiles and equal to the reference, both from the tiles' cache
+// (the second call) and after forget_tiles; declined while the neighbour tile is not resident
+// (the reference falls back to a coarser level for its lanes).
+TEST(TrilinearLanes, PacketsAcrossATileEdgeTakeBothTiles) {
+    const CutPainting painting(600, 400, 32, 2, 61);
+    const std::uint32_t P = painting.layout.payload();
+    for (const double direction : {1.0, -1.0})
+        for (const float lod0 : {0.0f, 0.4f}) {
+            VirtualTexture vt(painting.layout, 16, 16, painting.source());
+            std::vector<std::uint8_t> tile(painting.layout.tile_bytes());
+            auto put = [&](std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
+                const TileKey key{0, l, tx, ty};
+                painting.source()(key, tile.data());
+                vt.insert(key, tile.data());
+            };
+            TrilinearLanes lanes(vt, 0);
+            if (!lanes.enabled()) GTEST_SKIP() << "built without AVX-512: sample16 always declines";
+            // 16 lanes 0.9 texels apart across the edge between level 0's tiles 4 and 5 (their
+            // parents at level 1 are tiles 2 and 2: one tile there), lane 0 on its side.
+            alignas(64) double u[16], v[16];
+            alignas(64) float lod[16], r[16], g[16], b[16];
+            PacketUv packet;
+            const double x0 = 5.0 * P - direction * 6.2;
+            for (int k = 0; k < 16; ++k) {
+                u[k] = (x0 + direction * 0.9 * k) / 600.0, v[k] = (4.5 * P) / 400.0, lod[k] = lod0;
+                packet.du[k] = float(u[k] - u[0]), packet.lod[k] = lod0;
+            }
+            packet.u0 = u[0], packet.v0 = v[0];
+            put(0, direction > 0 ? 4 : 5, 4), put(1, 2, 2);
+            auto sample = [&] {
+                const auto lock = vt.read_lock();
+                return lanes.sample16(packet, r, g, b);
+            };
+            auto reference = [&] {
+                std::vector<float> out(48);
+                SampleRequest s;
+                s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = out.data();
+                sample_trilinear_reference(vt, s);
+                return out;
+            };
+            EXPECT_FALSE(sample()) << "direction " << direction << " lod " << lod0;  // one tile resident
+            put(0, direction > 0 ? 5 : 4, 4);
+            lanes.forget_tiles();
+            const std::vector<float> ref = reference();
+            for (int call = 0; call < 2; ++call) {
+                ASSERT_TRUE(sample()) << "direction " << direction << " lod " << lod0 << " call " << call;
+                for (int k = 0; k < 16; ++k) {
+                    EXPECT_NEAR(r[k], ref[3 * k], 0.01f) << "lane " << k;
+                    EXPECT_NEAR(g[k], ref[3 * k + 1], 0.01f) << "lane " << k;
+                    EXPECT_NEAR(b[k], ref[3 * k + 2], 0.01f) << "lane " << k;
+                }
+            }
+        }
+}
+
 // Nothing to sample in lanes for a painting the texture does not hold: sample() reports it.
 TEST(TrilinearLanes, DisabledForAPaintingNotInTheTexture) {
     const CutPainting painting(300, 200, 32, 2, 23);
