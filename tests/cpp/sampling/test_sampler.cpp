@@ -534,6 +534,15 @@ TEST(TrilinearLanes, PacketsFromTheirOriginDeclineAtTheEdges) {
     EXPECT_FALSE(lanes.sample16(nan, r, g, b));
 }
 
+// The reference sampler's 16 samples (r, g, b per sample) of a packet's uv and levels.
+static std::vector<float> packet_reference(const VirtualTexture& vt, const double* u, const double* v, const float* lod) {
+    std::vector<float> out(48);
+    SampleRequest s;
+    s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = out.data();
+    sample_trilinear_reference(vt, s);
+    return out;
+}
+
 // A packet across a tile's edge, running right or left (a painting seen mirrored), at one and
 // two levels: sampled from both tiles and equal to the reference, both from the tiles' cache
 // (the second call) and after forget_tiles; declined while the neighbour tile is not resident
@@ -568,17 +577,10 @@ TEST(TrilinearLanes, PacketsAcrossATileEdgeTakeBothTiles) {
                 const auto lock = vt.read_lock();
                 return lanes.sample16(packet, r, g, b);
             };
-            auto reference = [&] {
-                std::vector<float> out(48);
-                SampleRequest s;
-                s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = out.data();
-                sample_trilinear_reference(vt, s);
-                return out;
-            };
             EXPECT_FALSE(sample()) << "direction " << direction << " lod " << lod0;  // one tile resident
             put(0, direction > 0 ? 5 : 4, 4);
             lanes.forget_tiles();
-            const std::vector<float> ref = reference();
+            const std::vector<float> ref = packet_reference(vt, u, v, lod);
             for (int call = 0; call < 2; ++call) {
                 ASSERT_TRUE(sample()) << "direction " << direction << " lod " << lod0 << " call " << call;
                 for (int k = 0; k < 16; ++k) {
@@ -628,13 +630,7 @@ TEST(TrilinearLanes, ForgetsItsTilesWhenTheResidencyChanges) {
         vt.insert(k, tile.data());
     };
     put(0, 5, 4), put(1, 2, 2);
-    auto reference = [&] {
-        std::vector<float> out(48);
-        SampleRequest s;
-        s.u = u, s.v = v, s.lod = lod, s.count = 16, s.filter = Filter::Trilinear, s.out = out.data();
-        sample_trilinear_reference(vt, s);
-        return out;
-    };
+    auto reference = [&] { return packet_reference(vt, u, v, lod); };
     auto lanes_equal = [&](const std::vector<float>& ref) {  // to the packets' 0.01 of a code
         for (int k = 0; k < 16; ++k)
             if (std::abs(r[k] - ref[3 * k]) > 0.01f || std::abs(g[k] - ref[3 * k + 1]) > 0.01f ||
