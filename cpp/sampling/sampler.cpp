@@ -747,7 +747,7 @@ struct TrilinearLanes::State {
         double scale, limit;
     };
     std::vector<AxisLevel> axis_levels[2];
-    // Byte j of a texel's corners (j = 3 x right + channel) in every lane: the one-tile path's
+    // Byte j of a texel's corners (j = 3 x right + channel) in every lane: the stretch paths'
     // permute offsets, read as memory operands (as constants GCC made each anew at each use).
     alignas(64) std::int32_t corner_bytes[6][16];
     // Per finder, the last tile it looked up: its level, tile (cx, cy), its payload's first
