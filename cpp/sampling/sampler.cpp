@@ -1148,7 +1148,9 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         // A level whose lanes lie in lane 0's tile and its neighbour on the left or right (a
         // packet across a tile's edge; one_tile declined it, leaving lane 0's tile in
         // last_tile[finder]): one_tile's checks for the lanes' two tiles, each row's stretch
-        // as the level's bytes from both (State::across_edge).
+        // as the level's bytes from both (State::across_edge). The position and stretch are
+        // one_tile's, written again rather than handed over: GCC shares them, and one function
+        // for both paths cost the common packets more (bench/RESULTS.md).
         auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
             const LevelPosition p = level_position(k);
             const State::LastTile& tile = st.last_tile[finder];
@@ -1156,7 +1158,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
             const __m512i payload = _mm512_set1_epi32(t.payload);
             const __mmask16 in_tile = _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload);
             __m512i rows[2][2];
-            if (in_tile == 0xFFFF || tile.level != L + k || !tile.base || !s.fits ||
+            if (in_tile == 0xFFFF || !tile.base || !s.fits ||
                 _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload) != 0xFFFF ||
                 !st.across_edge(L + k, finder, p.nx, tile.x0 - p.ox, in_tile, s.lo, s.span,
                                 std::size_t(s.first_row) * std::size_t(t.row_bytes), rows))
