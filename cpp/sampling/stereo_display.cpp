@@ -791,9 +791,9 @@ struct LatticeLanes {
 
     // The common packet in one step instead of locate16 and blend16: all 16 lanes hit one
     // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in at most
-    // two sub-triangles of the lattice's cells (a cell, or two across a cell's edge or
-    // diagonal: the first and the last lane's; a row of pixels crosses the lattice along a
-    // line). On a sub-triangle the light is an affine function of the cell coordinates: its
+    // ten sub-triangles of the lattice's cells (nearly always one, or two across a cell's edge
+    // or diagonal: the first and the last lane's, as a row of pixels crosses the lattice along
+    // a line; more in a distant view). On a sub-triangle the light is an affine function of the cell coordinates: its
     // three corners read once (scalar loads, no gathers) and two fused multiply-adds per
     // channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower; upper: (c1 + c2 - c0) +
     // fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 + E2 w2 to float
@@ -851,11 +851,32 @@ struct LatticeLanes {
         } else {
             const CellLight& last = sub_triangle(15, _mm_extract_epi32(last4i, 3), _mm_extract_epi32(last4j, 3), &first,
                                                  last_lanes);
-            if ((first_lanes | last_lanes) != 0xFFFF) return false;
+            __m512 E[3];
             for (int k = 0; k < 3; ++k)
-                _mm512_store_ps(out.E[k], _mm512_mask_blend_ps(last_lanes & ~first_lanes,
-                                                               _mm512_fmadd_ps(fy, first.dy[k], _mm512_fmadd_ps(fx, first.dx[k], first.base[k])),
-                                                               _mm512_fmadd_ps(fy, last.dy[k], _mm512_fmadd_ps(fx, last.dx[k], last.base[k]))));
+                E[k] = _mm512_mask_blend_ps(last_lanes & ~first_lanes,
+                                            _mm512_fmadd_ps(fy, first.dy[k], _mm512_fmadd_ps(fx, first.dx[k], first.base[k])),
+                                            _mm512_fmadd_ps(fy, last.dy[k], _mm512_fmadd_ps(fx, last.dx[k], last.base[k])));
+            // A packet across more sub-triangles (a distant view, whose pixels lie far apart
+            // on the lattice): the first lane left out's in turn, up to kMoreCells more. Each
+            // costs a few vector operations; locate16 and blend16 cost 9 to 18 gathers.
+            __mmask16 covered = first_lanes | last_lanes;
+            if (covered != 0xFFFF) {
+                constexpr int kMoreCells = 8;
+                alignas(64) std::int32_t lane_i[16], lane_j[16];
+                _mm512_store_si512(lane_i, i), _mm512_store_si512(lane_j, j);
+                for (int more = 0; covered != 0xFFFF; ++more) {
+                    if (more == kMoreCells) return false;
+                    const int lane = std::countr_zero(unsigned(__mmask16(~covered)));
+                    __mmask16 lanes;
+                    const CellLight& cell = sub_triangle(lane, lane_i[lane], lane_j[lane], nullptr, lanes);
+                    lanes &= __mmask16(~covered);
+                    for (int k = 0; k < 3; ++k)
+                        E[k] = _mm512_mask_blend_ps(lanes, E[k],
+                                                    _mm512_fmadd_ps(fy, cell.dy[k], _mm512_fmadd_ps(fx, cell.dx[k], cell.base[k])));
+                    covered |= lanes;
+                }
+            }
+            for (int k = 0; k < 3; ++k) _mm512_store_ps(out.E[k], E[k]);
         }
         const Vec3f em = seen_front ? c.emission : Vec3f{0.0f, 0.0f, 0.0f};
         if (with_albedo) {
