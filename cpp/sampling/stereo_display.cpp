@@ -847,15 +847,15 @@ struct LatticeLanes {
                                               _mm_cvtsi128_si32(_mm512_castsi512_si128(j)), nullptr, first_lanes);
         if (first_lanes == 0xFFFF) {
             for (int k = 0; k < 3; ++k)
-                _mm512_store_ps(out.E[k], _mm512_fmadd_ps(fy, first.dy[k], _mm512_fmadd_ps(fx, first.dx[k], first.base[k])));
+                _mm512_store_ps(out.E[k], first.light(k, fx, fy));
         } else {
             const CellLight& last = sub_triangle(15, _mm_extract_epi32(last4i, 3), _mm_extract_epi32(last4j, 3), &first,
                                                  last_lanes);
             __m512 E[3];
             for (int k = 0; k < 3; ++k)
                 E[k] = _mm512_mask_blend_ps(last_lanes & ~first_lanes,
-                                            _mm512_fmadd_ps(fy, first.dy[k], _mm512_fmadd_ps(fx, first.dx[k], first.base[k])),
-                                            _mm512_fmadd_ps(fy, last.dy[k], _mm512_fmadd_ps(fx, last.dx[k], last.base[k])));
+                                            first.light(k, fx, fy),
+                                            last.light(k, fx, fy));
             // A packet across more sub-triangles (a distant view, whose pixels lie far apart
             // on the lattice): the first lane left out's in turn, up to kMoreCells more. Each
             // costs a few vector operations; locate16 and blend16 cost 9 to 18 gathers.
@@ -872,7 +872,7 @@ struct LatticeLanes {
                     lanes &= __mmask16(~covered);
                     for (int k = 0; k < 3; ++k)
                         E[k] = _mm512_mask_blend_ps(lanes, E[k],
-                                                    _mm512_fmadd_ps(fy, cell.dy[k], _mm512_fmadd_ps(fx, cell.dx[k], cell.base[k])));
+                                                    cell.light(k, fx, fy));
                     covered |= lanes;
                 }
             }
@@ -887,11 +887,16 @@ struct LatticeLanes {
         _mm512_store_ps(out.M[2], _mm512_set1_ps(em.z));
         return true;
     }
-    // A sub-triangle's light as E = base + fx dx + fy dy, per channel.
+    // A sub-triangle's light as E = base + fx dx + fy dy, per channel (the coefficients as
+    // floats: the multiply-adds take them as broadcast memory operands).
     struct CellLight {
         std::int32_t i = -1, j = -1;  // i < 0: empty
         bool upper = false, front = false;
-        __m512 base[3], dx[3], dy[3];
+        float base[3], dx[3], dy[3];
+        // Channel k's light in 16 lanes at cell coordinates (fx, fy).
+        __m512 light(int k, __m512 fx, __m512 fy) const {
+            return _mm512_fmadd_ps(fy, _mm512_set1_ps(dy[k]), _mm512_fmadd_ps(fx, _mm512_set1_ps(dx[k]), _mm512_set1_ps(base[k])));
+        }
     };
     // The last packets' triangle (consecutive packets of a row nearly always share it) and
     // the last two sub-triangles of its lattice they were lit from.
@@ -922,9 +927,9 @@ struct LatticeLanes {
         const Vec3f c0 = E[upper ? row_next + j + 1 : row_i + j];
         const Vec3f c1 = E[upper ? up : right], c2 = E[upper ? right : up];
         auto channel = [&](int k, float a0, float a1, float a2) {
-            cl.base[k] = _mm512_set1_ps(upper ? a1 + a2 - a0 : a0);
-            cl.dx[k] = _mm512_set1_ps(upper ? a0 - a1 : a1 - a0);
-            cl.dy[k] = _mm512_set1_ps(upper ? a0 - a2 : a2 - a0);
+            cl.base[k] = upper ? a1 + a2 - a0 : a0;
+            cl.dx[k] = upper ? a0 - a1 : a1 - a0;
+            cl.dy[k] = upper ? a0 - a2 : a2 - a0;
         };
         channel(0, c0.x, c1.x, c2.x), channel(1, c0.y, c1.y, c2.y), channel(2, c0.z, c1.z, c2.z);
         cl.i = ci, cl.j = cj, cl.upper = upper, cl.front = front;
