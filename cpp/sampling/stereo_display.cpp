@@ -1527,24 +1527,13 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
         };
 #endif
 
-        auto on_packet = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
-                             const RTCRayHit16& h) {
-            lap(t_rays);
-            start_row(row);
-#if defined(__AVX512F__) && defined(__AVX512DQ__)
-            if (lanes16) {  // (a short last packet casts all 16 lanes: whole_tail)
-                const unsigned g0 = h.hit.geomID[0];
-                const __m512i valid16 = _mm512_load_si512(valid);
-                if (g0 != kNoHit && _mm512_test_epi32_mask(valid16, valid16) == 0xFFFF &&
-                    _mm512_cmpeq_epi32_mask(_mm512_loadu_si512(h.hit.geomID), _mm512_set1_epi32(int(g0))) == 0xFFFF) {
-                    defer(row, i0, n, h, g0);
-                    return;
-                }
-            }
-#endif
-            // Every other packet: the side each hit sees; the hit points and eye-facing unit
-            // normals only where something reads them (the G-buffer, the right eye's claims, a
-            // lighting that is not a baked lattice).
+        // Every packet but the deferred ones: the side each hit sees; the hit points and
+        // eye-facing unit normals only where something reads them (the G-buffer, the right
+        // eye's claims, a lighting that is not a baked lattice). Out of line, so that the
+        // common packet's test and deferral sit in cast_rows' loop without this body's
+        // register saves.
+        auto other_packet = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
+                                const RTCRayHit16& h) __attribute__((noinline)) {
             alignas(64) float hx[16], hy[16], hz[16], nx[16], ny[16], nz[16];
             alignas(64) std::int32_t back[16];
             back_sides(h, back);
@@ -1728,6 +1717,23 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
             }
             pending_count = pc;
             lap(t_vt);
+        };
+        auto on_packet = [&](std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
+                             const RTCRayHit16& h) __attribute__((always_inline)) {
+            lap(t_rays);
+            start_row(row);
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+            if (lanes16) {  // (a short last packet casts all 16 lanes: whole_tail)
+                const unsigned g0 = h.hit.geomID[0];
+                const __m512i valid16 = _mm512_load_si512(valid);
+                if (g0 != kNoHit && _mm512_test_epi32_mask(valid16, valid16) == 0xFFFF &&
+                    _mm512_cmpeq_epi32_mask(_mm512_loadu_si512(h.hit.geomID), _mm512_set1_epi32(int(g0))) == 0xFFFF) {
+                    defer(row, i0, n, h, g0);
+                    return;
+                }
+            }
+#endif
+            other_packet(row, i0, n, valid, h);
         };
 
         // The right eye: the edge release of the row's claims (their sources, the packets'
