@@ -813,7 +813,7 @@ struct LatticeLanes {
             c.n = std::int32_t(b.segments[c.t]);
             c.front_points = b.front + b.offset[c.t], c.back_points = b.back + b.offset[c.t];
             c.albedo = b.albedo[c.t], c.emission = b.emission[c.t];
-            for (CellLight& cl : c.cells) cl.i = -1;
+            for (CellLight& cl : c.cells) cl.key = CellLight::kEmpty;
         }
         // One triangle: Embree's normal is the same in every lane (lane 0's, w . Ng as locate16's).
         const bool normals_agree = c.w.x * h.Ng_x[0] + c.w.y * h.Ng_y[0] + c.w.z * h.Ng_z[0] > 0;
@@ -890,8 +890,14 @@ struct LatticeLanes {
     // A sub-triangle's light as E = base + fx dx + fy dy, per channel (the coefficients as
     // floats: the multiply-adds take them as broadcast memory operands).
     struct CellLight {
-        std::int32_t i = -1, j = -1;  // i < 0: empty
-        bool upper = false, front = false;
+        // Cell (i, j), sub-triangle and side in one word (0 <= i, j < n, and n^2 / 2 < 2^31 / 3
+        // points: lanes16).
+        static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+        static std::uint64_t key_of(std::int32_t i, std::int32_t j, bool upper, bool front) {
+            return std::uint64_t(std::uint32_t(i)) << 32 | std::uint64_t(std::uint32_t(j)) << 2 |
+                   std::uint64_t(upper) << 1 | std::uint64_t(front);
+        }
+        std::uint64_t key = kEmpty;
         float base[3], dx[3], dy[3];
         // Channel k's light in 16 lanes at cell coordinates (fx, fy).
         __m512 light(int k, __m512 fx, __m512 fy) const {
@@ -915,8 +921,9 @@ struct LatticeLanes {
     // i + 1 start at row_i, row_next) in the entry that is not keep.
     const CellLight& cell_light(std::int32_t ci, std::int32_t cj, bool upper, bool front, const CellLight* keep) {
         TriangleCache& c = triangle_cache_;
+        const std::uint64_t key = CellLight::key_of(ci, cj, upper, front);
         for (const CellLight& cl : c.cells)
-            if (cl.i == ci && cl.j == cj && cl.upper == upper && cl.front == front) return cl;
+            if (cl.key == key) return cl;
         if (&c.cells[c.next] == keep) c.next ^= 1;
         CellLight& cl = c.cells[c.next];
         c.next ^= 1;
@@ -932,7 +939,7 @@ struct LatticeLanes {
             cl.dy[k] = upper ? a0 - a2 : a2 - a0;
         };
         channel(0, c0.x, c1.x, c2.x), channel(1, c0.y, c1.y, c2.y), channel(2, c0.z, c1.z, c2.z);
-        cl.i = ci, cl.j = cj, cl.upper = upper, cl.front = front;
+        cl.key = key;
         return cl;
     }
 
