@@ -813,7 +813,6 @@ struct LatticeLanes {
             c.n = std::int32_t(b.segments[c.t]);
             c.front_points = b.front + b.offset[c.t], c.back_points = b.back + b.offset[c.t];
             c.albedo = b.albedo[c.t], c.emission = b.emission[c.t];
-            for (CellLight& cl : c.cells) cl.key = CellLight::kEmpty;
         }
         // One triangle: Embree's normal is the same in every lane (lane 0's, w . Ng as locate16's).
         const bool normals_agree = c.w.x * h.Ng_x[0] + c.w.y * h.Ng_y[0] + c.w.z * h.Ng_z[0] > 0;
@@ -890,11 +889,12 @@ struct LatticeLanes {
     // A sub-triangle's light as E = base + fx dx + fy dy, per channel (the coefficients as
     // floats: the multiply-adds take them as broadcast memory operands).
     struct CellLight {
-        // Cell (i, j), sub-triangle and side in one word (0 <= i, j < n, and n^2 / 2 < 2^31 / 3
-        // points: lanes16).
+        // Triangle t, cell (i, j), sub-triangle and side in one word: t < 2^30, and
+        // 0 <= i, j < n < 2^16 (lanes16 keeps the points, about n^2 / 2 a triangle, below
+        // 2^31 / 3).
         static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
-        static std::uint64_t key_of(std::int32_t i, std::int32_t j, bool upper, bool front) {
-            return std::uint64_t(std::uint32_t(i)) << 32 | std::uint64_t(std::uint32_t(j)) << 2 |
+        static std::uint64_t key_of(std::uint64_t t, std::int32_t i, std::int32_t j, bool upper, bool front) {
+            return t << 34 | std::uint64_t(std::uint32_t(i)) << 18 | std::uint64_t(std::uint32_t(j)) << 2 |
                    std::uint64_t(upper) << 1 | std::uint64_t(front);
         }
         std::uint64_t key = kEmpty;
@@ -904,8 +904,7 @@ struct LatticeLanes {
             return _mm512_fmadd_ps(fy, _mm512_set1_ps(dy[k]), _mm512_fmadd_ps(fx, _mm512_set1_ps(dx[k]), _mm512_set1_ps(base[k])));
         }
     };
-    // The last packets' triangle (consecutive packets of a row nearly always share it) and
-    // the last two sub-triangles of its lattice they were lit from.
+    // The last packets' triangle (consecutive packets of a row nearly always share it).
     struct TriangleCache {
         unsigned geom = RTC_INVALID_GEOMETRY_ID, prim = 0;
         std::uint64_t t = 0;
@@ -913,20 +912,25 @@ struct LatticeLanes {
         std::int32_t n = 0;
         const Vec3f *front_points = nullptr, *back_points = nullptr;
         Vec3f albedo, emission;
-        CellLight cells[2];
-        int next = 0;  // the entry to replace next
     } triangle_cache_;
+    // The sub-triangles lit lately, direct-mapped by their cell's low bits (a chunk's rows
+    // cross the same cells one after another; two entries missed about once a packet in a
+    // distant view), and a spare entry for a sub-triangle whose slot holds `keep`.
+    static constexpr std::size_t kCellSlots = 64;
+    CellLight cells_[kCellSlots + 1];
     // The light of sub-triangle (ci, cj, upper) of the cached triangle's lattice, seen from the
     // front or the back: cached, or made from its corners as locate() finds them (rows i and
-    // i + 1 start at row_i, row_next) in the entry that is not keep.
+    // i + 1 start at row_i, row_next) in an entry that is not keep.
     const CellLight& cell_light(std::int32_t ci, std::int32_t cj, bool upper, bool front, const CellLight* keep) {
         TriangleCache& c = triangle_cache_;
-        const std::uint64_t key = CellLight::key_of(ci, cj, upper, front);
-        for (const CellLight& cl : c.cells)
-            if (cl.key == key) return cl;
-        if (&c.cells[c.next] == keep) c.next ^= 1;
-        CellLight& cl = c.cells[c.next];
-        c.next ^= 1;
+        const std::uint64_t key = CellLight::key_of(c.t, ci, cj, upper, front);
+        CellLight* slot = &cells_[(std::uint32_t(ci) & 7) << 3 | (std::uint32_t(cj) & 3) << 1 | std::uint32_t(upper)];
+        if (slot->key == key) return *slot;
+        if (slot == keep) {
+            slot = &cells_[kCellSlots];
+            if (slot->key == key) return *slot;
+        }
+        CellLight& cl = *slot;
         const std::uint64_t nn = std::uint64_t(c.n), i = std::uint64_t(ci), j = std::uint64_t(cj);
         const std::uint64_t row_i = i * (nn + 1) - i * (i - 1) / 2, row_next = row_i + (nn + 1 - i);
         const std::uint64_t right = row_next + j, up = row_i + j + 1;
