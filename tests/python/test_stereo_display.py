@@ -204,16 +204,22 @@ def test_gallery_display_pass_equals_the_gallerys_own(lit_gallery, small_scroll_
     assert close.mean() > 0.99   # silhouette pixels may hit the other side of an edge
 
 
+def _packet_and_pixel_paths(lit_gallery, pack, cam):
+    """The gallery, a texture, and its baked display of `cam` by the packet pass and by the
+    per-pixel path (reference=True)."""
+    g = lit_gallery[0].gallery
+    vt = VirtualTexture(pack, (30, 30))
+    return (g, vt, g.render_display(cam, vt, lighting="baked"),
+            g.render_display(cam, vt, lighting="baked", reference=True))
+
+
 def test_gallery_still_takes_the_packet_pass(lit_gallery, small_scroll_pack):
     """Gallery.render_display's baked still (the packet display pass) against its per-pixel
     path (reference=True) and against hits=True, which takes the per-pixel path too; both
     threads counts give the same image."""
-    src, room = lit_gallery
-    vt = VirtualTexture(small_scroll_pack, (30, 30))
+    src, _ = lit_gallery
     cam = v.Camera((4.0, 1.5, -0.6), (4.3, 1.4, 0.0), (0.0, 1.0, 0.0), 70.0, resolution=(80, 64))
-    g = src.gallery
-    fast = g.render_display(cam, vt, lighting="baked")
-    ref = g.render_display(cam, vt, lighting="baked", reference=True)
+    g, vt, fast, ref = _packet_and_pixel_paths(lit_gallery, small_scroll_pack, cam)
     rgb, _ = g.render_display(cam, vt, lighting="baked", hits=True)
     assert np.array_equal(rgb, ref) and fast.max() > 0
     close = np.isclose(fast, ref, rtol=1e-3, atol=1e-6).all(axis=2)
@@ -228,12 +234,8 @@ def test_gallery_distant_view_lights_packets_across_many_lattice_cells(lit_galle
     """A distant low-resolution view: a packet's 16 pixels lie far apart on the walls, across
     many sub-triangles of the baked lattice (the packet pass lights each from its own cell's
     corners), against the per-pixel path, which locates every pixel's cell on its own."""
-    src, room = lit_gallery
-    vt = VirtualTexture(small_scroll_pack, (30, 30))
     cam = v.Camera((2.0, 1.6, -3.5), (6.0, 1.2, 0.0), (0.0, 1.0, 0.0), 70.0, resolution=(64, 40))
-    g = src.gallery
-    fast = g.render_display(cam, vt, lighting="baked")
-    ref = g.render_display(cam, vt, lighting="baked", reference=True)
+    _, _, fast, ref = _packet_and_pixel_paths(lit_gallery, small_scroll_pack, cam)
     assert (ref.max(axis=2) > 0).mean() > 0.95
     close = np.isclose(fast, ref, rtol=1e-3, atol=1e-6).all(axis=2)
     assert close.mean() > 0.99   # silhouette pixels may hit the other side of an edge
