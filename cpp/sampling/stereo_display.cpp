@@ -792,8 +792,8 @@ struct LatticeLanes {
     // The common packet in one step instead of locate16 and blend16: all 16 lanes hit one
     // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in at most
     // ten sub-triangles of the lattice's cells (nearly always one, or two across a cell's edge
-    // or diagonal: the first and the last lane's, as a row of pixels crosses the lattice along
-    // a line; more in a distant view). On a sub-triangle the light is an affine function of
+    // or diagonal, as a row of pixels crosses the lattice along a line; more in a distant
+    // view). On a sub-triangle the light is an affine function of
     // the cell coordinates: its three corners read once (scalar loads, no gathers) and two
     // fused multiply-adds per channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower;
     // upper: (c1 + c2 - c0) + fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 +
@@ -831,49 +831,34 @@ struct LatticeLanes {
         const __mmask16 past = _mm512_cmp_ps_mask(_mm512_add_ps(fx, fy), one, _CMP_GT_OQ);
         const __mmask16 upper = past & room;
         if (past & ~room) return false;  // on the far edge: lattice_cell scales back onto it
-        // The sub-triangles of the first and the last lane, and the lanes on each.
         const bool seen_front = front != 0;
-        auto sub_triangle = [&](int lane, std::int32_t ci, std::int32_t cj, const CellLight* keep,
-                                __mmask16& lanes) -> const CellLight& {
+        // The sub-triangle of a lane and the lanes on it.
+        auto sub_triangle = [&](int lane, __mmask16& lanes) -> const CellLight& {
+            const __m512i at = _mm512_set1_epi32(lane);
+            const std::int32_t ci = _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_permutexvar_epi32(at, i)));
+            const std::int32_t cj = _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_permutexvar_epi32(at, j)));
             const bool up = (upper >> lane) & 1;
             lanes = _mm512_cmpeq_epi32_mask(i, _mm512_set1_epi32(ci)) & _mm512_cmpeq_epi32_mask(j, _mm512_set1_epi32(cj)) &
                     (up ? upper : __mmask16(~upper));
-            return cell_light(ci, cj, up, seen_front, keep);
+            return cell_light(ci, cj, up, seen_front);
         };
-        __mmask16 first_lanes, last_lanes;
-        const __m128i last4i = _mm512_extracti32x4_epi32(i, 3), last4j = _mm512_extracti32x4_epi32(j, 3);
-        const CellLight& first = sub_triangle(0, _mm_cvtsi128_si32(_mm512_castsi512_si128(i)),
-                                              _mm_cvtsi128_si32(_mm512_castsi512_si128(j)), nullptr, first_lanes);
-        if (first_lanes == 0xFFFF) {
-            for (int k = 0; k < 3; ++k)
-                _mm512_store_ps(out.E[k], first.light(k, fx, fy));
-        } else {
-            const CellLight& last = sub_triangle(15, _mm_extract_epi32(last4i, 3), _mm_extract_epi32(last4j, 3), &first,
-                                                 last_lanes);
-            __m512 E[3];
-            for (int k = 0; k < 3; ++k)
-                E[k] = _mm512_mask_blend_ps(last_lanes & ~first_lanes, first.light(k, fx, fy), last.light(k, fx, fy));
-            // A packet across more sub-triangles (a distant view, whose pixels lie far apart
-            // on the lattice): the first lane left out's in turn, up to kMoreCells more. Each
-            // costs a few vector operations; locate16 and blend16 cost 9 to 18 gathers.
-            __mmask16 covered = first_lanes | last_lanes;
-            if (covered != 0xFFFF) {
-                constexpr int kMoreCells = 8;
-                alignas(64) std::int32_t lane_i[16], lane_j[16];
-                _mm512_store_si512(lane_i, i), _mm512_store_si512(lane_j, j);
-                for (int more = 0; covered != 0xFFFF; ++more) {
-                    if (more == kMoreCells) return false;
-                    const int lane = std::countr_zero(unsigned(__mmask16(~covered)));
-                    __mmask16 lanes;
-                    const CellLight& cell = sub_triangle(lane, lane_i[lane], lane_j[lane], nullptr, lanes);
-                    lanes &= __mmask16(~covered);
-                    for (int k = 0; k < 3; ++k)
-                        E[k] = _mm512_mask_blend_ps(lanes, E[k], cell.light(k, fx, fy));
-                    covered |= lanes;
-                }
-            }
-            for (int k = 0; k < 3; ++k) _mm512_store_ps(out.E[k], E[k]);
+        // Lane 0's sub-triangle, then the first lane left out's in turn (a distant view's
+        // pixels lie far apart on the lattice), up to kMaxCells. Each costs a few vector
+        // operations; locate16 and blend16 cost 9 to 18 gathers.
+        constexpr int kMaxCells = 10;
+        __mmask16 covered;
+        const CellLight& first = sub_triangle(0, covered);
+        __m512 E[3];
+        for (int k = 0; k < 3; ++k) E[k] = first.light(k, fx, fy);
+        for (int cells = 1; covered != 0xFFFF; ++cells) {
+            if (cells == kMaxCells) return false;
+            __mmask16 lanes;
+            const CellLight& cell = sub_triangle(std::countr_zero(unsigned(__mmask16(~covered))), lanes);
+            lanes &= __mmask16(~covered);
+            for (int k = 0; k < 3; ++k) E[k] = _mm512_mask_blend_ps(lanes, E[k], cell.light(k, fx, fy));
+            covered |= lanes;
         }
+        for (int k = 0; k < 3; ++k) _mm512_store_ps(out.E[k], E[k]);
         const Vec3f em = seen_front ? c.emission : Vec3f{0.0f, 0.0f, 0.0f};
         if (with_albedo) {
             _mm512_store_ps(out.a[0], _mm512_set1_ps(c.albedo.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(c.albedo.y));
@@ -912,21 +897,17 @@ struct LatticeLanes {
     } triangle_cache_;
     // The sub-triangles lit lately, direct-mapped by their cell's low bits (a chunk's rows
     // cross the same cells one after another; two entries missed about once a packet in a
-    // distant view), and a spare entry for a sub-triangle whose slot holds `keep`.
+    // distant view).
     static constexpr std::size_t kCellSlots = 64;
-    CellLight cells_[kCellSlots + 1];
+    CellLight cells_[kCellSlots];
     // The light of sub-triangle (ci, cj, upper) of the cached triangle's lattice, seen from the
     // front or the back: cached, or made from its corners as locate() finds them (rows i and
-    // i + 1 start at row_i, row_next) in an entry that is not keep.
-    const CellLight& cell_light(std::int32_t ci, std::int32_t cj, bool upper, bool front, const CellLight* keep) {
+    // i + 1 start at row_i, row_next), valid until the next call.
+    const CellLight& cell_light(std::int32_t ci, std::int32_t cj, bool upper, bool front) {
         TriangleCache& c = triangle_cache_;
         const std::uint64_t key = CellLight::key_of(c.t, ci, cj, upper, front);
         CellLight* slot = &cells_[(std::uint32_t(ci) & 7) << 3 | (std::uint32_t(cj) & 3) << 1 | std::uint32_t(upper)];
         if (slot->key == key) return *slot;
-        if (slot == keep) {
-            slot = &cells_[kCellSlots];
-            if (slot->key == key) return *slot;
-        }
         CellLight& cl = *slot;
         const std::uint64_t nn = std::uint64_t(c.n), i = std::uint64_t(ci), j = std::uint64_t(cj);
         const std::uint64_t row_i = i * (nn + 1) - i * (i - 1) / 2, row_next = row_i + (nn + 1 - i);
