@@ -8,6 +8,7 @@ prints wall and process-CPU milliseconds per frame. For profiling without the se
 `pose()` is the set-up alone (bench/walk/alternate.py uses it).
 """
 import argparse
+import os
 import sys
 import time
 
@@ -44,8 +45,18 @@ def pose(w, h, frame=None):
 
 
 def main():
-    w, h = map(int, sys.argv[1].split("x"))
-    n, mode = int(sys.argv[2]), sys.argv[3]
+    ap = argparse.ArgumentParser(description="one pose of the walk, its display looped")
+    ap.add_argument("size", help="per-eye WxH")
+    ap.add_argument("n", type=int, help="displays (or bare casts) to loop")
+    ap.add_argument("mode", choices=["stereo", "left", "bare"])
+    ap.add_argument("--core", help="a core module file to load instead of the installed one")
+    a = ap.parse_args()
+    if a.core:  # before anything imports gigascroll (and with it the installed core)
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        from alternate import load_core
+        load_core(a.core)
+    w, h = map(int, a.size.split("x"))
+    n, mode = a.n, a.mode
     p = pose(w, h)
     src, vt, left, right, d, outs = p["src"], p["vt"], p["left"], p["right"], p["display"], p["outs"]
     src.display_stereo(d, vt, left, right, True, 0, *outs)
