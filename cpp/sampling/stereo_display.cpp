@@ -1139,6 +1139,15 @@ struct RowScratch {
 };
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
+// Rows per parallel chunk of one eye's pass alone, the display's and the bare cast's alike:
+// 16, so that a chunk's rows run one after another on one core (the texel rows sample16
+// fetches ahead for the next screen row are read there, not by the other core) and a chunk's
+// set-up is paid once per 16 rows; fewer for a short image, so that each thread still takes
+// about 8 chunks (the last chunk's wait stays small).
+std::size_t rows_per_chunk(std::size_t height, unsigned threads) {
+    const std::size_t workers = threads ? threads : default_threads();
+    return std::clamp<std::size_t>(height / (8 * workers), 4, 16);
+}
 // Rows per chunk of the right eye's pass with reuse: each chunk's first and last claim rows
 // are reset after the pass (2 rows in 16), the others by the chunk itself.
 constexpr std::size_t kReleaseChunkRows = 16;
@@ -1258,7 +1267,7 @@ double DisplayPass::render_eye(const PaintingSceneView& scene, const DisplayLigh
     const float release_ratio = 1.0f + o.edge_depth_ratio;
     // The left eye of a pair claims without compare-and-swaps inside its chunks' inner rows
     // (ClaimProjection::claim_rows): chunks as tall as the right eye's.
-    const std::size_t chunk_rows = reusing_ || claim_into ? kReleaseChunkRows : 4;
+    const std::size_t chunk_rows = reusing_ || claim_into ? kReleaseChunkRows : rows_per_chunk(eye.height, o.threads);
     const bool rows_aligned = claim_into && rows_align(eye, *claim_into);
     std::atomic<std::uint64_t> reused{0};
     GS_CHECK(!left || left_rgb != nullptr);
@@ -2152,7 +2161,7 @@ double cast_primary_rays(RTCScene scene, const Camera& eye, unsigned threads, st
     check_camera(eye);
     const auto t0 = Clock::now();
     std::atomic<std::uint64_t> total{0};
-    parallel_for(eye.height, 4, [&](std::size_t rb, std::size_t re) {
+    parallel_for(eye.height, rows_per_chunk(eye.height, threads), [&](std::size_t rb, std::size_t re) {
         std::uint64_t count = 0;
         cast_rows(scene, eye, rb, re, nullptr, false, [](std::size_t) {},
                   [&](std::size_t, std::uint32_t, std::uint32_t n,
