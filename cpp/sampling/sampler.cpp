@@ -718,9 +718,9 @@ inline StretchMasks stretch_masks(int span) {
 // The two texel rows below a footprint's pair (its rows 2 and 3), the 128 bytes from its
 // first texel on, fetched into the cache ahead of the next screen row's packets, which read
 // them: at the fine level a screen row steps 1 to 2 texel rows down (a view of an upright
-// painting), onto rows no packet has read, and a tile's row is too short (6 cache lines)
-// for the hardware's prefetcher to follow. The fetch of a row outside the slot is wasted,
-// not an error (a prefetch does not fault).
+// painting), mostly onto rows no packet has read yet, and a tile's row is too short (6 cache
+// lines) for the hardware's prefetcher to follow. The fetch of a row outside the slot is
+// wasted, not an error (a prefetch does not fault).
 [[gnu::always_inline]] inline void prefetch_rows_below(const std::uint8_t* first, std::int32_t row_bytes) {
     const std::uintptr_t below = reinterpret_cast<std::uintptr_t>(first) + 2 * std::uintptr_t(row_bytes);
     for (int row = 0; row < 2; ++row) {
