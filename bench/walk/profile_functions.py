@@ -19,11 +19,25 @@ import collections
 import os
 import re
 import subprocess
+import sys
 
 
-def perf_script(data, *args):
-    return subprocess.run(["perf", "script", "-i", data, *args], capture_output=True, text=True,
-                          check=True).stdout.splitlines()
+def fail(message):
+    """One line on stderr and exit status 2, as the gigascroll commands do."""
+    print(f"profile_functions: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def run(*command):
+    """A tool's standard output as lines; a missing tool or its failure ends the script."""
+    try:
+        return subprocess.run(command, capture_output=True, text=True,
+                              check=True).stdout.splitlines()
+    except FileNotFoundError:
+        fail(f"{command[0]} is not installed (Debian: linux-perf, binutils)")
+    except subprocess.CalledProcessError as e:
+        last = (e.stderr or "").strip().splitlines()
+        fail(f"{' '.join(command[:3])} failed: {last[-1] if last else e}")
 
 
 def main():
@@ -33,39 +47,41 @@ def main():
                     "recorded (e.g. single_pose.py's --core)")
     ap.add_argument("--top", type=int, default=25)
     a = ap.parse_args()
-    # Where the module's code was mapped: [start, end) at file offset pgoff.
-    recorded, mapping = None, None
-    for line in perf_script(a.data, "--show-mmap-events", "-F", "ip"):
+    # One pass over the run: the module's mapping ([start, end) at file offset pgoff; it comes
+    # before the samples that fall in it) and every sample's address and object.
+    recorded, mapping, samples = None, None, []
+    for line in run("perf", "script", "-i", a.data, "--show-mmap-events", "-F", "ip,dso"):
         m = re.search(r"MMAP2? .*\[(0x[0-9a-f]+)\((0x[0-9a-f]+)\) @ (0x[0-9a-f]+) .*\]: r-xp (\S+)$",
                       line)
-        if m and (os.path.realpath(m.group(4)) == os.path.realpath(a.module) if a.module
-                  else os.path.basename(m.group(4)).startswith("_core.")):
-            start, size, pgoff = (int(m.group(k), 16) for k in (1, 2, 3))
-            recorded, mapping = m.group(4), (start, start + size, pgoff)
+        if m:
+            if (os.path.realpath(m.group(4)) == os.path.realpath(a.module) if a.module
+                    else os.path.basename(m.group(4)).startswith("_core.")):
+                start, size, pgoff = (int(m.group(k), 16) for k in (1, 2, 3))
+                recorded, mapping = m.group(4), (start, start + size, pgoff)
+            continue
+        p = line.split(None, 1)
+        if len(p) == 2 and re.fullmatch(r"[0-9a-f]+", p[0]):
+            samples.append((int(p[0], 16), p[1].strip("()")))
     if mapping is None:
-        raise SystemExit("profile_functions: the run did not load the core module")
+        fail("the run did not load the core module")
     module = a.module or recorded
     # File offset to address in the file: the executable LOAD segment's vaddr - offset.
-    segments = [l.split() for l in subprocess.run(["readelf", "-lW", module], capture_output=True,
-                                                   text=True, check=True).stdout.splitlines()
+    segments = [l.split() for l in run("readelf", "-lW", module)
                 if l.strip().startswith("LOAD") and " R E " in l]
     if len(segments) != 1:
-        raise SystemExit(f"profile_functions: {module}: not one executable segment")
+        fail(f"{module}: not one executable segment")
     shift = int(segments[0][2], 16) - int(segments[0][1], 16)
     by_object, core = collections.Counter(), collections.Counter()
-    for line in perf_script(a.data, "-F", "ip,dso"):
-        p = line.split(None, 1)
-        if len(p) != 2:
-            continue
-        ip, obj = int(p[0], 16), p[1].strip("()")
+    for ip, obj in samples:
         if mapping[0] <= ip < mapping[1]:
             by_object["core"] += 1
             core[ip - mapping[0] + mapping[2] + shift] += 1
         else:
             by_object["embree" if "embree" in os.path.basename(obj) else "other"] += 1
+    if not core:  # (addr2line without addresses would read them from the terminal)
+        fail("no samples in the core module")
     addrs = sorted(core)
-    out = subprocess.run(["addr2line", "-a", "-i", "-f", "-C", "-e", module] + [hex(x) for x in addrs],
-                         capture_output=True, text=True, check=True).stdout.splitlines()
+    out = run("addr2line", "-a", "-i", "-f", "-C", "-e", module, *(hex(x) for x in addrs))
     frames, current, i = {}, None, 0
     while i < len(out):
         if out[i].startswith("0x"):

@@ -51,6 +51,8 @@ def main():
     ap.add_argument("mode", choices=["stereo", "left", "bare"])
     ap.add_argument("--core", help="a core module file to load instead of the installed one")
     a = ap.parse_args()
+    if a.core and not os.path.isfile(a.core):
+        ap.error(f"--core {a.core}: no such file")
     if a.core:  # before anything imports gigascroll (and with it the installed core)
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
         from alternate import load_core

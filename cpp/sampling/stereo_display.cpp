@@ -793,11 +793,11 @@ struct LatticeLanes {
     // triangle, from one side, inside it (Embree's barycentrics need no clamp) and in at most
     // ten sub-triangles of the lattice's cells (nearly always one, or two across a cell's edge
     // or diagonal, as a row of pixels crosses the lattice along a line; more in a distant
-    // view). On a sub-triangle the light is an affine function of
-    // the cell coordinates: its three corners read once (scalar loads, no gathers) and two
-    // fused multiply-adds per channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower;
-    // upper: (c1 + c2 - c0) + fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 +
-    // E1 w1 + E2 w2 to float rounding. The albedo only with_albedo (a painting's is its texture). Returns false,
+    // view). On a sub-triangle the light is an affine function of the cell coordinates: its
+    // three corners read once (scalar loads, no gathers) and two fused multiply-adds per
+    // channel and lane, E = c0 + fx (c1 - c0) + fy (c2 - c0) (lower; upper: (c1 + c2 - c0) +
+    // fx (c0 - c1) + fy (c0 - c2)), which is lattice_lerp's E0 w0 + E1 w1 + E2 w2 to float
+    // rounding. The albedo only with_albedo (a painting's is its texture). Returns false,
     // having written nothing, for any other packet (the caller then takes locate16 and
     // blend16).
     bool light16_cells(const BakedLattice& b, const RTCHit16& h, const std::int32_t* __restrict back,
