@@ -3,6 +3,7 @@ display looped: the stereo display with reuse, the left eye alone, or the bare c
 prints wall and process-CPU milliseconds per frame. For profiling without the set-up, e.g.
 
     .venv/bin/python bench/walk/single_pose.py 450x480 300 stereo   # or left, bare
+    .venv/bin/python bench/walk/single_pose.py 450x480 300 left --frame 120   # another pose
     perf stat -e page-faults .venv/bin/python bench/walk/single_pose.py 450x480 300 stereo
 
 `pose()` is the set-up alone (bench/walk/alternate.py uses it).
@@ -49,6 +50,7 @@ def main():
     ap.add_argument("size", help="per-eye WxH")
     ap.add_argument("n", type=int, help="displays (or bare casts) to loop")
     ap.add_argument("mode", choices=["stereo", "left", "bare"])
+    ap.add_argument("--frame", type=int, help="the walk's frame (default: mid-walk)")
     ap.add_argument("--core", help="a core module file to load instead of the installed one")
     a = ap.parse_args()
     if a.core and not os.path.isfile(a.core):
@@ -57,9 +59,12 @@ def main():
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
         from alternate import load_core
         load_core(a.core)
-    w, h = map(int, a.size.split("x"))
+    try:
+        w, h = map(int, a.size.split("x"))
+        p = pose(w, h, a.frame)
+    except ValueError as e:  # a size that is not WxH, a frame off the walk
+        ap.error(str(e))
     n, mode = a.n, a.mode
-    p = pose(w, h)
     src, vt, left, right, d, outs = p["src"], p["vt"], p["left"], p["right"], p["display"], p["outs"]
     src.display_stereo(d, vt, left, right, True, 0, *outs)
     t = time.perf_counter()
