@@ -850,7 +850,18 @@ struct LatticeLanes {
         const CellLight& first = sub_triangle(0, covered);
         __m512 E[3];
         for (int k = 0; k < 3; ++k) E[k] = first.light(k, fx, fy);
-        for (int cells = 1; covered != 0xFFFF; ++cells) {
+        int cells = 1;
+        if (covered != 0xFFFF) {
+            // Lane 15's next: a row's cells follow one another along the packet, so the last
+            // lane's is the other of two (the lookup does not wait for lane 0's lanes).
+            __mmask16 lanes;
+            const CellLight& last = sub_triangle(15, lanes);
+            lanes &= __mmask16(~covered);
+            for (int k = 0; k < 3; ++k) E[k] = _mm512_mask_blend_ps(lanes, E[k], last.light(k, fx, fy));
+            covered |= lanes;
+            ++cells;
+        }
+        for (; covered != 0xFFFF; ++cells) {
             if (cells == kMaxCells) return false;
             __mmask16 lanes;
             const CellLight& cell = sub_triangle(std::countr_zero(unsigned(__mmask16(~covered))), lanes);
