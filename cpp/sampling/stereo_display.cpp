@@ -842,9 +842,9 @@ struct LatticeLanes {
                     (up ? upper : __mmask16(~upper));
             return cell_light(ci, cj, up, seen_front);
         };
-        // Lane 0's sub-triangle, then the first lane left out's in turn (a distant view's
-        // pixels lie far apart on the lattice), up to kMaxCells. Each costs a few vector
-        // operations; locate16 and blend16 cost 9 to 18 gathers.
+        // Lane 0's sub-triangle, then lane 15's, then the first lane left out's in turn (a
+        // distant view's pixels lie far apart on the lattice), up to kMaxCells. Each costs a
+        // few vector operations; locate16 and blend16 cost 9 to 18 gathers.
         constexpr int kMaxCells = 10;
         __mmask16 covered;
         const CellLight& first = sub_triangle(0, covered);
@@ -852,8 +852,9 @@ struct LatticeLanes {
         for (int k = 0; k < 3; ++k) E[k] = first.light(k, fx, fy);
         int cells = 1;
         if (covered != 0xFFFF) {
-            // Lane 15's next: a row's cells follow one another along the packet, so the last
-            // lane's is the other of two (the lookup does not wait for lane 0's lanes).
+            // A straight row crosses each cell once, so a packet's cells are runs of lanes and
+            // lane 15's is the other of two. Its lookup does not wait for lane 0's lanes, as the
+            // loop's next lane would.
             __mmask16 lanes;
             const CellLight& last = sub_triangle(15, lanes);
             lanes &= __mmask16(~covered);
