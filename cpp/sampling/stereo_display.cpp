@@ -850,25 +850,21 @@ struct LatticeLanes {
         const CellLight& first = sub_triangle(0, covered);
         __m512 E[3];
         for (int k = 0; k < 3; ++k) E[k] = first.light(k, fx, fy);
-        int cells = 1;
-        if (covered != 0xFFFF) {
-            // A straight row crosses each cell once, so a packet's cells are runs of lanes and
-            // lane 15's is the other of two. Its lookup does not wait for lane 0's lanes, as the
-            // loop's next lane would.
+        // The lanes not yet covered that lie on lane's sub-triangle, lit from it.
+        auto add_cell = [&](int lane) {
             __mmask16 lanes;
-            const CellLight& last = sub_triangle(15, lanes);
-            lanes &= __mmask16(~covered);
-            for (int k = 0; k < 3; ++k) E[k] = _mm512_mask_blend_ps(lanes, E[k], last.light(k, fx, fy));
-            covered |= lanes;
-            ++cells;
-        }
-        for (; covered != 0xFFFF; ++cells) {
-            if (cells == kMaxCells) return false;
-            __mmask16 lanes;
-            const CellLight& cell = sub_triangle(std::countr_zero(unsigned(__mmask16(~covered))), lanes);
+            const CellLight& cell = sub_triangle(lane, lanes);
             lanes &= __mmask16(~covered);
             for (int k = 0; k < 3; ++k) E[k] = _mm512_mask_blend_ps(lanes, E[k], cell.light(k, fx, fy));
             covered |= lanes;
+        };
+        // A straight row crosses each cell once, so a packet's cells are runs of lanes and lane
+        // 15's is the other of two. Its lookup does not wait for lane 0's lanes, as the loop's
+        // next lane would.
+        if (covered != 0xFFFF) add_cell(15);
+        for (int cells = 2; covered != 0xFFFF; ++cells) {
+            if (cells == kMaxCells) return false;
+            add_cell(std::countr_zero(unsigned(__mmask16(~covered))));
         }
         for (int k = 0; k < 3; ++k) _mm512_store_ps(out.E[k], E[k]);
         const Vec3f em = seen_front ? c.emission : Vec3f{0.0f, 0.0f, 0.0f};
