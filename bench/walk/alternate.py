@@ -1,5 +1,5 @@
 """Two builds of the core module against each other on one pose of the walk, in alternated
-processes (the figures of bench/RESULTS.md's step-by-step display sections), e.g.
+processes (how the display's steps in bench/RESULTS.md's walk section were weighed), e.g.
 
     .venv/bin/python bench/walk/alternate.py OLD_core.so NEW_core.so --eye 1800x1920 --mode left
     .venv/bin/python bench/walk/alternate.py OLD_core.so NEW_core.so --mode right
@@ -15,27 +15,17 @@ the installed gigascroll._core. Modes:
           their ratio.
 """
 import argparse
-import importlib.util
 import os
 import statistics
 import subprocess
 import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-def load_core(path):
-    """Loads the extension module at `path` as gigascroll._core (before gigascroll imports it)."""
-    spec = importlib.util.spec_from_file_location("gigascroll._core", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["gigascroll._core"] = module
-    spec.loader.exec_module(module)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from walk_pose import load_core, pose  # noqa: E402  (beside this script)
 
 
 def display_ratio(mode, w, h, frame, alternations=12):
-    sys.path.insert(0, HERE)
-    from single_pose import pose
     p = pose(w, h, frame)
     src, vt, left, right, d, outs = p["src"], p["vt"], p["left"], p["right"], p["display"], p["outs"]
     ratios, shown, bare = [], [], []
@@ -62,8 +52,6 @@ def display_ratio(mode, w, h, frame, alternations=12):
 
 
 def right_vs_left(w, h):
-    sys.path.insert(0, HERE)
-    from single_pose import pose
     p = pose(w, h)
     src, vt, d, outs, path = p["src"], p["vt"], p["display"], p["outs"], p["path"]
     stages = {}

@@ -28,7 +28,7 @@ def main():
         sys.exit(2)
     sys.path.insert(0, HERE)
     if a.core:  # before anything imports gigascroll (and with it the installed core)
-        from alternate import load_core
+        from walk_pose import load_core
         load_core(a.core)
     from gigascroll.commands.gallery import parse_eye
     from gigascroll.errors import UserError
@@ -38,7 +38,7 @@ def main():
         print(f"frame_hashes.py: {e}", file=sys.stderr)
         sys.exit(2)
     import numpy as np
-    from single_pose import pose
+    from walk_pose import pose
     p = pose(w, h)
     src, vt, d, outs, path = p["src"], p["vt"], p["display"], p["outs"], p["path"]
     digests = {k: hashlib.sha256() for k in ("images", "sources", "levels", "hits", "counts")}

@@ -22,7 +22,7 @@ def main():
     a = ap.parse_args()
     if a.core:
         sys.path.insert(0, HERE)
-        from alternate import load_core
+        from walk_pose import load_core
         load_core(a.core)
     from gigascroll import views as v
     from gigascroll.benchmarks import walk as W

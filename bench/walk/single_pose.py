@@ -6,43 +6,15 @@ prints wall and process-CPU milliseconds per frame. For profiling without the se
     .venv/bin/python bench/walk/single_pose.py 450x480 300 left --frame 120   # another pose
     perf stat -e page-faults .venv/bin/python bench/walk/single_pose.py 450x480 300 stereo
 
-`pose()` is the set-up alone (bench/walk/alternate.py uses it).
+The set-up is walk_pose.pose(), which alternate.py and frame_hashes.py share.
 """
 import argparse
 import os
 import sys
 import time
 
-import numpy as np
-
-
-def pose(w, h, frame=None):
-    """The lit scroll walk at one frame (default mid-walk) with its tiles resident: a dict of
-    the source, the VT, the path, both eyes' cameras, a DisplayPass and two output images."""
-    from gigascroll import runtime, views as v
-    from gigascroll._core import DisplayPass
-    from gigascroll.benchmarks import walk as W
-    from gigascroll.gallery.walk import parent_keys
-    from gigascroll.views.exhibition import Headset
-    args = argparse.Namespace(pack=None, photons=1 << 17, threads=0)
-    pack, room, src, path = W.lit_scroll_walk(args)
-    vt = runtime.VirtualTexture(pack, (64, 64))
-    levels = np.array([t.levels for t in src.tiles], np.int64)
-
-    def cameras(f):
-        views = v.frame_cameras(path, f, headset=Headset(width=w, height=h), magnifier=None)
-        return views, views[0][0], views[1][0]
-
-    views, left, right = cameras(len(path) // 2 if frame is None else frame)
-    needed = np.concatenate([src.feedback(cam, fw, fh, 0).ravel() for cam, fw, fh in views[:2]])
-    needed = np.unique(needed[needed != v.NO_REQUEST])
-    needed = np.concatenate([needed, parent_keys(needed, levels)])
-    missing = vt.request(needed)
-    for key in zip(*(a.tolist() for a in v.unpack_requests(missing))):
-        vt.insert(key, pack.read_tile(*key))
-    outs = (np.empty((h, w, 3), np.float32), np.empty((h, w, 3), np.float32))
-    return {"src": src, "vt": vt, "path": path, "left": left, "right": right,
-            "cameras": lambda f: cameras(f)[1:], "display": DisplayPass(), "outs": outs}
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from walk_pose import load_core, pose  # noqa: E402  (beside this script)
 
 
 def main():
@@ -56,8 +28,6 @@ def main():
     if a.core and not os.path.isfile(a.core):
         ap.error(f"--core {a.core}: no such file")
     if a.core:  # before anything imports gigascroll (and with it the installed core)
-        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-        from alternate import load_core
         load_core(a.core)
     try:
         w, h = map(int, a.size.split("x"))
