@@ -2,7 +2,9 @@
 // paper's runtime, seed 000 §4: tile determination -> request processing -> loading ->
 // physical texture and page-table update -> display), mirroring the C++ core's arithmetic.
 //
-//   const vt = new VirtualTexture(gl, scene.pack, scene.tiles, {budgetBytes, maxRequestsPerFrame});
+//   const vt = new VirtualTexture(gl, scene.pack, {tiles: scene.tiles, budgetBytes, ...});
+//                                   // (tiles: scene.json's "tiles"; by default the batch URL
+//                                   // /api/tiles/{pack.hash}/batch, 64 keys a batch)
 //   await vt.ready;                 // every painting's coarse tail resident: no pixel is black
 //   vt.glsl                         // GLSL ES 3.00 to paste after "#version 300 es" and the
 //                                   // precision lines of any shader that samples or writes
@@ -52,7 +54,7 @@ export const DEFAULTS = {
 };
 
 export class VirtualTexture {
-  constructor(gl, pack, tiles, options = {}) {
+  constructor(gl, pack, options = {}) {
     throw new Error("VirtualTexture: not implemented yet");
   }
   get glsl() { return ""; }
