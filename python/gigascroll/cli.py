@@ -68,6 +68,8 @@ def _one_line(e: BaseException) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .outputs import ignore_sigxfsz
+    ignore_sigxfsz()  # past a file-size limit a write fails (EFBIG) and is reported, not fatal
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

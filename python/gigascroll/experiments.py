@@ -6,7 +6,6 @@ Scenarios and benchmarks import this module, never each other."""
 from __future__ import annotations
 
 import json
-import os
 import statistics
 import time
 from pathlib import Path
@@ -17,6 +16,7 @@ from tqdm import tqdm
 from . import views as v
 from .pack import TilePack, build_pack, synth_painting
 from .views import TEXEL_M, spec_of
+from .outputs import write_bytes, write_text
 
 __all__ = ["TEXEL_M", "spec_of", "pattern_image", "width_for_tiles", "cached_pack",
            "scroll_pack", "time_processing", "painting_sweep", "pyplot", "save_figure",
@@ -147,18 +147,22 @@ def pyplot():
 
 
 def save_figure(fig, path, **savefig) -> None:
-    """Writes a figure (savefig's options, e.g. dpi) and closes it."""
+    """Writes a figure (savefig's options, e.g. dpi) and closes it: rendered in memory, then
+    written atomically (outputs.write_bytes), so a full disk leaves no truncated image."""
+    import io
+
     import matplotlib.pyplot as plt
-    fig.savefig(path, **savefig)
-    plt.close(fig)
+    buf = io.BytesIO()
+    try:
+        fig.savefig(buf, format=Path(path).suffix.lstrip(".").lower() or "png", **savefig)
+    finally:
+        plt.close(fig)
+    write_bytes(path, buf.getvalue())
 
 
 def write_json(path, data, indent: int = 1) -> None:
     """Writes JSON under a temporary name, then renames it: a file that is there is whole."""
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=indent))
-    os.replace(tmp, path)
+    write_text(path, json.dumps(data, indent=indent))
 
 
 def timed(fn):

@@ -11,7 +11,8 @@ tiles (borders cropped; the source image is not read again):
 - ``tiff``: a tiled pyramidal BigTIFF (one IFD per mip level, JPEG or deflate).
 
 Either reader serves: the core's ``TilePack`` or the pure-Python ``PurePack``. Outputs are
-written under a temporary name and renamed into place when complete."""
+written under a temporary name and renamed into place when complete (gigascroll.outputs'
+rules: an existing directory is replaced only when an export made it, as its mark says)."""
 
 from __future__ import annotations
 
@@ -24,6 +25,9 @@ from pathlib import Path
 from typing import Iterator
 
 import numpy as np
+
+from .outputs import (atomic_file, check_output, encode_image, owned_by, replace_dir,
+                      signals_interrupt, temp_dir, write_bytes, write_mark, write_text)
 
 __all__ = ["export_pack", "FORMATS", "open_pack", "level_bands"]
 
@@ -86,9 +90,8 @@ def level_bands(pack, p: int, level: int, pool=None) -> Iterator[tuple[int, np.n
 
 
 def _jpeg(path: Path, pixels: np.ndarray, quality: int) -> None:
-    from PIL import Image
     # 4:4:4 (no chroma subsampling): paintings' fine colour detail is what they are viewed for.
-    Image.fromarray(np.ascontiguousarray(pixels)).save(path, "JPEG", quality=quality, subsampling=0)
+    write_bytes(path, encode_image(pixels, "JPEG", quality))
 
 
 def _halve(img: np.ndarray) -> np.ndarray:
@@ -174,12 +177,12 @@ def _export_iiif(pack, p: int, tmp: Path, quality: int, pool, progress, service_
         sizes.append({"width": w, "height": h})
         if level == 0:
             (tmp / "full" / "max" / "0").mkdir(parents=True, exist_ok=True)
-            shutil.copy(d / "default.jpg", tmp / "full" / "max" / "0" / "default.jpg")
+            write_bytes(tmp / "full" / "max" / "0" / "default.jpg", (d / "default.jpg").read_bytes())
     info = {"@context": IIIF_CONTEXT, "id": service_id, "type": "ImageService3",
             "protocol": "http://iiif.io/api/image", "profile": "level0",
             "width": W, "height": H, "sizes": sizes,
             "tiles": [{"width": P, "height": P, "scaleFactors": [1 << l for l in range(pp.levels)]}]}
-    (tmp / "info.json").write_text(json.dumps(info, indent=2) + "\n")
+    write_text(tmp / "info.json", json.dumps(info, indent=2) + "\n")
 
 
 def _export_dzi(pack, p: int, tmp: Path, name: str, quality: int, pool, progress) -> None:
@@ -200,7 +203,7 @@ def _export_dzi(pack, p: int, tmp: Path, name: str, quality: int, pool, progress
         img = _halve(img)
         (files / str(dz)).mkdir(parents=True, exist_ok=True)
         _jpeg(files / str(dz) / "0_0.jpg", img, quality)
-    (tmp / f"{name}.dzi").write_text(
+    write_text(tmp / f"{name}.dzi",
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<Image xmlns="http://schemas.microsoft.com/deepzoom/2008" '
         f'TileSize="{P}" Overlap="{overlap}" Format="jpg">\n'
@@ -263,52 +266,49 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
     if fmt == "dzi" and out.suffix == ".dzi":
         out = out.with_suffix("")
     final = [out.with_name(out.name + ".dzi"), out.with_name(out.name + "_files")] if fmt == "dzi" else [out]
-    for f in final:
-        if (f.exists() or f.is_symlink()) and not force:
-            raise OSError(f"{f}: already exists (use --force / force=True to overwrite)")
+    owned = owned_by("export", format=fmt)
+    folder = {"iiif": out, "dzi": final[-1], "tiff": None}[fmt]
+    for f in final:  # the shared rules: a directory only if an export made it
+        check_output(f, force=force, directory=f == folder, owned=owned,
+                     what=f"a {fmt} export of gigascroll")
     if not out.parent.is_dir():
         raise OSError(f"{out.parent}: no such directory")
     if not os.access(out.parent, os.W_OK):
         raise OSError(f"{out.parent}: not writable")
-    tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
-    shutil.rmtree(tmp, ignore_errors=True)
-    try:  # the output's place is writable (os.access passes for root on a read-only mount)
-        if fmt == "tiff":
-            tmp.touch(exist_ok=False)
-            tmp.unlink()
-        else:
-            tmp.mkdir()
-    except OSError as e:
-        raise OSError(f"cannot write {out}: {e.strerror or e}") from None
     pp = pack.paintings[p]
-    bar = _Progress(progress, sum(nx * ny for nx, ny in pp.level_tiles), f"export {fmt}")
-    workers = threads or os.cpu_count() or 1
-    try:
-        with ThreadPoolExecutor(workers) as pool:
-            if fmt == "tiff":
-                _export_tiff(pack, p, tmp, quality, compression, pool, bar)
-            else:
-                if fmt == "iiif":
-                    _export_iiif(pack, p, tmp, quality, pool, bar, service_id or pp.name)
-                else:
-                    _export_dzi(pack, p, tmp, out.name, quality, pool, bar)
-        bar.close()
-        for f in final:
-            if f.is_dir() and not f.is_symlink():
-                shutil.rmtree(f)
-            elif f.exists() or f.is_symlink():
-                f.unlink()
-        if fmt == "dzi":  # the tiles first, the .dzi (which marks it complete) last
-            os.rename(tmp / f"{out.name}_files", final[1])
-            os.rename(tmp / f"{out.name}.dzi", final[0])
-            tmp.rmdir()
-        else:
-            os.rename(tmp, out)
-    except BaseException:
-        bar.close()
-        if tmp.is_dir():
+    with signals_interrupt():  # SIGTERM / SIGHUP: the temporaries go as for Ctrl-C
+        if fmt == "tiff":
+            with atomic_file(out, durable=True) as tmp:
+                _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_tiff(
+                    pack, p, tmp, quality, compression, pool, bar))
+            return out
+        tmp = temp_dir(out)
+        try:
+            if fmt == "iiif":
+                _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_iiif(
+                    pack, p, tmp, quality, pool, bar, service_id or pp.name))
+                write_mark(tmp, "export", format=fmt)  # last: the output is whole
+                replace_dir(tmp, out, owned)
+            else:  # the tiles first, the .dzi (which marks it complete) last
+                _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_dzi(
+                    pack, p, tmp, out.name, quality, pool, bar))
+                write_mark(tmp / final[1].name, "export", format=fmt)
+                replace_dir(tmp / final[1].name, final[1], owned)
+                os.replace(tmp / final[0].name, final[0])
+                tmp.rmdir()
+        except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
-        elif tmp.exists():
-            tmp.unlink()
-        raise
+            raise
     return final[0]
+
+
+def _with_pool(threads: int, progress: bool, pp, fmt: str, work) -> None:
+    """work(pool, bar) on a thread pool whose queued jobs are cancelled when it fails (so the
+    cleanup after an error or a signal does not wait for them)."""
+    bar = _Progress(progress, sum(nx * ny for nx, ny in pp.level_tiles), f"export {fmt}")
+    pool = ThreadPoolExecutor(threads or os.cpu_count() or 1)
+    try:
+        work(pool, bar)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+        bar.close()

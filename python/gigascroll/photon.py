@@ -364,9 +364,10 @@ def trace_photons(scene: Scene, count: int, seed: int = 0, threads: int = 0) -> 
 
 
 def save_image(path, image: np.ndarray) -> None:
-    """Write linear radiance as EXR/HDR (float) or PNG/JPEG/TIFF (sRGB, 8 bit) via OpenImageIO.
-    Writes to a temporary name first, so a failed write never leaves a complete-looking file."""
-    import OpenImageIO as oiio
+    """Write linear radiance as EXR/HDR (float) or PNG/JPEG/TIFF (sRGB, 8 bit). Written by
+    outputs.write_image: under a temporary name, closed with errors checked, then renamed, so
+    a failed write (a full disk included) never leaves a complete-looking file."""
+    from .outputs import write_image
 
     path = Path(path)
     img = np.asarray(image, dtype=np.float32)
@@ -374,27 +375,16 @@ def save_image(path, image: np.ndarray) -> None:
         raise ValueError(f"image must have shape (H, W, 3), got {img.shape}")
     ext = path.suffix.lower()
     if ext in (".exr", ".hdr"):
-        data, fmt = img, "float"
+        data = img
     elif ext in (".png", ".jpg", ".jpeg", ".tif", ".tiff"):
         c = np.clip(np.nan_to_num(img), 0.0, 1.0)
         srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-        data, fmt = (srgb * 255 + 0.5).astype(np.uint8), "uint8"
+        data = (srgb * 255 + 0.5).astype(np.uint8)
     else:
         raise ValueError(f"unsupported image format {ext!r} (use .exr, .hdr, .png, .jpg or .tif)")
     if not path.parent.is_dir():
         raise OSError(f"directory does not exist: {path.parent}")
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    out = oiio.ImageOutput.create(str(tmp))
-    if out is None:
-        raise OSError(f"cannot write {path}: {oiio.geterror()}")
-    spec = oiio.ImageSpec(img.shape[1], img.shape[0], 3, fmt)
-    ok = out.open(str(tmp), spec) and out.write_image(np.ascontiguousarray(data))
-    err = out.geterror()
-    out.close()
-    if not ok:
-        tmp.unlink(missing_ok=True)
-        raise OSError(f"cannot write {path}: {err}")
-    tmp.replace(path)
+    write_image(path, data, quality=95, durable=True)
 
 
 def relmse(image: np.ndarray, reference: np.ndarray, eps: float = 1e-2) -> float:

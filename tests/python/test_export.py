@@ -15,6 +15,7 @@ from PIL import Image
 from gigascroll import build_pack
 from gigascroll.export import export_pack
 from gigascroll.pack import read_level
+from gigascroll.outputs import MARK, has_mark
 
 W, H = 450, 300
 
@@ -92,7 +93,8 @@ def test_dzi_levels_down_to_one_pixel(pack, tmp_path, reader):
     assert (T, overlap, root.get("Format")) == (pack.payload, pack.border, "jpg")
     files = tmp_path / "deep_files"
     top = math.ceil(math.log2(max(W, H)))
-    assert sorted(int(d.name) for d in files.iterdir()) == list(range(top + 1))
+    assert sorted(int(d.name) for d in files.iterdir() if d.name != MARK) == list(range(top + 1))
+    assert has_mark(files, "export", format="dzi")
     p = pack.paintings[0]
     for dz in range(top + 1):
         s = 1 << (top - dz)

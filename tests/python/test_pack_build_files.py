@@ -72,8 +72,8 @@ def test_force_replacement_is_atomic_for_a_reader(tmp_path):
 
 def test_fallback_replacement_keeps_one_pack(tmp_path, monkeypatch):
     # Without RENAME_EXCHANGE (another OS or file system) the old pack is moved aside first.
-    from gigascroll.pack import shards
-    monkeypatch.setattr(shards, "_exchange", lambda a, c: False)
+    from gigascroll import outputs
+    monkeypatch.setattr(outputs, "_exchange", lambda a, c: False)
     out = tmp_path / "p"
     build_pack(noise(20, 30, seed=1), out, tile_size=16, border=2)
     img = noise(30, 20, seed=3)

@@ -120,9 +120,8 @@ def builtin_pack(work: Path = Path("build")):
 
 
 def run(args) -> int:
-    from ..gallery.record import prepare_output, record_walk
-    from ..gallery.walk import GallerySource, GalleryWalk
-    from ..pack import TilePack
+    from ..gallery.record import prepare_output
+    from ..outputs import signals_interrupt
 
     eye = parse_eye(args.eye)
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
@@ -138,32 +137,8 @@ def run(args) -> int:
     out = Path(args.out)
     tmp = prepare_output(out)  # fails early on an unwritable --out
     try:
-        if args.packs:
-            p = Path(args.packs[0])
-            if not (p / "manifest.json").is_file():
-                raise UserError(f"{p} is not a tile pack (no manifest.json)")
-            pack = TilePack(p)
-        else:
-            pack = builtin_pack()
-        room = load_room(args.room, pack)
-        path = load_path(args.path, room, args.seconds)
-        t0 = time.perf_counter()
-        source = GallerySource(room, pack, args.lighting, photons=args.photons,
-                               threads=args.threads)
-        print(f"{source.name}: lit in {time.perf_counter() - t0:.1f} s "
-              f"({source.light_stats.get('photons_stored', 0)} photons stored)")
-        walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
-                           reuse=not args.no_reuse, oracle=not args.no_oracle, pace=args.pace,
-                           threads=args.threads, foveation=foveation)
-        settings = {"room": args.room, "path": args.path, "eye": f"{eye[0]}x{eye[1]}",
-                    "magnifier": not args.no_magnifier, "lighting": args.lighting,
-                    "seconds": args.seconds, "reuse": not args.no_reuse,
-                    "photons": args.photons, "frames": len(path)}
-        if foveation is not None:
-            settings["foveation"] = {"fovea_deg": foveation.fovea_deg,
-                                     "factor": foveation.factor, "blend": foveation.blend}
-        results = record_walk(walk, out, exr=args.exr, png_every=args.png_every,
-                              video=not args.no_video, progress=True, settings=settings, tmp=tmp)
+        with signals_interrupt():  # SIGTERM / SIGHUP: the temporary output goes as for Ctrl-C
+            results = _walk(args, out, tmp, eye, foveation)
     except BaseException:
         import shutil
         shutil.rmtree(tmp, ignore_errors=True)
@@ -177,3 +152,43 @@ def run(args) -> int:
     print(f"wrote {out}/ (report.md, results.json, frames/"
           f"{', walk.mp4' if not args.no_video else ''})")
     return 0
+
+
+def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
+    """Opens the pack, room and path, lights the room and records the walk into `tmp`."""
+    from ..gallery.record import record_walk
+    from ..gallery.video import check_fps
+    from ..gallery.walk import GallerySource, GalleryWalk
+    from ..pack import TilePack
+
+    if args.packs:
+        p = Path(args.packs[0])
+        if not (p / "manifest.json").is_file():
+            raise UserError(f"{p} is not a tile pack (no manifest.json)")
+        pack = TilePack(p)
+    else:
+        pack = builtin_pack()
+    room = load_room(args.room, pack)
+    path = load_path(args.path, room, args.seconds)
+    if not args.no_video:
+        try:
+            check_fps(path.fps)  # before the room is lit
+        except ValueError as e:
+            raise UserError(f"--path: {e}") from None
+    t0 = time.perf_counter()
+    source = GallerySource(room, pack, args.lighting, photons=args.photons,
+                           threads=args.threads)
+    print(f"{source.name}: lit in {time.perf_counter() - t0:.1f} s "
+          f"({source.light_stats.get('photons_stored', 0)} photons stored)")
+    walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
+                       reuse=not args.no_reuse, oracle=not args.no_oracle, pace=args.pace,
+                       threads=args.threads, foveation=foveation)
+    settings = {"room": args.room, "path": args.path, "eye": f"{eye[0]}x{eye[1]}",
+                "magnifier": not args.no_magnifier, "lighting": args.lighting,
+                "seconds": args.seconds, "reuse": not args.no_reuse,
+                "photons": args.photons, "frames": len(path)}
+    if foveation is not None:
+        settings["foveation"] = {"fovea_deg": foveation.fovea_deg,
+                                 "factor": foveation.factor, "blend": foveation.blend}
+    return record_walk(walk, out, exr=args.exr, png_every=args.png_every,
+                       video=not args.no_video, progress=True, settings=settings, tmp=tmp)

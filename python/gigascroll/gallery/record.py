@@ -2,63 +2,64 @@
 (side-by-side stereo), a Markdown report with plots and the results as JSON.
 
 Everything is written into a temporary directory beside the output and renamed into place
-when complete, so a failed or interrupted run never leaves a directory that looks finished
-(an earlier gallery output there is replaced only then).
+when complete, so a failed or interrupted run (SIGTERM included) never leaves a directory that
+looks finished; an earlier gallery output there (marked as one) is replaced only then, and
+nothing else is ever replaced (gigascroll.outputs' rules).
 """
 
 from __future__ import annotations
 
 import json
-import logging
-import os
 import shutil
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import UserError
+from ..outputs import (check_output, has_mark, replace_dir, signals_interrupt, temp_dir,
+                       write_image, write_mark, write_text)
+from .video import VideoWriter, check_fps
 from .walk import DISPLAY_PARTS, WALK_STAGES, GalleryWalk, compose_frame, tone_map
 
-__all__ = ["record_walk", "prepare_output", "MARKER"]
+__all__ = ["record_walk", "prepare_output", "is_gallery_output", "MARKER"]
 
 MARKER = "results.json"   # a directory holding it is a complete gallery output
 
 
+def is_gallery_output(path: Path) -> bool:
+    """Whether a directory is a gallery output: marked by the gallery (outputs.MARK), or an
+    earlier one's results.json with the gallery's own keys."""
+    if has_mark(path, "gallery"):
+        return True
+    results = path / MARKER
+    try:
+        if results.is_symlink() or not results.is_file():
+            return False
+        with open(results, "rb") as f:
+            head = f.read(1 << 16).decode("utf-8", "replace")
+    except OSError:
+        return False
+    return head.lstrip().startswith("{") and all(f'"{k}"' in head
+                                                 for k in ("settings", "summary", "frames"))
+
+
 def prepare_output(out: Path) -> Path:
-    """Checks that `out` can be written (its parent exists or can be made and is writable; an
-    existing `out` is an earlier gallery output or empty) and returns the temporary directory
-    to write into."""
+    """Checks that `out` can be written (an existing `out` is an earlier gallery output or
+    empty, never a protected place: outputs.check_output) and returns the temporary directory
+    to write into, made beside it (its parent is made if need be)."""
     out = Path(out)
-    if out.exists():
-        if not out.is_dir():
-            raise UserError(f"--out {out} exists and is not a directory")
-        if any(out.iterdir()) and not (out / MARKER).is_file():
-            raise UserError(f"--out {out} is a non-empty directory that is not a gallery output; "
-                            "refusing to replace it")
-    parent = out.resolve().parent
     try:
-        parent.mkdir(parents=True, exist_ok=True)
+        check_output(out, force=True, directory=True, owned=is_gallery_output,
+                     what="a gallery output")
+        tmp = temp_dir(out, hidden=True)
+        (tmp / "frames").mkdir()
     except OSError as e:
-        raise UserError(f"cannot create the output's parent directory {parent}: {e.strerror}") from None
-    tmp = parent / f".{out.name}.tmp-{os.getpid()}"
-    try:
-        if tmp.exists():
-            shutil.rmtree(tmp)
-        (tmp / "frames").mkdir(parents=True)
-    except OSError as e:
-        raise UserError(f"cannot write the output directory {out}: {e.strerror or e}") from None
+        raise UserError(f"--out {e}") from None
     return tmp
 
 
 def _commit(tmp: Path, out: Path) -> None:
-    out = Path(out)
-    old = None
-    if out.exists():
-        old = out.resolve().parent / f".{out.name}.old-{os.getpid()}"
-        os.replace(out, old)
-    os.replace(tmp, out)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+    replace_dir(tmp, out, owned=is_gallery_output)
 
 
 def _even(img: np.ndarray) -> np.ndarray:
@@ -68,17 +69,11 @@ def _even(img: np.ndarray) -> np.ndarray:
 
 
 def _write_png(path: Path, rgb8: np.ndarray) -> None:
-    import OpenImageIO as oiio
-    buf = oiio.ImageBuf(np.ascontiguousarray(rgb8))
-    if not buf.write(str(path)):
-        raise OSError(f"cannot write {path}: {buf.geterror()}")
+    write_image(path, rgb8)
 
 
 def _write_exr(path: Path, linear: np.ndarray) -> None:
-    import OpenImageIO as oiio
-    buf = oiio.ImageBuf(np.ascontiguousarray(linear, np.float32))
-    if not buf.write(str(path)):
-        raise OSError(f"cannot write {path}: {buf.geterror()}")
+    write_image(path, np.ascontiguousarray(linear, np.float32))
 
 
 def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int | None = None,
@@ -88,6 +83,8 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
     keep every n-th frame as PNG (None: about 40 over the walk, plus the last frame); every
     frame goes into the video. Returns the results dictionary."""
     out = Path(out)
+    if video:
+        check_fps(walk.path.fps)  # before anything is written
     tmp = tmp or prepare_output(out)
     n = len(walk.path)
     every = png_every or max(1, n // 40)
@@ -97,58 +94,45 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
     writer = None
     saved: list[str] = []
     try:
-        if video:
-            import imageio_ffmpeg
-            w, h = walk.eye
-            size = (2 * w + (2 * w) % 2, h + h % 2)
-            # x264's frame-packing SEI 3 marks the frames side-by-side stereo (left eye left).
-            writer = imageio_ffmpeg.write_frames(
-                str(tmp / "walk.mp4"), size, fps=walk.path.fps, codec="libx264",
-                pix_fmt_out="yuv420p", macro_block_size=1, quality=None,
-                output_params=["-crf", "20", "-preset", "veryfast",
-                               "-x264-params", "frame-packing=3"], ffmpeg_log_level="error")
-            writer.send(None)
+        with signals_interrupt():  # SIGTERM / SIGHUP: the temporaries go as for Ctrl-C
+            if video:
+                w, h = walk.eye
+                # x264's frame-packing SEI 3 marks the frames side-by-side stereo (left eye left).
+                writer = VideoWriter(tmp / "walk.mp4", (2 * w + (2 * w) % 2, h + h % 2),
+                                     walk.path.fps, ["-crf", "20", "-preset", "veryfast",
+                                                     "-x264-params", "frame-packing=3"])
 
-        def on_frame(frame, rec, images):
-            left, right, mag, lenses = images
-            linear = compose_frame(left, right, mag, lenses)
-            rgb8 = tone_map(linear, exposure)
+            def on_frame(frame, rec, images):
+                left, right, mag, lenses = images
+                linear = compose_frame(left, right, mag, lenses)
+                rgb8 = tone_map(linear, exposure)
+                if writer is not None:
+                    writer.send(_even(rgb8))
+                if frame % every == 0 or frame == n - 1:
+                    name = f"frame_{frame:05d}"
+                    _write_png(tmp / "frames" / f"{name}.png", rgb8)
+                    saved.append(name)
+                    if exr:
+                        _write_exr(tmp / "frames" / f"{name}.exr", linear)
+
+            summary = walk.run(progress=progress, on_frame=on_frame)
             if writer is not None:
-                writer.send(np.ascontiguousarray(_even(rgb8)))
-            if frame % every == 0 or frame == n - 1:
-                name = f"frame_{frame:05d}"
-                _write_png(tmp / "frames" / f"{name}.png", rgb8)
-                saved.append(name)
-                if exr:
-                    _write_exr(tmp / "frames" / f"{name}.exr", linear)
-
-        summary = walk.run(progress=progress, on_frame=on_frame)
-        if writer is not None:
-            writer.close()
-            writer = None
-        results = {"settings": settings or {}, "summary": summary, "frames": walk.records,
-                   "saved_frames": saved, "source": walk.source.name,
-                   "exposure": exposure,
-                   "light_seconds": getattr(walk.source, "light_seconds", 0.0),
-                   "light_stats": _jsonable(getattr(walk.source, "light_stats", {}))}
-        _plots(walk.records, summary, tmp)
-        _report(results, tmp, video)
-        (tmp / MARKER).write_text(json.dumps(_jsonable(results), indent=1))
-        _commit(tmp, out)
+                w, writer = writer, None
+                w.close()
+            results = {"settings": settings or {}, "summary": summary, "frames": walk.records,
+                       "saved_frames": saved, "source": walk.source.name,
+                       "exposure": exposure,
+                       "light_seconds": getattr(walk.source, "light_seconds", 0.0),
+                       "light_stats": _jsonable(getattr(walk.source, "light_stats", {}))}
+            _plots(walk.records, summary, tmp)
+            _report(results, tmp, video)
+            write_mark(tmp, "gallery")
+            write_text(tmp / MARKER, json.dumps(_jsonable(results), indent=1))  # last: whole
+            _commit(tmp, out)
         return results
     except BaseException:
         if writer is not None:
-            # The video is deleted with tmp: the writer's "no frames written" warning on close
-            # would be a second, misleading message beside the error.
-            logger = logging.getLogger("imageio_ffmpeg")
-            level = logger.level
-            logger.setLevel(logging.ERROR)
-            try:
-                writer.close()
-            except Exception:  # noqa: BLE001 (the original error is the one to report)
-                pass
-            finally:
-                logger.setLevel(level)
+            writer.abort()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
 
@@ -257,4 +241,4 @@ def _report(results: dict, tmp: Path, video: bool) -> None:
         if saved else []
     for name in pick:
         lines += [f"Frame {int(name.split('_')[1])}:", "", f"![{name}](frames/{name}.png)", ""]
-    (tmp / "report.md").write_text("\n".join(lines))
+    write_text(tmp / "report.md", "\n".join(lines))

@@ -11,13 +11,10 @@ leaves no pack and `resume=True` reuses the shards that were completed and verif
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import re
 import shutil
-import signal
-import threading
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -27,7 +24,8 @@ from .. import _core
 from .._core import TilePack, painting_geometry
 from .colour import plan_colour
 from .images import ImageSource, open_image, require_utf8_path
-from .shards import build_sharded, feed, publish
+from ..outputs import Interrupted, check_output, replace_dir, signals_interrupt, temp_dir
+from .shards import build_sharded, feed
 
 __all__ = ["build_pack", "plan_layout", "MANIFEST", "BuildInterrupted"]
 
@@ -68,48 +66,15 @@ def _is_pack_dir(path: Path) -> bool:
 
 
 def _prepare_output(out: Path, force: bool) -> None:
-    if out.exists() or out.is_symlink():
-        if not force:
-            raise OSError(f"{out}: already exists (use --force / force=True to overwrite)")
-        if out.is_dir() and not out.is_symlink():
-            if any(out.iterdir()) and not _is_pack_dir(out):
-                raise OSError(f"{out}: exists and is not a tile pack; refusing to overwrite it")
-        else:
-            raise OSError(f"{out}: exists and is not a directory; refusing to overwrite it")
+    check_output(out, force=force, directory=True, owned=_is_pack_dir, what="a tile pack")
 
 
 # ----------------------------------------------------------------------------- files on disk
 
-class BuildInterrupted(KeyboardInterrupt):
-    """A build stopped by SIGTERM or SIGHUP (SIGINT stays a plain KeyboardInterrupt); its
-    temporary directory has been removed. `signum` is the signal's number."""
-
-    def __init__(self, signum: int):
-        super().__init__(f"stopped by {signal.Signals(signum).name}")
-        self.signum = signum
-
-
-@contextlib.contextmanager
-def _signals_interrupt():
-    """While a build runs, SIGTERM and SIGHUP raise BuildInterrupted in the main thread (as
-    SIGINT raises KeyboardInterrupt), so the build's cleanup runs for them too. Outside the
-    main thread signal handlers cannot be set; the process' own handlers stay."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum, frame):
-        raise BuildInterrupted(signum)
-
-    saved = {}
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        if signal.getsignal(sig) in (signal.SIG_DFL, None):  # leave the caller's own handlers
-            saved[sig] = signal.signal(sig, handler)
-    try:
-        yield
-    finally:
-        for sig, old in saved.items():
-            signal.signal(sig, old)
+# A build stopped by SIGTERM or SIGHUP (SIGINT stays a plain KeyboardInterrupt); its temporary
+# directory has been removed. `signum` is the signal's number.
+BuildInterrupted = Interrupted
+_signals_interrupt = signals_interrupt
 
 
 def _process_gone(pid: int) -> bool:
@@ -124,9 +89,19 @@ def _process_gone(pid: int) -> bool:
     return False
 
 
+def _only_pack_files(path: Path) -> bool:
+    """Whether a directory holds nothing but what a build writes (a pack's files, finished
+    or not): a leftover that provably is a build's."""
+    try:
+        return all(p.name in PACK_FILES or _TILE_FILE.fullmatch(p.name) for p in path.iterdir())
+    except OSError:
+        return False
+
+
 def _remove_stale_tmp(out: Path) -> list[Path]:
     """Removes `OUT.tmp-<pid>` siblings of `out` left by builds whose process is gone
-    (SIGKILL, power loss); a live process' build directory is left alone. Returns them."""
+    (SIGKILL, power loss) and holding only pack files; a live process' build directory is
+    left alone. Returns them."""
     pattern = re.compile(re.escape(out.name) + r"\.tmp-([0-9]{1,10})(-old)?")
     removed = []
     try:
@@ -136,7 +111,7 @@ def _remove_stale_tmp(out: Path) -> list[Path]:
     for p in siblings:
         m = pattern.fullmatch(p.name)
         if (m and int(m.group(1)) != os.getpid() and _process_gone(int(m.group(1)))
-                and p.is_dir() and not p.is_symlink()):
+                and p.is_dir() and not p.is_symlink() and _only_pack_files(p)):
             shutil.rmtree(p, ignore_errors=True)
             removed.append(p)
     return removed
@@ -216,7 +191,7 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
            progress, band_rows, colour_options, sharding, bc1_fit) -> TilePack:
     sources: list[ImageSource] = []
     bar = None
-    tmp = out.parent / f"{out.name}.tmp-{os.getpid()}"
+    tmp = None
     try:
         for i, image in enumerate(inputs):
             name = names[i] if names else (None if not isinstance(image, np.ndarray) else
@@ -240,12 +215,10 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
             build_sharded(inputs, sources, offsets, (table_w, table_h), info, out, opts,
                           workers=int(sharding["workers"]), scheduler=sharding["scheduler"],
                           executor=sharding["executor"], resume=sharding["resume"],
-                          progress=progress, hook=sharding["hook"])
+                          progress=progress, hook=sharding["hook"], owned=_is_pack_dir)
             return TilePack(out)
 
-        if tmp.exists():
-            shutil.rmtree(tmp)
-        tmp.mkdir(parents=True)
+        tmp = temp_dir(out)
         builder = _core.PackBuilder(tmp, tile_size, border, codec, zstd_level, threads, bc1_fit)
         total = sum(s.width * s.height for s in sources)
         if progress:
@@ -263,12 +236,13 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
         del builder
         if bar is not None:
             bar.close()
-        publish(tmp, out)
+        replace_dir(tmp, out, owned=_is_pack_dir)
     except BaseException:
         if bar is not None:
             bar.close()
         for s in sources:
             s.close()
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
     return TilePack(out)

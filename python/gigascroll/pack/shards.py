@@ -12,7 +12,6 @@ files still hash to what it recorded, and builds the rest."""
 
 from __future__ import annotations
 
-import ctypes
 import json
 import os
 import queue
@@ -25,6 +24,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from .. import _core
+from ..outputs import MARK, check_output, fsync_dir as _fsync_dir, owned_by, replace_dir, write_mark
 from .images import ImageSource, open_image
 
 __all__ = ["build_sharded", "build_shard", "feed", "local_cluster", "publish"]
@@ -87,61 +87,8 @@ def feed(builder, source: ImageSource, bar=None) -> None:
         bands.close()  # joins the reader thread before the image is closed
 
 
-def _fsync_dir(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-_RENAME_EXCHANGE = 2
-
-
-def _exchange(a: Path, b: Path) -> bool:
-    """Atomically swaps two directory entries (Linux renameat2 RENAME_EXCHANGE). False when
-    the system or file system does not support it."""
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        renameat2 = libc.renameat2
-    except (OSError, AttributeError):
-        return False
-    AT_FDCWD = -100
-    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
-                          ctypes.c_uint]
-    if renameat2(AT_FDCWD, os.fsencode(a), AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
-        return True
-    err = ctypes.get_errno()
-    if err in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: not supported here
-        return False
-    raise OSError(err, f"cannot replace {b}: {os.strerror(err)}")
-
-
-def publish(tmp: Path, out: Path) -> None:
-    """Puts the finished pack `tmp` at `out`. Replacing an existing pack is atomic: the two
-    directories are swapped in one step (readers see the old or the new pack, never none)
-    and the old one, now at `tmp`, is deleted. Without RENAME_EXCHANGE the old pack is moved
-    aside first (a crash then leaves it there, removed by the next build)."""
-    blocked = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
-    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)  # no half-done swap
-    try:
-        _install_now(tmp, out)
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
-
-
-def _install_now(tmp: Path, out: Path) -> None:
-    if out.exists():
-        if not _exchange(tmp, out):
-            aside = out.parent / f"{out.name}.tmp-{os.getpid()}-old"
-            os.rename(out, aside)
-            os.rename(tmp, out)
-            tmp = aside
-        _fsync_dir(out.parent)
-        shutil.rmtree(tmp)
-    else:
-        os.rename(tmp, out)
-        _fsync_dir(out.parent)  # make the rename itself durable
+# Publishing a finished pack (the atomic swap) is the shared outputs.replace_dir.
+publish = replace_dir
 
 
 # ----------------------------------------------------------------------------- one shard
@@ -303,13 +250,12 @@ def _is_lost_worker(e: BaseException) -> bool:
 def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int, int],
                   info: dict, out: Path, opts: dict, *, workers: int, scheduler: str | None,
                   executor: str, resume: bool, progress: bool,
-                  hook: Callable[[int, str], None] | None) -> None:
+                  hook: Callable[[int, str], None] | None,
+                  owned: Callable[[Path], bool] | None = None) -> None:
     """The sharded build of build_pack (which has opened `sources` for their sizes and names
-    and planned the layout): shards in OUT.shards/, then the merge and the rename."""
-    shard_dir = out.parent / f"{out.name}.shards"
-    if shard_dir.exists() and not resume:
-        shutil.rmtree(shard_dir)
-    shard_dir.mkdir(parents=True, exist_ok=True)
+    and planned the layout): shards in OUT.shards/, then the merge and the rename (over an
+    existing pack only where `owned` says it is one)."""
+    shard_dir = _shard_dir(out, resume)
     n = len(sources)
     jobs = [{"index": i, "name": s.name, "input": input_identity(image), "options": opts}
             for i, (s, image) in enumerate(zip(sources, inputs))]
@@ -372,5 +318,19 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
         _, idx, rec = _shard_paths(shard_dir, i)
         idx.unlink()
         rec.unlink()
+    (shard_dir / MARK).unlink()  # the work directory's mark: not part of the pack
     _fsync_dir(shard_dir)
-    publish(shard_dir, out)
+    replace_dir(shard_dir, out, owned=owned)
+
+
+def _shard_dir(out: Path, resume: bool) -> Path:
+    """OUT.shards/, marked as this output's work directory. An existing one is reused (resume)
+    or removed only when its mark names this output; any other is refused."""
+    shard_dir = out.parent / f"{out.name}.shards"
+    owner = {"output": os.path.join(os.path.realpath(out.parent), out.name)}
+    if check_output(shard_dir, force=True, directory=True, owned=owned_by("pack-shards", **owner),
+                    what=f"the shard directory of a build of {out}") and not resume:
+        shutil.rmtree(shard_dir)
+    shard_dir.mkdir(parents=True, exist_ok=True)
+    write_mark(shard_dir, "pack-shards", **owner)
+    return shard_dir
