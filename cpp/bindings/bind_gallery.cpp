@@ -83,8 +83,9 @@ void bind_gallery(nb::module_& m) {
         .def_prop_ro("emitter_count", [](const Gallery& g) { return g.scene().emitter_count(); })
         .def_prop_ro("painting_count", [](const Gallery& g) { return g.paintings().size(); })
         .def_prop_ro("bounds", [](const Gallery& g) {
-            const Vec3f a = g.scene().bounds_min(), b = g.scene().bounds_max();
-            return std::make_tuple(std::array<float, 3>{a.x, a.y, a.z}, std::array<float, 3>{b.x, b.y, b.z});
+            const auto [a, b] = g.bounds();
+            return std::make_tuple(std::array<float, 3>{float(a.x), float(a.y), float(a.z)},
+                                   std::array<float, 3>{float(b.x), float(b.y), float(b.z)});
         })
         .def("_light", [](Gallery& g, const VirtualTexture& vt, std::uint64_t photons, float radius,
                           int light_samples, std::uint64_t seed, unsigned threads, bool disc) {
@@ -106,6 +107,54 @@ void bind_gallery(nb::module_& m) {
            "gather_stride"_a = 1, "inset_edges"_a = true,
            "coarse_disc"_a = false, "analytic_direct"_a = true, "shadow_probes"_a = 4)
         .def("_bake_progress", &Gallery::bake_progress)
+        .def("_bake_lattice", [](const Gallery& g) {
+            // Copies of the bake's lattices and the triangles' frames, taken under the read
+            // lock (light() and bake() replace them), for exporting the bake as a mesh.
+            require(g.baked(), "Gallery: bake() first");
+            const std::size_t T = g.scene().triangle_count();
+            std::size_t P = 0;
+            {
+                const auto lock = g.read_lock();
+                P = g.bake_arrays().points;
+            }
+            FreshArray<std::uint32_t> segments({T}), geometry({T});
+            FreshArray<std::uint64_t> offset({T});
+            FreshArray<std::int32_t> slot({T});
+            FreshArray<float> v0({T, 3}), e1({T, 3}), e2({T, 3}), albedo({T, 3}), emission({T, 3});
+            FreshArray<float> front({P, 3}), back({P, 3});
+            {
+                nb::gil_scoped_release release;
+                const auto lock = g.read_lock();
+                const Gallery::BakeArrays b = g.bake_arrays();
+                const Gallery::TriangleFrames f = g.triangle_frames();
+                require(b.points == P && f.count == T, "Gallery: the bake changed while it was read");
+                const Scene& sc = g.scene();
+                const std::uint32_t* first = sc.geometry_first_triangles();
+                std::uint32_t geom = 0;
+                for (std::size_t t = 0; t < T; ++t) {
+                    while (geom + 1 < sc.geometry_count() && first[geom + 1] <= t) ++geom;
+                    segments.data[t] = b.segments[t], offset.data[t] = b.offset[t];
+                    geometry.data[t] = geom, slot.data[t] = g.slot_of(std::uint32_t(t));
+                    const Vec3f a = sc.albedo(std::uint32_t(t)), e = sc.emission(std::uint32_t(t));
+                    const Vec3f* rows[5] = {&f.v0[t], &f.e1[t], &f.e2[t], &a, &e};
+                    float* outs[5] = {v0.data, e1.data, e2.data, albedo.data, emission.data};
+                    for (int k = 0; k < 5; ++k)
+                        outs[k][3 * t] = rows[k]->x, outs[k][3 * t + 1] = rows[k]->y, outs[k][3 * t + 2] = rows[k]->z;
+                }
+                for (std::size_t k = 0; k < P; ++k) {
+                    front.data[3 * k] = b.front[k].x, front.data[3 * k + 1] = b.front[k].y, front.data[3 * k + 2] = b.front[k].z;
+                    back.data[3 * k] = b.back[k].x, back.data[3 * k + 1] = b.back[k].y, back.data[3 * k + 2] = b.back[k].z;
+                }
+            }
+            nb::dict d;
+            d["segments"] = segments.array, d["offset"] = offset.array, d["front"] = front.array;
+            d["back"] = back.array, d["v0"] = v0.array, d["e1"] = e1.array, d["e2"] = e2.array;
+            d["slot"] = slot.array, d["geometry"] = geometry.array, d["albedo"] = albedo.array;
+            d["emission"] = emission.array;
+            return d;
+        }, "The bake's lattices and the triangles' frames, albedo, emission, painting slot "
+           "(-1: room surface) and geometry (one per add_surface / add_painting that kept a "
+           "triangle), copied under the read lock.")
         .def_prop_ro("stats", [](const Gallery& g) {
             const LightingStats& s = g.stats();
             nb::dict d;
@@ -171,12 +220,14 @@ void bind_gallery(nb::module_& m) {
         }, "camera"_a, "width"_a = 0, "height"_a = 0, "lod_bias"_a = 0.0, "threads"_a = 0,
            "display_step"_a = 1,
            "The feedback pass on the gallery's scene (same outputs as gigascroll.render_view).")
-        .def("intersect", [](const Gallery& g, std::array<float, 3> o, std::array<float, 3> d) -> nb::object {
-            require(g.committed(), "Gallery.intersect: commit first");
+        .def("intersect", [](const Gallery& g, std::array<double, 3> o, std::array<float, 3> d) -> nb::object {
             Hit h;
-            if (!g.scene().intersect(vec3f(o), vec3f(d), h)) return nb::none();
+            if (!g.intersect(vec3(o), vec3f(d), h)) return nb::none();
             return nb::make_tuple(h.t, std::array<float, 3>{h.p.x, h.p.y, h.p.z}, h.tri, g.slot_of(h.tri));
         }, "o"_a, "d"_a, "Nearest hit (t, point, triangle, painting slot or -1) along o + t d, or None.");
+
+    // A bake's lattice points at most (BakeSettings::max_points): a room's triangle budget.
+    m.attr("BAKE_MAX_POINTS") = BakeSettings{}.max_points;
 
     // The full-resolution display pass (sampling/stereo_display.h) on the gallery's scene and
     // light, one eye or a stereo pair with the right eye reusing the left eye's hits.
@@ -220,7 +271,7 @@ void bind_gallery(nb::module_& m) {
         double s;
         {
             nb::gil_scoped_release release;
-            s = cast_primary_rays(g.feedback_view().handle, eye, threads, &hits);
+            s = cast_primary_rays(g.feedback_view().handle, eye.moved(-g.origin()), threads, &hits);
         }
         return nb::make_tuple(s, hits);
     }, "gallery"_a, "eye"_a, "threads"_a = 0);

@@ -165,9 +165,19 @@ public:
     // its pyramid. u_axis, v_axis orthonormal; the painting faces u x v. Returns the slot.
     std::size_t add_painting(std::uint32_t painting, const PaintingGeometry& tiles, Vec3d origin,
                              Vec3d u_axis, Vec3d v_axis, double width_m, double height_m);
+    // Builds the BVH. A room far from the world's origin is held around itself (origin()).
     void commit();
     bool committed() const { return scene_.committed(); }
 
+    // The world position of the coordinates the room is held in: zero unless the room lies
+    // far from the world's origin (see commit()). Cameras given to the gallery and positions
+    // it returns (render_display's hits, bounds, intersect) are in world coordinates; scene(),
+    // hits and paintings() inside are relative to origin().
+    Vec3d origin() const { return origin_; }
+    // The room's bounding box in world coordinates.
+    std::pair<Vec3d, Vec3d> bounds() const;
+    // The nearest hit along o + t d (world o; hit.p in world coordinates).
+    bool intersect(Vec3d o, Vec3f d, Hit& hit) const;
     const Scene& scene() const { return scene_; }
     const std::vector<PaintingPlacement>& paintings() const { return placements_; }
     // The scene as the feedback pass takes it (views/feedback.h render_view).
@@ -236,6 +246,15 @@ public:
     BakeArrays bake_arrays() const {
         return {bake_n_.data(), bake_offset_.data(), bake_front_.data(), bake_back_.data(), bake_front_.size()};
     }
+    // Every kept triangle's frame p = v0 + b1 e1 + b2 e2 (its bake lattice's point (i, j) lies
+    // at b1 = i / n, b2 = j / n): for exporting the bake as a mesh. Fixed once committed.
+    struct TriangleFrames {
+        const Vec3f *v0, *e1, *e2;
+        std::size_t count;
+    };
+    TriangleFrames triangle_frames() const {
+        return {tri_v0_.data(), tri_e1_.data(), tri_e2_.data(), tri_v0_.size()};
+    }
 
 private:
     void require_lit() const;
@@ -254,6 +273,7 @@ private:
     void group_photons(const std::vector<Photon>& photons);  // fills photon_groups_
 
     Scene scene_;
+    Vec3d origin_{0, 0, 0};
     std::vector<PaintingPlacement> placements_;
     std::vector<int> geom_placement_;   // Embree geometry id -> painting slot or -1
     std::vector<int> tri_slot_;         // global triangle -> painting slot or -1

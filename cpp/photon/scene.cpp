@@ -87,9 +87,25 @@ std::size_t Scene::add_mesh(const float* vertices, std::size_t nv, const std::in
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
     device_.check("the mesh");
-    if (geom_offset_.size() <= id) geom_offset_.resize(id + 1);
+    if (geom_offset_.size() <= id) geom_offset_.resize(id + 1), geom_vertices_.resize(id + 1);
     geom_offset_[id] = first;
+    geom_vertices_[id] = nv;
     return kept.size();
+}
+
+void Scene::translate(Vec3f offset) {
+    require(!committed_, "Scene.translate: the scene is already committed");
+    require(is_finite(offset), "Scene.translate: the offset must be finite");
+    for (unsigned g = 0; g < geom_offset_.size(); ++g) {
+        RTCGeometry geom = rtcGetGeometry(scene_, g);
+        auto* vb = static_cast<float*>(rtcGetGeometryBufferData(geom, RTC_BUFFER_TYPE_VERTEX, 0));
+        for (std::size_t i = 0; i < geom_vertices_[g]; ++i)
+            vb[3 * i] += offset.x, vb[3 * i + 1] += offset.y, vb[3 * i + 2] += offset.z;
+        rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(geom);
+    }
+    device_.check("the translation");
+    if (!normal_.empty()) lo_ = lo_ + offset, hi_ = hi_ + offset;
 }
 
 void Scene::commit() {

@@ -51,6 +51,9 @@ public:
     // sampled. Returns the number of triangles kept.
     std::size_t add_mesh(const float* vertices, std::size_t nv, const std::int64_t* triangles,
                          std::size_t nt, const float* albedo, bool per_triangle, Vec3f emission);
+    // Moves every vertex by `offset` before commit (float addition per coordinate; the
+    // Gallery holds a room far from the world's origin around the room, see Gallery::origin).
+    void translate(Vec3f offset);
     void commit();  // builds the BVH and the emitter distribution; no add_mesh afterwards
     bool committed() const { return committed_; }
 
@@ -116,6 +119,7 @@ private:
     RTCScene scene_ = nullptr;
     bool committed_ = false;
     std::vector<std::uint32_t> geom_offset_;  // first global triangle of each geometry
+    std::vector<std::size_t> geom_vertices_;  // vertices of each geometry (for translate)
     std::vector<Vec3f> albedo_, emission_, normal_;
     std::vector<Vec3f> tri_v0_, tri_e1_, tri_e2_;  // emitters only, indexed like emitters_
     std::vector<std::uint32_t> emitters_;

@@ -1995,12 +1995,14 @@ void split_wall(double wall, std::initializer_list<EyeStats*> eyes) {
 }  // namespace
 
 void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& lighting,
-                         const VirtualTexture& vt, const Camera& eye, const DisplayOptions& o,
+                         const VirtualTexture& vt, const Camera& world_eye, const DisplayOptions& o,
                          float* rgb) {
     const std::scoped_lock lock(mutex_);
     require(scene.handle != nullptr, "display: the scene has no BVH");
     require(rgb != nullptr, "display: no output image");
-    check_camera(eye);
+    check_camera(world_eye);
+    const Camera eye = world_eye.moved(-scene.origin);  // into the BVH's coordinates
+    origin_ = scene.origin;
     GBuffer& g = g_[0];
     g.resize(eye.width, eye.height, false);
     EyeStats& st = stats_[0] = EyeStats{};
@@ -2013,14 +2015,17 @@ void DisplayPass::render(const PaintingSceneView& scene, const DisplayLighting& 
 }
 
 void DisplayPass::render_stereo(const PaintingSceneView& scene, const DisplayLighting& lighting,
-                                const VirtualTexture& vt, const Camera& left, const Camera& right,
-                                bool use_reuse, const DisplayOptions& o, float* left_rgb,
-                                float* right_rgb) {
+                                const VirtualTexture& vt, const Camera& world_left,
+                                const Camera& world_right, bool use_reuse, const DisplayOptions& o,
+                                float* left_rgb, float* right_rgb) {
     const std::scoped_lock lock(mutex_);
     require(scene.handle != nullptr, "display: the scene has no BVH");
     require(left_rgb != nullptr && right_rgb != nullptr, "display: no output image");
-    check_camera(left);
-    check_camera(right);
+    check_camera(world_left);
+    check_camera(world_right);
+    // Into the BVH's coordinates (both eyes by the same offset: the reuse is unchanged).
+    const Camera left = world_left.moved(-scene.origin), right = world_right.moved(-scene.origin);
+    origin_ = scene.origin;
     require(left.width == right.width && left.height == right.height,
             "display: both eyes need the same resolution");
     require(std::isfinite(o.edge_depth_ratio) && o.edge_depth_ratio >= 0,
@@ -2122,7 +2127,8 @@ std::vector<float> DisplayPass::hit_points(int eye) const {
     const bool reused = eye == 1 && sources_.size() == g.geom.size();
     for (std::size_t i = 0; i < g.geom.size(); ++i) {
         if (g.geom[i] == kNoHit) continue;
-        const Vec3f& p = reused && sources_[i] >= 0 ? g_[0].p[std::size_t(sources_[i])] : g.p[i];
+        const Vec3f& local = reused && sources_[i] >= 0 ? g_[0].p[std::size_t(sources_[i])] : g.p[i];
+        const Vec3f p(Vec3d(local) + origin_);  // in world coordinates
         out[3 * i] = p.x, out[3 * i + 1] = p.y, out[3 * i + 2] = p.z;
     }
     return out;

@@ -252,6 +252,7 @@ private:
     bool reusing_ = false;  // the right eye being rendered reuses the left eye's hits
     bool hits_kept_ = true;  // the last frame kept the hit points (geom, p) of both eyes
     std::uint64_t frame_ = 0;  // this frame's number among all passes' (the workers' scratch)
+    Vec3d origin_{0, 0, 0};    // the last frame's PaintingSceneView::origin (hit_points are world)
     std::vector<std::int32_t> sources_;
 };
 

@@ -34,6 +34,10 @@ struct PaintingSceneView {
     RTCScene handle = nullptr;
     std::span<const PaintingPlacement> paintings;
     std::span<const int> geom_placement;  // placement index per Embree geometry id, -1 = none
+    // The world position of the BVH's coordinate origin: the Gallery holds a room far from the
+    // world's origin in coordinates around the room (float keeps its precision there; see
+    // Gallery::origin). Passes take world cameras and cast from camera.moved(-origin).
+    Vec3d origin{0, 0, 0};
     int placement_of(unsigned geom_id) const {
         return geom_id < geom_placement.size() ? geom_placement[geom_id] : -1;
     }

@@ -191,9 +191,10 @@ void render_view(const ExhibitionScene& scene, const Camera& camera,
     render_view(scene.view(), camera, options, keys, lod, uv);
 }
 
-void render_view(const PaintingSceneView& scene, const Camera& camera,
+void render_view(const PaintingSceneView& scene, const Camera& world_camera,
                  const FeedbackOptions& options, std::uint64_t* keys, float* lod, double* uv) {
     require(scene.handle != nullptr, "render_view: the scene has no BVH");
+    const Camera camera = world_camera.moved(-scene.origin);  // into the BVH's coordinates
     require(std::isfinite(options.lod_bias), "lod_bias must be finite");
     const std::uint32_t fw = feedback_width(camera, options), fh = feedback_height(camera, options);
     require(fw <= camera.width && fh <= camera.height,
