@@ -38,7 +38,7 @@
 // directly; vt.cache, vt.pageTable, vt.requests expose the parts.
 import { PackGeometry } from "./geometry.js";
 import { PageTable } from "./page_table.js";
-import { TileCache } from "./cache.js";
+import { TileCache, slotGrid } from "./cache.js";
 import { FeedbackPass } from "./feedback.js";
 import { RequestProcessor } from "./requests.js";
 import { TileLoader } from "./loader.js";
@@ -55,11 +55,132 @@ export const DEFAULTS = {
 
 export class VirtualTexture {
   constructor(gl, pack, options = {}) {
-    throw new Error("VirtualTexture: not implemented yet");
+    const o = { ...DEFAULTS, ...options };
+    this.gl = gl;
+    this.options = o;
+    this.geometry = new PackGeometry(pack);
+    this.pageTable = new PageTable(this.geometry);
+    const pins = this.geometry.pinnedTiles();
+    const [sx, sy] = o.slots || slotGrid(gl.getParameter(gl.MAX_TEXTURE_SIZE), this.geometry.tileSize,
+                                         o.budgetBytes, pins.length);
+    this.cache = new TileCache(this.geometry, this.pageTable, sx, sy);
+    this.cache.createTexture(gl);
+    this.requests = new RequestProcessor(this.geometry, this.cache, this.pageTable,
+                                         { tableBits: o.tableBits, perFrame: o.maxRequestsPerFrame });
+    this.loader = new TileLoader(this.geometry, o.tiles, { maxBatchesInFlight: o.maxBatchesInFlight,
+                                                           useWorker: o.useWorker !== false });
+    this.feedback = new FeedbackPass(gl);
+    this.firstUnit = o.firstUnit;
+    this.frame = 0;
+    this.counters = { uploads: 0, feedbackMs: 0, readbacks: 0, failed: 0 };
+    this.pageTable.upload(gl);
+    this.ready = this.loadPinned(pins);
   }
-  get glsl() { return ""; }
-  bind(program) {}
-  beginFrame(frameNumber) {}
-  stats() { return {}; }
-  dispose() {}
+
+  get glsl() { return samplerGlsl; }
+
+  // Fetches and uploads every pinned tile (no budget: nothing is drawn before they are in).
+  async loadPinned(pins) {
+    const want = new Set(pins.map((k) => this.geometry.tileIndex(...k)));
+    this.loader.request([...want]);
+    while (want.size) {
+      await new Promise((r) => setTimeout(r, 5));
+      const failed = this.loader.takeFailed();
+      if (failed.length) throw new Error(`pinned tiles failed to load: ${failed[0].error}`);
+      for (const t of this.loader.take(Infinity)) {
+        if (!want.delete(t.index)) { this.loader.arrived.push(t); continue; }
+        this.cache.upload(this.gl, this.cache.place(t.index, true), t.bytes);
+      }
+    }
+    this.pageTable.upload(this.gl);
+    return this;
+  }
+
+  // Inserts a tile at once (tests; the pinned ones go to their slots): the page table is
+  // uploaded at the next beginFrame or flushTable.
+  insertTile(index, rgb) {
+    const s = this.cache.place(index, this.geometry.isPinned(...this.geometry.keyOf(index)));
+    if (s >= 0) this.cache.upload(this.gl, s, rgb);
+    return s;
+  }
+  flushTable() { this.pageTable.upload(this.gl); }
+
+  // The frame's work before drawing (the paper's five stages less the display).
+  beginFrame(frameNumber = this.frame + 1) {
+    this.frame = frameNumber;
+    this.feedback.frame = frameNumber;
+    const t0 = performance.now();
+    const readbacks = this.feedback.poll();
+    if (readbacks.length) {
+      this.requests.process(readbacks.map((r) => r.keys), frameNumber);
+      ++this.counters.readbacks;
+    }
+    this.counters.feedbackMs = performance.now() - t0;
+    this.upload();
+    const room = Math.max(0, 64 * this.options.maxBatchesInFlight - this.loader.tilesInFlight);
+    this.loader.request(this.requests.issue(room));
+  }
+
+  // Uploads arrived tiles within the per-frame budget and the page table's changes.
+  upload() {
+    for (const f of this.loader.takeFailed()) {
+      this.counters.failed += f.indices.length;
+      for (const i of f.indices) this.requests.arrived(i);
+    }
+    const tiles = this.loader.take(this.options.maxUploadsPerFrame);
+    for (const t of tiles) {
+      this.requests.arrived(t.index);
+      const s = this.cache.place(t.index);
+      if (s >= 0) this.cache.upload(this.gl, s, t.bytes);
+    }
+    this.counters.uploads = tiles.length;
+    this.pageTable.upload(this.gl);
+  }
+
+  // Sets the textures (units firstUnit .. firstUnit + 3) and uniforms of a program that
+  // uses vt.glsl; the program must be in use. Between feedback.begin and end it also sets
+  // the feedback target's pixel scale, so call it after begin.
+  bind(program) {
+    const gl = this.gl, u = this.firstUnit, pt = this.pageTable;
+    const units = [[pt.tableTexture, "uVtTable"], [pt.tailTexture, "uVtTail"], [pt.infoTexture, "uVtInfo"],
+                   [this.cache.texture, "uVtPhysical"]];
+    units.forEach(([texture, name], k) => {
+      gl.activeTexture(gl.TEXTURE0 + u + k);
+      gl.bindTexture(gl.TEXTURE_2D, texture);
+      gl.uniform1i(gl.getUniformLocation(program, name), u + k);
+    });
+    gl.activeTexture(gl.TEXTURE0);
+    const g = this.geometry;
+    gl.uniform4i(gl.getUniformLocation(program, "uVtTile"), g.tileSize, g.border, g.payload, this.cache.slotsX);
+    gl.uniform2f(gl.getUniformLocation(program, "uVtPixelScale"), ...this.feedback.pixelScale);
+  }
+
+  stats() {
+    const r = this.requests.last, c = this.cache.stats;
+    return {
+      frame: this.frame,
+      requests: r.requests,
+      commands: r.commands,
+      collisions: r.collisions,
+      hitRate: r.requests ? r.hits / r.requests : 1,
+      cacheHitRate: c.hits + c.misses ? c.hits / (c.hits + c.misses) : 1,
+      inFlight: this.loader.tilesInFlight,
+      pending: this.requests.pending.length + this.loader.arrived.length,
+      uploads: this.counters.uploads,
+      feedbackMs: this.counters.feedbackMs,
+      resident: this.cache.resident,
+      slots: this.cache.slots,
+      evictions: c.evictions,
+      failed: this.counters.failed,
+      bytesReceived: this.loader.bytesReceived,
+      skippedReadbacks: this.feedback.skipped,
+    };
+  }
+
+  dispose() {
+    this.loader.dispose();
+    this.feedback.dispose();
+    this.pageTable.dispose(this.gl);
+    this.cache.dispose(this.gl);
+  }
 }
