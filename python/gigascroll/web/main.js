@@ -1,0 +1,176 @@
+// The client's bootstrap and frame loop: fetch /api/scene.json and the room's glb, make the
+// virtual texture, then draw every frame through one path (desktop, side-by-side stereo and
+// each XR eye alike): VT beginFrame -> feedback pass per view (and the magnifier's) -> display
+// pass per view -> the magnifier's inset -> stats.
+//
+// URL parameters: camera=x,y,z,tx,ty,tz[,fov] fixes the view (`gigascroll render --camera`'s
+// convention); stereo=1 side-by-side; magnifier=1; stats=1; ipd=metres; size=WxH a fixed
+// canvas size in pixels (tests). Keys: WASD/QE walk, drag to look, M magnifier, V stereo,
+// I stats panel. window.gigascroll is the test hook (see expose()).
+
+import { DEFAULT_FOV, lookAt, anglesOf, parseCameraParam } from './camera.js';
+import { parseRoom } from './glb.js';
+import { RoomRenderer } from './room_draw.js';
+import { Magnifier, MAGNIFIER_VIEW } from './magnifier.js';
+import { Stats } from './stats.js';
+import { Controls } from './controls.js';
+import { XrPresenter, xrAvailable } from './xr.js';
+import { DEFAULT_IPD, desktopViews } from './desktop_views.js';
+import { VirtualTexture } from './vt/virtual_texture.js';
+
+const FEEDBACK_REDUCTION = 8;   // eyes' feedback at 1/8 resolution, the magnifier's at full
+
+async function fetchOk(url, kind) {
+  const r = await fetch(url);
+  if (!r.ok) throw new Error(`${url}: HTTP ${r.status} ${(await r.text()).slice(0, 200)}`);
+  return kind === 'json' ? r.json() : r.arrayBuffer();
+}
+
+function options(search) {
+  const q = new URLSearchParams(search);
+  const size = q.get('size') && /^(\d+)x(\d+)$/.exec(q.get('size'));
+  if (q.get('size') && !size) throw new Error(`?size wants WxH, got "${q.get('size')}"`);
+  const ipd = q.get('ipd') === null ? DEFAULT_IPD : Number(q.get('ipd'));
+  if (!(ipd >= 0 && ipd < 1)) throw new Error(`?ipd wants metres in [0, 1), got "${q.get('ipd')}"`);
+  return { camera: parseCameraParam(search), stereo: q.get('stereo') === '1', magnifier: q.get('magnifier') === '1',
+           stats: q.get('stats') === '1', ipd, size: size ? [Number(size[1]), Number(size[2])] : null };
+}
+
+class App {
+  constructor(canvas, gl, scene, meshes, vt, opts) {
+    Object.assign(this, { canvas, gl, scene, vt, opts });
+    this.room = new RoomRenderer(gl, meshes, vt, scene.display);
+    this.magnifier = new Magnifier(gl);
+    this.magnifier.toggle(opts.magnifier);
+    this.stats = new Stats(document.getElementById('stats'));
+    if (opts.stats) this.stats.toggle();
+    this.stereo = opts.stereo;
+    this.frame = 0;
+    this.afterFrame = null;   // test hook: fn({frame, gl, canvas, views}) after each frame
+    const c = opts.camera ?? scene.room.camera;
+    this.fov = c.fov ?? DEFAULT_FOV;
+    const start = lookAt(c.eye, c.target);
+    this.controls = new Controls(canvas, start, scene.room.bounds, {
+      fixed: Boolean(opts.camera),
+      keys: { KeyM: () => this.magnifier.toggle(), KeyV: () => { this.stereo = !this.stereo; }, KeyI: () => this.stats.toggle() },
+    });
+    this.xr = new XrPresenter(gl, { eye: start.position, yaw: anglesOf(start).yaw },
+                              (views, fb, t) => this.drawFrame(views, fb, t), () => this.magnifier.toggle());
+  }
+
+  // One frame of any mode: views (camera.js view records) into framebuffer (null: canvas).
+  drawFrame(views, framebuffer, now) {
+    const { gl, vt, room, magnifier } = this;
+    vt.beginFrame(this.frame);
+    views.forEach((v, i) => this.#feedback(i, v, FEEDBACK_REDUCTION));
+    const lens = magnifier.on ? magnifier.view(centreFrame(views), this.fov) : null;
+    if (lens) {
+      this.#feedback(MAGNIFIER_VIEW, lens, 1);
+      magnifier.render(room, lens);
+    }
+    gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
+    for (const v of views) {
+      room.drawView(v);
+      if (lens) magnifier.composite(v);
+    }
+    this.stats.update(this.frame, now, lens ? [...views, lens] : views, vt.stats());
+    this.afterFrame?.({ frame: this.frame, gl, canvas: this.canvas, views });
+    this.frame++;
+  }
+
+  #feedback(index, view, reduction) {
+    this.vt.feedback.begin(index, view.viewport[2], view.viewport[3], reduction);
+    this.room.drawFeedbackView(view);
+    this.vt.feedback.end(index);
+  }
+
+  // The desktop loop (stopped while an XR session draws).
+  run() {
+    let last = performance.now();
+    const tick = (now) => {
+      requestAnimationFrame(tick);
+      if (this.xr.session) return;
+      const dt = (now - last) / 1000;
+      last = now;
+      this.#fitCanvas();
+      const frame = this.controls.update(dt);
+      this.drawFrame(desktopViews(frame, this.fov, this.canvas.width, this.canvas.height, this.stereo, this.opts.ipd), null, now);
+    };
+    requestAnimationFrame(tick);
+  }
+
+  #fitCanvas() {
+    const c = this.canvas, size = this.opts.size;
+    const w = size ? size[0] : Math.max(1, Math.round(c.clientWidth * devicePixelRatio));
+    const h = size ? size[1] : Math.max(1, Math.round(c.clientHeight * devicePixelRatio));
+    if (c.width !== w || c.height !== h) Object.assign(c, { width: w, height: h });
+  }
+}
+
+// The frame between the views' eyes (the magnifier looks from there along the first eye's gaze).
+function centreFrame(views) {
+  const f = views[0].frame, n = views.length;
+  const position = [0, 1, 2].map((k) => views.reduce((s, v) => s + v.position[k], 0) / n);
+  return { ...f, position };
+}
+
+function showError(e) {
+  const el = document.getElementById('error');
+  if (el) { el.hidden = false; el.textContent = String(e?.message ?? e); }
+  console.error(e);
+}
+
+// window.gigascroll: ready() (resolves once the room is drawn with the coarse tail resident),
+// stats(), frame(), app (for tests), error.
+function expose(readyPromise, getApp) {
+  window.gigascroll = {
+    ready: () => readyPromise,
+    stats: () => ({ ...getApp()?.stats.numbers, vt: getApp()?.vt.stats() }),
+    frame: () => getApp()?.frame ?? 0,
+    get app() { return getApp(); },
+    error: null,
+  };
+}
+
+async function start() {
+  let app = null, resolve, reject;
+  const ready = new Promise((a, b) => { resolve = a; reject = b; });
+  expose(ready, () => app);
+  try {
+    const opts = options(location.search);
+    const canvas = document.getElementById('view');
+    if (opts.size) Object.assign(canvas.style, { width: `${opts.size[0]}px`, height: `${opts.size[1]}px` });
+    const gl = canvas.getContext('webgl2', { antialias: false, xrCompatible: true });
+    if (!gl) throw new Error('this browser has no WebGL2');
+    const scene = await fetchOk('/api/scene.json', 'json');
+    const meshes = parseRoom(await fetchOk(scene.room.glb, 'buffer'));
+    const vt = new VirtualTexture(gl, scene.pack, { tiles: scene.tiles });
+    await vt.ready;
+    app = new App(canvas, gl, scene, meshes, vt, opts);
+    app.run();
+    await new Promise((r) => { app.afterFrame = () => { app.afterFrame = null; r(); }; });
+    setupVrButton(app);
+    resolve(app.stats.numbers);
+  } catch (e) {
+    window.gigascroll.error = String(e?.message ?? e);
+    showError(e);
+    reject(e);
+  }
+}
+
+async function setupVrButton(app) {
+  const button = document.getElementById('enter-vr');
+  if (!button || !(await xrAvailable())) return;
+  button.hidden = false;
+  button.addEventListener('click', async () => {
+    try {
+      if (app.xr.session) await app.xr.exit();
+      else await app.xr.enter();
+      button.textContent = app.xr.session ? 'Exit VR' : 'Enter VR';
+    } catch (e) {
+      showError(e);
+    }
+  });
+}
+
+start();

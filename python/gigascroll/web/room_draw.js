@@ -1,0 +1,116 @@
+// The room on the GPU and the one per-view draw function every mode goes through (desktop,
+// side-by-side stereo, each XR eye, the magnifier): a view is {view, proj, position, viewport}
+// from camera.js, drawn into whatever framebuffer is bound.
+
+import { multiply } from './camera.js';
+import { ATTRIBUTES, HEADER, PAINTING_FS, ROOM_FS, ROOM_VS, displayMapping } from './display.glsl.js';
+import { makeProgram } from './gl_util.js';
+import { FEEDBACK_FS } from './feedback.glsl.js';
+
+function upload(gl, mesh) {
+  const vao = gl.createVertexArray();
+  gl.bindVertexArray(vao);
+  const attribute = (location, data, size) => {
+    const buffer = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+    gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
+    gl.enableVertexAttribArray(location);
+    gl.vertexAttribPointer(location, size, gl.FLOAT, false, 0, 0);
+  };
+  attribute(ATTRIBUTES.position, mesh.positions, 3);
+  attribute(ATTRIBUTES.irradianceFront, mesh.irradianceFront, 3);
+  attribute(ATTRIBUTES.irradianceBack, mesh.irradianceBack, 3);
+  if (mesh.texcoords) attribute(ATTRIBUTES.texcoord, mesh.texcoords, 2);
+  else gl.vertexAttrib2f(ATTRIBUTES.texcoord, 0, 0);
+  let indexType = null, count = mesh.vertexCount;
+  if (mesh.indices) {
+    const buffer = gl.createBuffer();
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, buffer);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, mesh.indices, gl.STATIC_DRAW);
+    indexType = { 1: gl.UNSIGNED_BYTE, 2: gl.UNSIGNED_SHORT, 4: gl.UNSIGNED_INT }[mesh.indices.BYTES_PER_ELEMENT];
+    count = mesh.indices.length;
+  }
+  gl.bindVertexArray(null);
+  return { vao, indexType, count, albedo: mesh.albedo, emission: mesh.emission, painting: mesh.painting };
+}
+
+export class RoomRenderer {
+  // meshes: glb.parseRoom's list; vt: the VirtualTexture facade; display: scene.json's display.
+  constructor(gl, meshes, vt, display) {
+    this.gl = gl;
+    this.vt = vt;
+    this.exposure = display.exposure;
+    const map = displayMapping(display);
+    const vs = HEADER + ROOM_VS;
+    this.room = makeProgram(gl, vs, HEADER + map + ROOM_FS, 'room');
+    this.painting = makeProgram(gl, vs, HEADER + vt.glsl + map + PAINTING_FS, 'painting');
+    this.feedback = makeProgram(gl, vs, HEADER + vt.glsl + FEEDBACK_FS, 'feedback');
+    // Room surfaces first: in the feedback pass they lay the depth that hides paintings.
+    this.meshes = meshes.map((m) => upload(gl, m)).sort((a, b) => (a.painting >= 0) - (b.painting >= 0));
+    this.triangles = this.meshes.reduce((n, m) => n + m.count / 3, 0);
+  }
+
+  // The display pass of one view into the bound framebuffer: clears its viewport, draws the
+  // room surfaces and the paintings (their albedo through the virtual texture).
+  drawView(view) {
+    const gl = this.gl;
+    this.#begin(view);
+    const viewProj = multiply(view.proj, view.view);
+    for (const [prog, paintings] of [[this.room, false], [this.painting, true]]) {
+      gl.useProgram(prog.program);
+      if (paintings) this.vt.bind(prog.program);
+      gl.uniformMatrix4fv(prog.uniforms.uViewProj, false, viewProj);
+      gl.uniform1f(prog.uniforms.uExposure, this.exposure);
+      for (const m of this.meshes) {
+        if ((m.painting >= 0) !== paintings) continue;
+        if (paintings) gl.uniform1i(prog.uniforms.uPainting, m.painting);
+        else gl.uniform3fv(prog.uniforms.uAlbedo, m.albedo);
+        gl.uniform3fv(prog.uniforms.uEmission, m.emission);
+        this.#draw(m);
+      }
+    }
+    gl.bindVertexArray(null);
+  }
+
+  // The feedback pass of one view, between vt.feedback.begin(i) and end(i) (which bind the
+  // reduced-resolution target): every surface writes depth so hidden paintings ask for
+  // nothing; paintings write their tile requests.
+  drawFeedbackView(view) {
+    const gl = this.gl, prog = this.feedback;
+    gl.enable(gl.DEPTH_TEST);
+    gl.disable(gl.CULL_FACE);
+    gl.useProgram(prog.program);
+    this.vt.bind(prog.program);
+    gl.uniformMatrix4fv(prog.uniforms.uViewProj, false, multiply(view.proj, view.view));
+    for (const m of this.meshes) {
+      gl.colorMask(m.painting >= 0, m.painting >= 0, m.painting >= 0, m.painting >= 0);
+      gl.uniform1i(prog.uniforms.uPainting, Math.max(0, m.painting));
+      this.#draw(m);
+    }
+    gl.colorMask(true, true, true, true);
+    gl.bindVertexArray(null);
+  }
+
+  #begin(view) {  // viewport, scissored clear, depth test
+    const gl = this.gl, [x, y, w, h] = view.viewport;
+    gl.viewport(x, y, w, h);
+    gl.enable(gl.SCISSOR_TEST);
+    gl.scissor(x, y, w, h);
+    gl.clearColor(0, 0, 0, 1);
+    gl.clearDepth(1);
+    gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+    gl.disable(gl.SCISSOR_TEST);
+    gl.enable(gl.DEPTH_TEST);
+    gl.depthFunc(gl.LESS);
+    gl.disable(gl.CULL_FACE);  // surfaces are lit on both sides (front and back irradiance)
+    gl.disable(gl.BLEND);
+  }
+
+  #draw(m) {
+    const gl = this.gl;
+    gl.bindVertexArray(m.vao);
+    if (m.indexType !== null) gl.drawElements(gl.TRIANGLES, m.count, m.indexType, 0);
+    else gl.drawArrays(gl.TRIANGLES, 0, m.count);
+  }
+}
+
