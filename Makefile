@@ -43,6 +43,7 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	$(PIP) install -q imageio-ffmpeg pyglet
 	$(PIP) install -q "dask[distributed]"
 	$(PIP) install -q flip-evaluator
+	$(PIP) install -q aiohttp
 	touch $@
 
 venv: $(VENV)/.deps-stamp

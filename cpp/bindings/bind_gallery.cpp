@@ -151,10 +151,13 @@ void bind_gallery(nb::module_& m) {
             d["back"] = back.array, d["v0"] = v0.array, d["e1"] = e1.array, d["e2"] = e2.array;
             d["slot"] = slot.array, d["geometry"] = geometry.array, d["albedo"] = albedo.array;
             d["emission"] = emission.array;
+            const Vec3d o = g.origin();
+            d["origin"] = std::array<double, 3>{o.x, o.y, o.z};
             return d;
-        }, "The bake's lattices and the triangles' frames, albedo, emission, painting slot "
-           "(-1: room surface) and geometry (one per add_surface / add_painting that kept a "
-           "triangle), copied under the read lock.")
+        }, "The bake's lattices and the triangles' frames (relative to origin, the world "
+           "position the room is held around), albedo, emission, painting slot (-1: room "
+           "surface) and geometry (one per add_surface / add_painting that kept a triangle), "
+           "copied under the read lock.")
         .def_prop_ro("stats", [](const Gallery& g) {
             const LightingStats& s = g.stats();
             nb::dict d;

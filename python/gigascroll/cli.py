@@ -7,11 +7,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .commands import bench, demo, export, gallery, info, pack, render, scenario, synth, view
+from .commands import bench, demo, export, gallery, info, pack, render, scenario, serve, synth, view
 from .errors import UserError
 
 # Subcommand modules, in the order `gigascroll --help` lists them.
-COMMANDS = [demo, synth, pack, info, export, bench, render, scenario, gallery, view]
+COMMANDS = [demo, synth, pack, info, export, bench, render, scenario, gallery, view, serve]
 
 
 # Integer options the core takes as fixed-width integers: checked when parsed, so a value

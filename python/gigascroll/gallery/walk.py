@@ -121,7 +121,6 @@ class GallerySource(FrameSource):
                  spacing: float | None = None, bake_samples: int = 32, threads: int = 0,
                  exposure: float | None = None):
         from .gallery import Gallery
-        from .rooms import GALLERY_LUX, lux_to_irradiance
         if lighting not in ("baked", "full", "unlit"):
             raise ValueError(f"lighting must be baked, full or unlit, got {lighting!r}")
         check_room_paintings(room, pack)
@@ -140,9 +139,7 @@ class GallerySource(FrameSource):
                 self.gallery.bake(spacing=spacing, light_samples=bake_samples, threads=threads)
             self.light_stats = dict(self.gallery.stats)
         self.light_seconds = time.perf_counter() - t0
-        # A white painting under the gallery's target illuminance displays as 1.
-        self.exposure = (1.0 if lighting == "unlit" else
-                         exposure or math.pi / lux_to_irradiance(GALLERY_LUX))
+        self.exposure = 1.0 if lighting == "unlit" else exposure or lit_exposure()
 
     def feedback(self, camera, width, height, threads=0):
         return self.gallery.render_view(camera, width, height, threads=threads)["keys"]
@@ -196,6 +193,14 @@ def parent_keys(keys: np.ndarray, levels: np.ndarray) -> np.ndarray:
     base = k & ~np.uint64((0x1F << 32) | 0xFFFFFFFF)
     return np.unique(base | ((level + 1).astype(np.uint64) << np.uint64(32))
                      | (morton >> np.uint64(2)))
+
+
+def lit_exposure() -> float:
+    """The display's exposure for a lit room: a white painting under the gallery's target
+    illuminance displays as 1 (the one definition; the browser client gets it in scene.json)."""
+    from .rooms import GALLERY_LUX, lux_to_irradiance
+
+    return math.pi / lux_to_irradiance(GALLERY_LUX)
 
 
 def tone_map(linear: np.ndarray, exposure: float = 1.0) -> np.ndarray:

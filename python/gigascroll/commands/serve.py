@@ -1,0 +1,72 @@
+"""`gigascroll serve PACK --room scroll|hall|FILE`: serve a pack and its lit room to browsers
+(the WebXR client; docs/serve-protocol.md). Prints the URL; Ctrl-C or SIGTERM stops it."""
+
+from __future__ import annotations
+
+import sys
+
+from ..errors import UserError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("serve", help="serve a pack and its lit room to a browser or headset",
+                       description="Serve a tile pack and a lit gallery room over HTTP(S) to "
+                                   "the WebXR client (loopback by default).")
+    p.add_argument("pack", metavar="PACK", help="pack directory")
+    p.add_argument("--room", required=True,
+                   help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1; a headset on the LAN needs "
+                        "--tls-cert and --tls-key)")
+    p.add_argument("--port", type=int, default=8000, help="port (default 8000; 0: a free one)")
+    p.add_argument("--tls-cert", metavar="FILE", help="PEM certificate (serve HTTPS)")
+    p.add_argument("--tls-key", metavar="FILE", help="PEM private key of --tls-cert")
+    p.add_argument("--cache-dir", metavar="DIR",
+                   help="where baked rooms are cached (default $XDG_CACHE_HOME/gigascroll/rooms "
+                        "or ~/.cache/gigascroll/rooms)")
+    p.add_argument("--threads", type=int, default=0, help="bake threads (0 = all cores)")
+    p.set_defaults(func=run)
+
+
+def _say(text: str) -> None:
+    print(f"gigascroll serve: {text}", file=sys.stderr, flush=True)
+
+
+def run(args) -> int:
+    from .. import TilePack
+    from ..serve import baked_room, make_app, pack_hash, serve_forever, tls_context
+    from ..serve.run import LOOPBACK_HOSTS, log_to_stderr
+
+    if not 0 <= args.port <= 65535:
+        raise UserError(f"--port must be in [0, 65535], got {args.port}")
+    if (args.tls_cert is None) != (args.tls_key is None):
+        raise UserError("--tls-cert and --tls-key go together")
+    ssl_context = None
+    if args.tls_cert:
+        try:
+            ssl_context = tls_context(args.tls_cert, args.tls_key)
+        except OSError as e:  # ssl.SSLError is one
+            raise UserError(f"TLS: cannot load --tls-cert {args.tls_cert} / --tls-key "
+                            f"{args.tls_key}: {e.strerror or e}") from None
+    elif args.host not in LOOPBACK_HOSTS:
+        _say(f"warning: serving plain HTTP on {args.host}: a headset needs HTTPS off "
+             "localhost for WebXR (give --tls-cert and --tls-key, or use adb reverse)")
+    try:
+        pack = TilePack(args.pack)
+    except Exception as e:  # a missing or corrupt pack
+        raise UserError(f"cannot open pack {args.pack}: {e}") from None
+    content_hash = pack_hash(pack)
+    try:
+        room = baked_room(args.room, pack, content_hash, args.cache_dir, threads=args.threads,
+                          announce=_say)
+    except (OSError, ValueError) as e:
+        raise UserError(f"room {args.room}: {e}") from None
+    log_to_stderr()
+    app = make_app(pack, room, content_hash)
+    try:
+        caught = serve_forever(app, args.host, args.port, ssl_context,
+                               announce=lambda url: print(f"serving {url}", flush=True))
+    except OSError as e:
+        raise UserError(f"cannot listen on {args.host}:{args.port}: {e.strerror or e}") from None
+    _say(f"stopped ({caught})")
+    return 0

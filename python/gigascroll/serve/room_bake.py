@@ -1,0 +1,164 @@
+"""The served room: its spec, its gallery and its baked light as a cached glb.
+
+The bake is `render --room ROOM --lighting baked`'s (`ROOM_LIGHTING`: its photon count and
+seed, the default gather radius and bake settings), so the headset shows the light of the CPU
+renders. The glb is cached under `cache_dir / f"{key}.glb"`, the key hashing the room spec
+(surfaces, slots), the pack's content hash and the lighting options: a second start with the
+same key reads the file instead of baking. It is written under a temporary name and renamed,
+so a killed bake never leaves a cache entry that looks complete."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import runtime
+from ..gallery import Gallery, builtin_room
+from ..gallery.gallery import PAINTING_REFLECTANCE
+from ..gallery.rooms import ROOM_NAMES
+from .room_glb import room_glb
+
+__all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "load_room_spec", "room_key",
+           "baked_room"]
+
+# `gigascroll render --room`'s defaults: light(vt, photons=--photons (2^18), seed=--seed (0))
+# with the default radius, then bake() with its defaults (commands/render.py, Gallery.still).
+ROOM_LIGHTING = {"photons": 1 << 18, "seed": 0}
+# Bumped when the glb's layout changes, so old cache entries are not served.
+GLB_FORMAT = 1
+
+
+def default_cache_dir() -> Path:
+    """$XDG_CACHE_HOME/gigascroll/rooms, else ~/.cache/gigascroll/rooms."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "gigascroll" / "rooms"
+
+
+def load_room_spec(room: str, pack):
+    """The RoomSpec of a built-in room name or a room file (ValueError / OSError if bad)."""
+    if room in ROOM_NAMES:
+        return builtin_room(room, pack)
+    from ..gallery.room_files import load_room
+
+    return load_room(room, pack)
+
+
+def room_key(spec, content_hash: str, lighting: dict) -> str:
+    """32 hex digits hashing the room's surfaces and slots, the pack and the lighting."""
+    h = hashlib.blake2b(digest_size=16, person=b"gigascroll-room")
+    h.update(json.dumps({"format": GLB_FORMAT, "pack": content_hash, "lighting": lighting,
+                         "name": spec.name}, sort_keys=True).encode())
+    for s in spec.surfaces:
+        h.update(json.dumps([s.name, [float(x) for x in s.albedo],
+                             [float(x) for x in s.emission]]).encode())
+        for a in (np.ascontiguousarray(s.vertices, np.float64), np.ascontiguousarray(s.triangles, np.int64)):
+            h.update(str(a.shape).encode())
+            h.update(a.tobytes())
+    for p in spec.paintings:
+        h.update(json.dumps([p.painting, [float(x) for x in p.origin], [float(x) for x in p.u_axis],
+                             [float(x) for x in p.v_axis], float(p.width_m), float(p.height_m)]).encode())
+    return h.hexdigest()
+
+
+@dataclass
+class BakedRoom:
+    """A room ready to serve: spec, gallery, cache key, the glb's path and whether it came
+    from the cache (`cache_hit`) or was baked now."""
+
+    spec: object
+    gallery: Gallery
+    key: str
+    glb_path: Path
+    cache_hit: bool
+    bake_stats: dict = field(default_factory=dict)
+
+
+def _mesh_infos(gallery: Gallery, spec, lattice: dict) -> list[dict]:
+    """One dict per Embree geometry (room_glb's `meshes`): names from the spec's surfaces
+    that kept a triangle, in order, then the painting slots."""
+    geometry, slot = lattice["geometry"], lattice["slot"]
+    count = int(geometry.max()) + 1 if len(geometry) else 0
+    surface_names = [s.name for s in spec.surfaces if _keeps_a_triangle(s)]
+    infos = []
+    for g in range(count):
+        first = int(np.flatnonzero(geometry == g)[0])
+        s = int(slot[first])
+        if s >= 0:
+            ps = spec.paintings[s]
+            infos.append({"name": f"painting {s}: {ps.name or ps.painting}",
+                          "albedo": (PAINTING_REFLECTANCE,) * 3, "emission": (0.0, 0.0, 0.0),
+                          "slot": s, "painting": gallery.slot_paintings[s], "origin": ps.origin,
+                          "u_axis": ps.u_axis, "v_axis": ps.v_axis, "width_m": ps.width_m,
+                          "height_m": ps.height_m})
+        else:
+            name = surface_names[g] if g < len(surface_names) else f"surface {g}"
+            infos.append({"name": name, "albedo": lattice["albedo"][first],
+                          "emission": lattice["emission"][first]})
+    return infos
+
+
+def _keeps_a_triangle(surface) -> bool:
+    """Whether the core keeps any of the surface's triangles (Gallery::add_surface's test:
+    a positive finite float cross product)."""
+    v = np.asarray(surface.vertices, np.float32)
+    t = np.asarray(surface.triangles, np.int64)
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    with np.errstate(all="ignore"):
+        length = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    return bool(np.any(np.isfinite(length) & (length > 0)))
+
+
+def _write_atomically(path: Path, data: bytes) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def bake_glb(gallery: Gallery, spec, pack, threads: int = 0) -> tuple[bytes, dict]:
+    """Lights and bakes the gallery as `render --room --lighting baked` does, and returns
+    (the glb, the lighting stats)."""
+    # The photons read the paintings' pinned coarse levels: any VT of the pack will do.
+    gallery.light(runtime.VirtualTexture(pack, (30, 30)), threads=threads, **ROOM_LIGHTING)
+    gallery.bake(threads=threads)
+    lattice = gallery._bake_lattice()
+    return room_glb(lattice, _mesh_infos(gallery, spec, lattice)), dict(gallery.stats)
+
+
+def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None,
+               threads: int = 0, announce=None) -> BakedRoom:
+    """The room `room` (built-in name or file) with the pack's paintings, its glb baked or
+    taken from the cache. announce(text), when given, hears one line: hit or bake."""
+    spec = load_room_spec(room, pack)
+    gallery = Gallery.from_room(spec, pack)
+    key = room_key(spec, content_hash, ROOM_LIGHTING)
+    path = Path(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
+    if path.is_file():
+        if announce:
+            announce(f"room {spec.name}: bake cache hit ({path.name})")
+        return BakedRoom(spec, gallery, key, path, True)
+    if announce:
+        announce(f"room {spec.name}: baking the light (cache miss, {path.name})")
+    data, stats = bake_glb(gallery, spec, pack, threads)
+    _write_atomically(path, data)
+    if announce:
+        announce(f"room {spec.name}: baked {stats['bake_points']} points in "
+                 f"{stats['photon_seconds'] + stats['build_seconds'] + stats['bake_seconds']:.1f} s, "
+                 f"{len(data) / 1e6:.1f} MB cached")
+    return BakedRoom(spec, gallery, key, path, False, stats)
