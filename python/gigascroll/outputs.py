@@ -34,7 +34,7 @@ from typing import Callable
 __all__ = ["MARK", "protected_reason", "check_output", "write_mark", "has_mark", "owned_by",
            "temp_dir", "atomic_file", "write_bytes", "write_text", "replace_dir",
            "write_image", "encode_image", "Interrupted", "signals_interrupt", "ignore_sigxfsz",
-           "write_error"]
+           "write_error", "oiio_reason"]
 
 MARK = ".gigascroll-output.json"   # in a directory a command made: which command made it
 
@@ -240,10 +240,10 @@ def write_image(path, pixels, quality: int = 90, durable: bool = False) -> None:
         ok = out.open(str(tmp), spec) and out.write_image(data)
         closed = out.close()
         if not (ok and closed):
-            raise OSError(f"cannot write {path}: {_oiio_reason(out, tmp)}")
+            raise OSError(f"cannot write {path}: {oiio_reason(out, tmp)}")
 
 
-def _oiio_reason(out, tmp: Path) -> str:
+def oiio_reason(out, tmp: Path) -> str:
     """OpenImageIO's error, or the system's words when the disk is full."""
     with contextlib.suppress(OSError, ValueError, ImportError):
         if os.statvfs(tmp.parent).f_bavail == 0:

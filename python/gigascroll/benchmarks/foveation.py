@@ -27,6 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..experiments import save_figure
+from ..outputs import write_text
+
 
 def add_arguments(p) -> None:
     p.add_argument("--pack", default=None,
@@ -199,7 +202,7 @@ def run(args) -> int:
     bar.close()
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(results, indent=1))
+    write_text(out, json.dumps(results, indent=1))
     if figure_data is not None:
         fig_path = out.parent / "error.png"
         _figure(fig_path, *figure_data)
@@ -258,5 +261,4 @@ def _figure(path: Path, plain, foveated, flip_map, lay, exposure: float, size: s
             x.set_xticks([])
             x.set_yticks([])
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, path, dpi=90)

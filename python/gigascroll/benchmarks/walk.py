@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..outputs import write_text
+
 
 def add_arguments(p) -> None:
     p.add_argument("--pack", default=None,
@@ -196,7 +198,7 @@ def run(args) -> int:
 
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(results, indent=1))
+    write_text(out, json.dumps(results, indent=1))
     print(f"wrote {out}")
     return 0
 

@@ -134,9 +134,9 @@ def stream_view(pack, png: Path, frames_max: int = 200, per_frame: int = 16) -> 
     diff = float(np.abs(rgb - reference).max())
     print(f"streamed view: {len(keys)} tiles of level {level}, sharp after {frame + 1} frames "
           f"(at most {per_frame} loads a frame); max |VT - plain mip texture| = {diff:.2g}")
-    import OpenImageIO as oiio
+    from ..outputs import write_image
     strip = np.concatenate([s[1] for s in snapshots], axis=0).clip(0, 255).astype(np.uint8)
-    oiio.ImageBuf(np.ascontiguousarray(strip)).write(str(png))
+    write_image(png, strip)
     print(f"streamed view frames {[s[0] for s in snapshots]} (coarsest answering level "
           f"{[s[2] for s in snapshots]}): {png}")
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import string
 import sys
 import time
 from pathlib import Path
@@ -33,7 +34,8 @@ def register(sub) -> None:
     p.add_argument("--photons", type=int, default=1 << 17)
     p.add_argument("--per-frame", type=int, default=16, help="tiles loaded per frame at most")
     p.add_argument("--screenshot", default="view-{n}.png",
-                   help="file pattern P writes the window's frame to ({n}: a counter)")
+                   help="file pattern P writes the window's frame to ({n}: a counter, which "
+                        "skips files already there; .png or .jpg)")
     p.add_argument("--quit-after", type=float, default=None, help="close after this many seconds")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--fovea", type=float, default=None, metavar="DEG",
@@ -50,6 +52,11 @@ def run(args) -> int:
     eye = parse_eye(args.eye) if args.eye else (win_w // 2, win_h)
     if not (args.target_fps > 0 and math.isfinite(args.target_fps)):
         raise UserError("--target-fps must be positive")
+    if args.quit_after is not None and not (math.isfinite(args.quit_after)
+                                            and 0 <= args.quit_after <= 1e7):
+        raise UserError(f"--quit-after must be a number of seconds in [0, 1e7], got "
+                        f"{args.quit_after}")
+    args.screenshot = screenshot_pattern(args.screenshot)
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
@@ -71,6 +78,33 @@ def run(args) -> int:
     except Exception as e:  # noqa: BLE001 (pyglet raises several kinds for "no display")
         raise UserError(f"cannot open a window: {str(e).splitlines()[0] if str(e) else type(e).__name__}") from None
     return Viewer(window, pack, room, args, eye, foveation).run()
+
+
+SCREENSHOT_FORMATS = (".png", ".jpg", ".jpeg")
+
+
+def screenshot_pattern(text: str) -> str:
+    """--screenshot checked before the window opens: a path whose only replacement field is
+    {n} (the shot's counter, with a format spec if wanted), ending in .png or .jpg, in an
+    existing directory; without {n}, a file that is not there yet. UserError otherwise."""
+    try:
+        fields = [f for _, f, _, _ in string.Formatter().parse(text) if f is not None]
+        if any(f != "n" for f in fields):
+            raise ValueError("its only field may be {n}, the shot's counter")
+        names = [text.format(n=k) for k in (0, 1, 99999)]
+    except (ValueError, KeyError, IndexError, AttributeError, TypeError) as e:
+        raise UserError(f"--screenshot {text[:80]!r}: not a file pattern ({e})") from None
+    first = Path(names[0])
+    if "\0" in text or first.suffix.lower() not in SCREENSHOT_FORMATS:
+        raise UserError(f"--screenshot {text[:80]!r}: the file must end in "
+                        f"{', '.join(SCREENSHOT_FORMATS)}")
+    if not first.parent.is_dir():
+        raise UserError(f"--screenshot {text[:80]!r}: no such directory {first.parent}")
+    if fields and len(set(names)) < 3:
+        raise UserError(f"--screenshot {text[:80]!r}: {{n}} must make each shot's name differ")
+    if not fields and (first.exists() or first.is_symlink()):
+        raise UserError(f"--screenshot {text[:80]!r}: the file exists (add {{n}} for a counter)")
+    return text
 
 
 class Viewer:
@@ -110,6 +144,7 @@ class Viewer:
         self.last = None
         self.texture = None
         self.shots = 0
+        self.written: set[str] = set()
         self.want_shot = False
         self.start = time.perf_counter()
         self.record = None
@@ -186,14 +221,29 @@ class Viewer:
         return True
 
     def screenshot(self):
+        """Saves the window's frame (outputs.write_image: never half a file). The counter
+        skips files it did not write; a failing write is one line, the session goes on."""
         import pyglet
-        name = self.args.screenshot.format(n=self.shots)
+
+        from ..outputs import write_image
+        pattern = self.args.screenshot
+        name = pattern.format(n=self.shots)
+        counted = pattern.format(n=0) != pattern.format(n=1)
+        while counted and os.path.lexists(name) and name not in self.written:
+            self.shots += 1
+            name = self.args.screenshot.format(n=self.shots)
         self.shots += 1
-        # Written aside and renamed: whoever waits for the file never reads half a PNG.
-        root, ext = os.path.splitext(name)
-        partial = f"{root}.partial{ext or '.png'}"
-        pyglet.image.get_buffer_manager().get_color_buffer().save(partial)
-        os.replace(partial, name)
+        if os.path.lexists(name) and name not in self.written:
+            print(f"screenshot: {name} exists and was not written here; not replaced", flush=True)
+            return
+        img = pyglet.image.get_buffer_manager().get_color_buffer().get_image_data()
+        rgb = self.np.frombuffer(img.get_bytes("RGB", img.width * 3), self.np.uint8)
+        try:
+            write_image(name, rgb.reshape(img.height, img.width, 3)[::-1])
+        except (OSError, ValueError) as e:
+            print(f"screenshot: {e}", flush=True)
+            return
+        self.written.add(name)
         print(f"screenshot: {name}", flush=True)
 
     def tick(self, dt):

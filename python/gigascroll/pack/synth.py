@@ -3,10 +3,10 @@ by the core (`render_ink_landscape`) and written as a tiled BigTIFF."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from .._core import render_ink_landscape
+from ..outputs import atomic_file, oiio_reason
 
 __all__ = ["synth_painting", "render_ink_landscape"]
 
@@ -31,35 +31,33 @@ def synth_painting(path, width: int, height: int, seed: int = 0, tile: int = 256
     if tile <= 0 or tile % 16:
         raise ValueError("TIFF tile size must be a positive multiple of 16")
     path = Path(path)
-    tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}{path.suffix}")
     spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
     spec.tile_width = spec.tile_height = tile
     spec.attribute("tiff:bigtiff", 1)
     spec.attribute("compression", compression)
     spec.attribute("Software", "gigascroll synth")
     spec.attribute("ImageDescription", f"gigascroll ink landscape, seed {seed}")
-    out = oiio.ImageOutput.create(str(tmp))
-    if out is None or not out.open(str(tmp), spec):
-        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
     bar = None
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=height, unit="row", desc="synth")
     try:
-        for y in range(0, height, tile):
-            rows = min(tile, height - y)
-            band = render_ink_landscape(width, height, y, rows, seed)
-            if not out.write_tiles(0, width, y, y + rows, 0, 1, band):
-                raise OSError(f"{path}: write failed: {out.geterror()}")
-            if bar is not None:
-                bar.update(rows)
-        if not out.close():
-            raise OSError(f"{path}: write failed: {out.geterror()}")
-        os.replace(tmp, path)
-    except BaseException:
-        out.close()
-        tmp.unlink(missing_ok=True)
-        raise
+        with atomic_file(path, durable=True) as tmp:  # renamed into place when whole
+            out = oiio.ImageOutput.create(str(tmp))
+            if out is None or not out.open(str(tmp), spec):
+                raise OSError(f"{path}: cannot write: {oiio.geterror()}")
+            try:
+                for y in range(0, height, tile):
+                    rows = min(tile, height - y)
+                    band = render_ink_landscape(width, height, y, rows, seed)
+                    if not out.write_tiles(0, width, y, y + rows, 0, 1, band):
+                        raise OSError(f"cannot write {path}: {oiio_reason(out, tmp)}")
+                    if bar is not None:
+                        bar.update(rows)
+            finally:
+                closed = out.close()
+            if not closed:
+                raise OSError(f"cannot write {path}: {oiio_reason(out, tmp)}")
     finally:
         if bar is not None:
             bar.close()

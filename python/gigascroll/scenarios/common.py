@@ -5,6 +5,7 @@ PNG frames)."""
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,6 +16,7 @@ from .. import views as v
 from ..experiments import (cached_pack, pattern_image, pyplot, save_figure, scroll_pack, spec_of,
                            write_json)
 from ..frame_loop import STAGES, FrameLoop
+from ..outputs import write_bytes, write_text
 from ..pack import TilePack
 from ..views.baselines import LodMapping
 
@@ -161,7 +163,9 @@ def save_png(path: Path, rgb: np.ndarray) -> None:
     if img.size and img.max() > 1.0 + 1e-6:  # 0..255 colours
         img = img / 255.0
     img = np.clip(img, 0, 1)
-    plt.imsave(path, img)
+    buf = io.BytesIO()  # encoded in memory, written atomically (no truncated PNG on a full disk)
+    plt.imsave(buf, img, format="png")
+    write_bytes(path, buf.getvalue())
 
 
 @dataclass
@@ -224,7 +228,7 @@ class Report:
         # Results first, report last: a report on disk means the run completed.
         write_json(self.out / f"{self.name}.json", self.results, indent=1)
         md = self.out / f"{self.name}.md"
-        md.write_text(f"# {self.title}\n\n" + "\n".join(self.lines) + "\n")
+        write_text(md, f"# {self.title}\n\n" + "\n".join(self.lines) + "\n")
         return md
 
 

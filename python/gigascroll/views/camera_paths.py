@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .._core import Camera
+from ..outputs import write_text
 from .exhibition import (FPS, HEADSET, MAGNIFIER, SCROLL, TABLE4_PAINTINGS, Exhibition, Headset,
                          Magnifier, PaintingSpec)
 
@@ -138,7 +139,7 @@ class CameraPath:
     def save(self, path: str | Path) -> None:
         def enc(a):
             return None if a is None else np.where(np.isnan(a), None, a).tolist()
-        Path(path).write_text(json.dumps({
+        write_text(path, json.dumps({
             "name": self.name, "fps": self.fps, "position": self.position.tolist(),
             "forward": self.forward.tolist(), "up": self.up.tolist(),
             "magnifier_target": enc(self.magnifier_target),
