@@ -18,7 +18,7 @@ import numpy as np
 
 from . import _core
 from ._core import Camera, PhotonMap, StereoCamera
-from .errors import expect_type
+from .errors import expect_type, positive_float32
 
 __all__ = ["Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENES",
            "RoomScene", "room_scene", "ROOMS", "default_radius", "render", "render_stereo",
@@ -255,9 +255,7 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
         limit = 1 << 64 if name in ("photons", "seed") else 1 << 31
         if value >= limit:
             raise ValueError(f"{name} must be below 2^{limit.bit_length() - 1}, got {value}")
-    radius = float(radius)
-    if not math.isfinite(radius) or radius <= 0:
-        raise ValueError(f"radius must be positive and finite, got {radius}")
+    radius = positive_float32(radius, "radius")
     if photons == 0 and indirect:
         raise ValueError("photons must be positive (or pass indirect=False)")
     return dict(photons=int(photons) if photons else 1, radius=radius, grid=grid, gather=gather, k=int(k),

@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import _core
 from .._core import Camera, TilePack
+from ..errors import positive_float32
 from .room import PaintingSlot, RoomSpec, Surface
 
 __all__ = ["Gallery", "LIGHTING_MODES", "PAINTING_REFLECTANCE", "painting_albedo"]
@@ -157,9 +158,7 @@ class Gallery(_core._Gallery):
                             ("threads", threads)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
-        r = 0.0 if radius is None else float(radius)
-        if not math.isfinite(r) or r < 0 or (radius is not None and r == 0):
-            raise ValueError(f"radius must be positive and finite, got {radius!r}")
+        r = 0.0 if radius is None else positive_float32(radius, "radius")  # 0: automatic
         self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads), bool(disc))
         return self.stats
 
@@ -329,7 +328,14 @@ class Gallery(_core._Gallery):
 
     def mitsuba_level(self, slot: int, max_width: int = 2048) -> int:
         """The mip level of a slot's painting written to Mitsuba: the finest whose width is at
-        most max_width texels."""
+        most max_width texels. ValueError for a slot outside [0, slots) or a width below 1."""
+        n = len(self.slot_paintings)
+        if not isinstance(slot, (int, np.integer)) or isinstance(slot, bool) or not 0 <= slot < n:
+            raise ValueError(f"slot must be an integer in [0, {n - 1}] (the room's {n} painting "
+                             f"slots), got {slot!r}" if n else f"the room has no painting slots "
+                             f"(slot {slot!r})")
+        if not isinstance(max_width, (int, np.integer)) or isinstance(max_width, bool) or max_width < 1:
+            raise ValueError(f"max_width must be a positive integer, got {max_width!r}")
         p = self.pack.paintings[self.slot_paintings[slot]]
         for level, (w, _) in enumerate(p.level_sizes):
             if w <= max_width:

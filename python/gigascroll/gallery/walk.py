@@ -15,6 +15,7 @@ room's paintings and boxes, unlit) or the Gallery's (lit). The loop only uses th
 
 from __future__ import annotations
 
+import hashlib
 import math
 import statistics
 import time
@@ -65,6 +66,16 @@ class FrameSource:
         raise NotImplementedError
 
 
+def pack_identity(pack) -> str | None:
+    """A digest of the pack's manifest (its paintings, geometry, codec and sources): a frame
+    source built from one pack must not stream another's tiles through its geometry."""
+    manifest = getattr(pack, "manifest_json", None)
+    if manifest is None:
+        return None
+    text = manifest() if callable(manifest) else manifest
+    return hashlib.blake2b(str(text).encode("utf-8", "surrogatepass"), digest_size=16).hexdigest()
+
+
 class ExhibitionSource(FrameSource):
     """A room's paintings in the views' `ExhibitionScene`, every other surface an occluder
     box (one per quad of the room), displayed unlit: radiance = albedo, occluders grey."""
@@ -74,6 +85,7 @@ class ExhibitionSource(FrameSource):
 
     def __init__(self, room: RoomSpec, pack):
         check_room_paintings(room, pack)
+        self.pack_identity = pack_identity(pack)
         self.name = f"{room.name} (unlit)"
         scene = v.ExhibitionScene()
         self.tiles = [v.PaintingGeometry(p.width, p.height, pack.tile_size, pack.border)
@@ -124,6 +136,7 @@ class GallerySource(FrameSource):
         if lighting not in ("baked", "full", "unlit"):
             raise ValueError(f"lighting must be baked, full or unlit, got {lighting!r}")
         check_room_paintings(room, pack)
+        self.pack_identity = pack_identity(pack)
         self.gallery = Gallery.from_room(room, pack)
         self.lighting = lighting
         self.name = f"{room.name} ({lighting})"
@@ -312,6 +325,10 @@ class GalleryWalk:
             raise ValueError("per_frame (the direct-loading threshold) must be > 0")
         if len(self.pack.paintings) < len(self.source.tiles):
             raise ValueError("the pack lacks paintings the scene shows")
+        built = getattr(self.source, "pack_identity", None)
+        if built is not None and built != pack_identity(self.pack):
+            raise ValueError("the frame source was built from another pack than the walk's "
+                             "(their manifests differ): build the source from the walk's pack")
         self.headset = Headset(width=int(w), height=int(h))
         if self.foveation is not None:  # a fovea wider than the eye fails here, not mid-walk
             self.foveation.layout(self.cameras(0)[0][0])

@@ -187,6 +187,17 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                            executor=executor, resume=resume, hook=shard_hook), bc1_fit)
 
 
+def _mpx_bar():
+    """tqdm counting Mpixels whose updates stop at the total: the float sum of the bands' shares
+    may pass it by a rounding error, which tqdm warns about (TqdmWarning, under 1 Mpixel)."""
+    from tqdm import tqdm
+
+    class MpxBar(tqdm):
+        def update(self, n=1):
+            return super().update(min(n, max(0.0, self.total - self.n)))
+    return MpxBar
+
+
 def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, zstd_level,
            progress, band_rows, colour_options, sharding, bc1_fit) -> TilePack:
     sources: list[ImageSource] = []
@@ -222,8 +233,7 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
         builder = _core.PackBuilder(tmp, tile_size, border, codec, zstd_level, threads, bc1_fit)
         total = sum(s.width * s.height for s in sources)
         if progress:
-            from tqdm import tqdm
-            bar = tqdm(total=total / 1e6, unit="Mpx", unit_scale=False, desc="pack",
+            bar = _mpx_bar()(total=total / 1e6, unit="Mpx", unit_scale=False, desc="pack",
                        bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} Mpx [{elapsed}<{remaining},"
                                   " {rate_fmt}]")
         for s, (ox, oy) in zip(sources, offsets):
