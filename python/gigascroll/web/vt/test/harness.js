@@ -1,0 +1,206 @@
+// The virtual texture's test page (harness.html): window.vtTest drives the GPU virtual texture
+// without the app, for tests/python/test_web_vt.py and `gigascroll bench web`:
+//   await vtTest.init({slots})          the pack from /api/scene.json, its tails resident
+//   await vtTest.insertTiles(keys)      fetch [p, l, x, y] tiles and make them resident
+//   vtTest.sampleProbes(probes)         [p, u, v, lod] x n -> vtSample's RGBA (float target)
+//   await vtTest.feedback(views, placements)
+//                                       one feedback pass per view, read back asynchronously:
+//                                       [{view, width, height, indices, keys}]
+//   await vtTest.benchFeedback(views, placements, frames)
+//                                       per frame: beginFrame's feedback time (poll +
+//                                       processing) with the views' passes drawn every frame
+// A view is {view, camera: [ex, ey, ez, tx, ty, tz, fov], display: [w, h], reduction}; the
+// camera is `gigascroll render --camera`'s convention (vertical fov in degrees, y up). A
+// placement is scene.json's slot: {painting, origin, u_axis, v_axis, width_m, height_m}.
+import { VirtualTexture } from "../virtual_texture.js";
+
+const canvas = document.getElementById("canvas");
+const gl = canvas.getContext("webgl2", { antialias: false });
+let scene = null, vt = null;
+
+function compile(vsSource, fsSource) {
+  const shader = (type, src) => {
+    const s = gl.createShader(type);
+    gl.shaderSource(s, src);
+    gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(s));
+    return s;
+  };
+  const p = gl.createProgram();
+  gl.attachShader(p, shader(gl.VERTEX_SHADER, vsSource));
+  gl.attachShader(p, shader(gl.FRAGMENT_SHADER, fsSource));
+  gl.linkProgram(p);
+  if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
+  return p;
+}
+
+const HEADER = "#version 300 es\nprecision highp float;\nprecision highp int;\n";
+
+async function init(options = {}) {
+  scene = await (await fetch("/api/scene.json")).json();
+  vt = new VirtualTexture(gl, scene.pack, { tiles: scene.tiles, ...options });
+  await vt.ready;
+  window.vt = vt;
+  return { slots: [vt.cache.slotsX, vt.cache.slotsY], pinned: vt.cache.pinnedCount, tiles: vt.geometry.tileCount };
+}
+
+async function fetchTiles(keys) {
+  const out = [], bytes = scene.pack.tile_size ** 2 * 3;
+  for (let k = 0; k < keys.length; k += 64) {
+    const batch = keys.slice(k, k + 64);
+    const r = await fetch(scene.tiles.batch, { method: "POST", body: JSON.stringify({ keys: batch }) });
+    if (!r.ok) throw new Error(`batch: HTTP ${r.status}`);
+    const body = new Uint8Array(await r.arrayBuffer());
+    batch.forEach((_, i) => out.push(body.subarray(i * bytes, (i + 1) * bytes)));
+  }
+  return out;
+}
+
+async function insertTiles(keys) {
+  const tiles = await fetchTiles(keys);
+  keys.forEach((k, i) => vt.insertTile(vt.geometry.tileIndex(...k), tiles[i]));
+  vt.flushTable();
+  return vt.cache.resident;
+}
+
+let probeProgram = null;
+function sampleProbes(probes) {
+  const n = probes.length / 4, w = Math.min(n, 256), h = Math.ceil(n / 256);
+  if (!gl.getExtension("EXT_color_buffer_float")) throw new Error("no EXT_color_buffer_float");
+  probeProgram ||= compile(HEADER + "void main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, 0, 1); }",
+    HEADER + vt.glsl + `
+uniform highp sampler2D uProbes;
+out vec4 outColor;
+void main() {
+  vec4 q = texelFetch(uProbes, ivec2(gl_FragCoord.xy), 0);
+  outColor = vtSample(int(q.x), q.yz, q.w);
+}`);
+  const data = new Float32Array(w * h * 4);
+  data.set(probes);
+  const tex = (format, pixels) => {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, format, w, h);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);  // float: not filterable
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+    if (pixels) gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, w, h, gl.RGBA, gl.FLOAT, pixels);
+    return t;
+  };
+  const input = tex(gl.RGBA32F, data), target = tex(gl.RGBA32F, null);
+  const fb = gl.createFramebuffer();
+  gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+  gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
+  gl.viewport(0, 0, w, h);
+  gl.useProgram(probeProgram);
+  vt.bind(probeProgram);
+  gl.activeTexture(gl.TEXTURE0);
+  gl.bindTexture(gl.TEXTURE_2D, input);
+  gl.uniform1i(gl.getUniformLocation(probeProgram, "uProbes"), 0);
+  gl.drawArrays(gl.TRIANGLES, 0, 3);
+  const out = new Float32Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, out);  // a test's readback, not the frame path
+  gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+  [input, target].forEach((t) => gl.deleteTexture(t));
+  gl.deleteFramebuffer(fb);
+  return Array.from(out.subarray(0, 4 * n));
+}
+
+// Column-major 4 x 4 view-projection of a `render --camera` pose for a display of w x h.
+export function viewProjection(camera, w, h) {
+  const [ex, ey, ez, tx, ty, tz, fov = 60] = camera;
+  const sub = (a, b) => a.map((x, i) => x - b[i]);
+  const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const eye = [ex, ey, ez], f = norm(sub([tx, ty, tz], eye));
+  const r = norm(cross(f, [0, 1, 0])), u = cross(r, f);
+  const th = Math.tan((fov * Math.PI) / 360), tw = th * w / h, n = 0.01, far = 1000;
+  // Rows of projection * view: x' = (r.(p-e)) / tw, y' = (u.(p-e)) / th, w' = f.(p-e).
+  const rows = [r.map((x) => x / tw), u.map((x) => x / th), null, f];
+  const a = (far + n) / (far - n), b = (-2 * far * n) / (far - n);
+  rows[2] = f.map((x) => x * a);
+  const m = new Float32Array(16);
+  for (let i = 0; i < 4; ++i) {
+    const row = rows[i];
+    m[i] = row[0]; m[4 + i] = row[1]; m[8 + i] = row[2];
+    m[12 + i] = -dot(row, eye) + (i === 2 ? b : 0);
+  }
+  return m;
+}
+
+let feedbackProgram = null, quads = null;
+function drawFeedback(views, placements) {
+  feedbackProgram ||= compile(HEADER + `
+in vec3 aPosition; in vec2 aUv;
+uniform mat4 uViewProj;
+out vec2 vUv;
+void main() { vUv = aUv; gl_Position = uViewProj * vec4(aPosition, 1.0); }`,
+    HEADER + vt.glsl + `
+uniform int uPainting;
+in vec2 vUv;
+out vec4 outColor;
+void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
+  if (!quads) {
+    quads = placements.map((s) => {
+      const c = (a, b) => [0, 1, 2].map((i) => s.origin[i] + a * s.u_axis[i] * s.width_m + b * s.v_axis[i] * s.height_m);
+      const v = [];
+      for (const [a, b] of [[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [0, 1]]) v.push(...c(a, b), a, b);
+      const buffer = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+      gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(v), gl.STATIC_DRAW);
+      return { buffer, painting: s.painting };
+    });
+  }
+  const pos = gl.getAttribLocation(feedbackProgram, "aPosition"), uv = gl.getAttribLocation(feedbackProgram, "aUv");
+  for (const v of views) {
+    vt.feedback.begin(v.view, v.display[0], v.display[1], v.reduction ?? 8);
+    gl.useProgram(feedbackProgram);
+    vt.bind(feedbackProgram);
+    gl.uniformMatrix4fv(gl.getUniformLocation(feedbackProgram, "uViewProj"), false,
+                        viewProjection(v.camera, v.display[0], v.display[1]));
+    gl.disable(gl.CULL_FACE);
+    gl.enable(gl.DEPTH_TEST);
+    for (const q of quads) {
+      gl.bindBuffer(gl.ARRAY_BUFFER, q.buffer);
+      gl.enableVertexAttribArray(pos);
+      gl.vertexAttribPointer(pos, 3, gl.FLOAT, false, 20, 0);
+      gl.enableVertexAttribArray(uv);
+      gl.vertexAttribPointer(uv, 2, gl.FLOAT, false, 20, 12);
+      gl.uniform1i(gl.getUniformLocation(feedbackProgram, "uPainting"), q.painting);
+      gl.drawArrays(gl.TRIANGLES, 0, 6);
+    }
+    vt.feedback.end(v.view);
+  }
+}
+
+const tick = () => new Promise((r) => setTimeout(r, 1));
+
+async function feedback(views, placements) {
+  quads = null;
+  drawFeedback(views, placements);
+  const got = new Map();
+  for (let k = 0; got.size < views.length && k < 10000; ++k) {
+    await tick();
+    for (const r of vt.feedback.poll()) got.set(r.view, r);
+  }
+  return views.map((v) => {
+    const r = got.get(v.view), keys = {};
+    for (const i of new Set(r.keys)) if (i !== 0xFFFFFFFF) keys[i] = vt.geometry.keyOf(i);
+    return { view: v.view, width: r.width, height: r.height, indices: Array.from(r.keys), keys };
+  });
+}
+
+async function benchFeedback(views, placements, frames = 200) {
+  quads = null;
+  const ms = [], counts = [];
+  for (let f = 1; f <= frames; ++f) {
+    vt.beginFrame(f);
+    if (vt.counters.readbacks > counts.length) { ms.push(vt.counters.feedbackMs); counts.push(vt.stats().requests); }
+    drawFeedback(views, placements);
+    await tick();
+  }
+  return { ms, requests: counts, stats: vt.stats() };
+}
+
+window.vtTest = { init, insertTiles, sampleProbes, feedback, benchFeedback, viewProjection };
+window.vtTestReady = true;
