@@ -10,7 +10,7 @@ APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzs
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
   liblcms2-dev colord-data iipimage-server lighttpd ccache \
   xvfb xdotool libgl1-mesa-dri libglx-mesa0 libgs-common \
-  libsquish-dev
+  libsquish-dev chromium
 JOBS ?= $(shell nproc)
 # Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
 # the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.
@@ -43,6 +43,7 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	$(PIP) install -q imageio-ffmpeg pyglet
 	$(PIP) install -q "dask[distributed]"
 	$(PIP) install -q flip-evaluator
+	$(PIP) install -q playwright
 	$(PIP) install -q aiohttp
 	touch $@
 
