@@ -1,5 +1,5 @@
-"""The photon pass and the hall's fine end, timed on their own (bench/RESULTS.md, "The fine end
-about 2x faster"): median wall-clock seconds of Gallery.light() at 2^16, 2^18 and 2^20 photons
+"""The photon pass and the hall's fine end, timed on their own (bench/RESULTS.md, the gallery
+section's lighting figures): median wall-clock seconds of Gallery.light() at 2^16, 2^18 and 2^20 photons
 in both rooms (its photon_seconds and the rest, the map), and the end-to-end time (light +
 bake + still, as `gigascroll bench gallery` re-times its targets) of the hall's front
 configurations at 2^18-2^20 photons from bench/gallery/results.json, with their relMSE against
@@ -9,7 +9,7 @@ Run from the repository root with the project's Python:
     .venv/bin/python bench/gallery/photon_pass.py [--repeats 3] [--out build/photon-pass.json]
 Run it on two builds (before and after) alternately, then
     .venv/bin/python bench/gallery/photon_pass.py --compare before1.json,before2.json:after1.json,after2.json
-prints the table of bench/RESULTS.md: the figures are medians of a shared machine's timings
+prints the before/after table: the figures are medians of a shared machine's timings
 and only their ratio within one period of load means anything. CPU seconds (the process's,
 all threads) are less sensitive to the load than wall-clock ones."""
 import argparse

@@ -1,5 +1,5 @@
 """Why the gallery bench's millisecond timings scatter, and what more re-timings give
-(bench/RESULTS.md, "Time to error with 30 re-timings at the cheap end ...").
+(bench/RESULTS.md, the gallery section).
 
     python bench/gallery/timing_noise.py [--rounds 40]
 

@@ -1,7 +1,7 @@
 """Hashes of what the stereo display writes over the walk (both eyes' images, the reuse
 sources, both eyes' levels and hit points, the right eye's counts), one per kind, so that two
 builds of the core module can be checked bit for bit (the "frames hash equal" of
-bench/RESULTS.md's display sections), e.g.
+bench/RESULTS.md's walk section), e.g.
 
     .venv/bin/python bench/walk/frame_hashes.py 1800x1920 --core OLD_core.so
     .venv/bin/python bench/walk/frame_hashes.py 1800x1920 --core NEW_core.so

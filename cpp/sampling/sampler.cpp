@@ -1166,7 +1166,7 @@ bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float*
         // last_tile[finder]): one_tile's checks for the lanes' two tiles, each row's stretch
         // as the level's bytes from both (State::across_edge). The position and stretch are
         // one_tile's, written again rather than handed over: GCC shares them, and one function
-        // for both paths cost the common packets more (bench/RESULTS.md).
+        // for both paths cost the common packets more (bench/RESULTS.md at 177a369).
         auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
             const LevelPosition p = level_position(k);
             const State::LastTile& tile = st.last_tile[finder];
