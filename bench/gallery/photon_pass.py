@@ -1,7 +1,7 @@
 """The photon pass and the hall's fine end, timed on their own (bench/RESULTS.md, the gallery
-section's lighting figures): median wall-clock seconds of Gallery.light() at 2^16, 2^18 and
-2^20 photons in both rooms (its photon_seconds and the rest, the map), and the end-to-end time (light +
-bake + still, as `gigascroll bench gallery` re-times its targets) of the hall's front
+section's lighting figures): median wall-clock seconds of Gallery.light() at 2^16, 2^18 and 2^20
+photons in both rooms (its photon_seconds and the rest, the map), and the end-to-end time (light
++ bake + still, as `gigascroll bench gallery` re-times its targets) of the hall's front
 configurations at 2^18-2^20 photons from bench/gallery/results.json, with their relMSE against
 the cached 4096-spp Mitsuba reference (computed once if it is not in --reference-cache).
 
