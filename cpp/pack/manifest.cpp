@@ -14,6 +14,7 @@
 
 #include "common/bits.h"
 #include "common/error.h"
+#include "pack/colour_record.h"
 
 namespace gigascroll {
 
@@ -27,13 +28,45 @@ constexpr std::uint64_t kMaxManifestBytes = 256ull << 20;
 // over it, e.g. when serialising, would exhaust the stack).
 constexpr int kMaxJsonDepth = 32;
 
+// JSON text as RFC 8259 defines it and manifest.schema.json reads it: no byte-order mark
+// (nlohmann skips one; Python's json refuses it), no NUL byte, no NaN or Infinity, strings of
+// valid UTF-8 without lone surrogates, numbers within a double's range (nlohmann refuses
+// these three), at most kMaxJsonDepth containers around any value. The pure-Python reader
+// (pack/reader.py, parse_manifest_text) applies the same rules.
 json parse_bounded(const std::string& text) {
+    if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0)
+        throw InvalidArgument("a byte-order mark before the JSON text (JSON allows none)");
+    // nlohmann reads a NUL as the end of the input (and ignores what follows); valid JSON
+    // text holds none (a string escapes it as \u0000).
+    if (text.find('\0') != std::string::npos)
+        throw InvalidArgument("a NUL byte in the JSON text at byte " +
+                              std::to_string(text.find('\0')));
     return json::parse(text, [](int depth, json::parse_event_t, json&) {
         if (depth > kMaxJsonDepth)
             throw InvalidArgument("JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
                                   " levels");
         return true;
     });
+}
+
+// Text for a message: bytes outside printable ASCII as \xNN, at most `max` bytes of the
+// input. Parse errors quote the input's bytes and fields are cut to a length; either may
+// split or hold invalid UTF-8, which Python could not turn into a message (it would raise
+// UnicodeDecodeError instead of the error).
+std::string ascii_escaped(const std::string& text, std::size_t max = std::string::npos) {
+    static const char* hex = "0123456789abcdef";
+    std::string out;
+    for (std::size_t i = 0; i < text.size() && i < max; ++i) {
+        const unsigned char c = static_cast<unsigned char>(text[i]);
+        if (c >= 0x20 && c < 0x7f) {
+            out += char(c);
+        } else {
+            out += "\\x";
+            out += hex[c >> 4];
+            out += hex[c & 15];
+        }
+    }
+    return out;
 }
 
 std::string painting_field(std::size_t i, const char* field) {
@@ -50,7 +83,7 @@ std::uint64_t uint_field(const json& obj, const char* key, const std::string& wh
     const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
     if (!v.is_number_integer())
         throw InvalidArgument("field '" + where + "' must be an integer in " + range + ", got " +
-                              v.dump().substr(0, 40));
+                              ascii_escaped(v.dump(), 40));
     if (v.is_number_unsigned()) {
         const auto u = v.get<std::uint64_t>();
         if (u >= lo && u <= hi) return u;
@@ -157,6 +190,15 @@ void validate_manifest(const Manifest& m) {
         const PaintingGeometry& g = p.geometry;
         const std::string who = "paintings[" + std::to_string(i) + "] ('" + p.name + "')";
         require(!p.name.empty(), "field '" + painting_field(i, "name") + "' is empty");
+        if (!p.colour.empty()) {
+            json colour;
+            try {
+                colour = parse_bounded(p.colour);
+            } catch (const json::exception& e) {
+                throw InvalidArgument("field '" + painting_field(i, "colour") + "': " + ascii_escaped(e.what()));
+            }
+            check_colour_record(colour, painting_field(i, "colour"));
+        }
         require(g.tile_size() == m.tile_size && g.border() == m.border,
                 who + ": tile size or border differs from the pack's");
         require(g.page_table_width() <= (1u << 20) && g.page_table_height() <= (1u << 20),
@@ -194,7 +236,7 @@ void validate_manifest(const Manifest& m) {
         for (std::size_t i = 0; i < m.tile_files.size(); ++i) {
             const std::string& f = m.tile_files[i];
             require(is_plain_file_name(f) && f != kManifestName && f != kIndexName,
-                    "field 'tile_files[" + std::to_string(i) + "]' = '" + f.substr(0, 64) +
+                    "field 'tile_files[" + std::to_string(i) + "]' = '" + ascii_escaped(f, 64) +
                         "' is not a plain tile file name");
             require(seen.insert(f).second,
                     "field 'tile_files[" + std::to_string(i) + "]': '" + f + "' is listed twice");
@@ -211,7 +253,7 @@ std::string manifest_text(const Manifest& mf) {
     try {
         extra = parse_bounded(mf.page_table_extra);
     } catch (const json::exception& e) {
-        throw InvalidArgument(std::string("page_table_json: ") + e.what());
+        throw InvalidArgument(std::string("page_table_json: ") + ascii_escaped(e.what()));
     }
     require(extra.is_object(), "page_table_json must be a JSON object");
     json m;
@@ -240,10 +282,9 @@ std::string manifest_text(const Manifest& mf) {
             try {
                 colour = parse_bounded(p.colour);
             } catch (const json::exception& e) {
-                throw InvalidArgument("colour of painting '" + p.name + "': " + e.what());
+                throw InvalidArgument("colour of painting '" + p.name + "': " + ascii_escaped(e.what()));
             }
-            require(colour.is_object(), "colour of painting '" + p.name + "' must be a JSON object");
-            jp["colour"] = std::move(colour);
+            jp["colour"] = std::move(colour);  // validate_manifest checked it
         }
         jp["width"] = g.width();
         jp["height"] = g.height();
@@ -280,6 +321,18 @@ void write_manifest(const std::string& path, const Manifest& m) {
 }
 
 namespace {
+
+// A level holds exactly the schema's six fields (its additionalProperties is false).
+void check_level_keys(const json& level, const std::string& where) {
+    if (!level.is_object()) throw InvalidArgument("field '" + where + "' must be an object");
+    for (const auto& item : level.items()) {
+        const std::string& k = item.key();
+        if (k != "level" && k != "width" && k != "height" && k != "tiles_x" && k != "tiles_y" &&
+            k != "first_entry")
+            throw InvalidArgument("field '" + where + "' has an unknown key " +
+                                  ascii_escaped(json(k).dump(), 40));
+    }
+}
 
 Manifest parse_json(const json& m) {
     if (!m.is_object()) throw InvalidArgument("the manifest is not a JSON object");
@@ -334,8 +387,10 @@ Manifest parse_json(const json& m) {
         info.name = string_field(jp, "name", painting_field(i, "name"), true);
         info.source = string_field(jp, "source", painting_field(i, "source"), false);
         info.conversion = string_field(jp, "conversion", painting_field(i, "conversion"), false);
-        if (jp.contains("colour"))
-            info.colour = object_field(jp, "colour", painting_field(i, "colour")).dump();
+        if (jp.contains("colour")) {
+            check_colour_record(jp.at("colour"), painting_field(i, "colour"));
+            info.colour = jp.at("colour").dump();
+        }
         PaintingGeometry g(u32_field(jp, "width", painting_field(i, "width"), 1, 1u << 30),
                            u32_field(jp, "height", painting_field(i, "height"), 1, 1u << 30),
                            mf.tile_size, mf.border);
@@ -362,6 +417,7 @@ Manifest parse_json(const json& m) {
             const std::string lw = painting_field(i, "levels") + "[" + std::to_string(l) + "]";
             const LevelGeometry& lv = g.level(l);
             const json& jl = levels[l];
+            check_level_keys(jl, lw);
             if (uint_field(jl, "level", lw + ".level", 0, 64) != l ||
                 uint_field(jl, "width", lw + ".width", 0, UINT64_MAX) != lv.width ||
                 uint_field(jl, "height", lw + ".height", 0, UINT64_MAX) != lv.height ||
@@ -376,6 +432,8 @@ Manifest parse_json(const json& m) {
             !jp.at("uv_scale")[0].is_number() || !jp.at("uv_scale")[1].is_number())
             throw InvalidArgument("field '" + uvw + "' must be two numbers");
         const double u = jp.at("uv_scale")[0].get<double>(), v = jp.at("uv_scale")[1].get<double>();
+        if (!(u > 0 && u <= 1 && v > 0 && v <= 1))  // the schema's range, before the tolerance
+            throw InvalidArgument("field '" + uvw + "' must be two numbers in (0, 1]");
         if (!(std::abs(u - g.uv_scale_u()) <= 1e-9 * g.uv_scale_u()) ||
             !(std::abs(v - g.uv_scale_v()) <= 1e-9 * g.uv_scale_v()))
             throw InvalidArgument("field '" + uvw + "' does not match the painting's size");
@@ -409,12 +467,12 @@ Manifest parse_manifest(const std::string& text) {
     try {
         m = parse_bounded(text);
     } catch (const json::exception& e) {
-        throw InvalidArgument(std::string("corrupt manifest: ") + e.what());
+        throw InvalidArgument(std::string("corrupt manifest: ") + ascii_escaped(e.what()));
     }
     try {
         return parse_json(m);
     } catch (const json::exception& e) {
-        throw InvalidArgument(std::string("malformed manifest: ") + e.what());
+        throw InvalidArgument(std::string("malformed manifest: ") + ascii_escaped(e.what()));
     }
 }
 
@@ -434,14 +492,14 @@ Manifest read_manifest(const std::string& path, std::string* text_out) {
     try {
         m = parse_bounded(buffer.str());
     } catch (const json::exception& e) {
-        throw IoError(path + ": corrupt manifest: " + e.what());
+        throw IoError(path + ": corrupt manifest: " + ascii_escaped(e.what()));
     } catch (const InvalidArgument& e) {
-        throw IoError(path + ": corrupt manifest: " + e.what());
+        throw IoError(path + ": corrupt manifest: " + ascii_escaped(e.what()));
     }
     try {
         mf = parse_json(m);
     } catch (const json::exception& e) {
-        throw IoError(path + ": malformed manifest: " + e.what());
+        throw IoError(path + ": malformed manifest: " + ascii_escaped(e.what()));
     } catch (const InvalidArgument& e) {
         throw IoError(path + ": " + e.what());
     }

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import bisect
 import json
+import math
 import os
+import re
 import stat
 import struct
 import warnings
@@ -20,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest", "tile_key",
-           "tile_seed", "SCHEMA_PATH", "decode_bc1"]
+__all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest",
+           "parse_manifest_text", "tile_key", "tile_seed", "SCHEMA_PATH", "decode_bc1"]
 
 SCHEMA_PATH = Path(__file__).with_name("manifest.schema.json")
 _HEADER = struct.Struct("<8sIIQQ")  # magic, version, entry size, count, data bytes
@@ -33,7 +35,10 @@ _STORED = 1
 PACK_VERSION, OLDEST_PACK_VERSION = 2, 1
 MAX_PACK_PAINTINGS = 1 << 16  # the 16-bit painting field of a tile key
 MAX_TABLE_SLACK = 16          # merged table area / the smallest area that holds the tables
-_TILE_FILE = __import__("re").compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,254}")
+_TILE_FILE = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,254}")
+MAX_JSON_DEPTH = 32           # containers around any value (the core's parse_bounded)
+_SURROGATE = re.compile("[\ud800-\udfff]")
+_BOM = b"\xef\xbb\xbf"
 
 
 TILE_SEED_SALT = 0x9E3779B97F4A7C15
@@ -92,15 +97,88 @@ def _next_pow2(n: int) -> int:
     return 1 << max(0, (n - 1).bit_length())
 
 
+def _is_json_integer(_, v) -> bool:
+    """An integer as the core reads one: a JSON integer literal that fits int64 or uint64
+    (JSON Schema's "integer" accepts 128.0, and Python's ints are unbounded; the core parses
+    a larger literal as a double, so it is a number but not an integer there)."""
+    return isinstance(v, int) and not isinstance(v, bool) and -(1 << 63) <= v < (1 << 64)
+
+
+def _pattern(validator, pattern, instance, schema):
+    """ECMA-262's "pattern" (JSON Schema's): `$` matches only at the end; Python's `$` also
+    matches before a final newline, which would let "name\n" through."""
+    import jsonschema
+    if validator.is_type(instance, "string") and \
+            not re.search(re.sub(r"(?<!\\)\$$", r"\\Z", pattern), instance):
+        yield jsonschema.ValidationError(f"{instance!r} does not match {pattern!r}")
+
+
 @lru_cache(maxsize=1)
 def _validator():
-    """Draft 2020-12 with exact integers: JSON Schema's "integer" accepts 128.0, the core
-    refuses it (and so must we)."""
+    """Draft 2020-12 with the core's integers and ECMA-262 patterns."""
     import jsonschema
     base = jsonschema.Draft202012Validator
-    checker = base.TYPE_CHECKER.redefine(
-        "integer", lambda _, v: isinstance(v, int) and not isinstance(v, bool))
-    return jsonschema.validators.extend(base, type_checker=checker)(manifest_schema())
+    checker = base.TYPE_CHECKER.redefine("integer", _is_json_integer)
+    return jsonschema.validators.extend(base, validators={"pattern": _pattern},
+                                        type_checker=checker)(manifest_schema())
+
+
+def _json_value_problem(node, depth: int) -> str | None:
+    """Why one value of a parsed manifest could not be in JSON text the core accepts."""
+    if depth > MAX_JSON_DEPTH:
+        return f"JSON nested deeper than {MAX_JSON_DEPTH} levels"
+    if isinstance(node, float) and not math.isfinite(node):
+        return f"{node} (JSON has no NaN or Infinity, and a number must fit a double)"
+    if isinstance(node, int) and not -(1 << 64) < node < (1 << 64):
+        try:
+            float(node)
+        except OverflowError:
+            return "a number beyond a double's range"
+    if isinstance(node, str) and (c := _SURROGATE.search(node)):
+        return f"a lone surrogate U+{ord(c[0]):04X} in a string (not valid Unicode)"
+    if isinstance(node, dict) and any(_SURROGATE.search(k) for k in node if isinstance(k, str)):
+        return "a lone surrogate in a key (not valid Unicode)"
+    return None
+
+
+def _check_json_values(m, where: str) -> None:
+    """What JSON text can hold, as the core's parser (nlohmann) reads it: no NaN or Infinity,
+    no number beyond a double's range, no lone surrogate in a string or key, at most
+    MAX_JSON_DEPTH containers around any value. A manifest parsed by Python's json may hold
+    all of these; the schema does not see them."""
+    stack = [(m, 0, ())]
+    while stack:
+        node, depth, path = stack.pop()
+        if (why := _json_value_problem(node, depth)) is not None:
+            at = "/".join(map(str, path)) or "(top level)"
+            raise OSError(f"{where}: {why} at {at[:200]}")
+        if isinstance(node, dict):
+            stack.extend((v, depth + 1, path + (k,)) for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, depth + 1, path + (i,)) for i, v in enumerate(node))
+
+
+def parse_manifest_text(data: bytes | str, where: str = "manifest.json") -> dict:
+    """manifest.json's bytes (or text) -> the validated manifest, with the core's rules
+    (cpp/pack/manifest.cpp): JSON text of RFC 8259 in UTF-8 without a byte-order mark, then
+    validate_manifest(). OSError naming `where` if not."""
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        data = bytes(data)
+        if data.startswith(_BOM):
+            raise OSError(f"{where}: a byte-order mark before the JSON text (JSON allows none)")
+        try:
+            data = data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            raise OSError(f"{where}: corrupt manifest: not UTF-8 ({e.reason} at byte "
+                          f"{e.start})") from None
+    if data.startswith("\ufeff"):
+        raise OSError(f"{where}: a byte-order mark before the JSON text (JSON allows none)")
+    try:
+        m = json.loads(data)
+    except (ValueError, RecursionError) as e:  # JSONDecodeError; ints of > 4300 digits
+        raise OSError(f"{where}: corrupt manifest: {str(e)[:200]}") from None
+    validate_manifest(m, where)
+    return m
 
 
 def _check_disjoint(m: dict, where: str) -> None:
@@ -142,6 +220,7 @@ def validate_manifest(m: dict, where: str = "manifest.json") -> None:
     placements, overlap, the merged table's size, uv scales). OSError naming `where` and the
     field if not."""
     import jsonschema
+    _check_json_values(m, where)
     if isinstance(m, dict) and isinstance(m.get("version"), int) and \
             not isinstance(m["version"], bool) and m["version"] not in (1, 2):
         raise OSError(f"{where}: unsupported pack version {m['version']} (this reader reads 1 to 2)")
@@ -249,16 +328,10 @@ class PurePack:
         if mpath.stat().st_size > 256 << 20:
             raise OSError(f"{mpath}: manifest too large")
         try:
-            text = mpath.read_text()
+            text = mpath.read_bytes()
         except FileNotFoundError:
             raise OSError(f"{mpath}: missing manifest (not a finished tile pack)") from None
-        except UnicodeDecodeError as e:
-            raise OSError(f"{mpath}: corrupt manifest: {e}") from None
-        try:
-            m = json.loads(text)
-        except (json.JSONDecodeError, RecursionError) as e:
-            raise OSError(f"{mpath}: corrupt manifest: {str(e)[:200]}") from None
-        validate_manifest(m, str(mpath))
+        m = parse_manifest_text(text, str(mpath))
         self.manifest = m
         self.version = m["version"]
         if self.version < 2:
