@@ -119,6 +119,17 @@ def test_scenarios_and_benchmarks_do_not_import_each_other():
     assert bad == []
 
 
+def test_only_the_top_imports_serve():
+    # serve (the HTTP server of the browser client) sits at the top of the flow beside the
+    # commands: only commands, benchmarks and serve itself import it.
+    serve = [m for m in MODULES if m.startswith("gigascroll.serve")]
+    assert "gigascroll.serve.app" in serve
+    top = ("gigascroll.serve", "gigascroll.commands", "gigascroll.benchmarks", "gigascroll.cli")
+    bad = [f"{a} -> {b}" for a in MODULES if not a.startswith(top) for b in sorted(GRAPH[a])
+           if b in serve]
+    assert bad == []
+
+
 def test_no_star_imports():
     stars = [f"{name}: from {node.module} import *" for name, path in MODULES.items()
              for node in ast.walk(ast.parse(path.read_text()))

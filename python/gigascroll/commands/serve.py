@@ -35,12 +35,12 @@ def _say(text: str) -> None:
 def run(args) -> int:
     from .. import TilePack
     from ..serve import baked_room, make_app, pack_hash, serve_forever, tls_context
-    from ..serve.run import LOOPBACK_HOSTS, log_to_stderr
+    from ..serve.run import LOOPBACK_HOSTS, listen_socket, log_to_stderr
 
     if not 0 <= args.port <= 65535:
         raise UserError(f"--port must be in [0, 65535], got {args.port}")
     if (args.tls_cert is None) != (args.tls_key is None):
-        raise UserError("--tls-cert and --tls-key go together")
+        raise UserError("TLS: --tls-cert and --tls-key go together")
     ssl_context = None
     if args.tls_cert:
         try:
@@ -51,6 +51,10 @@ def run(args) -> int:
     elif args.host not in LOOPBACK_HOSTS:
         _say(f"warning: serving plain HTTP on {args.host}: a headset needs HTTPS off "
              "localhost for WebXR (give --tls-cert and --tls-key, or use adb reverse)")
+    try:
+        sock = listen_socket(args.host, args.port)
+    except OSError as e:
+        raise UserError(f"cannot listen on {args.host}:{args.port}: {e.strerror or e}") from None
     try:
         pack = TilePack(args.pack)
     except Exception as e:  # a missing or corrupt pack
@@ -63,10 +67,7 @@ def run(args) -> int:
         raise UserError(f"room {args.room}: {e}") from None
     log_to_stderr()
     app = make_app(pack, room, content_hash)
-    try:
-        caught = serve_forever(app, args.host, args.port, ssl_context,
-                               announce=lambda url: print(f"serving {url}", flush=True))
-    except OSError as e:
-        raise UserError(f"cannot listen on {args.host}:{args.port}: {e.strerror or e}") from None
+    caught = serve_forever(app, args.host, args.port, ssl_context, sock=sock,
+                           announce=lambda url: print(f"serving {url}", flush=True))
     _say(f"stopped ({caught})")
     return 0

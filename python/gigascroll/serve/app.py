@@ -44,6 +44,11 @@ def _fail(cls, message: str):
     return cls(text=message + "\n", content_type="text/plain")
 
 
+def _too_large(message: str, size: int):
+    return web.HTTPRequestEntityTooLarge(max_size=MAX_BODY, actual_size=size,
+                                         text=message + "\n", content_type="text/plain")
+
+
 @web.middleware
 async def one_line_errors(request: web.Request, handler):
     """Every error as a 4xx with a one-line body and one log line: HTTP errors keep their
@@ -144,7 +149,7 @@ async def batch(request: web.Request) -> web.StreamResponse:
     state = _state(request)
     _check_hash(state, request)
     if request.content_length is not None and request.content_length > MAX_BODY:
-        raise _fail(web.HTTPRequestEntityTooLarge, f"body over {MAX_BODY} bytes")
+        raise _too_large(f"body over {MAX_BODY} bytes", request.content_length)
     try:
         doc = json.loads(await request.read())
     except (ValueError, RecursionError):
@@ -153,7 +158,7 @@ async def batch(request: web.Request) -> web.StreamResponse:
     if not isinstance(keys, list):
         raise _fail(web.HTTPBadRequest, 'body must be JSON {"keys": [[painting, level, tx, ty], ...]}')
     if len(keys) > MAX_BATCH:
-        raise _fail(web.HTTPRequestEntityTooLarge, f"{len(keys)} keys: at most {MAX_BATCH} a batch")
+        raise _too_large(f"{len(keys)} keys: at most {MAX_BATCH} a batch", request.content_length or 0)
     for k in keys:
         if not (isinstance(k, list) and len(k) == 4
                 and all(type(x) is int and 0 <= x < 1 << 31 for x in k)):

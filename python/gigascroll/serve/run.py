@@ -6,13 +6,14 @@ from __future__ import annotations
 import asyncio
 import logging
 import signal
+import socket
 import ssl
 import sys
 import threading
 
 from aiohttp import web
 
-__all__ = ["LOOPBACK_HOSTS", "tls_context", "start_site", "serve_forever", "ServerThread",
+__all__ = ["LOOPBACK_HOSTS", "tls_context", "listen_socket", "start_site", "serve_forever", "ServerThread",
            "OneLineFormatter"]
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
@@ -27,6 +28,8 @@ class OneLineFormatter(logging.Formatter):
         if record.exc_info and record.exc_info[1] is not None:
             e = record.exc_info[1]
             message += f": {type(e).__name__}: {' '.join(str(e).split())}"
+            if message.startswith("Error handling request"):  # aiohttp: not HTTP at all
+                message = f"{getattr(e, 'code', 400)} bad HTTP{message[len('Error handling request'):]}"
         return f"gigascroll serve: {message}"[:1000]
 
 
@@ -45,13 +48,26 @@ def _url(site_address, tls: bool) -> str:
     return f"{'https' if tls else 'http'}://{host}:{port}/"
 
 
+def listen_socket(host: str, port: int) -> socket.socket:
+    """A socket listening on host:port (0: a free port), made before anything slow (the
+    bake) so that a taken port fails at once. OSError when the address is taken, unknown or
+    unavailable."""
+    try:
+        family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+    except socket.gaierror as e:
+        raise OSError(f"unknown host {host!r} ({e.strerror})") from None
+    return socket.create_server((host, port), family=family, backlog=512)
+
+
 async def start_site(app: web.Application, host: str, port: int,
-                     ssl_context: ssl.SSLContext | None = None) -> tuple[web.AppRunner, str]:
-    """Starts `app` on host:port (0: a free port); (its runner, its URL). OSError when the
-    address is taken or unavailable."""
+                     ssl_context: ssl.SSLContext | None = None,
+                     sock: socket.socket | None = None) -> tuple[web.AppRunner, str]:
+    """Starts `app` on `sock`, else on host:port (0: a free port); (its runner, its URL).
+    OSError when the address is taken or unavailable."""
     runner = web.AppRunner(app, access_log=None, handle_signals=False)
     await runner.setup()
-    site = web.TCPSite(runner, host, port, ssl_context=ssl_context, reuse_address=True)
+    site = (web.SockSite(runner, sock, ssl_context=ssl_context) if sock is not None else
+            web.TCPSite(runner, host, port, ssl_context=ssl_context, reuse_address=True))
     try:
         await site.start()
     except BaseException:
@@ -61,16 +77,17 @@ async def start_site(app: web.Application, host: str, port: int,
 
 
 def serve_forever(app: web.Application, host: str, port: int,
-                  ssl_context: ssl.SSLContext | None = None, announce=print) -> str:
-    """Serves until SIGINT or SIGTERM; returns the signal's name. `announce(url)` is called
-    once the socket listens."""
+                  ssl_context: ssl.SSLContext | None = None, announce=print,
+                  sock: socket.socket | None = None) -> str:
+    """Serves until SIGINT or SIGTERM (on `sock` when given, else on host:port); returns the
+    signal's name. `announce(url)` is called once the socket listens."""
     async def main():
         loop = asyncio.get_running_loop()
         stop = asyncio.Event()
         caught = []
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, lambda s=sig: (caught.append(s), stop.set()))
-        runner, url = await start_site(app, host, port, ssl_context)
+        runner, url = await start_site(app, host, port, ssl_context, sock)
         try:
             announce(url)
             await stop.wait()
@@ -123,6 +140,12 @@ class ServerThread:
         return False
 
 
+def _bad_http_too(record: logging.LogRecord) -> bool:
+    """aiohttp logs a request it cannot parse as HTTP at debug level when it is a
+    connection's first (non-HTTP traffic): keep those too, so each bad request has its line."""
+    return record.levelno >= logging.INFO or str(record.msg).startswith("Error handling request")
+
+
 def log_to_stderr(level: int = logging.INFO) -> None:
     """One-line records of the server's and aiohttp's loggers on stderr."""
     handler = logging.StreamHandler(sys.stderr)
@@ -132,3 +155,6 @@ def log_to_stderr(level: int = logging.INFO) -> None:
         logger.handlers[:] = [handler]
         logger.setLevel(level)
         logger.propagate = False
+    server = logging.getLogger("aiohttp.server")
+    server.setLevel(min(level, logging.DEBUG))
+    server.addFilter(_bad_http_too)
