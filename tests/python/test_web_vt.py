@@ -3,6 +3,8 @@ headless chromium with WebGL2 on SwiftShader: the GPU sampler against VirtualTex
 on the same resident set, the GPU feedback pass against render_view's at the same size, and
 the request hash against HashProcessor.slot."""
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -126,3 +128,129 @@ def test_gpu_sampler_after_evictions(vt_pack, browser):  # noqa: F811
         page.close()
     cpu, _ = cpu_samples(vt, pr)
     assert np.abs(gpu[:, :3] * 255 - cpu).max() <= 2.0
+
+
+# Two paintings on the wall z = 0 (1 mm texels), the layout both feedback passes see.
+PLACEMENTS = [
+    {"painting": 0, "origin": [-2.0, 1.5, 0.0], "u_axis": [1, 0, 0], "v_axis": [0, -1, 0],
+     "width_m": 4.0, "height_m": 0.3},
+    {"painting": 1, "origin": [2.2, 2.0, 0.0], "u_axis": [1, 0, 0], "v_axis": [0, -1, 0],
+     "width_m": 1.5, "height_m": 0.9},
+]
+QUEST3_EYE = (2064, 2208)  # per-eye display; its feedback is 1/8: 258 x 276
+POSES = [  # (camera x, y, z, target x, y, z, vertical fov), display, reduction
+    ((0.0, 1.35, 1.0, 0.0, 1.35, 0.0, 90.0), QUEST3_EYE, 8),      # the long one, head on
+    ((1.5, 1.5, 0.6, -0.5, 1.4, 0.0, 90.0), QUEST3_EYE, 8),       # oblique, levels 0..4
+    ((-1.0, 1.4, 0.12, -1.0, 1.4, 0.0, 60.0), QUEST3_EYE, 8),     # close: level 0
+    ((2.6, 1.3, 2.5, 3.0, 1.6, 0.0, 70.0), QUEST3_EYE, 8),        # the other one
+    ((1.0, 1.4, 7.0, 1.0, 1.5, 0.0, 90.0), QUEST3_EYE, 8),        # both, far: levels 2, 3
+    ((2.9, 1.5, 0.3, 2.9, 1.5, 0.0, 8.0), (512, 512), 1),         # a magnifier, full size
+]
+
+
+@functools.lru_cache(maxsize=None)
+def cpu_feedback(camera, display, reduction):
+    """The core's feedback pass (render_view) of the PLACEMENTS: request keys, rows top down."""
+    scene = g.ExhibitionScene()
+    for s, (w, h) in zip(PLACEMENTS, SIZES):
+        scene.add_painting(s["painting"], g.PaintingGeometry(w, h, TILE, BORDER), s["origin"],
+                           s["u_axis"], s["v_axis"], s["width_m"], s["height_m"])
+    scene.commit()
+    cam = g.Camera(camera[:3], camera[3:6], (0, 1, 0), camera[6], display)
+    fw, fh = max(1, display[0] // reduction), max(1, display[1] // reduction)
+    return g.render_view(scene, cam, fw, fh, display=False)["keys"]
+
+
+def gpu_keys(result):
+    """The GPU readback (flat tile indices, rows bottom up) as request keys, rows top down."""
+    lut = {int(i): int(g.pack_request(*k)) for i, k in result["keys"].items()}
+    lut[0xFFFFFFFF] = int(g.NO_REQUEST)
+    keys = np.array([lut[i] for i in result["indices"]], np.uint64)
+    return keys.reshape(result["height"], result["width"])[::-1]
+
+
+@pytest.mark.parametrize("pose", range(len(POSES)))
+def test_gpu_feedback_equals_core_feedback(vt_page, pose):
+    """Per feedback pixel the GPU requests the core's tile, except where the level of detail
+    lies on a level boundary (the GPU's 2 x 2 finite differences against the core's analytic
+    ray differentials; sampler.glsl.js) or a tile edge falls within float32 rounding: at most
+    0.5% of the pixels; the tile sets differ only by tiles of those pixels."""
+    page, _ = vt_page
+    camera, display, reduction = POSES[pose]
+    cpu = cpu_feedback(camera, display, reduction)
+    view = {"view": 0, "camera": list(camera), "display": list(display), "reduction": reduction}
+    (result,) = page.evaluate("([v, p]) => vtTest.feedback([v], p)", [view, PLACEMENTS])
+    gpu = gpu_keys(result)
+    assert gpu.shape == cpu.shape
+    seen = cpu != g.NO_REQUEST
+    assert seen.mean() > 0.01, "the pose must see a painting"
+    differ = gpu != cpu
+    assert differ.mean() <= 0.005, f"{differ.mean():.4%} of the pixels differ"
+    only_gpu = set(gpu[differ].tolist()) - set(gpu[~differ].tolist())
+    only_cpu = set(cpu[differ].tolist()) - set(cpu[~differ].tolist())
+    assert set(gpu.ravel().tolist()) ^ set(cpu.ravel().tolist()) <= only_gpu | only_cpu
+    levels = {int(k) >> 32 & 31 for k in cpu[seen].ravel().tolist()}
+    assert levels, "no request"
+
+
+A_LECUYER = 2862933555777941757
+
+
+def test_request_hash_matches_core(vt_page):
+    """requests.js's slot of B = p 2^37 + l 2^32 + morton(x, y) in frame F equals
+    HashProcessor.slot and the formula a (B (F + 2^20 + 1)) mod 2^64 >> (64 - bits) in Python
+    integers, for random keys (27-bit paintings, 16-bit tiles) and frames up to 2^40."""
+    page, _ = vt_page
+    rng = np.random.default_rng(3)
+    cases = [[int(rng.integers(0, 2**27 - 1)), int(rng.integers(0, 32)), int(rng.integers(0, 65536)),
+              int(rng.integers(0, 65536)), int(f)] for f in rng.integers(0, 2**40, 300)]
+    cases += [[0, 0, 0, 0, 0], [2**27 - 2, 31, 65535, 65535, 2**40], [3, 2, 100, 57, 7]]
+    for bits in (4, 16, 28):
+        got = page.evaluate("""async ([cases, bits]) => {
+            const r = await import("/client/vt/requests.js");
+            return cases.map(([p, l, x, y, f]) => r.hashSlot(...r.requestKey(p, l, x, y), f, bits)); }""",
+                            [cases, bits])
+        core = g.HashProcessor(min(bits, 20))  # 2^28 slots would take 2 GiB; slot() scales
+        for (p, l, x, y, f), slot in zip(cases, got):
+            key = int(g.pack_request(p, l, x, y))
+            assert key == (p << 37) | (l << 32) | int(g.pack_request(0, 0, x, y))
+            salt = f + 2**20 + 1
+            assert slot == (A_LECUYER * (key * salt % 2**64) % 2**64) >> (64 - bits)
+            assert slot >> (bits - min(bits, 20)) == core.slot(key, core.frame_salt(f))
+
+
+def flat_index(pack, p, l, tx, ty):
+    """The feedback's flat tile index (geometry.js): tiles of earlier paintings and levels
+    first, row-major inside a level."""
+    base = 0
+    for q in range(p):
+        geo = pack.paintings[q]
+        base += sum(w * h for w, h in geo.level_tiles)
+    tiles = pack.paintings[p].level_tiles
+    return base + sum(w * h for w, h in tiles[:l]) + ty * tiles[l][0] + tx
+
+
+@pytest.mark.parametrize("bits", [4, 6, 16])
+def test_request_processing_matches_hash_processor(vt_page, vt_pack, bits):
+    """One frame's feedback (the core's own, as flat indices) through requests.js gives the
+    requests HashProcessor.process gives: the same keys survive the same collisions (the finer
+    level, then the smaller key), whatever the order of insertion."""
+    page, _ = vt_page
+    pack = g.TilePack(str(vt_pack))
+    cpu = np.concatenate([cpu_feedback(*POSES[k]).ravel() for k in (1, 3)])
+    table = {}
+    for key in set(cpu.tolist()) - {int(g.NO_REQUEST)}:
+        p, l, x, y = (int(a[0]) for a in g.unpack_requests(np.array([key], np.uint64)))
+        table[key] = flat_index(pack, p, l, x, y)
+    flat = [table.get(int(k), 0xFFFFFFFF) for k in cpu.tolist()]
+    geos = [g.PaintingGeometry(w, h, TILE, BORDER) for w, h in SIZES]
+    page.evaluate("(flat) => { window.flat = new Uint32Array(flat); }", flat)
+    for frame in (0, 1, 12345):
+        got = page.evaluate("""async ([bits, frame]) => {
+            const { RequestProcessor } = await import("/client/vt/requests.js");
+            const r = new RequestProcessor(vt.geometry, vt.cache, vt.pageTable, { tableBits: bits });
+            return r.process([window.flat], frame).map((i) => vt.geometry.keyOf(i)); }""",
+                            [bits, frame])
+        want = g.HashProcessor(bits).process([cpu], g.ResidentSet(geos), frame)["requests"]
+        assert sorted(int(g.pack_request(*k)) for k in got) == sorted(want.tolist())
+        assert len(want) < len(table) or bits == 16  # small tables lose some to collisions
