@@ -7,6 +7,7 @@
 #include <nanobind/stl/vector.h>
 
 #include <filesystem>
+#include <functional>
 
 #include "bindings/bindings.h"
 #include "bindings/arrays.h"
@@ -83,6 +84,80 @@ void check_tile_out(const TilePack& pack, const TileOut& out) {
     const std::size_t T = pack.tile_size();
     require(out.shape(0) == T && out.shape(1) == T && out.shape(2) == 3,
             "out must have shape (" + std::to_string(T) + ", " + std::to_string(T) + ", 3)");
+}
+
+// The index of `painting` in `pack`: the README passes a painting object (pack.paintings[i],
+// a reference into the pack's own list) where the core takes its index.
+std::uint32_t painting_index(const TilePack& pack, const PaintingInfo& painting) {
+    const std::vector<PaintingInfo>& all = pack.paintings();
+    const std::less<const PaintingInfo*> before;  // a total order even on unrelated pointers
+    if (!all.empty() && !before(&painting, all.data()) && before(&painting, all.data() + all.size()))
+        return static_cast<std::uint32_t>(&painting - all.data());
+    throw InvalidArgument("painting '" + painting.name + "' is not one of this pack's paintings "
+                          "(pass pack.paintings[i] of this pack, or the index i)");
+}
+
+bool has_tile_at(const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
+                 std::uint32_t ty) {
+    return p.has_tile(pi, l, tx, ty);
+}
+
+std::tuple<std::uint64_t, std::uint32_t, std::uint64_t> locate_at(
+    const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
+    const TileLocation loc = p.locate(pi, l, tx, ty);
+    return {loc.offset, loc.length, loc.checksum};
+}
+
+std::string tile_file_at(const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
+                         std::uint32_t ty) {
+    return p.tile_files()[p.locate(pi, l, tx, ty).file];
+}
+
+nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>> read_tile_at(
+    const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
+    const std::size_t T = p.tile_size();
+    FreshArray<std::uint8_t, nb::ndim<3>> tile({T, T, 3});
+    {
+        nb::gil_scoped_release release;
+        p.read_tile(pi, l, tx, ty, tile.data);  // on throw, the array frees the buffer
+    }
+    return tile.array;
+}
+
+nb::ndarray<nb::numpy, std::uint8_t, nb::ndim<3>> read_slot_tile_at(
+    const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx, std::uint32_t ty) {
+    const auto shape = texel_format_tile_shape(p.slot_format(), p.tile_size());
+    FreshArray<std::uint8_t, nb::ndim<3>> tile({shape[0], shape[1], shape[2]});
+    {
+        nb::gil_scoped_release release;
+        p.read_slot_tile(pi, l, tx, ty, tile.data);
+    }
+    return tile.array;
+}
+
+void read_tile_into_at(const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
+                       std::uint32_t ty, TileOut out) {
+    check_tile_out(p, out);
+    nb::gil_scoped_release release;
+    p.read_tile(pi, l, tx, ty, out.data());
+}
+
+// Fn(pack, painting index, rest...) as Fn(pack, painting object, rest...): the second overload
+// of each per-tile method.
+template <auto Fn>
+struct ByPainting;
+template <typename R, typename... Rest, R (*Fn)(const TilePack&, std::uint32_t, Rest...)>
+struct ByPainting<Fn> {
+    static R call(const TilePack& p, const PaintingInfo& painting, Rest... rest) {
+        return Fn(p, painting_index(p, painting), rest...);
+    }
+};
+
+// Binds `name` twice: with the painting's index and with the painting object itself.
+template <auto Fn, typename... Extra>
+void def_per_tile(nb::class_<TilePack>& c, const char* name, const Extra&... extra) {
+    c.def(name, Fn, "painting"_a, "level"_a, "tx"_a, "ty"_a, extra...);
+    c.def(name, &ByPainting<Fn>::call, "painting"_a, "level"_a, "tx"_a, "ty"_a, extra...);
 }
 
 }  // namespace
@@ -163,9 +238,9 @@ void bind_pack(nb::module_& m) {
                    std::to_string(g.height()) + ", " + std::to_string(g.levels()) + " levels)";
         });
 
-    nb::class_<TilePack>(m, "TilePack",
-                         "A tile pack opened for reading. Thread-safe; reads release the GIL.")
-        .def("__init__", [](TilePack* self, const std::filesystem::path& path) {
+    nb::class_<TilePack> pack(m, "TilePack",
+                         "A tile pack opened for reading. Thread-safe; reads release the GIL.");
+    pack.def("__init__", [](TilePack* self, const std::filesystem::path& path) {
             new (self) TilePack(path.string());
             for (const std::string& w : self->warnings())
                 if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw nb::python_error();
@@ -184,48 +259,20 @@ void bind_pack(nb::module_& m) {
         .def_prop_ro("tile_count", &TilePack::tile_count)
         .def("manifest_json", &TilePack::manifest_json,
              "The manifest as the core's reader parsed it (JSON text).")
-        .def("has_tile", &TilePack::has_tile, "painting"_a, "level"_a, "tx"_a, "ty"_a)
-        .def("locate", [](const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
-                          std::uint32_t ty) {
-            const TileLocation loc = p.locate(pi, l, tx, ty);
-            return std::make_tuple(loc.offset, loc.length, loc.checksum); },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a, "(offset, length, checksum) in its tile file")
-        .def("tile_file", [](const TilePack& p, std::uint32_t pi, std::uint32_t l, std::uint32_t tx,
-                             std::uint32_t ty) { return p.tile_files()[p.locate(pi, l, tx, ty).file]; },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a, "name of the tile file holding the tile")
-        .def("read_tile", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
-                             std::uint32_t tx, std::uint32_t ty) {
-            const std::size_t T = p.tile_size();
-            FreshArray<std::uint8_t, nb::ndim<3>> tile({T, T, 3});
-            {
-                nb::gil_scoped_release release;
-                p.read_tile(pi, l, tx, ty, tile.data);  // on throw, the array frees the buffer
-            }
-            return tile.array; },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a,
-            "The tile as a (tile_size, tile_size, 3) uint8 array, checksum verified.")
-        .def("read_slot_tile", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
-                                  std::uint32_t tx, std::uint32_t ty) {
-            const auto shape = texel_format_tile_shape(p.slot_format(), p.tile_size());
-            FreshArray<std::uint8_t, nb::ndim<3>> tile({shape[0], shape[1], shape[2]});
-            {
-                nb::gil_scoped_release release;
-                p.read_slot_tile(pi, l, tx, ty, tile.data);
-            }
-            return tile.array; },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a,
-            "The tile as the cache keeps it, checksum verified: (tile_size / 4, tile_size / 4, 8) "
-            "BC1 blocks (row-major) for a bc1 pack, else what read_tile gives.")
         .def_prop_ro("slot_format", [](const TilePack& p) { return std::string(texel_format_name(p.slot_format())); },
                      "'bc1' when the cache keeps this pack's tiles block-compressed, else 'rgb8'.")
-        .def_prop_ro("slot_bytes", &TilePack::slot_bytes, "Bytes of one tile in the cache.")
-        .def("read_tile_into", [](const TilePack& p, std::uint32_t pi, std::uint32_t l,
-                                  std::uint32_t tx, std::uint32_t ty, TileOut out) {
-            check_tile_out(p, out);
-            nb::gil_scoped_release release;
-            p.read_tile(pi, l, tx, ty, out.data()); },
-            "painting"_a, "level"_a, "tx"_a, "ty"_a, "out"_a.noconvert(),
-            "Reads the tile into a C-contiguous (tile_size, tile_size, 3) uint8 array.");
+        .def_prop_ro("slot_bytes", &TilePack::slot_bytes, "Bytes of one tile in the cache.");
+    // Per-tile methods take the painting as its index or as the object in pack.paintings.
+    def_per_tile<&has_tile_at>(pack, "has_tile", "False for padding tiles.");
+    def_per_tile<&locate_at>(pack, "locate", "(offset, length, checksum) in its tile file");
+    def_per_tile<&tile_file_at>(pack, "tile_file", "name of the tile file holding the tile");
+    def_per_tile<&read_tile_at>(pack, "read_tile",
+        "The tile as a (tile_size, tile_size, 3) uint8 array, checksum verified.");
+    def_per_tile<&read_slot_tile_at>(pack, "read_slot_tile",
+        "The tile as the cache keeps it, checksum verified: (tile_size / 4, tile_size / 4, 8) "
+        "BC1 blocks (row-major) for a bc1 pack, else what read_tile gives.");
+    def_per_tile<&read_tile_into_at>(pack, "read_tile_into", "out"_a.noconvert(),
+        "Reads the tile into a C-contiguous (tile_size, tile_size, 3) uint8 array.");
 
     nb::class_<PackBuilder>(m, "PackBuilder",
                             "Low-level streaming pack writer; use gigascroll.build_pack instead.")
