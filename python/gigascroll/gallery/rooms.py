@@ -19,7 +19,8 @@ a physical size (`PaintingSpec`) keeps it, and one given in texels gets the scro
 
 Orientation: image x runs along u and image y (down) along v. With the project's camera
 (right = forward x up), the image reads unmirrored from the side v x u points to. The hall's
-paintings (u = +x, v = +z) face up, v x u = +y. The scroll's placement (origin at x = length,
+paintings (u = +x, v = +z) face up, v x u = +y, and read upright to a visitor on their +z side
+(looking toward -z; the hall's suggested camera stands there). The scroll's placement (origin at x = length,
 u = -x, v = -y, as in `single_scroll`) faces the room, v x u = -z: it reads unmirrored from
 z < 0, where the visitors stand.
 """
@@ -333,8 +334,11 @@ def hall_room(paintings, count: int | None = None, texel_m: float = TEXEL_M) -> 
     radiance = lux_to_irradiance(GALLERY_LUX) / _mean_unit_irradiance(panels, centres,
                                                                        [0.0, 1.0, 0.0])
     surfaces.append(_surface("ceiling_lights", panels, LIGHT_ALBEDO, (radiance,) * 3))
-    return RoomSpec("hall", surfaces, slots, camera_eye=(length / 2, 1.7, -3.5),
-                    camera_target=(length / 2, TABLE_HEIGHT, HALL_FIRST_TABLE_Z + depth / 2))
+    # The suggested camera stands beyond the last table's far edge (+z), where the paintings'
+    # bottoms are: image y (down) runs along +z, so only from there do they read upright
+    # (from the -z side they read rotated by 180 degrees).
+    return RoomSpec("hall", surfaces, slots, camera_eye=(length / 2, 1.7, z_end + 3.5),
+                    camera_target=(length / 2, TABLE_HEIGHT, z_end - depth / 2))
 
 
 def _table_quads(x, z, length, depth, height) -> list[np.ndarray]:
