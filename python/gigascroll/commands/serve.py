@@ -39,6 +39,8 @@ def run(args) -> int:
 
     if not 0 <= args.port <= 65535:
         raise UserError(f"--port must be in [0, 65535], got {args.port}")
+    if args.cache_dir is not None and not args.cache_dir.strip():
+        raise UserError("--cache-dir must name a directory")
     if (args.tls_cert is None) != (args.tls_key is None):
         raise UserError("TLS: --tls-cert and --tls-key go together")
     ssl_context = None
