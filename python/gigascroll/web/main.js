@@ -44,9 +44,11 @@ class App {
     this.magnifier.toggle(opts.magnifier);
     this.stats = new Stats(document.getElementById('stats'));
     if (opts.stats) this.stats.toggle();
+    this.stats.track(vt);
     this.stereo = opts.stereo;
     this.frame = 0;
     this.afterFrame = null;   // test hook: fn({frame, gl, canvas, views}) after each frame
+    this.captures = [];       // capture()'s waiting promises
     const c = opts.camera ?? scene.room.camera;
     this.fov = c.fov ?? DEFAULT_FOV;
     const start = lookAt(c.eye, c.target);
@@ -73,9 +75,27 @@ class App {
       room.drawView(v);
       if (lens) magnifier.composite(v);
     }
-    this.stats.update(this.frame, now, lens ? [...views, lens] : views, vt.stats());
+    const feedbackViews = [...views.keys(), ...(lens ? [MAGNIFIER_VIEW] : [])];
+    this.stats.update(this.frame, now, lens ? [...views, lens] : views, feedbackViews, vt.stats());
     this.afterFrame?.({ frame: this.frame, gl, canvas: this.canvas, views });
+    if (this.captures.length && framebuffer === null) this.#capture();
     this.frame++;
+  }
+
+  // Replaces the fixed or starting view (camera.js frame of eye, target; fov degrees).
+  setCamera(eye, target, fov = this.fov) {
+    this.fov = fov;
+    this.controls.start = lookAt(eye, target);
+    Object.assign(this.controls, anglesOf(this.controls.start), { position: [...eye] });
+  }
+
+  // Resolves the waiting capture() promises with this frame's canvas pixels.
+  #capture() {
+    const { gl, canvas } = this, w = canvas.width, h = canvas.height;
+    const pixels = new Uint8Array(w * h * 4);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+    const result = { frame: this.frame, width: w, height: h, pixels };
+    for (const resolve of this.captures.splice(0)) resolve(result);
   }
 
   #feedback(index, view, reduction) {
@@ -114,6 +134,12 @@ function centreFrame(views) {
   return { ...f, position };
 }
 
+function base64(bytes) {
+  let s = '';
+  for (let i = 0; i < bytes.length; i += 0x8000) s += String.fromCharCode(...bytes.subarray(i, i + 0x8000));
+  return btoa(s);
+}
+
 function showError(e) {
   const el = document.getElementById('error');
   if (el) { el.hidden = false; el.textContent = String(e?.message ?? e); }
@@ -121,12 +147,14 @@ function showError(e) {
 }
 
 // window.gigascroll: ready() (resolves once the room is drawn with the coarse tail resident),
-// stats(), frame(), app (for tests), error.
+// stats(), frame(), capture() (the next desktop frame's canvas as {frame, width, height,
+// pixels: RGBA rows from the bottom, base64}), app (for tests), error.
 function expose(readyPromise, getApp) {
   window.gigascroll = {
     ready: () => readyPromise,
     stats: () => ({ ...getApp()?.stats.numbers, vt: getApp()?.vt.stats() }),
     frame: () => getApp()?.frame ?? 0,
+    capture: () => new Promise((resolve) => getApp().captures.push(resolve)).then((c) => ({ ...c, pixels: base64(c.pixels) })),
     get app() { return getApp(); },
     error: null,
   };

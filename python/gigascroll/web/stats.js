@@ -3,10 +3,12 @@
 // the last stop of the camera until the view is exact (the virtual texturing paper's display
 // latency after stopping, seed 000 Table 2: 4-5 frames there).
 //
-// "Exact": the virtual texture has processed a feedback readback of a frame drawn at or after
-// the stop, that readback asked for no tile that is not resident, and nothing is pending, in
-// flight or waiting for upload: what is on screen is then what the full resident set would
-// draw. A stop is the first frame whose views equal the previous frame's.
+// A stop is the first frame of a run of frames drawn with the same views. The view is confirmed
+// exact once every drawn view's feedback from a frame at or after the stop has been processed,
+// asked for no tile that is not resident, and nothing is pending, in flight or waiting for
+// upload. What is on screen was then final since the frame of the last upload (uploads land
+// before that frame's draw), so the display latency is max(stop, last upload) - stop frames;
+// the confirmation comes a readback later (framesStopToConfirmed).
 
 const FPS_WINDOW = 30;   // frames averaged for the fps figure
 
@@ -21,34 +23,48 @@ export class Stats {
     this.times = [];
     this.lastViews = null;
     this.stopFrame = null;        // first frame of the current stop, null while moving
-    this.exactFrame = null;       // first exact frame since stopFrame
     this.lastStopToExact = null;  // frames from the last stop to its exact view
+    this.confirmedFrame = null;   // frame at which the exact view was confirmed
+    this.lastUploadFrame = -1;
     this.uploadsTotal = 0;
-    this.bytesTotal = 0;
+    this.readbackFrames = new Map();  // feedback view -> frame of its newest processed readback
     this.numbers = {};
+  }
+
+  // Wraps vt.feedback.poll to learn which frame each processed readback was drawn in.
+  track(vt) {
+    const poll = vt.feedback.poll.bind(vt.feedback);
+    vt.feedback.poll = () => {
+      const readbacks = poll();
+      for (const r of readbacks) this.readbackFrames.set(r.view, Math.max(r.frame, this.readbackFrames.get(r.view) ?? -1));
+      return readbacks;
+    };
   }
 
   toggle() {
     if (this.panel) this.panel.hidden = !this.panel.hidden;
   }
 
-  // Once a frame after drawing: frame number, time (ms), the frame's views, vt.stats().
-  update(frame, now, views, vt) {
+  // Once a frame after drawing: frame number, time (ms), the frame's views, their feedback
+  // view indices, vt.stats().
+  update(frame, now, views, feedbackViews, vt) {
     this.times.push(now);
     if (this.times.length > FPS_WINDOW + 1) this.times.shift();
     if (sameViews(views, this.lastViews)) {
-      if (this.stopFrame === null) this.stopFrame = frame;
+      if (this.stopFrame === null) this.stopFrame = frame - 1;   // the first frame at this pose
     } else {
       this.stopFrame = null;
-      this.exactFrame = null;
+      this.confirmedFrame = null;
     }
     this.lastViews = views.map((v) => ({ view: Float32Array.from(v.view), proj: Float32Array.from(v.proj) }));
-    const exact = isExact(vt, this.stopFrame);
-    if (exact && this.exactFrame === null) {
-      this.exactFrame = frame;
-      this.lastStopToExact = frame - this.stopFrame;
-    }
+    if (vt.uploads > 0) this.lastUploadFrame = frame;
     this.uploadsTotal += vt.uploads ?? 0;
+    const readback = Math.min(...feedbackViews.map((i) => this.readbackFrames.get(i) ?? -1));
+    if (this.confirmedFrame === null && isExact(vt, this.stopFrame, readback)) {
+      this.confirmedFrame = frame;
+      this.lastStopToExact = Math.max(this.stopFrame, this.lastUploadFrame) - this.stopFrame;
+      this.lastStopToConfirmed = frame - this.stopFrame;
+    }
     const span = this.times.length > 1 ? this.times[this.times.length - 1] - this.times[0] : 0;
     this.numbers = {
       frame,
@@ -60,9 +76,12 @@ export class Stats {
       hitRate: vt.hitRate ?? 0,
       resident: vt.resident ?? 0,
       uploadsTotal: this.uploadsTotal,
-      exact: this.exactFrame !== null,
+      bytesReceived: vt.bytesReceived ?? 0,
+      exact: this.confirmedFrame !== null,
       stopFrame: this.stopFrame,
+      lastUploadFrame: this.lastUploadFrame,
       framesStopToExact: this.lastStopToExact,
+      framesStopToConfirmed: this.lastStopToConfirmed ?? null,
     };
     if (this.panel && !this.panel.hidden) this.panel.textContent = this.text();
   }
@@ -81,9 +100,9 @@ export class Stats {
   }
 }
 
-// Whether the VT's state at this frame makes the view exact (see the header).
-export function isExact(vt, stopFrame) {
-  if (stopFrame === null || stopFrame === undefined) return false;
-  return (vt.feedbackFrame ?? -1) >= stopFrame && (vt.missing ?? 1) === 0 && (vt.pending ?? 0) === 0
-    && (vt.inFlight ?? 0) === 0 && (vt.uploads ?? 0) === 0;
+// Whether the VT's state confirms the view exact (see the header): readbackFrame is the
+// oldest of the drawn views' newest processed readbacks.
+export function isExact(vt, stopFrame, readbackFrame) {
+  if (stopFrame === null || stopFrame === undefined || readbackFrame < stopFrame) return false;
+  return vt.commands === 0 && vt.pending === 0 && vt.inFlight === 0 && vt.uploads === 0;
 }

@@ -45,7 +45,7 @@ export class XrPresenter {
   async enter() {
     const xr = navigator.xr;
     const session = await xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
-    await this.gl.makeXRCompatible?.();
+    if (!this.gl.getContextAttributes().xrCompatible) await this.gl.makeXRCompatible();
     const layer = new XRWebGLLayer(session, this.gl);
     session.updateRenderState({ baseLayer: layer });
     let floor = true, space;
