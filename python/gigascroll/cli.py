@@ -1,10 +1,17 @@
 """The `gigascroll` command line. Each subcommand lives in gigascroll.commands.<name>
 and exposes `register(subparsers)`; the parser sets `func(args) -> int` on the namespace.
-Errors the user can fix (bad files, bad parameters) print one line and exit with 2."""
+Errors the user can fix (bad files, bad parameters) print one line and exit with 2; when
+standard output's reader goes away (`gigascroll info --json PACK | head`) the command ends
+quietly with 141, as Unix tools killed by SIGPIPE do."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import os
+import select
+import signal
 import sys
 
 from .commands import bench, demo, export, gallery, info, pack, render, scenario, serve, synth, view
@@ -67,13 +74,49 @@ def _one_line(e: BaseException) -> str:
     return " ".join(str(e).split()) or type(e).__name__
 
 
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe whose reader has gone (`info --json | head`): a flush
+    fails with EPIPE, or (nothing left to flush) poll reports an error on the descriptor,
+    which Linux does for a pipe with no reader."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        return True
+    except (OSError, ValueError, AttributeError):
+        return False
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), 0)
+        return any(ev & select.POLLERR for _, ev in poller.poll(0))
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return False
+
+
+def _reader_left() -> int:
+    """Ends quietly as Unix tools do when their reader leaves: what is still buffered goes to
+    /dev/null (so the interpreter's last flush does not complain) and the exit status is
+    128 + SIGPIPE = 141, what a shell reports for `cat` killed by SIGPIPE."""
+    with contextlib.suppress(OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    return 128 + signal.SIGPIPE
+
+
 def main(argv: list[str] | None = None) -> int:
     from .outputs import ignore_sigxfsz
     ignore_sigxfsz()  # past a file-size limit a write fails (EFBIG) and is reported, not fatal
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # argparse's --help ignores a closed pipe itself (exit 0)
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()  # a reader that has gone shows here, not in the interpreter's exit
+        return code
+    except BrokenPipeError as e:  # stdout's reader gone: quiet; another pipe: an error
+        if _stdout_closed():
+            return _reader_left()
+        print(f"gigascroll {args.command}: error: {_one_line(e)}", file=sys.stderr)
+        return 2
     except (UserError, ValueError, OSError) as e:
         print(f"gigascroll {args.command}: error: {_one_line(e)}", file=sys.stderr)
         return 2
