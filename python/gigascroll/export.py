@@ -26,8 +26,9 @@ from typing import Iterator
 
 import numpy as np
 
-from .outputs import (atomic_file, check_output, encode_image, owned_by, replace_dir,
-                      signals_interrupt, temp_dir, write_bytes, write_mark, write_text)
+from .outputs import (atomic_file, check_output, encode_image, owned_by, refuse_protected,
+                      replace_dir, signals_interrupt, temp_dir, write_bytes, write_mark,
+                      write_text)
 
 __all__ = ["export_pack", "FORMATS", "open_pack", "level_bands"]
 
@@ -262,7 +263,7 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
         raise ValueError(f"unknown compression '{compression}' (expected jpeg or deflate)")
     pack = open_pack(pack_path, reader)
     p = _painting_index(pack, painting)
-    out = Path(out)
+    out = refuse_protected(out)
     if fmt == "dzi" and out.suffix == ".dzi":
         out = out.with_suffix("")
     final = [out.with_name(out.name + ".dzi"), out.with_name(out.name + "_files")] if fmt == "dzi" else [out]

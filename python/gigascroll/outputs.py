@@ -31,10 +31,10 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["MARK", "protected_reason", "check_output", "write_mark", "has_mark", "owned_by",
+__all__ = ["MARK", "protected_reason", "refuse_protected", "check_output", "write_mark", "has_mark", "owned_by",
            "temp_dir", "atomic_file", "write_bytes", "write_text", "replace_dir",
            "write_image", "encode_image", "Interrupted", "signals_interrupt", "ignore_sigxfsz",
-           "write_error", "oiio_reason"]
+           "write_error", "WriteError", "oiio_reason"]
 
 MARK = ".gigascroll-output.json"   # in a directory a command made: which command made it
 
@@ -42,9 +42,15 @@ _counter = itertools.count()
 _FULL = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)  # the disk or the size limit is full
 
 
+class WriteError(OSError):
+    """'cannot write PATH: REASON', one line for the CLI, with the system's errno."""
+
+
 def write_error(path, e: OSError) -> OSError:
-    """An OSError 'cannot write PATH: REASON' that keeps `e`'s errno (one line for the CLI)."""
-    err = OSError(f"cannot write {path}: {e.strerror or e}")
+    """A WriteError for `path` that keeps `e`'s errno (`e` itself when it already is one)."""
+    if isinstance(e, WriteError):
+        return e
+    err = WriteError(f"cannot write {path}: {e.strerror or e}")
     err.errno = e.errno
     return err
 
@@ -81,15 +87,21 @@ def protected_reason(path) -> str | None:
     return None
 
 
+def refuse_protected(path) -> Path:
+    """`path` as a Path, or OSError when it is a protected place (protected_reason)."""
+    p = Path(path)
+    reason = protected_reason(p)
+    if reason:
+        raise OSError(f"{p}: {reason}; refusing to write there")
+    return p
+
+
 def check_output(path, *, force: bool, directory: bool, owned: Callable[[Path], bool] | None = None,
                  what: str = "an output of this command") -> bool:
     """Raises OSError unless `path` may be written: absent, or (with force) a file for a file
     output, an empty or `owned` directory for a directory output, and never a protected place
     (protected_reason) or a link to a directory. Returns whether something is there now."""
-    p = Path(path)
-    reason = protected_reason(p)
-    if reason:
-        raise OSError(f"{p}: {reason}; refusing to write there")
+    p = refuse_protected(path)
     if not (p.exists() or p.is_symlink()):
         return False
     if not force:
@@ -175,7 +187,8 @@ def atomic_file(path, durable: bool = False):
     except BaseException as e:
         with contextlib.suppress(OSError):
             tmp.unlink()
-        if isinstance(e, OSError) and (e.errno in _FULL or e.filename in (str(tmp), tmp)):
+        if isinstance(e, OSError) and not isinstance(e, WriteError) and (
+                e.errno in _FULL or e.filename in (str(tmp), tmp)):
             raise write_error(path, e) from None
         raise
 
@@ -297,6 +310,8 @@ def replace_dir(tmp, out, owned: Callable[[Path], bool] | None = None) -> None:
     old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)  # no half-done swap
     try:
         if out.exists() or out.is_symlink():
+            if out.is_symlink() or os.path.samefile(tmp, out):
+                raise OSError(f"{out}: is not a directory this command may replace")
             if out.is_symlink() or not out.is_dir() or protected_reason(out) or (
                     any(out.iterdir()) and not (owned is not None and owned(out))):
                 raise OSError(f"{out}: changed while it was being written; refusing to replace it")

@@ -136,13 +136,13 @@ def run(args) -> int:
                         "b.tif -o gallery.pack)")
     out = Path(args.out)
     tmp = prepare_output(out)  # fails early on an unwritable --out
-    try:
-        with signals_interrupt():  # SIGTERM / SIGHUP: the temporary output goes as for Ctrl-C
+    with signals_interrupt():  # SIGTERM / SIGHUP: the temporary output goes as for Ctrl-C
+        try:
             results = _walk(args, out, tmp, eye, foveation)
-    except BaseException:
-        import shutil
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        except BaseException:
+            import shutil
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
     s = results["summary"]
     print(f"{s['frames']} frames at {eye[0]}x{eye[1]} per eye: {s['fps']:.2f} fps; display "
           f"{s['display_ms']:.1f} ms/frame (left {s['left_display_ms']:.1f}, right "

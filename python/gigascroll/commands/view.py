@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 import string
 import sys
 import time
@@ -91,6 +92,9 @@ def screenshot_pattern(text: str) -> str:
         fields = [f for _, f, _, _ in string.Formatter().parse(text) if f is not None]
         if any(f != "n" for f in fields):
             raise ValueError("its only field may be {n}, the shot's counter")
+        specs = [s for _, f, s, _ in string.Formatter().parse(text) if f is not None]
+        if any(int(w) > 64 for s in specs for w in re.findall(r"[0-9]+", s or "")):
+            raise ValueError("its field's width is at most 64")
         names = [text.format(n=k) for k in (0, 1, 99999)]
     except (ValueError, KeyError, IndexError, AttributeError, TypeError) as e:
         raise UserError(f"--screenshot {text[:80]!r}: not a file pattern ({e})") from None

@@ -85,16 +85,16 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
     out = Path(out)
     if video:
         check_fps(walk.path.fps)  # before anything is written
-    tmp = tmp or prepare_output(out)
     n = len(walk.path)
     every = png_every or max(1, n // 40)
     if every < 1:
         raise UserError("--png-every must be >= 1")
+    tmp = tmp or prepare_output(out)
     exposure = walk.source.exposure
     writer = None
     saved: list[str] = []
-    try:
-        with signals_interrupt():  # SIGTERM / SIGHUP: the temporaries go as for Ctrl-C
+    with signals_interrupt():  # SIGTERM / SIGHUP: the temporaries go as for Ctrl-C
+        try:
             if video:
                 w, h = walk.eye
                 # x264's frame-packing SEI 3 marks the frames side-by-side stereo (left eye left).
@@ -129,12 +129,12 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
             write_mark(tmp, "gallery")
             write_text(tmp / MARKER, json.dumps(_jsonable(results), indent=1))  # last: whole
             _commit(tmp, out)
-        return results
-    except BaseException:
-        if writer is not None:
-            writer.abort()
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+            return results
+        except BaseException:
+            if writer is not None:
+                writer.abort()
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
 
 
 def _jsonable(x):
