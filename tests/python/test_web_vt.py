@@ -254,3 +254,28 @@ def test_request_processing_matches_hash_processor(vt_page, vt_pack, bits):
         want = g.HashProcessor(bits).process([cpu], g.ResidentSet(geos), frame)["requests"]
         assert sorted(int(g.pack_request(*k)) for k in got) == sorted(want.tolist())
         assert len(want) < len(table) or bits == 16  # small tables lose some to collisions
+
+
+def test_streaming_loads_what_the_core_requests(browser, vt_pack):  # noqa: F811
+    """The whole runtime from a cold cache (feedback pass, asynchronous readback, hash,
+    capped loading through the worker's batches, uploads within the budget): once quiet, every
+    tile the core's feedback pass requests for the two eyes and the magnifier is resident,
+    except tiles only level-boundary pixels asked for (test_gpu_feedback_equals_core_feedback
+    bounds those), and the loads stayed within the caps."""
+    views = [{"view": v, "camera": list(POSES[k][0]), "display": list(POSES[k][1]),
+              "reduction": POSES[k][2]} for v, k in enumerate((1, 3, 5))]
+    with serve_pack(vt_pack) as url:
+        page = open_page(browser, f"{url}/client/vt/test/harness.html")
+        page.evaluate("() => vtTest.init({slots: [20, 20], maxRequestsPerFrame: 8, maxUploadsPerFrame: 4})")
+        out = page.evaluate("([v, p]) => vtTest.stream(v, p, 400)", [views, PLACEMENTS])
+        page.close()
+    resident = {int(g.pack_request(*k)) for k in out["resident"]}
+    wanted = set()
+    for k in (1, 3, 5):
+        wanted |= set(cpu_feedback(*POSES[k]).ravel().tolist())
+    wanted.discard(int(g.NO_REQUEST))
+    missing = wanted - resident
+    assert out["frames"] < 400 and out["stats"]["failed"] == 0
+    assert len(missing) <= 2, f"{len(missing)} of {len(wanted)} requested tiles not resident"
+    # 8 commands a frame at most, so the cold start took at least this many frames.
+    assert out["frames"] >= (len(wanted) - 12) / 8

@@ -6,6 +6,8 @@
 //   await vtTest.feedback(views, placements)
 //                                       one feedback pass per view, read back asynchronously:
 //                                       [{view, width, height, indices, keys}]
+//   await vtTest.stream(views, placements, maxFrames)
+//                                       the whole runtime from a cold cache until quiet
 //   await vtTest.benchFeedback(views, placements, frames)
 //                                       per frame: beginFrame's feedback time (poll +
 //                                       processing) with the views' passes drawn every frame
@@ -173,7 +175,9 @@ void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
   }
 }
 
-const tick = () => new Promise((r) => setTimeout(r, 1));
+// One animation frame, as the app's loop ticks: chromium updates a fence's status between
+// tasks, and with setTimeout ticks alone it was seen never to signal some of them.
+const tick = () => new Promise((r) => requestAnimationFrame(() => r()));
 
 async function feedback(views, placements) {
   quads = null;
@@ -202,5 +206,22 @@ async function benchFeedback(views, placements, frames = 200) {
   return { ms, requests: counts, stats: vt.stats() };
 }
 
-window.vtTest = { init, insertTiles, sampleProbes, feedback, benchFeedback, viewProjection };
+// The runtime from a cold cache: every frame beginFrame (readbacks -> requests -> fetches ->
+// uploads) and the views' feedback passes, until `quiet` frames in a row have nothing missing,
+// in flight or waiting (or maxFrames). Returns the frames, the stats and the resident tiles.
+async function stream(views, placements, maxFrames = 600, quiet = 5) {
+  quads = null;
+  let still = 0, f = 0;
+  while (f < maxFrames && still < quiet) {
+    vt.beginFrame(++f);
+    drawFeedback(views, placements);
+    await tick();
+    const s = vt.stats();
+    still = vt.counters.readbacks > 0 && s.commands === 0 && s.inFlight === 0 && s.pending === 0 ? still + 1 : 0;
+  }
+  const resident = [...vt.cache.slotOf.keys()].map((i) => vt.geometry.keyOf(i));
+  return { frames: f, stats: vt.stats(), resident };
+}
+
+window.vtTest = { init, insertTiles, sampleProbes, feedback, benchFeedback, stream, viewProjection };
 window.vtTestReady = true;
