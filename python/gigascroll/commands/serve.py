@@ -34,6 +34,7 @@ def _say(text: str) -> None:
 
 def run(args) -> int:
     from .. import TilePack
+    from ..outputs import signals_interrupt
     from ..serve import baked_room, make_app, pack_hash, serve_forever, tls_context
     from ..serve.run import LOOPBACK_HOSTS, listen_socket, log_to_stderr
 
@@ -63,8 +64,9 @@ def run(args) -> int:
         raise UserError(f"cannot open pack {args.pack}: {e}") from None
     content_hash = pack_hash(pack)
     try:
-        room = baked_room(args.room, pack, content_hash, args.cache_dir, threads=args.threads,
-                          announce=_say)
+        with signals_interrupt():  # SIGTERM during the bake: the same clean exit as Ctrl-C
+            room = baked_room(args.room, pack, content_hash, args.cache_dir,
+                              threads=args.threads, announce=_say)
     except (OSError, ValueError) as e:
         raise UserError(f"room {args.room}: {e}") from None
     log_to_stderr()

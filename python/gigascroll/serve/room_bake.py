@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,6 +21,7 @@ from .. import runtime
 from ..gallery import Gallery, builtin_room
 from ..gallery.gallery import PAINTING_REFLECTANCE
 from ..gallery.rooms import ROOM_NAMES
+from ..outputs import write_bytes
 from .room_glb import room_glb
 
 __all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "load_room_spec", "room_key",
@@ -114,23 +114,6 @@ def _keeps_a_triangle(surface) -> bool:
     return bool(np.any(np.isfinite(length) & (length > 0)))
 
 
-def _write_atomically(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
 def bake_glb(gallery: Gallery, spec, pack, threads: int = 0) -> tuple[bytes, dict]:
     """Lights and bakes the gallery as `render --room --lighting baked` does, and returns
     (the glb, the lighting stats)."""
@@ -156,7 +139,8 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
     if announce:
         announce(f"room {spec.name}: baking the light (cache miss, {path.name})")
     data, stats = bake_glb(gallery, spec, pack, threads)
-    _write_atomically(path, data)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_bytes(path, data, durable=True)  # a temporary name, then renamed
     if announce:
         announce(f"room {spec.name}: baked {stats['bake_points']} points in "
                  f"{stats['photon_seconds'] + stats['build_seconds'] + stats['bake_seconds']:.1f} s, "
