@@ -38,7 +38,6 @@ PaintingSlot only (no Surface); the wall behind it is a node of its own.
 from __future__ import annotations
 
 import base64
-import copy
 import io
 import json
 import math
@@ -49,24 +48,22 @@ from pathlib import Path
 import numpy as np
 
 from .room import PaintingSlot, RoomSpec, Surface
+from .room_assets import (MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES,  # noqa: F401
+                          check_regular, check_triangles, read_regular)
+from .room_gltf import (MATERIAL_TAG, MAX_NODE_DEPTH, MAX_NODES, NODE_TAG,  # noqa: F401
+                        check_gltf, list_of_dicts, read_gltf, trimesh_input)
 from .sizes import PaintingSize, painting_sizes
 
 __all__ = ["load_room", "save_room", "ROOM_FILE_SUFFIXES", "PAINTING_PREFIX"]
 
 ROOM_FILE_SUFFIXES = (".glb", ".gltf", ".obj", ".ply")
 PAINTING_PREFIX = "painting:"
-MAX_FILE_BYTES = 1 << 30       # 1 GiB: a room, not a city
-MAX_TRIANGLES = 20_000_000
-MAX_NODES = 20_000              # trimesh takes ~1 ms per node
-MAX_NODE_DEPTH = 64            # glTF node nesting (trimesh's graph is quadratic in it)
 MAX_EXTENT_M = 10_000.0        # every vertex within 10 km of the origin
 MIN_PAINTING_M = 1e-3          # a placeholder's sides are at least 1 mm ...
 MAX_RADIANCE = 1e9             # ... and no emitter is brighter than this (W / m^2 / sr)
 ASPECT_TOLERANCE = 0.01
 PLANAR_TOLERANCE = 1e-4        # relative to the placeholder's diagonal (float32 positions)
 _GLB_MAGIC, _GLB_JSON, _GLB_BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
-_TAG = "gigascroll_node"       # extras key that tags each node before trimesh reads the file
-_MATERIAL_TAG = "gigascroll-material-"
 _CAMERA = "gigascroll_camera"  # marks the camera pseudo-node between reader and assembly
 
 
@@ -88,19 +85,18 @@ def load_room(path, paintings, name: str | None = None) -> RoomSpec:
     ValueError (anything else), naming the file and the node."""
     path = Path(path)
     sizes = painting_sizes(paintings)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such room file")
     suffix = path.suffix.lower()
     if suffix not in ROOM_FILE_SUFFIXES:
         raise ValueError(f"{path}: unknown room file type {suffix!r} (want one of "
                          f"{', '.join(ROOM_FILE_SUFFIXES)})")
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise ValueError(f"{path}: {size} bytes is too large for a room file")
+    try:
+        data = read_regular(path, f"{path}: room file", MAX_FILE_BYTES)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: no such room file") from None
     reader = {".glb": _gltf_nodes, ".gltf": _gltf_nodes, ".obj": _obj_nodes, ".ply": _ply_nodes}
     try:
         with np.errstate(all="ignore"):  # hostile transforms overflow inside trimesh; checked after
-            nodes = reader[suffix](path)
+            nodes = reader[suffix](path, data)
     except (TypeError, KeyError, IndexError, AttributeError, OverflowError) as e:
         # a JSON value of the wrong shape that the checks above did not anticipate
         raise ValueError(f"{path}: malformed room file: {type(e).__name__}: {e}") from None
@@ -112,142 +108,8 @@ def load_room(path, paintings, name: str | None = None) -> RoomSpec:
 
 # --- glTF --------------------------------------------------------------------------------------
 
-def _read_gltf(path: Path) -> tuple[dict, bytes | None]:
-    """The JSON of a .gltf or .glb file and a .glb's binary chunk."""
-    data = path.read_bytes()
-    binary = None
-    try:
-        if path.suffix.lower() == ".glb":
-            if len(data) < 20:
-                raise ValueError("too short for a GLB header")
-            magic, version, length = struct.unpack_from("<III", data, 0)
-            if magic != _GLB_MAGIC or version != 2:
-                raise ValueError("not a glTF 2.0 binary (bad magic or version)")
-            if length > len(data):
-                raise ValueError(f"header says {length} bytes, file has {len(data)}")
-            text, offset = None, 12
-            while offset + 8 <= length:
-                chunk_length, chunk_type = struct.unpack_from("<II", data, offset)
-                chunk = data[offset + 8:offset + 8 + chunk_length]
-                if len(chunk) != chunk_length:
-                    raise ValueError("truncated chunk")
-                if chunk_type == _GLB_JSON and text is None:
-                    text = chunk
-                elif chunk_type == _GLB_BIN and binary is None:
-                    binary = chunk
-                offset += 8 + chunk_length
-            if text is None:
-                raise ValueError("no JSON chunk")
-        else:
-            text = data
-        header = json.loads(text.decode("utf-8"))
-    except (ValueError, UnicodeDecodeError, struct.error, RecursionError) as e:
-        raise ValueError(f"{path}: trimesh cannot read it as glTF: {e}") from None
-    if not isinstance(header, dict):
-        raise ValueError(f"{path}: glTF JSON is not an object")
-    return header, binary
-
-
-def _list_of_dicts(header: dict, key: str, path: Path) -> list:
-    items = header.get(key, [])
-    if not isinstance(items, list) or not all(isinstance(x, dict) for x in items):
-        raise ValueError(f"{path}: glTF '{key}' must be a list of objects")
-    return items
-
-
-def _check_buffers(header: dict, path: Path):
-    """External buffers must be regular files beside the room (no devices, no huge reads)."""
-    for i, b in enumerate(_list_of_dicts(header, "buffers", path)):
-        uri = b.get("uri")
-        if uri is None or (isinstance(uri, str) and uri.startswith("data:")):
-            continue
-        if not isinstance(uri, str):
-            raise ValueError(f"{path}: buffer {i} has a non-string uri")
-        target = (path.parent / uri)
-        if not target.is_file():
-            raise FileNotFoundError(f"{path}: buffer {i} file {uri!r} not found")
-        if target.stat().st_size > MAX_FILE_BYTES:
-            raise ValueError(f"{path}: buffer {i} file {uri!r} is too large")
-
-
-_COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
-_TYPE_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
-
-
-def _check_accessors(header: dict, path: Path):
-    """Every accessor within its buffer view and every view within its buffer, before trimesh
-    allocates anything (a hostile count would otherwise ask for terabytes)."""
-    buffers = _list_of_dicts(header, "buffers", path)
-    views = _list_of_dicts(header, "bufferViews", path)
-
-    def integer(x, what):
-        if isinstance(x, bool) or not isinstance(x, int) or not 0 <= x <= MAX_FILE_BYTES:
-            raise ValueError(f"{path}: glTF {what} must be an integer in [0, {MAX_FILE_BYTES}], "
-                             f"got {x!r}")
-        return x
-
-    for i, v in enumerate(views):
-        b = integer(v.get("buffer", -1), f"bufferViews[{i}].buffer")
-        if b >= len(buffers):
-            raise ValueError(f"{path}: glTF bufferViews[{i}] names a missing buffer")
-        end = integer(v.get("byteOffset", 0), "byteOffset") + integer(v.get("byteLength", -1),
-                                                                        "byteLength")
-        if end > integer(buffers[b].get("byteLength", -1), f"buffers[{b}].byteLength"):
-            raise ValueError(f"{path}: glTF bufferViews[{i}] runs past its buffer")
-    for i, a in enumerate(_list_of_dicts(header, "accessors", path)):
-        ct, kind = a.get("componentType"), a.get("type")
-        size = _COMPONENT_BYTES.get(ct) if isinstance(ct, int) else None
-        width = _TYPE_WIDTH.get(kind) if isinstance(kind, str) else None
-        if size is None or width is None:
-            raise ValueError(f"{path}: glTF accessors[{i}] has a bad componentType or type")
-        nbytes = integer(a.get("count", -1), f"accessors[{i}].count") * size * width
-        if "sparse" in a:
-            raise ValueError(f"{path}: glTF accessors[{i}]: sparse accessors are not supported")
-        if "bufferView" not in a:  # all zeros (sparse is refused): no reason to be large
-            if nbytes > 1 << 20:
-                raise ValueError(f"{path}: glTF accessors[{i}] has no buffer view and "
-                                 f"{a['count']} elements")
-            continue
-        view = integer(a["bufferView"], f"accessors[{i}].bufferView")
-        if view >= len(views):
-            raise ValueError(f"{path}: glTF accessors[{i}] names a missing buffer view")
-        stride = views[view].get("byteStride", size * width)
-        integer(stride, f"bufferViews[{view}].byteStride")
-        need = integer(a.get("byteOffset", 0), "byteOffset") + (
-            0 if nbytes == 0 else stride * (nbytes // (size * width) - 1) + size * width)
-        if need > views[view].get("byteLength", 0):
-            raise ValueError(f"{path}: glTF accessors[{i}] runs past its buffer view")
-
-
-def _check_node_tree(header: dict, path: Path):
-    """glTF nodes form trees (one parent at most, no cycles); and a bounded depth, since
-    trimesh's scene graph slows down quadratically with it (a hostile file could stall us)."""
-    nodes = _list_of_dicts(header, "nodes", path)
-    if len(nodes) > MAX_NODES:
-        raise ValueError(f"{path}: {len(nodes)} glTF nodes, more than {MAX_NODES}")
-    parent = {}
-    for i, n in enumerate(nodes):
-        children = n.get("children", [])
-        if not isinstance(children, list):
-            raise ValueError(f"{path}: node {i} has non-list children")
-        for c in children:
-            if isinstance(c, bool) or not isinstance(c, int) or not 0 <= c < len(nodes):
-                raise ValueError(f"{path}: node {i} has a child {c!r} that is not a node")
-            if c in parent or c == i:
-                raise ValueError(f"{path}: node {c} has two parents or is its own child "
-                                 f"(glTF nodes form trees)")
-            parent[c] = i
-    for i in range(len(nodes)):
-        depth, j = 0, i
-        while j in parent:
-            j, depth = parent[j], depth + 1
-            if depth > MAX_NODE_DEPTH:
-                raise ValueError(f"{path}: node {i} is nested more than {MAX_NODE_DEPTH} deep "
-                                 f"(or in a cycle)")
-
-
 def _gltf_material(header: dict, index, path: Path, node: str) -> tuple[tuple, tuple]:
-    materials = _list_of_dicts(header, "materials", path)
+    materials = list_of_dicts(header, "materials", path)
     if not isinstance(index, int) or not 0 <= index < len(materials):
         raise ValueError(f"{path}: node {node!r} has no material (glTF's default is white, "
                          f"albedo 1)")
@@ -265,10 +127,14 @@ def _gltf_material(header: dict, index, path: Path, node: str) -> tuple[tuple, t
     return albedo, emission
 
 
-def _numbers(values, n: int, path: Path, node: str, what: str) -> tuple:
+def _numbers(values, n: int, path: Path, node: str, what: str, text: bool = False) -> tuple:
+    """n finite numbers (JSON numbers; decimal strings only where the format is text: OBJ)."""
     try:
+        if isinstance(values, (str, bytes)) or any(
+                isinstance(x, bool) or isinstance(x, (str, bytes)) != text for x in values):
+            raise TypeError
         out = tuple(float(x) for x in values)
-        if len(out) != n or any(isinstance(x, bool) for x in values):
+        if len(out) != n:
             raise TypeError
     except (TypeError, ValueError):
         raise ValueError(f"{path}: node {node!r}: {what} must be {n} numbers, got "
@@ -278,40 +144,25 @@ def _numbers(values, n: int, path: Path, node: str, what: str) -> tuple:
     return out
 
 
-def _gltf_nodes(path: Path) -> list[_Node]:
+def _gltf_nodes(path: Path, data: bytes) -> list[_Node]:
+    """The drawn mesh instances of a glTF file, checked first (room_gltf) and then read by
+    trimesh from what room_gltf hands it (the drawn meshes' positions and indices only)."""
     import trimesh
 
-    header, binary = _read_gltf(path)
-    _check_buffers(header, path)
-    _check_accessors(header, path)
-    _check_node_tree(header, path)
-    nodes = _list_of_dicts(header, "nodes", path)
-    for key in ("meshes", "materials", "accessors", "bufferViews", "scenes"):
-        _list_of_dicts(header, key, path)
-    # Tag nodes and materials so that what trimesh returns can be traced back to the JSON.
-    tagged = copy.deepcopy(header)
-    original_names = []
-    for i, n in enumerate(tagged.get("nodes", [])):
-        original_names.append(n.get("name") if isinstance(n.get("name"), str) else f"node{i}")
-        extras = n.get("extras")
-        n["extras"] = {_TAG: i}
+    header, binary = read_gltf(path, data)
+    drawn = check_gltf(header, path)
+    nodes = header.get("nodes", [])
+    names = [n["name"] if isinstance(n.get("name"), str) else f"node{i}"
+             for i, n in enumerate(nodes)]
+    for i, n in enumerate(nodes):
         for k in ("matrix", "translation", "rotation", "scale"):
             if k in n:
                 _numbers(n[k], {"matrix": 16, "translation": 3, "rotation": 4, "scale": 3}[k],
-                         path, original_names[-1], k)
-        if extras is not None and not isinstance(extras, dict):
-            extras = {}
-    for i, m in enumerate(tagged.get("materials", [])):
-        m["name"] = f"{_MATERIAL_TAG}{i}"
-    text = json.dumps(tagged).encode("utf-8")
+                         path, names[i], k)
+    text, files = trimesh_input(header, binary, path, drawn)
     try:
-        if binary is not None or path.suffix.lower() == ".glb":
-            blob = _glb_bytes(text, binary)
-            scene = trimesh.load(io.BytesIO(blob), file_type="glb", force="scene", process=False)
-        else:
-            resolver = trimesh.resolvers.FilePathResolver(str(path.parent / "x.gltf"))
-            scene = trimesh.load(io.BytesIO(text), file_type="gltf", resolver=resolver,
-                                 force="scene", process=False)
+        scene = trimesh.load(io.BytesIO(text), file_type="gltf", resolver=files, force="scene",
+                             process=False)
     except OSError:
         raise
     except Exception as e:  # trimesh raises anything from KeyError to AssertionError
@@ -325,19 +176,19 @@ def _gltf_nodes(path: Path) -> list[_Node]:
         forest = scene.graph.transforms
         edge = forest.edge_data.get((forest.parents.get(frame), frame), {})
         meta = edge.get("metadata") or forest.node_data.get(frame, {}).get("metadata") or {}
-        index = meta.get(_TAG)
+        index = meta.get(NODE_TAG)
         if not isinstance(index, int):
             raise ValueError(f"{path}: cannot trace trimesh node {frame!r} back to the file")
-        node_name = original_names[index]
         extras = nodes[index].get("extras")
         material = getattr(getattr(geometry.visual, "material", None), "name", None)
-        material_index = (int(material[len(_MATERIAL_TAG):]) if isinstance(material, str)
-                          and material.startswith(_MATERIAL_TAG) else None)
-        vertices, triangles = _transformed(path, node_name, matrix, geometry)
-        node = _Node(node_name, vertices, triangles,
+        material_index = (int(material[len(MATERIAL_TAG):]) if isinstance(material, str)
+                          and material.startswith(MATERIAL_TAG) else None)
+        vertices, triangles = _transformed(path, names[index], matrix, geometry)
+        node = _Node(names[index], vertices, triangles,
                      extras=extras if isinstance(extras, dict) else {})
         if _placeholder_key(node) is None:
-            node.albedo, node.emission = _gltf_material(header, material_index, path, node_name)
+            node.albedo, node.emission = _gltf_material(header, material_index, path,
+                                                        names[index])
         out.append((index, node))
     return [node for _, node in sorted(out, key=lambda item: item[0]) if node is not None]
 
@@ -427,10 +278,21 @@ def _glb_bytes(text: bytes, binary: bytes | None) -> bytes:
 
 # --- OBJ and PLY -------------------------------------------------------------------------------
 
-def _parse_mtl(path: Path) -> dict[str, dict]:
-    """newmtl / Kd / Ke of an .mtl file, at full precision."""
+class _Files(dict):
+    """The files trimesh may ask a loader's resolver for, read beforehand: a name missing here
+    is not opened on demand. file_name: the room file's name (trimesh names an unnamed OBJ
+    object after it)."""
+    file_name = None
+
+
+_MTL_MAPS = ("map_", "bump", "disp", "decal", "refl", "norm")  # texture statements of an MTL
+
+
+def _parse_mtl(text: str, lib: Path, room: Path) -> dict[str, dict]:
+    """newmtl / Kd / Ke of an .mtl file, at full precision. The texture maps it names are
+    never read (the gallery uses Kd and Ke), but each must be a regular file or missing."""
     materials, current = {}, None
-    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+    for line in text.splitlines():
         parts = line.split()
         if not parts:
             continue
@@ -438,23 +300,52 @@ def _parse_mtl(path: Path) -> dict[str, dict]:
             current = materials.setdefault(" ".join(parts[1:]), {})
         elif parts[0] in ("Kd", "Ke") and current is not None:
             current[parts[0]] = parts[1:]
+        elif parts[0].lower().startswith(_MTL_MAPS) and len(parts) >= 2:
+            image = lib.parent / parts[-1]  # options (-s 1 1 1 ...) come before the file
+            check_regular(image, f"{room}: {lib.name}: {parts[0]} file {parts[-1]!r}",
+                          missing_ok=True)
     return materials
 
 
-def _obj_nodes(path: Path) -> list[_Node]:
-    import trimesh
-
-    mtl, objects = {}, {}
-    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+def _obj_libraries(path: Path, text: str) -> tuple[dict, _Files, dict]:
+    """The materials of every mtllib the OBJ names (read safely; a missing one gives none),
+    those files for trimesh's resolver, and the objects' order in the file."""
+    mtl, files, objects = {}, _Files(), {}
+    files.file_name = path.name
+    for line in text.splitlines():
         if line.startswith("mtllib") and len(line.split(maxsplit=1)) == 2:
-            lib = path.parent / line.split(maxsplit=1)[1].strip()
-            if lib.is_file() and lib.stat().st_size < MAX_FILE_BYTES:
-                mtl.update(_parse_mtl(lib))
+            name = line.split(maxsplit=1)[1].strip()
+            lib = path.parent / name
+            what = f"{path}: mtllib {name!r}"
+            if name in files or check_regular(lib, what, missing_ok=True) is None:
+                continue
+            data = read_regular(lib, what, MAX_FILE_BYTES)
+            files[name] = data
+            mtl.update(_parse_mtl(data.decode("utf-8", errors="replace"), lib, path))
         elif line.startswith("o ") and len(line.split(maxsplit=1)) == 2:
             objects.setdefault(line.split(maxsplit=1)[1].strip(), len(objects))
+    return mtl, files, objects
+
+
+def _count_obj_faces(path: Path, text: str):
+    """The OBJ's triangles (a face of k corners is k - 2), before trimesh expands them."""
+    triangles = 0
+    for line in text.splitlines():
+        if line.startswith("f ") or line.startswith("f\t"):
+            triangles += max(len(line.split()) - 3, 0)
+    check_triangles(path, triangles)
+
+
+def _obj_nodes(path: Path, data: bytes) -> list[_Node]:
+    import trimesh
+
+    text = data.decode("utf-8", errors="replace")
+    _count_obj_faces(path, text)
+    mtl, files, objects = _obj_libraries(path, text)
     try:
-        scene = trimesh.load(str(path), file_type="obj", force="scene", process=False,
-                             split_objects=True, group_material=True, maintain_order=True)
+        scene = trimesh.load(io.BytesIO(data), file_type="obj", resolver=files, force="scene",
+                             process=False, split_objects=True, group_material=True,
+                             maintain_order=True)
     except OSError:
         raise
     except Exception as e:
@@ -473,8 +364,8 @@ def _obj_nodes(path: Path) -> list[_Node]:
             if material not in mtl:
                 raise ValueError(f"{path}: node {name!r} has no material in the .mtl")
             m = mtl[material]
-            node.albedo = _numbers(m.get("Kd", ["1", "1", "1"])[:3], 3, path, name, "Kd")
-            node.emission = _numbers(m.get("Ke", ["0", "0", "0"])[:3], 3, path, name, "Ke")
+            node.albedo = _numbers(m.get("Kd", ["1", "1", "1"])[:3], 3, path, name, "Kd", True)
+            node.emission = _numbers(m.get("Ke", ["0", "0", "0"])[:3], 3, path, name, "Ke", True)
         out.append((objects.get(name, len(objects) + order.index(geometry_name)), node))
     return [node for _, node in sorted(out, key=lambda item: item[0])]  # file order
 
@@ -486,11 +377,26 @@ def _obj_object_name(geometry_name: str, material, mtl) -> str:
     return geometry_name
 
 
-def _ply_nodes(path: Path) -> list[_Node]:
+def _check_ply_header(path: Path, data: bytes):
+    """The PLY header's element counts within the budget, before trimesh allocates them (a
+    face has at least one triangle)."""
+    end = data.find(b"end_header", 0, 1 << 20)
+    for line in data[:end if end >= 0 else 1 << 20].decode("ascii", "replace").splitlines():
+        parts = line.split()
+        if len(parts) == 3 and parts[0] == "element" and parts[2].isdigit():
+            count = int(parts[2])
+            if parts[1] == "face":
+                check_triangles(path, count, " (faces)")
+            elif count > MAX_VERTICES:
+                raise ValueError(f"{path}: {count} {parts[1]} elements, more than {MAX_VERTICES}")
+
+
+def _ply_nodes(path: Path, data: bytes) -> list[_Node]:
     import trimesh
 
+    _check_ply_header(path, data)
     try:
-        mesh = trimesh.load(str(path), file_type="ply", force="mesh", process=False)
+        mesh = trimesh.load(io.BytesIO(data), file_type="ply", force="mesh", process=False)
         raw = mesh.metadata.get("_ply_raw", {})
         surface_of_face = np.asarray(raw["face"]["data"]["surface"], dtype=np.int64).reshape(-1)
         table = raw["surface"]["data"]
@@ -649,8 +555,7 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
             name = node.extras.get("scene") or name
             continue
         total += len(node.triangles)
-        if total > MAX_TRIANGLES:
-            raise ValueError(f"{path}: more than {MAX_TRIANGLES} triangles")
+        check_triangles(path, total)
         if _placeholder_key(node) is not None:
             slots.append(_slot(node, sizes, path))
             continue
@@ -808,18 +713,22 @@ def write_gltf(nodes: list[dict], path, roots: list[int] | None = None,
         header["nodes"].append(out)
     if roots is None:
         roots = [i for i in range(len(nodes)) if i not in children_of_someone]
-    header["scenes"] = [{"nodes": list(roots)}]
+    header["scenes"] = [{"nodes": list(roots)} if roots else {}]
     if scene_name:
         header["scenes"][0]["name"] = scene_name
     if uses_strength:
         header["extensionsUsed"] = ["KHR_materials_emissive_strength"]
     blob.extend(b"\0" * (-len(blob) % 4))
     header["buffers"] = [{"byteLength": len(blob)}]
+    for key in ("nodes", "meshes", "materials", "accessors", "bufferViews", "buffers"):
+        if not header[key] or not blob and key == "buffers":  # the schema: non-empty, or none
+            del header[key]
     if path.suffix.lower() == ".glb":
-        data = _glb_bytes(json.dumps(header).encode("utf-8"), bytes(blob))
+        data = _glb_bytes(json.dumps(header).encode("utf-8"), bytes(blob) if blob else None)
     else:
-        header["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
-                                       + base64.b64encode(bytes(blob)).decode("ascii"))
+        if blob:
+            header["buffers"][0]["uri"] = ("data:application/octet-stream;base64,"
+                                           + base64.b64encode(bytes(blob)).decode("ascii"))
         data = json.dumps(header, indent=1).encode("utf-8")
     _write_whole(path, data)
     return path
