@@ -225,7 +225,9 @@ def test_render_cli_bad_room_input(tmp_path, red_pack, gigascroll_cli, args, mes
 
 def test_stream_makes_the_views_tiles_resident(tmp_path):
     """Close to a fine painting the view asks for level-0 tiles that are not pinned; stream()
-    inserts exactly the missing ones, after which the feedback's requests all hit."""
+    inserts exactly the missing ones and their missing parents (the coarser level trilinear
+    filtering reads), after which the feedback's requests and their parents all hit."""
+    from gigascroll.gallery.tile_keys import parent_keys
     from gallery_checks import gradient_pack
 
     pack = gradient_pack(tmp_path / "g.pack", size=(1024, 512))
@@ -234,6 +236,7 @@ def test_stream_makes_the_views_tiles_resident(tmp_path):
     cam = g.Camera([0, 1.5, -1.5], [0, 1.5, -2], [0, 1, 0], 50, resolution=(96, 64))
     keys = gal.render_view(cam, width=96, height=64)["keys"]
     wanted = np.unique(keys[keys != g.NO_REQUEST])
+    wanted = np.union1d(wanted, parent_keys(wanted, np.array([p.levels for p in pack.paintings])))
     before = vt.stats()["resident"]
     missing = len(vt.request(wanted))
     assert missing > 0

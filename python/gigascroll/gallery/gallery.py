@@ -263,16 +263,23 @@ class Gallery(_core._Gallery):
         return (out, dict(d)) if hits else out
 
     def stream(self, camera: Camera, vt, rounds: int = 3) -> int:
-        """Makes the tiles this view asks for resident: the feedback pass at the camera's full
+        """Makes the tiles this view reads resident: the feedback pass at the camera's full
         resolution, then each missing tile read from the pack and inserted (synchronously, for
-        stills; the frame loop streams asynchronously). Repeats while new tiles are missing
-        (at most `rounds` times). Returns the number of tiles inserted."""
+        stills; the frame loop streams asynchronously): the requested tiles and their parents
+        one level coarser, which trilinear filtering also reads (as the walk loads them;
+        without them a pixel blended its level with a coarser pinned one, tile by tile).
+        Repeats while new tiles are missing (at most `rounds` times). Returns the number of
+        tiles inserted."""
         from .._core import NO_REQUEST, unpack_requests
+        from .tile_keys import parent_keys
 
+        levels = np.array([p.levels for p in self.pack.paintings], np.int64)
         inserted = 0
         for _ in range(int(rounds)):
             keys = self.render_view(camera, width=camera.width, height=camera.height)["keys"]
             keys = np.unique(keys[keys != NO_REQUEST])
+            # parents first: the LRU keeps the finer tiles should a small cache overflow
+            keys = np.concatenate([parent_keys(keys, levels), keys])
             missing = vt.request(keys) if len(keys) else keys
             if len(missing) == 0:
                 break

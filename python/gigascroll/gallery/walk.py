@@ -28,7 +28,9 @@ from .. import runtime
 from .. import views as v
 from ..frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
 from ..views.exhibition import Headset
+from .frame_rates import FPS_MEANING
 from .room import RoomSpec
+from .tile_keys import parent_keys
 
 __all__ = ["FrameSource", "ExhibitionSource", "GallerySource", "walk_path", "stops_of", "GalleryWalk", "WALK_STAGES", "DISPLAY_PARTS",
            "compose_frame", "tone_map", "lens_in_view", "parent_keys"]
@@ -191,21 +193,6 @@ def check_room_paintings(room: RoomSpec, pack) -> None:
         raise ValueError(f"room {room.name!r} has no paintings")
     for slot in room.paintings:
         painting_index(pack, slot.painting)
-
-
-def parent_keys(keys: np.ndarray, levels: np.ndarray) -> np.ndarray:
-    """The tiles one level coarser of request keys (the second level trilinear filtering
-    reads), dropping those already at a painting's coarsest level. levels: per painting id."""
-    k = np.asarray(keys, np.uint64).ravel()
-    k = k[k != v.NO_REQUEST]
-    painting = (k >> np.uint64(37)).astype(np.int64)
-    level = ((k >> np.uint64(32)) & np.uint64(0x1F)).astype(np.int64)
-    keep = level + 1 < levels[painting]
-    k, level = k[keep], level[keep]
-    morton = k & np.uint64(0xFFFFFFFF)
-    base = k & ~np.uint64((0x1F << 32) | 0xFFFFFFFF)
-    return np.unique(base | ((level + 1).astype(np.uint64) << np.uint64(32))
-                     | (morton >> np.uint64(2)))
 
 
 def lit_exposure() -> float:
@@ -498,8 +485,10 @@ class GalleryWalk:
             "right_display_ms": statistics.mean(x["right_display_ms"] for x in r),
             "reused_share": statistics.mean(x["reused_share"] for x in r),
             "stops": stops_of(r),
+            "fps_meaning": dict(FPS_MEANING),  # what fps and fps_from_frame_time measure
         }
         if "error" in r[0]:
+            out["oracle_ms"] = statistics.mean(x["oracle_ms"] for x in r)
             out["error_mean"] = statistics.mean(x["error"] for x in r)
             out["error_final"] = r[-1]["error"]
         return out
