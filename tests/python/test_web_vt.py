@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import gigascroll as g
-from browser import browser, chromium_path, open_page, serve_pack  # noqa: F401 - fixtures
+from browser import browser, chromium_path, open_page, pack_scene, serve_pack  # noqa: F401 - fixtures
 
 TILE, BORDER = 128, 4
 SIZES = [(4000, 300), (1500, 900)]  # a long one with four tail levels, a squarer one
@@ -36,7 +36,8 @@ def vt_page(browser, vt_pack):  # noqa: F811
     """The test page on a server of the pack, its virtual texture made (tails resident)."""
     with serve_pack(vt_pack) as url:
         page = open_page(browser, f"{url}/client/vt/test/harness.html", "window.vtTestReady === true")
-        info = page.evaluate("(slots) => vtTest.init({slots})", list(SLOTS))
+        info = page.evaluate("([slots, scene]) => vtTest.init({slots, scene})",
+                             [list(SLOTS), pack_scene(vt_pack)])
         yield page, info
         page.close()
 
@@ -119,7 +120,7 @@ def test_gpu_sampler_after_evictions(vt_pack, browser):  # noqa: F811
     assert vt.stats()["evictions"] > 50
     with serve_pack(vt_pack) as url:
         page = open_page(browser, f"{url}/client/vt/test/harness.html")
-        page.evaluate("(slots) => vtTest.init({slots})", list(slots))
+        page.evaluate("([slots, scene]) => vtTest.init({slots, scene})", [list(slots), pack_scene(vt_pack)])
         page.evaluate("(keys) => vtTest.insertTiles(keys)", [list(k) for k in keys])
         assert page.evaluate("() => vt.cache.stats.evictions") == vt.stats()["evictions"]
         pr = probes(pack, rng, 800)
@@ -266,7 +267,8 @@ def test_streaming_loads_what_the_core_requests(browser, vt_pack):  # noqa: F811
               "reduction": POSES[k][2]} for v, k in enumerate((1, 3, 5))]
     with serve_pack(vt_pack) as url:
         page = open_page(browser, f"{url}/client/vt/test/harness.html")
-        page.evaluate("() => vtTest.init({slots: [20, 20], maxRequestsPerFrame: 8, maxUploadsPerFrame: 4})")
+        page.evaluate("(scene) => vtTest.init({scene, slots: [20, 20], maxRequestsPerFrame: 8, maxUploadsPerFrame: 4})",
+                      pack_scene(vt_pack))
         out = page.evaluate("([v, p]) => vtTest.stream(v, p, 400)", [views, PLACEMENTS])
         page.close()
     resident = {int(g.pack_request(*k)) for k in out["resident"]}

@@ -1,6 +1,7 @@
 // The virtual texture's test page (harness.html): window.vtTest drives the GPU virtual texture
 // without the app, for tests/python/test_web_vt.py and `gigascroll bench web`:
-//   await vtTest.init({slots})          the pack from /api/scene.json, its tails resident
+//   await vtTest.init({slots, scene})   the pack from scene (default /api/scene.json; the
+//                                       server has none without a room), tails resident
 //   await vtTest.insertTiles(keys)      fetch [p, l, x, y] tiles and make them resident
 //   vtTest.sampleProbes(probes)         [p, u, v, lod] x n -> vtSample's RGBA (float target)
 //   await vtTest.feedback(views, placements)
@@ -39,7 +40,7 @@ function compile(vsSource, fsSource) {
 const HEADER = "#version 300 es\nprecision highp float;\nprecision highp int;\n";
 
 async function init(options = {}) {
-  scene = await (await fetch("/api/scene.json")).json();
+  scene = options.scene || await (await fetch("/api/scene.json")).json();
   vt = new VirtualTexture(gl, scene.pack, { tiles: scene.tiles, ...options });
   await vt.ready;
   window.vt = vt;
