@@ -1,6 +1,13 @@
 """Rooms from files: glTF 2.0 (.gltf / .glb), OBJ (+ .mtl) and PLY, read through trimesh, as a
 `RoomSpec`; and `save_room`, which writes a `RoomSpec` back as such a file.
 
+Before trimesh reads anything, the file is checked from its structure: every file it names
+is a regular file, read safely and only if used (room_assets); a glTF file follows the glTF 2.0
+specification (its JSON Schema and the rules beyond it) and its drawn instances fit the
+triangle budget, counted from the node graph and the accessors' counts (room_gltf); OBJ faces
+and PLY elements are counted from the text. The budget is what the gallery can bake
+(room_assets.MAX_TRIANGLES).
+
 glTF: trimesh reads the geometry and the scene graph; every node's world transform (the
 product of its ancestors' matrix / TRS) is applied to its vertices, and a node whose transform
 mirrors (negative determinant) has its triangles' winding reversed, as glTF specifies, so
