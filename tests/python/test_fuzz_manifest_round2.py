@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import shutil
 
 import numpy as np
@@ -308,3 +309,106 @@ def test_fuzz_colour_records_and_hostile_values_agree(base):
         assert len({v == "ok" for v in out.values()}) == 1, {k: v[:200] for k, v in out.items()}
 
     run()
+
+
+# ----------------------------------------------------------------------------- resumed shards
+
+@pytest.fixture(scope="module")
+def failed_build(tmp_path_factory):
+    """A sharded build (process pool) that failed on painting 1, a truncated PNG whose
+    header reads: shard 0 is complete in OUT.shards/. Returns (inputs, out, full bytes of
+    painting 1's file)."""
+    from PIL import Image
+    root = tmp_path_factory.mktemp("resume-colour")
+    rng = np.random.default_rng(9)
+    good, bad = root / "a.png", root / "b.png"
+    Image.fromarray(rng.integers(0, 256, (40, 50, 3), np.uint8)).save(good)
+    Image.fromarray(rng.integers(0, 256, (300, 300, 3), np.uint8)).save(bad)
+    full = bad.read_bytes()
+    bad.write_bytes(full[:len(full) // 3])
+    out = root / "o.pack"
+    with pytest.raises(OSError, match="corrupt or truncated"):
+        build_pack([good, bad], out, tile_size=16, border=2, workers=1, executor="processes")
+    return [good, bad], out, full
+
+
+def _edited(record: dict, edit) -> dict:
+    r = copy.deepcopy(record)
+    edit(r)
+    return r
+
+
+# (what, edit of shard 0's record, whether resume may reuse the shard)
+RECORD_EDITS = [
+    ("unedited", lambda r: None, True),
+    ("colour mode off the schema", lambda r: r["colour"].update(mode="maybe"), False),
+    ("colour record dropped to a list", lambda r: r.update(colour=[1]), False),
+    ("colour NaN", lambda r: r["colour"].update(transform=float("nan")), False),
+    ("colour valid but edited", lambda r: r["colour"].update(stored_space="source"), False),
+    ("name edited", lambda r: r.update(name="other"), False),
+    ("width as a string", lambda r: r.update(width=str(r["width"])), False),
+    ("source not a string", lambda r: r.update(source=None), False),
+    ("no digest (an older record)", lambda r: r.pop("record_xxh3"), False),
+    ("a lone surrogate in the name", lambda r: r.update(name="a\ud800"), False),
+]
+
+
+@pytest.mark.parametrize("what, edit, reusable", RECORD_EDITS, ids=[c[0] for c in RECORD_EDITS])
+def test_resume_reuses_only_unedited_valid_records(failed_build, tmp_path, what, edit, reusable):
+    from gigascroll.pack.shards import _completed_shard
+    _, out, _ = failed_build
+    shards = tmp_path / "s"
+    shutil.copytree(out.parent / "o.pack.shards", shards)
+    record = json.loads((shards / "shard-00000.json").read_text())
+    assert record["colour"]["mode"] == "convert"
+    (shards / "shard-00000.json").write_text(json.dumps(_edited(record, edit), allow_nan=True))
+    reused = _completed_shard(shards, 0, record["job"])
+    assert (reused is not None) == reusable
+
+
+def test_a_huge_record_is_not_read_in_full(failed_build, tmp_path):
+    from gigascroll.pack.shards import _completed_shard
+    _, out, _ = failed_build
+    shards = tmp_path / "s"
+    shutil.copytree(out.parent / "o.pack.shards", shards)
+    record = json.loads((shards / "shard-00000.json").read_text())
+    record["note"] = "x" * (4 << 20)
+    (shards / "shard-00000.json").write_text(json.dumps(record))
+    assert _completed_shard(shards, 0, record["job"]) is None
+
+
+def test_the_merge_checks_every_record():
+    from gigascroll.pack.shard_records import record_digest, record_problem
+    record = {"name": "a", "width": 5, "height": 7, "source": "a.png", "conversion": "none",
+              "colour": {"mode": "convert", "source_space": "assumed sRGB", "profile": None,
+                         "stored_space": "sRGB", "transform": "none"},
+              "tiles_xxh3": "0123456789abcdef", "index_xxh3": "0123456789abcdef"}
+    record["record_xxh3"] = record_digest(record)
+    assert record_problem(record) is None
+    bad = _edited(record, lambda r: r["colour"].update(mode="maybe"))
+    bad["record_xxh3"] = record_digest(bad)  # even with a matching digest
+    assert "colour" in record_problem(bad)
+    assert "tiles_xxh3" in record_problem(_edited(record, lambda r: r.update(tiles_xxh3="x")))
+
+
+def test_a_resumed_build_never_copies_an_edited_colour_record(failed_build):
+    """The issue's case: shard 0's colour record edited off the schema, then --resume. The
+    shard is rebuilt (its tile file is a new one), the pack opens in both readers and its
+    colour records are a single-process build's."""
+    inputs, out, full = failed_build
+    shards = out.parent / "o.pack.shards"
+    rec = shards / "shard-00000.json"
+    record = json.loads(rec.read_text())
+    record["colour"]["mode"] = "maybe"
+    rec.write_text(json.dumps(record))
+    old_tiles = os.stat(shards / "tiles-00000.bin").st_ino
+    inputs[1].write_bytes(full)  # painting 1 readable now
+    pack = build_pack(inputs, out, tile_size=16, border=2, workers=1, executor="processes",
+                      resume=True)
+    assert os.stat(out / "tiles-00000.bin").st_ino != old_tiles  # rebuilt, not reused
+    single = build_pack(inputs, out.parent / "single.pack", tile_size=16, border=2)
+    assert [p.colour for p in pack.paintings] == [p.colour for p in single.paintings]
+    with PurePack(out) as pure:
+        assert [p.colour for p in pure.paintings] == [p.colour for p in single.paintings]
+    assert (out / "manifest.json").read_bytes() == \
+        (out.parent / "single.pack" / "manifest.json").read_bytes()

@@ -38,6 +38,9 @@ def register(sub) -> None:
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                    help="build the shards on this Dask scheduler's workers (they must see the "
                    "output directory)")
+    p.add_argument("--timeout", type=float, default=None, metavar="SECONDS",
+                   help="bound on each wait for Dask: connecting to the scheduler (default 30 s), "
+                   "its first worker and any stretch without workers (default 60 s)")
     p.add_argument("--resume", action="store_true",
                    help="reuse the verified shards a failed sharded build left in OUTPUT.shards/")
     p.set_defaults(func=run)
@@ -54,7 +57,8 @@ def run(args) -> int:
                       force=args.force, layout=args.layout, seed=args.seed,
                       threads=args.threads, bc1_fit=args.bc1_fit, progress=True, colour=args.colour,
                       intent=args.intent, black_point_compensation=args.bpc,
-                      workers=args.workers, scheduler=args.scheduler, resume=args.resume)
+                      workers=args.workers, scheduler=args.scheduler, resume=args.resume,
+                      timeout=args.timeout)
     seconds = time.perf_counter() - t0
     mpx = sum(p.width * p.height for p in pack.paintings) / 1e6
     print(pack_summary(pack))

@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import _core
 from .._core import TilePack, painting_geometry
+from .cluster import check_timeout, scheduler_location
 from .colour import plan_colour
 from .images import ImageSource, open_image, require_utf8_path
 from ..outputs import Interrupted, check_output, replace_dir, signals_interrupt, temp_dir
@@ -124,7 +125,8 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                band_rows: int = 0, colour: str = "convert", intent: str = "relative",
                black_point_compensation: bool = True, workers: int = 0,
                scheduler: str | None = None, executor: str = "dask", resume: bool = False,
-               shard_hook: Callable[[int, str], None] | None = None) -> TilePack:
+               shard_hook: Callable[[int, str], None] | None = None,
+               timeout: float | None = None) -> TilePack:
     """Builds a tile pack at `out` from one image or a list of images (file paths or numpy
     arrays, one painting each) and returns it opened. The build goes into a temporary sibling
     directory renamed into place at the end, so a failed or interrupted build leaves nothing
@@ -139,6 +141,9 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     `out`'s directory), or with `executor="processes"` of a plain process pool; the pack is
     the same bytes as a single-process build. `resume=True` reuses the verified shards a
     failed sharded build left in `OUT.shards/`. `threads` is per worker there (default 1).
+    `timeout` bounds each wait on Dask, in seconds: connecting to the scheduler (default
+    30), its first worker and any stretch without workers (default 60); each ends in an
+    OSError naming the address and what it waited for. Only tcp:// addresses are supported.
     `shard_hook(index, name)`, if given, runs on the worker before each painting (tests)."""
     if isinstance(inputs, (str, os.PathLike, np.ndarray)):
         inputs = [inputs]
@@ -167,6 +172,9 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     if executor not in ("dask", "processes"):
         raise ValueError(f"unknown executor '{executor}' (expected dask or processes)")
     sharded = bool(workers) or scheduler is not None
+    timeout = check_timeout(timeout)
+    if scheduler is not None:
+        scheduler_location(scheduler)  # an unsupported address: now, before any work
     if resume and not sharded:
         raise ValueError("resume needs a sharded build (workers or scheduler)")
     out = Path(out)
@@ -184,7 +192,8 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         return _build(inputs, out, tile_size, border, codec, names, layout, seed, threads,
                       zstd_level, progress, band_rows, colour_options,
                       dict(sharded=sharded, workers=workers, scheduler=scheduler,
-                           executor=executor, resume=resume, hook=shard_hook), bc1_fit)
+                           executor=executor, resume=resume, hook=shard_hook,
+                           timeout=timeout), bc1_fit)
 
 
 def _mpx_bar():
@@ -226,7 +235,8 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
             build_sharded(inputs, sources, offsets, (table_w, table_h), info, out, opts,
                           workers=int(sharding["workers"]), scheduler=sharding["scheduler"],
                           executor=sharding["executor"], resume=sharding["resume"],
-                          progress=progress, hook=sharding["hook"], owned=_is_pack_dir)
+                          progress=progress, hook=sharding["hook"], owned=_is_pack_dir,
+                          timeout=sharding["timeout"])
             return TilePack(out)
 
         tmp = temp_dir(out)

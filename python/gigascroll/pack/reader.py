@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["PurePack", "PurePainting", "manifest_schema", "validate_manifest",
-           "parse_manifest_text", "tile_key", "tile_seed", "SCHEMA_PATH", "decode_bc1"]
+           "parse_manifest_text", "validate_colour_record", "tile_key", "tile_seed",
+           "SCHEMA_PATH", "decode_bc1"]
 
 SCHEMA_PATH = Path(__file__).with_name("manifest.schema.json")
 _HEADER = struct.Struct("<8sIIQQ")  # magic, version, entry size, count, data bytes
@@ -113,14 +114,32 @@ def _pattern(validator, pattern, instance, schema):
         yield jsonschema.ValidationError(f"{instance!r} does not match {pattern!r}")
 
 
-@lru_cache(maxsize=1)
-def _validator():
-    """Draft 2020-12 with the core's integers and ECMA-262 patterns."""
+@lru_cache(maxsize=2)
+def _validator(definition: str | None = None):
+    """Draft 2020-12 with the core's integers and ECMA-262 patterns, for the manifest or
+    for one of the schema's $defs."""
     import jsonschema
     base = jsonschema.Draft202012Validator
     checker = base.TYPE_CHECKER.redefine("integer", _is_json_integer)
+    schema = manifest_schema()
+    if definition is not None:
+        schema = {"$schema": schema["$schema"], "$defs": schema["$defs"],
+                  "$ref": f"#/$defs/{definition}"}
     return jsonschema.validators.extend(base, validators={"pattern": _pattern},
-                                        type_checker=checker)(manifest_schema())
+                                        type_checker=checker)(schema)
+
+
+def validate_colour_record(colour, where: str = "colour") -> None:
+    """A painting's colour record (the schema's $defs/colour) as both readers check it in a
+    manifest: OSError naming `where` if not."""
+    import jsonschema
+    _check_json_values(colour, where)
+    try:
+        _validator("colour").validate(colour)
+    except jsonschema.ValidationError as e:
+        path = "/".join(str(p) for p in e.absolute_path) or "(top level)"
+        raise OSError(f"{where}: does not match the schema's colour record at {path}: "
+                      f"{e.message[:200]}") from None
 
 
 def _json_value_problem(node, depth: int) -> str | None:

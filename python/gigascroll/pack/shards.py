@@ -5,10 +5,11 @@ pack without copying tile data (format version 2 keeps one tile file per paintin
 A shard is what a worker leaves in `OUT.shards/` for painting i: `tiles-NNNNN.bin` and
 `shard-NNNNN.idx` (written by the core's PackBuilder with first_painting = i: the same bytes
 a single-process build writes for that painting), then `shard-NNNNN.json` last, recording
-what it was built from and the XXH3-64 of both files. The merge (PackBuilder.assemble)
-writes index.bin and manifest.json and the directory is renamed to OUT. Until then no pack
-exists at OUT; a rerun with resume reuses every shard whose record matches the job and whose
-files still hash to what it recorded, and builds the rest."""
+what it was built from and the XXH3-64 of both files and of the record itself. The merge
+(PackBuilder.assemble) writes index.bin and manifest.json and the directory is renamed to
+OUT. Until then no pack exists at OUT; a rerun with resume reuses every shard whose record
+matches the job, follows the manifest schema and is unedited, and whose files are regular
+and still hash to what it recorded, and builds the rest (shard_records)."""
 
 from __future__ import annotations
 
@@ -25,11 +26,12 @@ import numpy as np
 
 from .. import _core
 from ..outputs import MARK, check_output, fsync_dir as _fsync_dir, owned_by, replace_dir, write_mark
+from .cluster import run_on_dask
 from .images import ImageSource, open_image
+from .shard_records import (NotRegularFile, file_hash as _file_hash, read_record, record_digest,
+                            record_problem, require_regular_or_missing)
 
 __all__ = ["build_sharded", "build_shard", "feed", "local_cluster", "publish"]
-
-_CHUNK = 1 << 22
 
 
 # ----------------------------------------------------------------------------- streaming
@@ -93,15 +95,6 @@ publish = replace_dir
 
 # ----------------------------------------------------------------------------- one shard
 
-def _file_hash(path: Path) -> str:
-    import xxhash
-    h = xxhash.xxh3_64()
-    with open(path, "rb") as f:
-        while chunk := f.read(_CHUNK):
-            h.update(chunk)
-    return h.hexdigest()
-
-
 def _shard_paths(directory: Path, index: int) -> tuple[Path, Path, Path]:
     return (directory / f"tiles-{index:05d}.bin", directory / f"shard-{index:05d}.idx",
             directory / f"shard-{index:05d}.json")
@@ -153,6 +146,7 @@ def build_shard(directory: str, index: int, image, name: str, opts: dict, job: d
                   "conversion": source.conversion, "colour": source.colour,
                   "tiles_xxh3": _file_hash(work / tiles.name),
                   "index_xxh3": _file_hash(work / idx.name)}
+        record["record_xxh3"] = record_digest(record)
         with open(work / rec_path.name, "w") as f:
             json.dump(record, f)
             f.flush()
@@ -165,14 +159,21 @@ def build_shard(directory: str, index: int, image, name: str, opts: dict, job: d
 
 
 def _completed_shard(directory: Path, index: int, job: dict) -> dict | None:
-    """The record of a shard that was completed for this job and still verifies, else None."""
+    """The record of a shard that was completed for this job and still verifies, else None:
+    its record valid by the manifest schema and unedited (shard_records). NotRegularFile
+    where a FIFO, a device (a link to /dev/zero) or a directory stands in for one of its
+    files: such a shard directory was tampered with; nothing of it is read or removed."""
     tiles, idx, rec_path = _shard_paths(directory, index)
+    for path in (tiles, idx, rec_path):
+        require_regular_or_missing(path)
     try:
-        record = json.loads(rec_path.read_text())
-        if record.get("job") != job:
+        record = read_record(rec_path)
+        if record.get("job") != job or record_problem(record) is not None:
             return None
         if _file_hash(tiles) != record["tiles_xxh3"] or _file_hash(idx) != record["index_xxh3"]:
             return None
+    except NotRegularFile:
+        raise
     except (OSError, ValueError, KeyError, TypeError, RecursionError):
         return None
     return record
@@ -191,39 +192,7 @@ def local_cluster(workers: int):
     with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_":
                           str(1 << 28)}):
         return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                            dashboard_address=":0", silence_logs=logging.ERROR)
-
-
-def _run_dask(tasks, workers: int, scheduler: str | None, on_done) -> None:
-    try:
-        from dask.distributed import Client, as_completed
-    except ImportError:
-        raise ValueError("sharded builds on Dask need dask.distributed "
-                         "(pip install 'gigascroll[cluster]')") from None
-    cluster = None
-    if scheduler is not None:
-        if not isinstance(scheduler, str) or "://" not in scheduler:
-            raise ValueError(f"scheduler must be an address like tcp://HOST:PORT, got {scheduler!r}")
-        try:
-            client = Client(scheduler, timeout="20s")
-        except (OSError, TimeoutError) as e:
-            raise OSError(f"cannot reach the Dask scheduler at {scheduler}: {e}") from None
-    else:
-        cluster = local_cluster(workers)
-        client = Client(cluster)
-    try:
-        futures = {client.submit(build_shard, *args, key=f"gigascroll-shard-{i}-{os.getpid()}",
-                                 pure=False): i for i, args in tasks}
-        try:
-            for fut, record in as_completed(futures, with_results=True):
-                on_done(futures.pop(fut), record)
-                fut.release()  # a lost worker must not make the cluster recompute it
-        finally:
-            client.cancel(list(futures))
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+                            dashboard_address=":0", silence_logs=logging.CRITICAL)
 
 
 def _run_processes(tasks, workers: int, on_done) -> None:
@@ -251,7 +220,8 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
                   info: dict, out: Path, opts: dict, *, workers: int, scheduler: str | None,
                   executor: str, resume: bool, progress: bool,
                   hook: Callable[[int, str], None] | None,
-                  owned: Callable[[Path], bool] | None = None) -> None:
+                  owned: Callable[[Path], bool] | None = None,
+                  timeout: float | None = None) -> None:
     """The sharded build of build_pack (which has opened `sources` for their sizes and names
     and planned the layout): shards in OUT.shards/, then the merge and the rename (over an
     existing pack only where `owned` says it is one)."""
@@ -272,9 +242,12 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
     tasks = [(i, (str(shard_dir), i, inputs[i], sources[i].name, opts, jobs[i], hook))
              for i in todo]
     bar = None
-    if progress and todo:
-        from tqdm import tqdm
-        bar = tqdm(total=n, initial=reused, unit="painting", desc="pack shards")
+
+    def start_bar() -> None:  # once the workers are there: a failed connection shows none
+        nonlocal bar
+        if progress and todo and bar is None:
+            from tqdm import tqdm
+            bar = tqdm(total=n, initial=reused, unit="painting", desc="pack shards")
 
     def on_done(i: int, record: dict) -> None:
         records[i] = record
@@ -285,9 +258,11 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
         if tasks:
             workers = max(1, min(workers, len(tasks)))  # no idle worker processes
             if executor == "processes" and scheduler is None:
+                start_bar()
                 _run_processes(tasks, workers, on_done)
             else:
-                _run_dask(tasks, workers, scheduler, on_done)
+                run_on_dask(build_shard, tasks, workers, scheduler, on_done, local_cluster,
+                            timeout, on_ready=start_bar)
     except BaseException as e:
         if bar is not None:
             bar.close()
@@ -306,6 +281,9 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
 
     for i, s in enumerate(sources):  # what the workers saw must be what the layout planned
         r = records[i]
+        if (why := record_problem(r)) is not None:  # nothing unchecked goes into the manifest
+            raise OSError(f"shard {i} in {shard_dir}: its record cannot go into a manifest: "
+                          f"{why}")
         if (r["name"], r["width"], r["height"]) != (s.name, s.width, s.height):
             raise OSError(f"shard {i} holds '{r['name']}' {r['width']} x {r['height']}, "
                           f"expected '{s.name}' {s.width} x {s.height}")
