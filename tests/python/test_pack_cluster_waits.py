@@ -254,3 +254,52 @@ def test_a_failing_task_prints_no_dask_worker_block(tmp_path):
     assert r.returncode == 2, r.stderr[-3000:]
     assert r.stderr.strip().splitlines() == ["error: painting painting1 is unreadable"], \
         r.stderr[-3000:]
+
+
+class FakeClient:
+    """What _gather looks at: the client's status and the scheduler's worker list."""
+
+    def __init__(self, status="running", workers=None):
+        self.status = status
+        self.workers = workers or {}
+
+    def scheduler_info(self):
+        return {"workers": self.workers}
+
+
+def test_tasks_waiting_on_a_cluster_without_workers_end_in_one_line(monkeypatch):
+    """All workers gone mid-build: the tasks would wait forever; after `timeout` seconds
+    without a worker the build ends naming the scheduler (a stand-in client and a wait that
+    never sees a task finish)."""
+    import asyncio
+
+    import distributed
+
+    from gigascroll.pack import cluster
+
+    def never_done(fs, timeout=None, return_when=None):
+        import time
+        time.sleep(timeout)
+        raise asyncio.TimeoutError()
+
+    monkeypatch.setattr(distributed, "wait", never_done)
+    monkeypatch.setattr(cluster, "_POLL", 0.05)
+    where = "the Dask scheduler at tcp://127.0.0.1:1"
+    with pytest.raises(OSError, match="has had no workers for 0.3 s.*2 shard"):
+        cluster._gather(FakeClient(), {"f1": 0, "f2": 1}, None, where, 0.3)
+    with pytest.raises(OSError, match="lost the connection to the Dask scheduler"):
+        cluster._gather(FakeClient(status="closed"), {"f1": 0}, None, where, 0.3)
+    # With a worker present the wait goes on (here: until the stand-in loses its scheduler).
+    client = FakeClient(workers={"tcp://w": {}})
+    calls = []
+
+    def poll(fs, timeout=None, return_when=None):
+        calls.append(1)
+        if len(calls) > 20:
+            client.status = "closed"
+        raise asyncio.TimeoutError()
+
+    monkeypatch.setattr(distributed, "wait", poll)
+    with pytest.raises(OSError, match="lost the connection"):
+        cluster._gather(client, {"f1": 0}, None, where, 0.01)
+    assert len(calls) > 20  # never "no workers" while one is there
