@@ -54,7 +54,7 @@ build: venv
 	CMAKE_BUILD_PARALLEL_LEVEL=$(JOBS) $(PIP) install -q --no-build-isolation --no-deps -e . 
 
 demo: build
-	$(VENV)/bin/gigascroll demo
+	$(VENV)/bin/gigascroll demo --workdir build/demo
 
 ctest: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)

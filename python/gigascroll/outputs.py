@@ -31,7 +31,7 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["MARK", "protected_reason", "refuse_protected", "check_output", "write_mark", "has_mark", "owned_by",
+__all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "check_output", "write_mark", "has_mark", "owned_by",
            "temp_dir", "atomic_file", "write_bytes", "write_text", "replace_dir",
            "write_image", "encode_image", "Interrupted", "signals_interrupt", "ignore_sigxfsz",
            "write_error", "WriteError", "oiio_reason"]
@@ -141,6 +141,16 @@ def has_mark(directory, command: str, **details) -> bool:
 def owned_by(command: str, **details) -> Callable[[Path], bool]:
     """The `owned` test of check_output for directories marked by `command`."""
     return lambda p: has_mark(p, command, **details)
+
+
+# ----------------------------------------------------------------------------- default places
+
+def beside(anchor, suffix: str) -> Path:
+    """Where an output made from `anchor` (a pack, an image, another output) goes when the
+    user names none: next to it and named after it, `shows/a.pack` -> `shows/a-walk` for
+    suffix "walk", wherever the command runs from. Absolute, so the command can say where."""
+    a = Path(os.path.abspath(anchor))
+    return a.parent / f"{a.stem or 'output'}-{suffix}"
 
 
 # ----------------------------------------------------------------------------- temporaries

@@ -11,8 +11,10 @@ def register(sub) -> None:
                        description="Synthesizes the built-in ink-landscape painting (about a "
                        "minute on 2 cores), builds its tile pack, prints the pack summary, "
                        "writes a PNG preview of a few levels and tiles, and walks through the lit "
-                       "scroll room (video, frames and report in build/demo/walk/).")
-    p.add_argument("--workdir", default="build/demo", help="output directory (default build/demo)")
+                       "scroll room (video, frames and report in WORKDIR/walk/).")
+    p.add_argument("--workdir", default="gigascroll-demo",
+                   help="output directory (default gigascroll-demo in the working directory; "
+                        "`make demo` passes build/demo)")
     p.add_argument("--width", type=int, default=60000, help="painting width (default 60000)")
     p.add_argument("--height", type=int, default=2400, help="painting height (default 2400)")
     p.add_argument("--seed", type=int, default=0, help="landscape variation (default 0)")
@@ -48,6 +50,7 @@ def run(args) -> int:
         render_room(work / "cornell.png")
     if not args.no_walk:
         gallery_walk(pack, work / "walk", args.eye, args.walk_seconds)
+    print(f"everything the demo made is in {work.resolve()}/")
     return 0
 
 
@@ -70,7 +73,8 @@ def gallery_walk(pack, out: Path, eye: str, seconds: float) -> None:
     res = record_walk(walk, out, settings={"room": "scroll", "eye": f"{w}x{h}",
                                            "seconds": seconds, "lighting": "baked"})
     s = res["summary"]
-    print(f"gallery walk: {s['frames']} frames at {w}x{h} per eye, {s['fps']:.1f} fps on this "
+    from ..gallery.frame_rates import fps_text
+    print(f"gallery walk: {s['frames']} frames at {w}x{h} per eye, {fps_text(s)} on this "
           f"machine, right eye reusing {100 * s['reused_share']:.0f} % of its pixels, hit rate "
           f"{s['hit_rate']:.3f}, error vs oracle {s['error_mean']:.2g} mean / "
           f"{s['error_final']:.2g} at the end: {out}/walk.mp4, {out}/report.md")

@@ -1,8 +1,10 @@
-"""`gigascroll gallery [PACK] [--room ...] [--path ...] [--eye WxH] ... --out DIR`: walk
-through the lit gallery and write the frames, the video, the report and the results."""
+"""`gigascroll gallery [PACK] [--room ...] [--path ...] [--eye WxH] ... [--out DIR]`: walk
+through the lit gallery and write the frames, the video, the report and the results (by
+default next to the pack, PACK-walk/; the command prints where)."""
 
 from __future__ import annotations
 
+import os
 import re
 import time
 from pathlib import Path
@@ -20,9 +22,11 @@ def register(sub) -> None:
         "the display pass at full per-eye resolution (right eye reusing the left eye's hits), "
         "lit by the photon map. Writes PNG frames (eyes side by side, magnifier inset), an "
         "H.264 MP4 of the walk (side-by-side stereo), report.md with plots and results.json.")
-    p.add_argument("packs", nargs="*", metavar="PACK",
-                   help="tile pack (default: the built-in painting, synthesized and packed once "
-                        "into build/gallery-painting.pack)")
+    p.add_argument("pack", nargs="?", metavar="PACK",
+                   help="one tile pack (it may hold several paintings: gigascroll pack a.tif "
+                        "b.tif -o gallery.pack); default: the built-in painting, synthesized "
+                        "and packed once into the user cache ($XDG_CACHE_HOME/gigascroll, else "
+                        "~/.cache/gigascroll)")
     p.add_argument("--room", default="scroll", help="scroll, hall, or a room file (glTF/OBJ/PLY)")
     p.add_argument("--path", default="walk",
                    help="walk (along the painting, with stops and a close look) or a camera path JSON")
@@ -31,7 +35,9 @@ def register(sub) -> None:
     p.add_argument("--lighting", choices=["baked", "full"], default="baked",
                    help="baked irradiance (default) or direct light and gather per pixel")
     p.add_argument("--seconds", type=float, default=6.0, help="length of the default walk")
-    p.add_argument("--out", default="build/gallery", help="output directory (default build/gallery)")
+    p.add_argument("--out", default=None,
+                   help="output directory (default: next to the pack, PACK-walk; without a "
+                        "pack, gallery-walk in the working directory)")
     p.add_argument("--exr", action="store_true", help="also write each saved frame as linear EXR")
     p.add_argument("--png-every", type=int, default=None,
                    help="keep every n-th frame as PNG (default: about 40 over the walk)")
@@ -105,12 +111,23 @@ def load_path(path: str, room, seconds: float):
     return v.CameraPath.load(p)
 
 
-def builtin_pack(work: Path = Path("build")):
-    """The built-in ink landscape at BUILTIN_PAINTING, synthesized and packed once."""
+def user_cache() -> Path:
+    """$XDG_CACHE_HOME/gigascroll, else ~/.cache/gigascroll (serve's baked rooms live there
+    too): data the commands make for themselves, kept between runs."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "gigascroll"
+
+
+def builtin_pack(work: Path | None = None):
+    """The built-in ink landscape at BUILTIN_PAINTING, synthesized and packed once into `work`
+    (default: the user cache, whatever the working directory)."""
     from ..pack import TilePack, build_pack, synth_painting
+    work = user_cache() if work is None else Path(work)
     pack_dir = work / "gallery-painting.pack"
     if (pack_dir / "manifest.json").is_file():
         return TilePack(pack_dir)
+    print(f"no pack given: packing the built-in painting ({BUILTIN_PAINTING[0]} x "
+          f"{BUILTIN_PAINTING[1]}) once into {os.path.abspath(pack_dir)}")
     work.mkdir(parents=True, exist_ok=True)
     tif = work / "gallery-painting.tif"
     synth_painting(tif, *BUILTIN_PAINTING, progress=True)
@@ -131,10 +148,7 @@ def run(args) -> int:
         raise UserError("--png-every must be >= 1")
     if args.photons < 1:
         raise UserError("--photons must be >= 1")
-    if len(args.packs) > 1:
-        raise UserError("give one pack (a pack holds several paintings: gigascroll pack a.tif "
-                        "b.tif -o gallery.pack)")
-    out = Path(args.out)
+    out = default_out(args)
     tmp = prepare_output(out)  # fails early on an unwritable --out
     with signals_interrupt():  # SIGTERM / SIGHUP: the temporary output goes as for Ctrl-C
         try:
@@ -144,14 +158,23 @@ def run(args) -> int:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
     s = results["summary"]
-    print(f"{s['frames']} frames at {eye[0]}x{eye[1]} per eye: {s['fps']:.2f} fps; display "
+    from ..gallery.frame_rates import fps_text
+    print(f"{s['frames']} frames at {eye[0]}x{eye[1]} per eye: {fps_text(s)}; display "
           f"{s['display_ms']:.1f} ms/frame (left {s['left_display_ms']:.1f}, right "
           f"{s['right_display_ms']:.1f} reusing {100 * s['reused_share']:.0f} %); hit rate "
           f"{s['hit_rate']:.3f}" + (f"; error vs oracle {s['error_mean']:.3g} mean, "
                                     f"{s['error_final']:.3g} last" if "error_mean" in s else ""))
-    print(f"wrote {out}/ (report.md, results.json, frames/"
+    print(f"wrote {os.path.abspath(out)}/ (report.md, results.json, frames/"
           f"{', walk.mp4' if not args.no_video else ''})")
     return 0
+
+
+def default_out(args) -> Path:
+    """--out, else next to the pack (PACK-walk), else gallery-walk in the working directory."""
+    from ..outputs import beside
+    if args.out is not None:
+        return Path(args.out)
+    return beside(args.pack, "walk") if args.pack else Path("gallery-walk")
 
 
 def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
@@ -161,8 +184,8 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     from ..gallery.walk import GallerySource, GalleryWalk
     from ..pack import TilePack
 
-    if args.packs:
-        p = Path(args.packs[0])
+    if args.pack:
+        p = Path(args.pack)
         if not (p / "manifest.json").is_file():
             raise UserError(f"{p} is not a tile pack (no manifest.json)")
         pack = TilePack(p)

@@ -17,7 +17,9 @@ def register(sub) -> None:
                        "display latency after a stop.")
     p.add_argument("name", metavar="NAME", help=" | ".join(SCENARIOS))
     p.add_argument("--quick", action="store_true", help="scaled-down run (seconds; used by tests)")
-    p.add_argument("--out", default="scenario-out", help="output directory (default %(default)s)")
+    p.add_argument("--out", default=None,
+                   help="output directory (default: next to --pack, PACK-scenarios; without "
+                        "--pack, scenario-out in the working directory)")
     p.add_argument("--cache", default=None,
                    help="where test packs are kept between runs (default OUT/cache)")
     p.add_argument("--threshold", type=int, default=16,
@@ -44,15 +46,18 @@ def run(args) -> int:
             raise UserError("--methods is empty")
     if args.threads < 0:
         raise UserError("--threads must be >= 0")
+    from ..outputs import beside
+    if args.out is None:
+        args.out = str(beside(args.pack, "scenarios") if args.pack else Path("scenario-out"))
     opts = Options(quick=args.quick, out=Path(args.out),
                    cache=Path(args.cache) if args.cache else None, threshold=args.threshold,
                    methods=methods, pack=Path(args.pack) if args.pack else None,
                    path=Path(args.path) if args.path else None, threads=args.threads,
                    pace=not args.no_pace, duration=args.duration)
     res = run_scenario(args.name, opts)
-    report = Path(args.out) / f"{args.name}.md"
+    report = Path(args.out).resolve() / f"{args.name}.md"
     failed = [k for k, ok in res.get("checks", {}).items() if ok is False]
-    print(f"{args.name}: report {report}, results {Path(args.out) / (args.name + '.json')}")
+    print(f"{args.name}: report {report}, results {report.with_suffix('.json')}")
     for k in failed:
         print(f"  check failed: {k}")
     return 1 if failed else 0

@@ -34,9 +34,10 @@ def register(sub) -> None:
                    help="the resolution adapts to hold this frame rate (default 20)")
     p.add_argument("--photons", type=int, default=1 << 17)
     p.add_argument("--per-frame", type=int, default=16, help="tiles loaded per frame at most")
-    p.add_argument("--screenshot", default="view-{n}.png",
+    p.add_argument("--screenshot", default=None,
                    help="file pattern P writes the window's frame to ({n}: a counter, which "
-                        "skips files already there; .png or .jpg)")
+                        "skips files already there; .png or .jpg; default: next to the pack, "
+                        "PACK-view-{n}.png)")
     p.add_argument("--quit-after", type=float, default=None, help="close after this many seconds")
     p.add_argument("--threads", type=int, default=0)
     p.add_argument("--fovea", type=float, default=None, metavar="DEG",
@@ -57,7 +58,8 @@ def run(args) -> int:
                                             and 0 <= args.quit_after <= 1e7):
         raise UserError(f"--quit-after must be a number of seconds in [0, 1e7], got "
                         f"{args.quit_after}")
-    args.screenshot = screenshot_pattern(args.screenshot)
+    args.screenshot = screenshot_pattern(args.screenshot if args.screenshot is not None
+                                         else default_screenshot(args.pack))
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
@@ -82,6 +84,14 @@ def run(args) -> int:
 
 
 SCREENSHOT_FORMATS = (".png", ".jpg", ".jpeg")
+
+
+def default_screenshot(pack: str) -> str:
+    """The screenshots' default pattern: next to the pack, PACK-view-{n}.png (braces in the
+    pack's own name escaped, so only {n} is a field)."""
+    from ..outputs import beside
+    prefix = str(beside(pack, "view-"))
+    return prefix.replace("{", "{{").replace("}", "}}") + "{n}.png"
 
 
 def screenshot_pattern(text: str) -> str:
@@ -248,7 +258,7 @@ class Viewer:
             print(f"screenshot: {e}", flush=True)
             return
         self.written.add(name)
-        print(f"screenshot: {name}", flush=True)
+        print(f"screenshot: {os.path.abspath(name)}", flush=True)
 
     def tick(self, dt):
         """One frame of the loop; the resolution adapts toward the target frame rate."""
