@@ -82,6 +82,11 @@ void bind_gallery(nb::module_& m) {
         .def_prop_ro("triangle_count", [](const Gallery& g) { return g.scene().triangle_count(); })
         .def_prop_ro("emitter_count", [](const Gallery& g) { return g.scene().emitter_count(); })
         .def_prop_ro("painting_count", [](const Gallery& g) { return g.paintings().size(); })
+        .def_prop_ro("origin", [](const Gallery& g) {
+            const Vec3d o = g.origin();
+            return std::array<double, 3>{o.x, o.y, o.z};
+        }, "Where the room's own coordinates (the BVH's, the bake's triangle frames) have their "
+           "origin in the world: (0, 0, 0) unless the room lies far from the world's origin.")
         .def_prop_ro("bounds", [](const Gallery& g) {
             const auto [a, b] = g.bounds();
             return std::make_tuple(std::array<float, 3>{float(a.x), float(a.y), float(a.z)},

@@ -68,6 +68,7 @@ def test_far_room_is_lit_as_at_the_origin(pack, at_origin, km):
 def test_origin_room_keeps_its_coordinates(at_origin):
     """A room around the origin is not moved, so its frames stay bit for bit the same."""
     g, _, _ = at_origin
+    assert tuple(g.origin) == (0.0, 0.0, 0.0)
     lo, hi = g.bounds
     np.testing.assert_array_equal(lo, [-2, 0, -2])
     np.testing.assert_array_equal(hi, [2, 3, 2])
@@ -80,6 +81,9 @@ def test_world_coordinates_at_the_interface(pack, at_origin):
     offset = DIRECTION * 9000
     g = Gallery.from_room(shifted(box_room(), offset), pack)
     camera = g.camera(SIZE)
+    # x and y far: held around the room's middle (float); z spans the origin: not moved
+    lo, hi = (np.array(b) for b in g.bounds)
+    np.testing.assert_allclose(g.origin, [*((lo + hi) / 2)[:2], 0.0], atol=1e-3)
     for a, b in zip(g.bounds, g0.bounds):
         np.testing.assert_allclose(np.array(a) - offset, b, atol=2e-3)
     eye = np.array(box_room().camera_eye)
