@@ -7,7 +7,7 @@ or exhaust memory run in a forked child with a timeout and an address-space cap
     line), and so is a FIFO swapped in between the check and the open;
   - memory bounded by the file: a 1.9 MB .glb whose one 50k-triangle mesh is drawn by 19000
     nodes is refused from its structure before an instance is expanded (it reached 3.8 GiB);
-    an unused 3 GB (sparse) image or buffer is never read; the triangle budget counted from
+    an unused 4 GiB (sparse) image or buffer is never read; the triangle budget counted from
     the structure equals the triangles the loader expands (brute force, random node trees);
   - the glTF 2.0 specification: numbers given as strings, a projective matrix, a missing
     mesh, byteStride 1, float indices, unknown extensionsRequired ... are ValueErrors, while
@@ -188,7 +188,7 @@ def test_triangle_cap_is_what_the_bake_can_hold():
     assert room_assets.MAX_TRIANGLES == _core.BAKE_MAX_POINTS // 3 == 11_184_810
 
 
-def sparse(path: Path, size: int = 3 << 30) -> Path:
+def sparse(path: Path, size: int = 4 << 30) -> Path:
     with open(path, "wb") as f:
         f.truncate(size)
     return path
@@ -196,14 +196,14 @@ def sparse(path: Path, size: int = 3 << 30) -> Path:
 
 @pytest.mark.parametrize("what", ["image", "unused-buffer", "used-buffer-prefix"])
 def test_unused_bytes_are_not_read(fork_worker, tmp_path, what):
-    """A 3 GB sparse file the room names is not read (the child has 3 GiB of address space in
+    """A 4 GiB sparse file the room names is not read (the child has 3 GiB of address space in
     all): an image, a buffer no accessor reads, or the bytes past a buffer's byteLength."""
     path, header = example_gltf(tmp_path)
     if what == "image":
         header["images"] = [{"uri": "big.png"}]
         sparse(tmp_path / "big.png")
     elif what == "unused-buffer":
-        header["buffers"].append({"byteLength": 3 << 30, "uri": "big.bin"})
+        header["buffers"].append({"byteLength": 4 << 30, "uri": "big.bin"})
         sparse(tmp_path / "big.bin")
     else:
         blob = (tmp_path / "room.bin").read_bytes()
