@@ -17,17 +17,18 @@ BENCHMARKS = {
     "foveation": "the gallery walk foveated: rays and time saved, requests, error per region",
     "layout": "merged page-table layout time and fill against painting count (BRKGA vs shelf)",
     "bc1": "the bc1 (DXT1) codec: PSNR and FLIP per painting, sampling cost, hit rate per byte",
+    "web": "gigascroll serve's tiles on loopback against aiohttp's static-file handler",
 }
 
 
 def register(sub) -> None:
     from ..benchmarks import (bc1, cluster, export, gallery, layout, loader, pack, photon,
                               queues, views, walk)
-    from ..benchmarks import foveation
+    from ..benchmarks import foveation, web
 
     modules = {"pack": pack, "cluster": cluster, "export": export, "queues": queues,
                "loader": loader, "views": views, "photon": photon, "gallery": gallery,
-               "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1}
+               "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1, "web": web}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True
