@@ -94,25 +94,27 @@ def _handshake(address: str, timeout: float) -> dict:
 
 
 def _first_bytes(sock, timeout: float) -> bytes | None:
-    """What the peer sends first, within `timeout`: a Dask server sends its handshake
-    unprompted; a peer still silent halfway is sent an HTTP request, which an HTTP server
-    answers (Dask's own handshake may hold no line end, so an HTTP server would wait for it
-    forever). None if it stays silent; b"" if it closes the connection."""
+    """What the peer sends first (up to 64 bytes, at least 8 unless it closes), within
+    `timeout`: a Dask server sends its handshake unprompted; a peer still silent halfway is
+    sent an HTTP request, which an HTTP server answers (Dask's own handshake may hold no line
+    end, so an HTTP server would wait for it forever). None if it stays silent."""
     import select
     deadline = time.monotonic() + timeout
-    prompted = False
+    prompted, got = False, b""
     while True:
         left = deadline - time.monotonic()
         if left <= 0:
-            return None
-        wait = min(left, timeout / 2) if not prompted else left
+            return got or None
+        wait = left if prompted or got else min(left, timeout / 2)
         if select.select([sock], [], [], wait)[0]:
-            sock.settimeout(max(0.1, deadline - time.monotonic()))
             try:
-                return sock.recv(64)
+                chunk = sock.recv(64 - len(got))
             except OSError:
-                return b""
-        if not prompted:
+                chunk = b""
+            got += chunk
+            if not chunk or len(got) >= 8:
+                return got
+        elif not prompted and not got:
             prompted = True
             with contextlib.suppress(OSError):
                 sock.sendall(b"GET / HTTP/1.0\r\n\r\n")
