@@ -63,3 +63,18 @@ def test_other_arguments_are_still_type_checked(two_paintings):
         pack.read_tile("painting0", 0, 0, 0)
     with pytest.raises(TypeError):
         pack.has_tile(None, 0, 0, 0)
+
+
+def test_pure_reader_takes_a_painting_or_its_index(two_paintings):
+    pack, path = two_paintings
+    pure, other = PurePack(path), PurePack(path)
+    for i, p in enumerate(pure.paintings):
+        np.testing.assert_array_equal(pure.read_tile(p, 0, 0, 0), pack.read_tile(i, 0, 0, 0))
+        assert pure.locate(p, 0, 0, 0) == pure.locate(i, 0, 0, 0) == pack.locate(i, 0, 0, 0)
+        assert pure.tile_file(p, 0, 0, 0) == pack.tile_file(i, 0, 0, 0)
+    # Equal fields are not enough: the painting must be this pack's own object.
+    assert other.paintings[0] == pure.paintings[0]
+    with pytest.raises(ValueError, match="not one of this pack's paintings"):
+        pure.read_tile(other.paintings[0], 0, 0, 0)
+    pure.close()
+    other.close()

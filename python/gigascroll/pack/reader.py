@@ -452,6 +452,19 @@ class PurePack:
     def __del__(self):
         self.close()
 
+    def _painting_index(self, p) -> int:
+        """`p` as an index, as TilePack takes it: a painting of this pack (an object of
+        `self.paintings`) or its index. ValueError for another pack's painting."""
+        if not isinstance(p, PurePainting):
+            return p
+        if getattr(self, "_painting_ids", None) is None:
+            self._painting_ids = {id(q): i for i, q in enumerate(self.paintings)}
+        i = self._painting_ids.get(id(p))
+        if i is None or self.paintings[i] is not p:
+            raise ValueError(f"painting {p.name!r} is not one of this pack's paintings (pass "
+                             "pack.paintings[i] of this pack, or the index i)")
+        return i
+
     def _entry_index(self, p: int, l: int, tx: int, ty: int) -> int:
         if not 0 <= p < len(self.paintings):
             raise ValueError(f"painting {p} out of range (pack has {len(self.paintings)})")
@@ -484,16 +497,20 @@ class PurePack:
 
     def locate(self, p: int, l: int, tx: int, ty: int) -> tuple[int, int, int]:
         """(offset, length, checksum) of a stored tile in its tile file."""
+        p = self._painting_index(p)
         _, _, offset, length, checksum = self._entry(p, l, tx, ty)
         return offset, length, checksum
 
     def tile_file(self, p: int, l: int, tx: int, ty: int) -> str:
         """Name of the tile file that holds the tile."""
+        p = self._painting_index(p)
         return self.tile_files[self._entry(p, l, tx, ty)[1]]
 
     def read_tile(self, p: int, l: int, tx: int, ty: int) -> np.ndarray:
-        """Reads, decompresses and verifies one tile: (tile_size, tile_size, 3) uint8."""
+        """Reads, decompresses and verifies one tile: (tile_size, tile_size, 3) uint8. The
+        painting is the object in `paintings` or its index."""
         import xxhash
+        p = self._painting_index(p)
         key, file, offset, length, checksum = self._entry(p, l, tx, ty)
         nbytes = self.tile_size * self.tile_size * 3
         if self.codec == "bc1":
