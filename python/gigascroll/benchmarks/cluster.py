@@ -65,7 +65,10 @@ def run(args) -> int:
     mpx = sum(s.width // args.scale * (s.height // args.scale) for s in TABLE4_PAINTINGS) / 1e6
     common = {"tile_size": 128, "border": 4, "codec": args.codec, "force": True}
 
+    made: set[Path] = set()  # the packs this run built: the only ones it removes
+
     def timed(label, out, **kw):
+        made.add(out)
         t = time.perf_counter()
         build_pack(inputs, out, threads=1, **common, **kw)
         return time.perf_counter() - t
@@ -115,6 +118,6 @@ def run(args) -> int:
                                              "codec": args.codec, "runs": results,
                                              "median_seconds": med,
                                              "dask_startup_seconds": startup}, indent=2)
-    for p in work.glob("*.pack"):
+    for p in made:  # not every *.pack of --workdir: a user's packs may live there
         shutil.rmtree(p, ignore_errors=True)
     return 0
