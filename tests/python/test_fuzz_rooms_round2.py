@@ -19,7 +19,6 @@ import base64
 import copy
 import json
 import os
-import struct
 from pathlib import Path
 
 import numpy as np
