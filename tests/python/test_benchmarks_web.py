@@ -14,6 +14,8 @@ def test_bench_web_quick(tmp_path, gigascroll_cli):
     assert s["tiles"] > 10 and s["tile_bytes"] == 128 * 128 * 3
     for kind in ("static", "serve", "serve-batch"):
         assert len(s["runs"][kind]) == 1 and s["median"][kind]["tiles_per_s"] > 0
+        run = s["runs"][kind][0]  # random tiles over the whole pack, not a few
+        assert run["distinct_tiles"] >= min(s["tiles"], run["tiles_fetched"]) // 3
         m = s["median"][kind]
         assert abs(m["mb_per_s"] * 1e6 - m["tiles_per_s"] * s["tile_bytes"]) < 1e-6 * m["mb_per_s"] * 1e6
     assert s["ratio_serve_to_static"] == (s["median"]["serve"]["tiles_per_s"]

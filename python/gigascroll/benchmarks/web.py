@@ -79,12 +79,13 @@ def _stop(proc: subprocess.Popen) -> None:
 
 
 async def _load(url: str, paths, expected, batch: int, connections: int, seconds: float, seed: int):
-    """(requests, tiles, bytes, seconds) of `connections` clients fetching random tiles."""
+    """(requests, tiles, bytes, seconds, distinct tiles) of `connections` clients fetching
+    random tiles."""
     import aiohttp
 
     rng = np.random.default_rng(seed)
-    order = rng.integers(0, len(paths), 1 << 20)
-    counts = [0, 0, 0]
+    order = rng.integers(0, len(paths["tile"]), 1 << 20)
+    counts, distinct = [0, 0, 0], set()
     conn = aiohttp.TCPConnector(limit=connections, force_close=False)
     async with aiohttp.ClientSession(url, connector=conn) as session:
         deadline = time.perf_counter() + seconds
@@ -105,6 +106,7 @@ async def _load(url: str, paths, expected, batch: int, connections: int, seconds
                                           and body != b"".join(expected[k] for k in ks)):
                     raise RuntimeError(f"{url}: wrong response ({resp.status}, {len(body)} bytes)")
                 checked += 1
+                distinct.update(ks)
                 counts[0] += 1
                 counts[1] += len(ks)
                 counts[2] += len(body)
@@ -112,7 +114,7 @@ async def _load(url: str, paths, expected, batch: int, connections: int, seconds
         t0 = time.perf_counter()
         await asyncio.gather(*(worker(w) for w in range(connections)))
         elapsed = time.perf_counter() - t0
-    return counts[0], counts[1], counts[2], elapsed
+    return counts[0], counts[1], counts[2], elapsed, len(distinct)
 
 
 def _round(kind, url, keys, expected, h, args, seed) -> dict:
@@ -122,9 +124,10 @@ def _round(kind, url, keys, expected, h, args, seed) -> dict:
         paths = {"tile": [f"/api/tiles/{h}/{p}/{l}/{x}/{y}" for p, l, x, y in keys],
                  "batch": f"/api/tiles/{h}/batch", "keys": [list(k) for k in keys]}
     batch = args.batch if kind == "serve-batch" else 0
-    n, tiles, nbytes, s = asyncio.run(_load(url, paths, expected, batch, args.connections,
-                                            args.duration, seed))
-    return {"requests_per_s": n / s, "tiles_per_s": tiles / s, "mb_per_s": nbytes / s / 1e6}
+    n, tiles, nbytes, s, distinct = asyncio.run(_load(url, paths, expected, batch,
+                                                      args.connections, args.duration, seed))
+    return {"requests_per_s": n / s, "tiles_per_s": tiles / s, "mb_per_s": nbytes / s / 1e6,
+            "tiles_fetched": tiles, "distinct_tiles": distinct}
 
 
 def run(args) -> int:
