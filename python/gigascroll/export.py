@@ -271,7 +271,7 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
     folder = {"iiif": out, "dzi": final[-1], "tiff": None}[fmt]
     for f in final:  # the shared rules: a directory only if an export made it
         check_output(f, force=force, directory=f == folder, owned=owned,
-                     what=f"a {fmt} export of gigascroll")
+                     what=f"an export ({fmt}) of gigascroll")
     if not out.parent.is_dir():
         raise OSError(f"{out.parent}: no such directory")
     if not os.access(out.parent, os.W_OK):

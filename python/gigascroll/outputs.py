@@ -69,10 +69,15 @@ def protected_reason(path) -> str | None:
     home directory, the working directory or one of its ancestors, by name or once
     symbolic links are resolved."""
     p = Path(path)
+    if p.is_absolute() and p == Path(p.anchor):
+        return "is the root directory"
     if p.name in ("", ".", ".."):
-        return "is the working directory, its parent or the root"
-    cwd = Path.cwd()
-    candidates = {Path(os.path.abspath(p))}
+        return "is the working directory or its parent"
+    try:
+        cwds = {Path.cwd(), Path.cwd().resolve()}
+    except OSError:  # the working directory was removed: no path is inside it
+        cwds = set()
+    candidates = {Path(os.path.abspath(p))} if cwds else {p} if p.is_absolute() else set()
     with contextlib.suppress(OSError, RuntimeError):
         candidates.add(p.resolve())
     home = _home()
@@ -81,7 +86,7 @@ def protected_reason(path) -> str | None:
             return "is the root directory"
         if home is not None and (c == home or c == Path(os.path.expanduser("~"))):
             return "is the home directory"
-        for d in (cwd, cwd.resolve()):
+        for d in cwds:
             if c == d or c in d.parents:
                 return "is the working directory or one of its ancestors"
     return None
