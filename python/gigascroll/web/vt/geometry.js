@@ -81,12 +81,18 @@ export class PackGeometry {
     return q.levelFirst[l] + ty * q.tilesX[l] + tx;
   }
 
-  // The tile key [p, l, tx, ty] of a flat index (binary search over paintings and levels);
-  // null outside the pack.
+  // The tile key [p, l, tx, ty] of a flat index; null outside the pack.
   keyOf(index) {
+    const k = [0, 0, 0, 0];
+    return this.keyInto(index, k) ? k : null;
+  }
+
+  // The same into out[0..3] (no allocation); false outside the pack. A binary search over
+  // the paintings, then the levels from the finest.
+  keyInto(index, out) {
     const ps = this.paintings;
     let lo = 0, hi = ps.length - 1;
-    if (!(index >= 0 && index < this.tileCount)) return null;
+    if (!(index >= 0 && index < this.tileCount)) return false;
     while (lo < hi) {
       const mid = (lo + hi + 1) >> 1;
       if (ps[mid].firstIndex <= index) lo = mid; else hi = mid - 1;
@@ -95,7 +101,8 @@ export class PackGeometry {
     let l = q.levels - 1;
     while (q.levelFirst[l] > index) --l;
     const r = index - q.levelFirst[l];
-    return [lo, l, r % q.tilesX[l], Math.floor(r / q.tilesX[l])];
+    out[0] = lo; out[1] = l; out[2] = r % q.tilesX[l]; out[3] = Math.floor(r / q.tilesX[l]);
+    return true;
   }
 
   // Every pinned tile in the core's order (cache/virtual_texture.cpp): per painting, the

@@ -31,7 +31,9 @@
 //   vt.feedback.end(view)           // starts the asynchronous readback (pixel-pack buffer +
 //                                   // fence; never a synchronous readPixels)
 //   vt.stats()                      // {requests, commands, inFlight, uploads, hitRate,
-//                                   //  feedbackMs, resident, pending, frame}
+//                                   //  feedbackMs, processMs, resident, pending, frame,
+//                                   //  readbackFrame (the frame the newest processed
+//                                   //  feedback was drawn in), ...}
 //   vt.dispose()
 //
 // Test hooks (tests/python/test_web_vt.py): vt.insertTile(key, rgbBytes) inserts a tile
@@ -72,7 +74,7 @@ export class VirtualTexture {
     this.feedback = new FeedbackPass(gl);
     this.firstUnit = o.firstUnit;
     this.frame = 0;
-    this.counters = { uploads: 0, feedbackMs: 0, readbacks: 0, failed: 0 };
+    this.counters = { uploads: 0, feedbackMs: 0, processMs: 0, readbacks: 0, readbackFrame: -1, failed: 0 };
     this.pageTable.upload(gl);
     this.ready = this.loadPinned(pins);
   }
@@ -111,11 +113,15 @@ export class VirtualTexture {
     this.feedback.frame = frameNumber;
     const t0 = performance.now();
     const readbacks = this.feedback.poll();
+    const t1 = performance.now();
     if (readbacks.length) {
       this.requests.process(readbacks.map((r) => r.keys), frameNumber);
       ++this.counters.readbacks;
+      this.counters.readbackFrame = Math.max(...readbacks.map((r) => r.frame));
     }
-    this.counters.feedbackMs = performance.now() - t0;
+    const t2 = performance.now();
+    this.counters.feedbackMs = t2 - t0;
+    this.counters.processMs = t2 - t1;
     this.upload();
     const room = Math.max(0, 64 * this.options.maxBatchesInFlight - this.loader.tilesInFlight);
     this.loader.request(this.requests.issue(room));
@@ -167,7 +173,10 @@ export class VirtualTexture {
       inFlight: this.loader.tilesInFlight,
       pending: this.requests.pending.length + this.loader.arrived.length,
       uploads: this.counters.uploads,
-      feedbackMs: this.counters.feedbackMs,
+      feedbackMs: this.counters.feedbackMs,   // readback copies + processing, this frame
+      processMs: this.counters.processMs,     // processing alone
+      readbacks: this.counters.readbacks,     // frames that processed a readback
+      readbackFrame: this.counters.readbackFrame,  // the newest processed readback's frame
       resident: this.cache.resident,
       slots: this.cache.slots,
       evictions: c.evictions,

@@ -180,31 +180,57 @@ void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
 // tasks, and with setTimeout ticks alone it was seen never to signal some of them.
 const tick = () => new Promise((r) => requestAnimationFrame(() => r()));
 
-async function feedback(views, placements) {
-  quads = null;
+// Draws the views' feedback passes and waits for each view's readback.
+async function readAll(views, placements) {
+  while (vt.feedback.pending) { await tick(); vt.feedback.poll(); }  // older readbacks out
   drawFeedback(views, placements);
   const got = new Map();
   for (let k = 0; got.size < views.length && k < 10000; ++k) {
     await tick();
     for (const r of vt.feedback.poll()) got.set(r.view, r);
   }
-  return views.map((v) => {
-    const r = got.get(v.view), keys = {};
+  return views.map((v) => got.get(v.view));
+}
+
+async function feedback(views, placements) {
+  quads = null;
+  const got = await readAll(views, placements);
+  return views.map((v, k) => {
+    const r = got[k], keys = {};
     for (const i of new Set(r.keys)) if (i !== 0xFFFFFFFF) keys[i] = vt.geometry.keyOf(i);
     return { view: v.view, width: r.width, height: r.height, indices: Array.from(r.keys), keys };
   });
 }
 
-async function benchFeedback(views, placements, frames = 200) {
+// `step`: metres a frame by which every camera (eye and target) moves.
+async function benchFeedback(views, placements, frames = 200, step = [0, 0, 0]) {
   quads = null;
-  const ms = [], counts = [];
+  const ms = [], processMs = [], counts = [], pixels = [];
   for (let f = 1; f <= frames; ++f) {
+    const seen = vt.counters.readbacks;
     vt.beginFrame(f);
-    if (vt.counters.readbacks > counts.length) { ms.push(vt.counters.feedbackMs); counts.push(vt.stats().requests); }
-    drawFeedback(views, placements);
+    if (vt.counters.readbacks > seen) {
+      ms.push(vt.counters.feedbackMs);
+      processMs.push(vt.counters.processMs);
+      counts.push(vt.stats().requests);
+    }
+    const moved = views.map((v) => ({ ...v, camera: v.camera.map((c, i) => (i < 6 ? c + f * step[i % 3] : c)) }));
+    drawFeedback(moved, placements);
     await tick();
   }
-  return { ms, requests: counts, stats: vt.stats() };
+  for (const t of vt.feedback.views) if (t) pixels.push(t.width * t.height);
+  // Then all views' last feedback processed together, `frames` times (new salts): the
+  // steady state of a headset, where every view's readback arrives each frame.
+  const moved = views.map((v) => ({ ...v, camera: v.camera.map((c, i) => (i < 6 ? c + frames * step[i % 3] : c)) }));
+  const buffers = (await readAll(moved, placements)).map((r) => r.keys.slice());
+  const together = [], run = 5;  // 5 frames a sample: performance.now() has 0.1 ms steps
+  for (let k = 0; k < frames; ++k) {
+    const t0 = performance.now();
+    for (let j = 1; j <= run; ++j) vt.requests.process(buffers, frames + k * run + j);
+    together.push((performance.now() - t0) / run);
+  }
+  return { ms, processMs, requests: counts, pixels, together, togetherRequests: vt.requests.last.requests,
+           stats: vt.stats() };
 }
 
 // The runtime from a cold cache: every frame beginFrame (readbacks -> requests -> fetches ->
