@@ -327,8 +327,8 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     budget = 0.0 if time_budget is None else float(time_budget)
     if not math.isfinite(budget) or budget <= 0 and time_budget is not None:
         raise ValueError(f"time_budget must be positive and finite, got {time_budget!r}")
-    alpha = float(alpha)
-    if not 0 < alpha < 1:
+    alpha = positive_float32(alpha, "alpha")  # the core's float: 1e-46 would be 0 there
+    if not alpha < 1:
         raise ValueError(f"alpha must be in (0, 1), got {alpha}")
     if isinstance(coarse_passes, bool) or not isinstance(coarse_passes, (int, np.integer)) or not 0 <= coarse_passes <= 1 << 24:
         raise ValueError(f"coarse_passes must be an integer in [0, 2^24], got {coarse_passes!r}")

@@ -400,3 +400,36 @@ def test_pack_progress_under_one_megapixel_does_not_warn():
         assert any(issubclass(w.category, TqdmWarning) for w in caught) == warns
         if not warns:
             assert bar.n == pytest.approx(0.3, abs=1e-12) and bar.n <= 0.3
+
+
+@given(value=st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                       st.sampled_from([1e-46, 1e-39, 2.0 ** -126, 2.0 ** -127, 3.4028234663852886e38,
+                                        3.5e38, 0.0, -0.0, 5e-324])))
+@fuzz_settings(60)
+def test_float32_values_are_checked_against_numpy(value):
+    """positive_float32 takes exactly the positive normal float32 range (numpy's finfo)."""
+    from gigascroll.errors import positive_float32
+    f32 = np.finfo(np.float32)
+    ok = bool(float(f32.tiny) <= value <= float(f32.max))
+    if ok:
+        assert positive_float32(value, "x") == value
+        assert np.float32(value) > 0 and np.isfinite(np.float32(value))
+    else:
+        with pytest.raises(ValueError, match="float32"):
+            positive_float32(value, "x")
+
+
+@pytest.mark.parametrize("value", [1e-46, 1e-39, 1e39, float("nan"), 0.0, -1.0])
+def test_float32_options_of_the_api(inputs, value):
+    from gigascroll import TilePack, builtin_scene, render
+    from gigascroll.gallery import Gallery, builtin_room
+    from gigascroll.runtime import VirtualTexture
+    scene, cam = builtin_scene("cornell", resolution=(8, 8))
+    with pytest.raises(ValueError, match="radius"):
+        render(scene, cam, photons=64, radius=value)
+    with pytest.raises(ValueError, match="alpha"):
+        render(scene, cam, photons=64, progressive=True, passes=1, alpha=value)
+    pack = TilePack(inputs["pack"])
+    g = Gallery.from_room(builtin_room("scroll", pack), pack)
+    with pytest.raises(ValueError, match="radius"):
+        g.light(VirtualTexture(pack, slots=(8, 8)), photons=64, radius=value)
