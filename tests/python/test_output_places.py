@@ -52,6 +52,17 @@ def test_view_screenshots_default_next_to_the_pack(tmp_path):
     assert pattern.format(n=7) == str(tmp_path / "odd{name}-view-7.png")
 
 
+def test_view_default_screenshot_does_not_hide_the_real_error(gigascroll_cli, tmp_path):
+    # The default pattern lies beside the pack: a missing directory is the pack's problem
+    # (reported later, as without the default), not a --screenshot the user never gave.
+    import subprocess
+    import sys
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    r = subprocess.run([sys.executable, "-m", "gigascroll", "view", str(tmp_path / "no" / "p.pack")],
+                       capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 2 and "--screenshot" not in r.stderr, r.stderr
+
+
 def test_gallery_usage_says_one_pack(gigascroll_cli, tmp_path):
     r = gigascroll_cli("gallery", "--help")
     assert r.returncode == 0

@@ -58,8 +58,9 @@ def run(args) -> int:
                                             and 0 <= args.quit_after <= 1e7):
         raise UserError(f"--quit-after must be a number of seconds in [0, 1e7], got "
                         f"{args.quit_after}")
-    args.screenshot = screenshot_pattern(args.screenshot if args.screenshot is not None
-                                         else default_screenshot(args.pack))
+    # The default is beside the pack, valid whenever the pack is (checked before the window).
+    args.screenshot = (screenshot_pattern(args.screenshot) if args.screenshot is not None
+                       else default_screenshot(args.pack))
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
