@@ -180,6 +180,12 @@ def run(args) -> int:
         except ValueError:
             doc = {}
     doc["server"] = result
+    from .web_client import feedback_figures, format_figures  # the virtual texture's part
+    try:
+        doc["client_feedback"] = feedback_figures(frames=30 if args.quick else 240)
+        print(format_figures(doc["client_feedback"]))
+    except (RuntimeError, ImportError) as e:  # no chromium or no playwright
+        print(f"client feedback: not measured ({e})")
     write_json(path, doc)
     print(f"wrote {path}")
     return 0
