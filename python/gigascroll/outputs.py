@@ -34,7 +34,7 @@ from typing import Callable
 __all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "check_output", "write_mark", "has_mark", "owned_by",
            "temp_dir", "atomic_file", "write_bytes", "write_text", "replace_dir",
            "write_image", "encode_image", "Interrupted", "signals_interrupt", "ignore_sigxfsz",
-           "write_error", "WriteError", "oiio_reason"]
+           "write_error", "WriteError", "oiio_reason", "full_reason"]
 
 MARK = ".gigascroll-output.json"   # in a directory a command made: which command made it
 
@@ -271,16 +271,22 @@ def write_image(path, pixels, quality: int = 90, durable: bool = False) -> None:
             raise OSError(f"cannot write {path}: {oiio_reason(out, tmp)}")
 
 
-def oiio_reason(out, tmp: Path) -> str:
-    """OpenImageIO's error, or the system's words when the disk is full."""
+def full_reason(path) -> str | None:
+    """The system's words when a write to `path` failed because its disk is full or the file
+    reached the file-size limit (libraries that write files themselves often say less)."""
     with contextlib.suppress(OSError, ValueError, ImportError):
-        if os.statvfs(tmp.parent).f_bavail == 0:
+        if os.statvfs(Path(path).parent).f_bavail == 0:
             return "No space left on device"
         import resource
         limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
-        if limit != resource.RLIM_INFINITY and os.path.getsize(tmp) >= limit:
+        if limit != resource.RLIM_INFINITY and os.path.getsize(path) >= limit:
             return "File too large (the file-size limit)"
-    return " ".join((out.geterror() or "").split())[:300] or "write failed"
+    return None
+
+
+def oiio_reason(out, tmp: Path) -> str:
+    """OpenImageIO's error, or the system's words when the disk is full."""
+    return full_reason(tmp) or " ".join((out.geterror() or "").split())[:300] or "write failed"
 
 
 # ----------------------------------------------------------------------------- directories

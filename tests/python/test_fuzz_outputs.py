@@ -433,3 +433,39 @@ def test_float32_options_of_the_api(inputs, value):
     g = Gallery.from_room(builtin_room("scroll", pack), pack)
     with pytest.raises(ValueError, match="radius"):
         g.light(VirtualTexture(pack, slots=(8, 8)), photons=64, radius=value)
+
+
+_VIDEO_CHILD = textwrap.dedent("""
+    import resource, sys, numpy as np
+    from gigascroll.outputs import ignore_sigxfsz
+    from gigascroll.gallery.video import VideoWriter
+    ignore_sigxfsz()
+    if sys.argv[2] != "none":
+        resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[2]), int(sys.argv[2])))
+    w = VideoWriter(sys.argv[1], (64, 48), 30, ["-crf", "20", "-preset", "veryfast"])
+    rng = np.random.default_rng(0)
+    try:
+        for i in range(40):
+            w.send(rng.integers(0, 256, (48, 64, 3), dtype=np.uint8))
+        w.close()
+        print("closed")
+    except OSError as e:
+        w.abort()
+        print("OSError", e)
+""")
+
+
+def test_video_past_the_size_limit_is_an_error(tmp_path):
+    """The walk's video: ffmpeg's exit status is checked (imageio-ffmpeg's writer did not),
+    so a video cut short is one OSError; the control is read back frame by frame."""
+    out = tmp_path / "w.mp4"
+    r = subprocess.run([sys.executable, "-c", _VIDEO_CHILD, str(out), "20000"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.stdout.strip() == f"OSError cannot write {out}: File too large (the file-size limit)", r
+    out.unlink()
+    r = subprocess.run([sys.executable, "-c", _VIDEO_CHILD, str(out), "none"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.stdout.strip() == "closed", r
+    import imageio_ffmpeg
+    frames = imageio_ffmpeg.read_frames(str(out))
+    assert next(frames)["size"] == (64, 48) and sum(1 for _ in frames) == 40

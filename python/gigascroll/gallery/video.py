@@ -6,11 +6,14 @@ is one OSError line with ffmpeg's first error line."""
 from __future__ import annotations
 
 import math
+import signal
 import subprocess
 import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from ..outputs import full_reason
 
 __all__ = ["VideoWriter", "check_fps", "FPS_RANGE"]
 
@@ -78,5 +81,8 @@ class VideoWriter:
         lines = [ln.strip() for ln in self._log.read().decode("utf-8", "replace").splitlines()
                  if ln.strip()]
         self._log.close()
-        why = lines[0][:300] if lines else f"ffmpeg exited with status {self._proc.returncode}"
+        rc = self._proc.returncode
+        why = (full_reason(self.path) or (lines[0][:300] if lines else None)
+               or (f"ffmpeg was stopped by {signal.Signals(-rc).name}" if rc < 0 else
+                   f"ffmpeg exited with status {rc}"))
         return OSError(f"cannot write {self.path}: {why}")
