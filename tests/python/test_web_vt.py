@@ -123,12 +123,21 @@ def test_gpu_sampler_after_evictions(vt_pack, browser):  # noqa: F811
         page.evaluate("([slots, scene]) => vtTest.init({slots, scene})", [list(slots), pack_scene(vt_pack)])
         page.evaluate("(keys) => vtTest.insertTiles(keys)", [list(k) for k in keys])
         assert page.evaluate("() => vt.cache.stats.evictions") == vt.stats()["evictions"]
+        tables = page.evaluate("""() => vt.geometry.paintings.map((q, p) => q.levelWidth.map((_, l) => {
+            const w = q.gridWidth(l), h = q.gridHeight(l), e = [];
+            for (let y = 0; y < h; ++y) for (let x = 0; x < w; ++x) e.push(vt.pageTable.lookup(p, l, x, y));
+            return { w, h, e }; }))""")
         pr = probes(pack, rng, 800)
         gpu = np.asarray(page.evaluate("(p) => vtTest.sampleProbes(p)", pr.ravel().tolist()),
                          np.float32).reshape(-1, 4)
         page.close()
     cpu, _ = cpu_samples(vt, pr)
     assert np.abs(gpu[:, :3] * 255 - cpu).max() <= 2.0
+    # Entry for entry (level, slot), padding included: the same LRU chose the same slots.
+    for p, levels in enumerate(tables):
+        for l, t in enumerate(levels):
+            want = [vt.lookup((p, l, x, y)) for y in range(t["h"]) for x in range(t["w"])]
+            assert [(e >> 24, e & 0xFFFFFF) for e in t["e"]] == want, (p, l)
 
 
 # Two paintings on the wall z = 0 (1 mm texels), the layout both feedback passes see.

@@ -5,9 +5,13 @@
 // end() copies the target into a pixel-pack buffer and sets a fence; poll() hands back, per
 // view, the newest readback whose fence has signalled (getSyncParameter: no stall), read
 // with getBufferSubData. No synchronous readPixels into client memory ever happens on the
-// frame path. A view whose buffers are all waiting skips its readback that frame.
+// frame path. A view whose buffers are all waiting skips its readback that frame; one whose
+// fence has not signalled STALE_FRAMES frames later is given up.
 
 export const RING = 3;  // readbacks in flight per view
+// A readback whose fence has not signalled this many frames after it was drawn is given up
+// (its buffer reused): a fence that never signals must not stop tile determination.
+export const STALE_FRAMES = 60;
 
 class ViewTarget {
   constructor(gl, width, height) {
@@ -53,6 +57,7 @@ export class FeedbackPass {
     this.frame = 0;
     this.pixelScale = [1, 1];
     this.skipped = 0;
+    this.abandoned = 0;
   }
 
   // Binds view's target at max(1, floor(display / reduction)) per axis (the core's 1/8
@@ -103,6 +108,12 @@ export class FeedbackPass {
       if (!t) return;
       let best = null;
       for (const r of t.ring) {
+        if (r.sync && this.frame - r.frame > STALE_FRAMES) {
+          gl.deleteSync(r.sync);
+          r.sync = null;
+          ++this.abandoned;
+          continue;
+        }
         if (!r.sync || gl.getSyncParameter(r.sync, gl.SYNC_STATUS) !== gl.SIGNALED) continue;
         gl.deleteSync(r.sync);
         r.sync = null;

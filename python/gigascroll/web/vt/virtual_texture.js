@@ -183,6 +183,7 @@ export class VirtualTexture {
       failed: this.counters.failed,
       bytesReceived: this.loader.bytesReceived,
       skippedReadbacks: this.feedback.skipped,
+      abandonedReadbacks: this.feedback.abandoned,
     };
   }
 
