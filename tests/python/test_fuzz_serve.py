@@ -172,3 +172,52 @@ def test_fuzz_serve_requests(server, data):
 @given(data=st.data())
 def test_fuzz_serve_requests_long(server, data):
     _run_request_case(server, data, "serve-requests-long")
+
+
+# ----------------------------------------------------------------------------- Python API
+
+API = ["pack_hash", "pack_description", "room_key", "baked_room", "make_app", "scene_document",
+       "tls_context", "default_cache_dir"]
+VALUES = ["0", "-1", "2**64", "None", "True", "float('nan')", "''", "'x'", "'scroll'", "'hall'",
+          "'\\udcff'", "'a' * 5000", "b'x'", "[]", "{}", "{'photons': 1}", "PACK", "PACK_PATH",
+          "CERT", "KEY", "JUNK", "CACHE", "'/nonexistent/x'", "SPEC", "HASH", "ROOM", "object()"]
+API_CASE = '''
+import gigascroll, gigascroll.serve as serve
+from gigascroll.gallery import builtin_room
+PACK_PATH, CERT, KEY, JUNK, CACHE = {paths!r}
+PACK = gigascroll.TilePack(PACK_PATH)
+HASH = serve.pack_hash(PACK)
+SPEC = builtin_room("scroll", PACK)
+ROOM = serve.baked_room("scroll", PACK, HASH, CACHE) if {needs_room!r} else None
+try:
+    result = getattr(serve, {name!r})({args})
+    if {name!r} == "make_app":
+        result[serve.app.STATE_KEY].pool.shutdown()
+except (ValueError, OSError, TypeError) as e:
+    print(type(e).__name__, " ".join(str(e).split())[:200])
+'''
+
+
+def _run_api_case(fork_worker, files, data, family):
+    name = data.draw(st.sampled_from(API))
+    args = data.draw(st.lists(st.sampled_from(VALUES), max_size=4))
+    count_case(family)
+    text = ", ".join(args)
+    paths = (files["pack"], files["cert"], files["key"], files["junk"], files["cache"])
+    code = API_CASE.format(paths=paths, needs_room="ROOM" in args, name=name, args=text)
+    o = fork_worker.run({"kind": "python", "code": code, "cwd": files["dir"]}, timeout=90)
+    assert o.code == 0 and not o.timeout, f"serve.{name}({text}): {o.describe()}"
+
+
+@fuzz_settings(40)
+@given(data=st.data())
+def test_fuzz_serve_api(fork_worker, files, data):
+    _run_api_case(fork_worker, files, data, "serve-api")
+
+
+@pytest.mark.fuzz
+@long_only
+@fuzz_settings(40, long_examples=1000, long=True)
+@given(data=st.data())
+def test_fuzz_serve_api_long(fork_worker, files, data):
+    _run_api_case(fork_worker, files, data, "serve-api-long")

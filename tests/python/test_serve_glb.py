@@ -97,7 +97,7 @@ def test_glb_irradiance_is_the_cores(room, pose, rng):
     seen = np.flatnonzero(np.isfinite(pos[:, 0]))
     eye = np.array(camera.position)
     compared = ambiguous = painting_points = 0
-    for k in rng.choice(seen, min(150, len(seen)), replace=False):
+    for k in rng.choice(seen, min(100, len(seen)), replace=False):
         found = _interpolate(meshes, pos[k].astype(np.float64), eye)
         assert found, f"pixel {k}: the core's hit {pos[k]} lies on no glb triangle"
         tol = 1e-3 * max(1.0, float(np.abs(E[k]).max()))
@@ -110,7 +110,7 @@ def test_glb_irradiance_is_the_cores(room, pose, rng):
         if slot[k] >= 0:
             painting_points += 1
             assert any(u is not None and np.abs(u - uv[k]).max() < 1e-4 for _, u in found)
-    assert compared >= 135 and ambiguous <= 15
+    assert compared >= 90 and ambiguous <= 10
     if pose is None:
         assert painting_points > 20  # the default view looks at the scroll
 

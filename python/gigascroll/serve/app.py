@@ -14,12 +14,16 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import os
 import re
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import numpy as np
 from aiohttp import web
 
+from .._core import TilePack
+from ..errors import expect_type
 from .client_files import CLIENT_DIR, CONTENT_TYPES, client_path
 from .pack_info import pack_hash
 from .scene import MAX_BATCH, scene_document
@@ -198,6 +202,17 @@ def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT
              read_threads: int = 4, max_inflight: int = 16) -> web.Application:
     """The application serving `pack` (an open TilePack) and `room` (a BakedRoom, or None for
     tiles only). content_hash: the pack's (computed when None)."""
+    from .room_bake import BakedRoom
+
+    expect_type(pack, TilePack, "pack")
+    if room is not None:
+        expect_type(room, BakedRoom, "room")
+    if content_hash is not None:
+        expect_type(content_hash, str, "content_hash")
+    client_dir = Path(expect_type(client_dir, (str, os.PathLike), "client_dir"))
+    for name, value in (("read_threads", read_threads), ("max_inflight", max_inflight)):
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 256:
+            raise ValueError(f"{name} must be an integer in [1, 256], got {value!r}")
     app = web.Application(middlewares=[one_line_errors], client_max_size=MAX_BODY)
     state = _State(pack, content_hash or pack_hash(pack), room, client_dir, read_threads,
                    max_inflight)

@@ -10,6 +10,9 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+from .._core import TilePack
+from ..errors import expect_type
+
 __all__ = ["pack_hash", "pack_description"]
 
 INDEX_NAME, MANIFEST_NAME = "index.bin", "manifest.json"
@@ -17,7 +20,7 @@ INDEX_NAME, MANIFEST_NAME = "index.bin", "manifest.json"
 
 def pack_hash(pack) -> str:
     """32 hex digits naming the pack's content (manifest and tile checksums)."""
-    root = Path(pack.path)
+    root = Path(expect_type(pack, TilePack, "pack").path)
     h = hashlib.blake2b(digest_size=16, person=b"gigascroll-pack")
     for name in (MANIFEST_NAME, INDEX_NAME):
         h.update(name.encode() + b"\0")
@@ -29,6 +32,8 @@ def pack_hash(pack) -> str:
 
 def pack_description(pack, content_hash: str) -> dict:
     """scene.json's "pack": geometry, paintings, page-table placement (docs/serve-protocol.md)."""
+    expect_type(pack, TilePack, "pack")
+    expect_type(content_hash, str, "content_hash")
     return {
         "hash": content_hash, "tile_size": pack.tile_size, "border": pack.border,
         "payload": pack.payload, "table_size": list(pack.table_size),

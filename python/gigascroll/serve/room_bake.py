@@ -21,6 +21,9 @@ from .. import runtime
 from ..gallery import Gallery, builtin_room
 from ..gallery.gallery import PAINTING_REFLECTANCE
 from ..gallery.rooms import ROOM_NAMES
+from .._core import TilePack
+from ..errors import expect_type
+from ..gallery.room import RoomSpec
 from ..outputs import write_bytes
 from .room_glb import room_glb
 
@@ -51,6 +54,9 @@ def load_room_spec(room: str, pack):
 
 def room_key(spec, content_hash: str, lighting: dict) -> str:
     """32 hex digits hashing the room's surfaces and slots, the pack and the lighting."""
+    expect_type(spec, RoomSpec, "spec")
+    expect_type(content_hash, str, "content_hash")
+    expect_type(lighting, dict, "lighting")
     h = hashlib.blake2b(digest_size=16, person=b"gigascroll-room")
     h.update(json.dumps({"format": GLB_FORMAT, "pack": content_hash, "lighting": lighting,
                          "name": spec.name}, sort_keys=True).encode())
@@ -128,6 +134,13 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
                threads: int = 0, announce=None) -> BakedRoom:
     """The room `room` (built-in name or file) with the pack's paintings, its glb baked or
     taken from the cache. announce(text), when given, hears one line: hit or bake."""
+    expect_type(room, str, "room")
+    expect_type(pack, TilePack, "pack")
+    expect_type(content_hash, str, "content_hash")
+    if cache_dir is not None:
+        expect_type(cache_dir, (str, os.PathLike), "cache_dir")
+        if not str(cache_dir).strip():
+            raise ValueError("cache_dir must name a directory")
     spec = load_room_spec(room, pack)
     gallery = Gallery.from_room(spec, pack)
     key = room_key(spec, content_hash, ROOM_LIGHTING)

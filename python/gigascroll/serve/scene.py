@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..errors import expect_type
 from ..gallery.walk import lit_exposure
 from .pack_info import pack_description
 
@@ -18,6 +19,9 @@ def _floats(v) -> list[float]:
 
 def scene_document(pack, content_hash: str, room) -> dict:
     """The scene of a served pack and BakedRoom."""
+    from .room_bake import BakedRoom
+
+    expect_type(room, BakedRoom, "room")
     spec, gallery = room.spec, room.gallery
     camera = gallery.camera()
     slots = [{"slot": k, "painting": gallery.slot_paintings[k], "origin": _floats(s.origin), "u_axis": _floats(s.u_axis), "v_axis": _floats(s.v_axis),
