@@ -119,8 +119,8 @@ def test_a_silent_port_ends_in_one_line(image, tmp_path, silent_port):
 
 
 def test_an_http_server_is_not_a_dask_scheduler(image, tmp_path, http_port):
-    address = f"tcp://127.0.0.1:{http_port}"
-    r = pack(image, "-o", tmp_path / "o.pack", "--scheduler", address, "--timeout", TIMEOUT)
+    address = f"tcp://127.0.0.1:{http_port}"  # asked after 1 s of silence, it answers at once
+    r = pack(image, "-o", tmp_path / "o.pack", "--scheduler", address, "--timeout", 20)
     one_line(r, address, "is not a Dask scheduler")
 
 
@@ -172,8 +172,9 @@ def test_a_scheduler_without_workers_ends_in_one_line(image, tmp_path):
     with LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
                       dashboard_address=":0") as cluster:
         address = cluster.scheduler_address
-        r = pack(image, "-o", tmp_path / "o.pack", "--scheduler", address, "--timeout", TIMEOUT)
-    one_line(r, address, "has no workers", f"within {TIMEOUT} s")
+        # Connecting must succeed within the timeout on a loaded machine too: 5 s.
+        r = pack(image, "-o", tmp_path / "o.pack", "--scheduler", address, "--timeout", 5)
+    one_line(r, address, "has no workers", "within 5 s")
 
 
 # ----------------------------------------------------------------------------- resume

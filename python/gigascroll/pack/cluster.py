@@ -95,9 +95,10 @@ def _handshake(address: str, timeout: float) -> dict:
 
 def _first_bytes(sock, timeout: float) -> bytes | None:
     """What the peer sends first (up to 64 bytes, at least 8 unless it closes), within
-    `timeout`: a Dask server sends its handshake unprompted; a peer still silent halfway is
-    sent an HTTP request, which an HTTP server answers (Dask's own handshake may hold no line
-    end, so an HTTP server would wait for it forever). None if it stays silent."""
+    `timeout`: a Dask server sends its handshake unprompted, at once; a peer still silent
+    after a second (or half the timeout) is sent an HTTP request, which an HTTP server
+    answers (Dask's own handshake may hold no line end, so an HTTP server would wait for it
+    forever). None if it stays silent."""
     import select
     deadline = time.monotonic() + timeout
     prompted, got = False, b""
@@ -105,7 +106,7 @@ def _first_bytes(sock, timeout: float) -> bytes | None:
         left = deadline - time.monotonic()
         if left <= 0:
             return got or None
-        wait = left if prompted or got else min(left, timeout / 2)
+        wait = left if prompted or got else min(left, timeout / 2, 1.0)
         if select.select([sock], [], [], wait)[0]:
             try:
                 chunk = sock.recv(64 - len(got))
