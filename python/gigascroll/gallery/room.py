@@ -45,10 +45,12 @@ class PaintingSlot:
 
 @dataclass
 class RoomSpec:
-    """A room: its surfaces, its painting slots, and a suggested first camera."""
+    """A room: its surfaces, its painting slots, a suggested first camera, and the light specs
+    (gallery/lights.py `LightSpec`) its emitting surfaces were made from, where known."""
 
     name: str
     surfaces: list[Surface] = field(default_factory=list)
     paintings: list[PaintingSlot] = field(default_factory=list)
     camera_eye: tuple[float, float, float] | None = None
     camera_target: tuple[float, float, float] | None = None
+    lights: list = field(default_factory=list)

@@ -7,7 +7,9 @@ in W / m^2 per channel times 683 lm / W (the lumen's definition at 555 nm), so a
 200 lux is 200 / 683 = 0.293 W / m^2 per channel. The light radiances are solved so that the
 *direct* illuminance on the paintings (from the lights alone, computed exactly with Lambert's
 polygon formula) meets the target; interreflections add to it (tens of percent in these rooms),
-as they would in a real gallery. A display of these rooms needs an exposure: a painting of
+as they would in a real gallery. Each room's lights are `LightSpec`s (gallery/lights.py: panels,
+colour temperature, lumens or a lux target) that a caller may replace. A display of these
+rooms needs an exposure: a painting of
 albedo 0.5 under 200 lux eq. has radiance 0.5 * 0.293 / pi = 0.047.
 
 Paintings sit exactly where the scenarios' `ExhibitionScene`s put them
@@ -32,6 +34,9 @@ import math
 import numpy as np
 
 from ..views.exhibition import TEXEL_M
+from .lights import LightSpec, light_surface
+from .lights import LIGHT_ALBEDO  # noqa: F401  (a room's light panels, as before)
+from .polygon import polygon_irradiance, unit_irradiance
 from .room import PaintingSlot, RoomSpec, Surface
 from .sizes import PaintingSize, painting_sizes
 
@@ -51,7 +56,6 @@ WALL_ALBEDO = (0.80, 0.78, 0.74)
 CEILING_ALBEDO = (0.85, 0.85, 0.85)
 FLOOR_ALBEDO = (0.35, 0.27, 0.20)
 TABLE_ALBEDO = (0.25, 0.20, 0.16)
-LIGHT_ALBEDO = (0.70, 0.70, 0.70)
 
 # --- scroll (seed 000 section 5.3) -----------------------------------------------------------
 SCROLL_LENGTH_M = 12.0        # the seed's 12 m scroll
@@ -91,35 +95,6 @@ def lux_to_irradiance(lux: float) -> float:
     return lux / LUMENS_PER_WATT
 
 
-def polygon_irradiance(point, normal, polygon) -> float:
-    """Irradiance at `point` (receiver facing unit `normal`) from a planar convex polygon of
-    unit radiance that emits on the side its winding's normal points to (counter-clockwise seen
-    from the front). Lambert's formula: E = 1/2 sum_i theta_i (n . g_i), g_i the unit normal of
-    the plane through the point and edge i. The polygon must lie wholly above the receiver's
-    horizon (all the rooms here place lights so)."""
-    return float(unit_irradiance([point], normal, [polygon])[0, 0])
-
-
-def unit_irradiance(points, normal, polygons) -> np.ndarray:
-    """polygon_irradiance for P points (one receiver normal) and Q polygons of as many corners
-    each: a (P, Q) array."""
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    n = np.asarray(normal, dtype=np.float64)
-    poly = np.asarray(polygons, dtype=np.float64)                     # (Q, K, 3)
-    light_normal = np.cross(poly[:, 1] - poly[:, 0], poly[:, 2] - poly[:, 0])
-    facing = np.einsum("pqk,qk->pq", p[:, None] - poly[None, :, 0], light_normal) > 0
-    r = poly[None] - p[:, None, None]                                 # (P, Q, K, 3)
-    if np.any((r @ n <= 0).any(axis=2) & facing):
-        raise ValueError("polygon_irradiance: the light crosses the receiver's horizon")
-    r /= np.linalg.norm(r, axis=3, keepdims=True)
-    nxt = np.roll(r, -1, axis=2)
-    theta = np.arccos(np.clip((r * nxt).sum(axis=3), -1.0, 1.0))
-    g = np.cross(r, nxt)
-    g /= np.linalg.norm(g, axis=3, keepdims=True)
-    total = (theta * (g @ n)).sum(axis=2)
-    return np.where(facing, np.abs(total) / 2.0, 0.0)
-
-
 def direct_irradiance(spec: RoomSpec, point, normal) -> np.ndarray:
     """Unoccluded direct irradiance (W / m^2 per channel) at a point from every emitting quad of
     the room (each emitter is a list of quads: triangles 2k, 2k+1 share corners)."""
@@ -141,17 +116,18 @@ def emitted_power(spec: RoomSpec) -> np.ndarray:
     return power
 
 
-def builtin_room(name: str, paintings, count: int | None = None) -> RoomSpec:
+def builtin_room(name: str, paintings, count: int | None = None, lights=None) -> RoomSpec:
     """The built-in room `name` (one of ROOM_NAMES) for these paintings (a TilePack, a list of
     PaintingSpecs, or see `painting_sizes`). `count`: the number of paintings in the hall (a
     positive multiple of the number of paintings, at most HALL_MAX_TABLES tables); the scroll
-    room shows one painting, the first."""
+    room shows one painting, the first. `lights`: a list of `LightSpec`s in place of the
+    room's own (None: the room's lights, described in its function)."""
     if name == "scroll":
         if count not in (None, 1):
             raise ValueError(f"the scroll room shows one painting, got count={count}")
-        return scroll_room(paintings)
+        return scroll_room(paintings, lights=lights)
     if name == "hall":
-        return hall_room(paintings, count)
+        return hall_room(paintings, count, lights=lights)
     raise ValueError(f"unknown room {name!r}; built-in rooms: {', '.join(ROOM_NAMES)}")
 
 
@@ -213,13 +189,9 @@ def _size_m(p: PaintingSize, width_m: float) -> tuple[float, float]:
     return width_m, width_m / p.aspect
 
 
-def _mean_unit_irradiance(quads, points, normal) -> float:
-    return float(unit_irradiance(points, normal, quads).sum(axis=1).mean())
-
-
 # --- the rooms -------------------------------------------------------------------------------
 
-def scroll_room(paintings, painting: int | str = 0) -> RoomSpec:
+def scroll_room(paintings, painting: int | str = 0, lights=None) -> RoomSpec:
     """Seed 000 section 5.3: one scroll on a wall at eye height, the room sized to it.
 
     The painting (default the first) is 12 m long at its own aspect (or its physical size when
@@ -229,7 +201,8 @@ def scroll_room(paintings, painting: int | str = 0) -> RoomSpec:
     on a track 10 cm below the ceiling, each aimed at the scroll's centre line at 30 degrees off
     vertical, giving the scroll 180 lux eq. of direct light on average; plus a dim fill panel
     over the middle of the ceiling (1 m from the side and front walls, 1.5 m from the back
-    wall) giving the scroll's centre 20 lux eq.
+    wall) giving the scroll's centre 20 lux eq. (Both white `LightSpec`s; `lights` replaces
+    them.)
     """
     sizes = painting_sizes(paintings)
     index = _painting_index(sizes, painting)
@@ -266,23 +239,22 @@ def scroll_room(paintings, painting: int | str = 0) -> RoomSpec:
     xs = np.linspace(0.0, width, 4 * n_spots + 1)
     ys = np.linspace(top - height, top, 3)
     grid = [(x, y, 0.0) for x in xs for y in ys]
-    spot_radiance = lux_to_irradiance(SPOT_LUX) / _mean_unit_irradiance(spots, grid, face)
-
     fill_x = (lo[0] + FILL_INSET, hi[0] - FILL_INSET)
     fill_z = (lo[2] + FILL_INSET, hi[2] - FILL_BACK)
     fill = _quad([sum(fill_x) / 2, SCROLL_CEILING - 0.01, sum(fill_z) / 2],
                  [(fill_x[1] - fill_x[0]) / 2, 0, 0], [0, 0, (fill_z[1] - fill_z[0]) / 2],
                  [0.0, -1.0, 0.0])
-    fill_radiance = lux_to_irradiance(FILL_LUX) / _mean_unit_irradiance(
-        [fill], [(width / 2, centre, 0.0)], face)
-
-    surfaces.append(_surface("spot_lights", spots, LIGHT_ALBEDO, (spot_radiance,) * 3))
-    surfaces.append(_surface("fill_light", [fill], LIGHT_ALBEDO, (fill_radiance,) * 3))
+    if lights is None:
+        lights = [LightSpec("spot_lights", spots, lux=SPOT_LUX, points=grid, normal=face),
+                  LightSpec("fill_light", [fill], lux=FILL_LUX, points=[(width / 2, centre, 0.0)],
+                            normal=face)]
+    surfaces += [light_surface(light, [slot]) for light in lights]
     return RoomSpec("scroll", surfaces, [slot], camera_eye=(width / 2, 1.6, -3.0),
-                    camera_target=(width / 2, centre, 0.0))
+                    camera_target=(width / 2, centre, 0.0), lights=list(lights))
 
 
-def hall_room(paintings, count: int | None = None, texel_m: float = TEXEL_M) -> RoomSpec:
+def hall_room(paintings, count: int | None = None, texel_m: float = TEXEL_M,
+              lights=None) -> RoomSpec:
     """Seed 000 section 5.4: `count` paintings (default: one of each) laid flat on 70 cm tables,
     as `multi_exhibition` lays them: painting slot i shows painting i % n; eight (n) to a table,
     side by side across it, long side along x, 1 mm above the top; table g runs along x at z
@@ -290,7 +262,8 @@ def hall_room(paintings, count: int | None = None, texel_m: float = TEXEL_M) -> 
     scroll's texel size, as `spec_of`). Tables are boxes: a 4 cm top and four 6 cm legs. Room:
     5 m of floor around the tables, 4 m ceiling. Lights: 0.6 m square ceiling panels facing
     down, 2 cm below the ceiling, a grid of about one per 2 m x 2 m over each table, giving the
-    paintings' centres 200 lux eq. of direct light on average.
+    paintings' centres 200 lux eq. of direct light on average (one white `LightSpec`;
+    `lights` replaces it).
     """
     sizes = painting_sizes(paintings)
     n = len(sizes)
@@ -331,14 +304,15 @@ def hall_room(paintings, count: int | None = None, texel_m: float = TEXEL_M) -> 
     hi = np.array([length + HALL_MARGIN, HALL_CEILING, z_end + HALL_MARGIN])
     surfaces = _shell(lo, hi)
     surfaces.append(_surface("tables", table_quads, TABLE_ALBEDO))
-    radiance = lux_to_irradiance(GALLERY_LUX) / _mean_unit_irradiance(panels, centres,
-                                                                       [0.0, 1.0, 0.0])
-    surfaces.append(_surface("ceiling_lights", panels, LIGHT_ALBEDO, (radiance,) * 3))
+    if lights is None:
+        lights = [LightSpec("ceiling_lights", panels, lux=GALLERY_LUX, points=centres,
+                            normal=[0.0, 1.0, 0.0])]
+    surfaces += [light_surface(light, slots) for light in lights]
     # The suggested camera stands beyond the last table's far edge (+z), where the paintings'
     # bottoms are: image y (down) runs along +z, so only from there do they read upright
     # (from the -z side they read rotated by 180 degrees).
     return RoomSpec("hall", surfaces, slots, camera_eye=(length / 2, 1.7, z_end + 3.5),
-                    camera_target=(length / 2, TABLE_HEIGHT, z_end - depth / 2))
+                    camera_target=(length / 2, TABLE_HEIGHT, z_end - depth / 2), lights=list(lights))
 
 
 def _table_quads(x, z, length, depth, height) -> list[np.ndarray]:

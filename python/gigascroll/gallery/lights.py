@@ -1,0 +1,257 @@
+"""The gallery's lights as a lighting designer gives them: `LightSpec`.
+
+A light is one or more rectangular panels (diffusers: one-sided Lambertian emitters) that share
+a colour and an intensity. Its colour is a colour temperature in kelvin (the Planckian
+radiator, `light_colour.kelvin_to_rgb`; None: white, equal linear sRGB channels, sRGB's D65
+white). Its intensity is either
+
+- a luminous flux in lumens (a lamp's datasheet figure) for all its panels together:
+  flux = 683 lm/W x pi x area x L for a Lambertian panel of radiance L at unit luminance; or
+- a target illuminance in lux: the mean *direct* illuminance over a painting slot (its
+  slot_grid points) or over given points, for which the radiance is solved exactly. The direct
+  illuminance is linear in the radiance, and Lambert's polygon formula (gallery/polygon.py)
+  gives it for unit radiance with nothing in between. Interreflections add to it (tens of
+  percent in a pale room; nothing with black walls), as they would in a real gallery; the
+  `light` command measures the total.
+
+`light_surface(light, slots)` turns a spec into the room's emitting `Surface` (emission =
+L x the colour's linear sRGB at unit luminance). `rectangle(centre, aim, width, height)`
+makes a panel's corners; `lights_from_json` reads a list of specs (the `light` command's
+`--lights` file).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .light_colour import LUMINANCE_WEIGHTS, kelvin_to_rgb
+from .polygon import unit_irradiance
+from .room import PaintingSlot, Surface
+from .slot_grid import slot_front, slot_points
+
+__all__ = ["LightSpec", "LIGHT_ALBEDO", "SOLVE_SAMPLES", "rectangle", "light_surface",
+           "light_colour", "solve_radiance", "lights_from_json", "load_lights"]
+
+LUMENS_PER_WATT = 683.0   # as gallery/rooms.py: lux equivalent per W / m^2
+LIGHT_ALBEDO = (0.70, 0.70, 0.70)  # a light panel's diffuser
+SOLVE_SAMPLES = 64        # slot_grid cells along a painting's longer side for a target solve
+MAX_EXTENT_M = 10_000.0
+MAX_LUMENS = 1e9
+MAX_LUX = 1e6
+
+
+@dataclass
+class LightSpec:
+    """One light: `panels` (a list of (4, 3) corner arrays, counter-clockwise seen from the lit
+    side), `kelvin` (None: white), and exactly one of `lumens` (total luminous flux) or `lux`
+    (the target mean direct illuminance on `painting`, a slot's name or index, or else at
+    `points` (P, 3) facing `normal`)."""
+
+    name: str
+    panels: list
+    kelvin: float | None = None
+    lumens: float | None = None
+    lux: float | None = None
+    painting: str | int | None = None
+    points: object = None
+    normal: object = None
+    albedo: tuple = LIGHT_ALBEDO
+    details: dict = field(default_factory=dict)  # what the solve found (radiance, lumens)
+
+
+def rectangle(centre, aim, width: float, height: float, across=(1.0, 0.0, 0.0)) -> np.ndarray:
+    """A panel's 4 corners: centred at `centre`, emitting toward `aim`, `width` metres along
+    `across` (made perpendicular to aim; world z when across is parallel to it) and `height`
+    along aim x across; counter-clockwise seen from the lit side."""
+    c, a = _vec(centre, "centre"), _unit(aim, "aim")
+    x = _vec(across, "across")
+    x = x - (x @ a) * a
+    if np.linalg.norm(x) < 1e-9:
+        x = np.array([0.0, 0.0, 1.0]) - a[2] * a
+    x /= np.linalg.norm(x)
+    y = np.cross(a, x)
+    y /= np.linalg.norm(y)
+    w, h = (_positive(v, what, MAX_EXTENT_M) for v, what in ((width, "width"), (height, "height")))
+    half_a, half_b = x * w / 2, y * h / 2
+    corners = np.array([c - half_a - half_b, c + half_a - half_b, c + half_a + half_b,
+                        c - half_a + half_b])
+    if np.dot(np.cross(half_a, half_b), a) < 0:
+        corners = corners[::-1].copy()
+    return corners
+
+
+def light_colour(light: LightSpec) -> np.ndarray:
+    """The light's linear sRGB at unit luminance."""
+    return np.ones(3) if light.kelvin is None else np.array(kelvin_to_rgb(light.kelvin))
+
+
+def solve_radiance(light: LightSpec, slots: list[PaintingSlot]) -> float:
+    """The radiance scale L (W / m^2 / sr at unit luminance) that gives the spec's lumens or
+    its target lux; ValueError for a spec that is not one of the documented forms."""
+    panels = _panels(light)
+    if (light.lumens is None) == (light.lux is None):
+        raise ValueError(f"light {light.name!r}: give exactly one of lumens or lux")
+    if light.lumens is not None:
+        lumens = _positive(light.lumens, f"light {light.name!r}: lumens", MAX_LUMENS)
+        area = sum(0.5 * np.linalg.norm(np.cross(p[2] - p[0], p[3] - p[1])) for p in panels)
+        return lumens / (LUMENS_PER_WATT * math.pi * area)
+    lux = _positive(light.lux, f"light {light.name!r}: lux", MAX_LUX)
+    points, normal = _receivers(light, slots)
+    try:
+        unit = unit_irradiance(points, normal, panels).sum(axis=1).mean()
+    except ValueError:
+        raise ValueError(f"light {light.name!r}: a panel crosses the plane of the points it "
+                         "lights (it must lie wholly in front of them)") from None
+    if not unit > 0:
+        raise ValueError(f"light {light.name!r}: no panel faces the points it should light")
+    return lux / LUMENS_PER_WATT / float(unit)
+
+
+def light_surface(light: LightSpec, slots: list[PaintingSlot]) -> Surface:
+    """The room's emitting surface for `light`: its panels as quads (triangles 2k, 2k + 1),
+    emission = solve_radiance x light_colour. Records radiance and lumens in light.details."""
+    panels = _panels(light)
+    radiance = solve_radiance(light, slots)
+    rgb = light_colour(light)
+    vertices = np.concatenate(panels).astype(np.float64)
+    base = 4 * np.arange(len(panels), dtype=np.int64)[:, None]
+    triangles = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
+    area = sum(0.5 * np.linalg.norm(np.cross(p[2] - p[0], p[3] - p[1])) for p in panels)
+    light.details = {"radiance": radiance, "rgb": rgb.tolist(),
+                     "lumens": LUMENS_PER_WATT * math.pi * area * radiance * float(
+                         rgb @ np.asarray(LUMINANCE_WEIGHTS)),
+                     "area_m2": float(area)}
+    return Surface(light.name, vertices, triangles, tuple(float(a) for a in light.albedo),
+                   tuple(float(radiance * c) for c in rgb))
+
+
+# --- reading specs -----------------------------------------------------------------------------
+
+_KEYS = {"name", "centre", "aim", "width", "height", "across", "kelvin", "lumens", "lux",
+         "painting"}
+
+
+def lights_from_json(data) -> list[LightSpec]:
+    """Light specs from JSON data: a list of objects with name, centre [x, y, z], aim
+    [x, y, z], width and height (metres), optional across [x, y, z], kelvin, and lumens or
+    lux with painting (a slot's name or index)."""
+    if not isinstance(data, list) or not data or len(data) > 1000:
+        raise ValueError("lights: expected a list of 1 to 1000 light objects")
+    lights = []
+    for i, item in enumerate(data):
+        if not isinstance(item, dict):
+            raise ValueError(f"lights[{i}]: expected an object, got {type(item).__name__}")
+        unknown = set(item) - _KEYS
+        if unknown:
+            raise ValueError(f"lights[{i}]: unknown keys {sorted(unknown)[:5]} (known: "
+                             f"{', '.join(sorted(_KEYS))})")
+        missing = {"centre", "aim", "width", "height"} - set(item)
+        if missing:
+            raise ValueError(f"lights[{i}]: missing {', '.join(sorted(missing))}")
+        name = item.get("name", f"light{i}")
+        if not isinstance(name, str) or not 0 < len(name) <= 200:
+            raise ValueError(f"lights[{i}]: name must be a string of 1 to 200 characters")
+        if "lux" in item and "painting" not in item:
+            raise ValueError(f"light {name!r}: lux needs the painting it is measured on")
+        panel = rectangle(item["centre"], item["aim"], item["width"], item["height"],
+                          item.get("across", (1.0, 0.0, 0.0)))
+        painting = item.get("painting")
+        if painting is not None and (isinstance(painting, bool)
+                                     or not isinstance(painting, (str, int))):
+            raise ValueError(f"light {name!r}: painting must be a slot's name or index")
+        lights.append(LightSpec(name, [panel], kelvin=item.get("kelvin"),
+                                lumens=item.get("lumens"), lux=item.get("lux"),
+                                painting=painting))
+    return lights
+
+
+def load_lights(path) -> list[LightSpec]:
+    """lights_from_json of a JSON file (at most 1 MB)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such lights file")
+    if path.stat().st_size > 1 << 20:
+        raise ValueError(f"{path}: a lights file is at most 1 MB")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"), parse_constant=_no_constant)
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: not a JSON lights file ({e})") from None
+    try:
+        return lights_from_json(data)
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}") from None
+
+
+# --- checks ------------------------------------------------------------------------------------
+
+def _no_constant(name: str):
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _vec(value, what: str) -> np.ndarray:
+    try:
+        a = np.asarray(value, np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be 3 numbers, got {str(value)[:60]!r}") from None
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or np.abs(a).max() > MAX_EXTENT_M:
+        raise ValueError(f"{what} must be 3 finite numbers within {MAX_EXTENT_M:g} m, got "
+                         f"{str(value)[:60]!r}")
+    return a
+
+
+def _unit(value, what: str) -> np.ndarray:
+    a = _vec(value, what)
+    n = np.linalg.norm(a)
+    if n < 1e-9:
+        raise ValueError(f"{what} must not be zero")
+    return a / n
+
+
+def _positive(value, what: str, most: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{what} must be a number, got {value!r}")
+    v = float(value)
+    if not (math.isfinite(v) and 0 < v <= most):
+        raise ValueError(f"{what} must be positive and at most {most:g}, got {value!r}")
+    return v
+
+
+def _panels(light: LightSpec) -> list[np.ndarray]:
+    if not isinstance(light, LightSpec):
+        raise ValueError(f"a light must be a LightSpec, got {type(light).__name__}")
+    if not isinstance(light.panels, (list, tuple)) or not 1 <= len(light.panels) <= 10_000:
+        raise ValueError(f"light {light.name!r}: panels must be a list of 1 to 10000 rectangles")
+    panels = []
+    for k, p in enumerate(light.panels):
+        a = np.asarray(p, np.float64)
+        if a.shape != (4, 3) or not np.all(np.isfinite(a)) or np.abs(a).max() > MAX_EXTENT_M:
+            raise ValueError(f"light {light.name!r}: panel {k} must be 4 finite corners (4, 3)")
+        if np.linalg.norm(np.cross(a[2] - a[0], a[3] - a[1])) < 1e-12:
+            raise ValueError(f"light {light.name!r}: panel {k} has no area")
+        panels.append(a)
+    return panels
+
+
+def _receivers(light: LightSpec, slots: list[PaintingSlot]) -> tuple[np.ndarray, np.ndarray]:
+    """The points (P, 3) and the normal a lux target is the mean direct illuminance of."""
+    if (light.painting is None) == (light.points is None):
+        raise ValueError(f"light {light.name!r}: a lux target needs exactly one of painting or "
+                         "points")
+    if light.points is not None:
+        p = np.asarray(light.points, np.float64).reshape(-1, 3)
+        if not len(p) or not np.all(np.isfinite(p)):
+            raise ValueError(f"light {light.name!r}: points must be finite (P, 3)")
+        return p, _unit(light.normal, f"light {light.name!r}: normal")
+    which = light.painting
+    for i, s in enumerate(slots):
+        if (isinstance(which, str) and s.name == which) or (
+                isinstance(which, (int, np.integer)) and not isinstance(which, bool) and i == which):
+            return slot_points(s, SOLVE_SAMPLES).reshape(-1, 3), slot_front(s)
+    names = [s.name for s in slots]
+    raise ValueError(f"light {light.name!r}: no painting slot {which!r} in the room (slots: "
+                     f"{', '.join(map(str, names[:10]))}{' ...' if len(names) > 10 else ''})")
