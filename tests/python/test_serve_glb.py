@@ -137,12 +137,16 @@ def test_glb_materials_and_extras_are_the_rooms(room):
     assert max(max(e) for e in emission.values()) > 1
 
 
-def test_the_bake_is_cached_and_keyed(room, tmp_path):
+def test_the_bake_is_cached_and_keyed(room, tmp_path, monkeypatch):
     pack, r = room
     cache = r.glb_path.parent
     again = baked_room("scroll", pack, pack_hash(pack), cache_dir=cache)
     assert again.cache_hit and again.key == r.key and not again.gallery.lit  # no light, no bake
     assert sorted(p.name for p in cache.iterdir()) == [r.glb_path.name]
+    from gigascroll.serve import room_bake
+    monkeypatch.setitem(room_bake.ROOM_LIGHTING, "photons", 1 << 10)   # other light: a new key
+    assert room_bake.room_key(r.spec, pack_hash(pack), room_bake.lighting_options()) != r.key
+    monkeypatch.undo()
     other = build_pack(pattern_image(2000, 300)[:, ::-1].copy(), tmp_path / "q.pack")
     moved = baked_room("scroll", other, pack_hash(other), cache_dir=cache)
     assert not moved.cache_hit and moved.key != r.key

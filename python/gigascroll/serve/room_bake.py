@@ -10,6 +10,7 @@ so a killed bake never leaves a cache entry that looks complete."""
 from __future__ import annotations
 
 import hashlib
+import inspect
 import json
 import os
 from dataclasses import dataclass, field
@@ -27,14 +28,28 @@ from ..gallery.room import RoomSpec
 from ..outputs import write_bytes
 from .room_glb import room_glb
 
-__all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "load_room_spec", "room_key",
-           "baked_room"]
+__all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "lighting_options",
+           "load_room_spec", "room_key", "baked_room"]
 
 # `gigascroll render --room`'s defaults: light(vt, photons=--photons (2^18), seed=--seed (0))
 # with the default radius, then bake() with its defaults (commands/render.py, Gallery.still).
 ROOM_LIGHTING = {"photons": 1 << 18, "seed": 0}
 # Bumped when the glb's layout changes, so old cache entries are not served.
 GLB_FORMAT = 1
+
+
+def lighting_options() -> dict:
+    """What the bake's light depends on, for the cache key: ROOM_LIGHTING, the defaults of
+    Gallery.light and Gallery.bake that it leaves as they are (so a changed default is a
+    new key) and the package's version."""
+    from .. import __version__
+
+    def defaults(fn, skip):
+        return {n: p.default for n, p in inspect.signature(fn).parameters.items()
+                if p.default is not inspect.Parameter.empty and n not in skip}
+
+    return {"light": {**defaults(Gallery.light, {"threads"}), **ROOM_LIGHTING},
+            "bake": defaults(Gallery.bake, {"threads", "progress"}), "version": __version__}
 
 
 def default_cache_dir() -> Path:
@@ -143,7 +158,7 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
             raise ValueError("cache_dir must name a directory")
     spec = load_room_spec(room, pack)
     gallery = Gallery.from_room(spec, pack)
-    key = room_key(spec, content_hash, ROOM_LIGHTING)
+    key = room_key(spec, content_hash, lighting_options())
     path = Path(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
     if path.is_file():
         if announce:

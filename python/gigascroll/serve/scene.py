@@ -24,7 +24,8 @@ def scene_document(pack, content_hash: str, room) -> dict:
     expect_type(room, BakedRoom, "room")
     spec, gallery = room.spec, room.gallery
     camera = gallery.camera()
-    slots = [{"slot": k, "painting": gallery.slot_paintings[k], "origin": _floats(s.origin), "u_axis": _floats(s.u_axis), "v_axis": _floats(s.v_axis),
+    slots = [{"slot": k, "painting": gallery.slot_paintings[k], "origin": _floats(s.origin),
+              "u_axis": _floats(s.u_axis), "v_axis": _floats(s.v_axis),
               "width_m": float(s.width_m), "height_m": float(s.height_m)}
              for k, s in enumerate(spec.paintings)]
     lo, hi = gallery.bounds
