@@ -4,6 +4,7 @@
 //                                       server has none without a room), tails resident
 //   await vtTest.insertTiles(keys)      fetch [p, l, x, y] tiles and make them resident
 //   vtTest.sampleProbes(probes)         [p, u, v, lod] x n -> vtSample's RGBA (float target)
+//   vtTest.render(view, placements)     the display pass's vtSample at vtLod: RGBA8 bytes
 //   await vtTest.feedback(views, placements)
 //                                       one feedback pass per view, read back asynchronously:
 //                                       [{view, width, height, indices, keys}]
@@ -143,35 +144,9 @@ uniform int uPainting;
 in vec2 vUv;
 out vec4 outColor;
 void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
-  if (!quads) {
-    quads = placements.map((s) => {
-      const c = (a, b) => [0, 1, 2].map((i) => s.origin[i] + a * s.u_axis[i] * s.width_m + b * s.v_axis[i] * s.height_m);
-      const v = [];
-      for (const [a, b] of [[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [0, 1]]) v.push(...c(a, b), a, b);
-      const buffer = gl.createBuffer();
-      gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
-      gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(v), gl.STATIC_DRAW);
-      return { buffer, painting: s.painting };
-    });
-  }
-  const pos = gl.getAttribLocation(feedbackProgram, "aPosition"), uv = gl.getAttribLocation(feedbackProgram, "aUv");
   for (const v of views) {
     vt.feedback.begin(v.view, v.display[0], v.display[1], v.reduction ?? 8);
-    gl.useProgram(feedbackProgram);
-    vt.bind(feedbackProgram);
-    gl.uniformMatrix4fv(gl.getUniformLocation(feedbackProgram, "uViewProj"), false,
-                        viewProjection(v.camera, v.display[0], v.display[1]));
-    gl.disable(gl.CULL_FACE);
-    gl.enable(gl.DEPTH_TEST);
-    for (const q of quads) {
-      gl.bindBuffer(gl.ARRAY_BUFFER, q.buffer);
-      gl.enableVertexAttribArray(pos);
-      gl.vertexAttribPointer(pos, 3, gl.FLOAT, false, 20, 0);
-      gl.enableVertexAttribArray(uv);
-      gl.vertexAttribPointer(uv, 2, gl.FLOAT, false, 20, 12);
-      gl.uniform1i(gl.getUniformLocation(feedbackProgram, "uPainting"), q.painting);
-      gl.drawArrays(gl.TRIANGLES, 0, 6);
-    }
+    drawQuads(feedbackProgram, v, placements);
     vt.feedback.end(v.view);
   }
 }
@@ -179,6 +154,77 @@ void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
 // One animation frame, as the app's loop ticks: chromium updates a fence's status between
 // tasks, and with setTimeout ticks alone it was seen never to signal some of them.
 const tick = () => new Promise((r) => requestAnimationFrame(() => r()));
+
+// The paintings of a view as the display pass samples them: vtSample at vtLod (the sRGB8
+// texel, no light), into an RGBA8 target of the display size; returns its bytes, rows bottom
+// up (a test's synchronous readback, not the frame path).
+let displayProgram = null;
+function render(view, placements) {
+  displayProgram ||= compile(HEADER + `
+in vec3 aPosition; in vec2 aUv;
+uniform mat4 uViewProj;
+out vec2 vUv;
+void main() { vUv = aUv; gl_Position = uViewProj * vec4(aPosition, 1.0); }`,
+    HEADER + vt.glsl + `
+uniform int uPainting;
+in vec2 vUv;
+out vec4 outColor;
+void main() { outColor = vtSample(uPainting, vUv, vtLod(uPainting, vUv)); }`);
+  quads = null;
+  const [w, h] = view.display;
+  const target = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_2D, target);
+  gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8, w, h);
+  const depth = gl.createRenderbuffer();
+  gl.bindRenderbuffer(gl.RENDERBUFFER, depth);
+  gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, w, h);
+  const fb = gl.createFramebuffer();
+  gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+  gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
+  gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depth);
+  gl.viewport(0, 0, w, h);
+  gl.clearColor(0, 0, 0, 0);
+  gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+  drawQuads(displayProgram, view, placements);
+  const out = new Uint8Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, out);
+  gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+  gl.deleteFramebuffer(fb);
+  gl.deleteTexture(target);
+  gl.deleteRenderbuffer(depth);
+  return Array.from(out);
+}
+
+// Draws the placements' quads with `program` (uViewProj, uPainting, aPosition, aUv).
+function drawQuads(program, v, placements) {
+  if (!quads) {
+    quads = placements.map((s) => {
+      const c = (a, b) => [0, 1, 2].map((i) => s.origin[i] + a * s.u_axis[i] * s.width_m + b * s.v_axis[i] * s.height_m);
+      const data = [];
+      for (const [a, b] of [[0, 0], [1, 0], [1, 1], [0, 0], [1, 1], [0, 1]]) data.push(...c(a, b), a, b);
+      const buffer = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+      gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(data), gl.STATIC_DRAW);
+      return { buffer, painting: s.painting };
+    });
+  }
+  const pos = gl.getAttribLocation(program, "aPosition"), uv = gl.getAttribLocation(program, "aUv");
+  gl.useProgram(program);
+  vt.bind(program);
+  gl.uniformMatrix4fv(gl.getUniformLocation(program, "uViewProj"), false,
+                      viewProjection(v.camera, v.display[0], v.display[1]));
+  gl.disable(gl.CULL_FACE);
+  gl.enable(gl.DEPTH_TEST);
+  for (const q of quads) {
+    gl.bindBuffer(gl.ARRAY_BUFFER, q.buffer);
+    gl.enableVertexAttribArray(pos);
+    gl.vertexAttribPointer(pos, 3, gl.FLOAT, false, 20, 0);
+    gl.enableVertexAttribArray(uv);
+    gl.vertexAttribPointer(uv, 2, gl.FLOAT, false, 20, 12);
+    gl.uniform1i(gl.getUniformLocation(program, "uPainting"), q.painting);
+    gl.drawArrays(gl.TRIANGLES, 0, 6);
+  }
+}
 
 // Draws the views' feedback passes and waits for each view's readback.
 async function readAll(views, placements) {
@@ -250,5 +296,5 @@ async function stream(views, placements, maxFrames = 600, quiet = 5) {
   return { frames: f, stats: vt.stats(), resident };
 }
 
-window.vtTest = { init, insertTiles, sampleProbes, feedback, benchFeedback, stream, viewProjection };
+window.vtTest = { init, insertTiles, sampleProbes, feedback, render, benchFeedback, stream, viewProjection };
 window.vtTestReady = true;
