@@ -334,3 +334,28 @@ def test_gpu_display_equals_core_sampling(vt_page, vt_pack, pose):
     mse = np.mean((gpu[both][:, :3].astype(np.float64) - cpu[both]) ** 2)
     psnr = 10 * np.log10(255 ** 2 / max(mse, 1e-12))
     assert psnr >= 40, f"PSNR {psnr:.1f} dB"
+
+
+def test_bad_pack_descriptions_are_refused(vt_page, vt_pack):
+    """A scene.json pack the core would not accept (PackGeometry::validate) makes the virtual
+    texture throw a clear Error before it touches WebGL; the good one is accepted."""
+    page, _ = vt_page
+    good = pack_scene(vt_pack)["pack"]
+    p0 = good["paintings"][0]
+    bad = [{**good, "border": 0}, {**good, "tile_size": 8, "border": 4},
+           {**good, "table_size": [100, 8]}, {**good, "paintings": []},
+           {**good, "paintings": [{**p0, "levels": p0["levels"] - 1}]},
+           {**good, "paintings": [{**p0, "levels": 40}]},
+           {**good, "paintings": [{**p0, "table_offset": [3, 0]}]},
+           {**good, "paintings": [{**p0, "table_offset": [good["table_size"][0], 0]}]},
+           {**good, "paintings": [{**p0, "index": 1}]},
+           {**good, "paintings": [{**p0, "width": -5}]},
+           {**good, "paintings": [{**p0, "level_tiles": [[1, 1]] * p0["levels"]}]},
+           {**good, "paintings": [{**p0, "width": float("nan")}]}]
+    out = page.evaluate("""async (packs) => {
+        const { PackGeometry } = await import("/client/vt/geometry.js");
+        return packs.map((p) => { try { new PackGeometry(p); return "accepted"; }
+                                  catch (e) { return e instanceof Error ? e.message : "not an Error"; } }); }""",
+                        [good] + bad)
+    assert out[0] == "accepted"
+    assert all(m.startswith("pack: ") for m in out[1:]), out

@@ -36,6 +36,11 @@ export class PaintingInfo {
       this.levelFirst.push(first);
       first += tx * ty;
     }
+    const last = this.levels - 1;
+    if (this.levelWidth[last] > this.payload || this.levelHeight[last] > this.payload ||
+        (last > 0 && this.levelWidth[last - 1] <= this.payload && this.levelHeight[last - 1] <= this.payload) ||
+        this.tableWidth < this.tilesX[0] || this.tableHeight < this.tilesY[0])
+      throw new Error(`pack: painting ${p.index}'s levels or page table are not the core's geometry`);
     this.firstIndex = firstIndex;
     this.endIndex = first;
     // countr_zero(min(Mp, Np)) + 1, at most the level count (PaintingGeometry::merged_levels).
@@ -55,8 +60,28 @@ function checkLevel(p, l, w, h, tx, ty) {
     throw new Error(`pack: painting ${p.index} level ${l} is not the core's geometry`);
 }
 
+// What the runtime relies on (PackGeometry::validate): a clear Error for a bad description.
+function checkPack(pack) {
+  const int = (x) => Number.isInteger(x) && x >= 0;
+  const pow2 = (x) => int(x) && x > 0 && (x & (x - 1)) === 0;
+  if (!pack || !int(pack.tile_size) || !int(pack.border) || pack.border < 1 || pack.tile_size <= 2 * pack.border)
+    throw new Error("pack: tile_size must exceed 2 * border, border >= 1");
+  if (!Array.isArray(pack.table_size) || !pack.table_size.every(pow2))
+    throw new Error("pack: table_size must be two powers of two");
+  if (!Array.isArray(pack.paintings) || pack.paintings.length === 0) throw new Error("pack: no paintings");
+  pack.paintings.forEach((p, i) => {
+    const ok = p && p.index === i && int(p.width) && int(p.height) && p.width > 0 && p.height > 0 &&
+      int(p.levels) && p.levels >= 1 && p.levels <= 32 && Array.isArray(p.table_size) && p.table_size.every(pow2) &&
+      Array.isArray(p.table_offset) && p.table_offset.every(int) &&
+      p.table_offset[0] % p.table_size[0] === 0 && p.table_offset[1] % p.table_size[1] === 0 &&
+      p.table_offset[0] + p.table_size[0] <= pack.table_size[0] && p.table_offset[1] + p.table_size[1] <= pack.table_size[1];
+    if (!ok) throw new Error(`pack: painting ${i} is not a valid placement in the merged page table`);
+  });
+}
+
 export class PackGeometry {
   constructor(pack) {
+    checkPack(pack);
     this.tileSize = pack.tile_size;
     this.border = pack.border;
     this.payload = pack.tile_size - 2 * pack.border;
