@@ -122,9 +122,9 @@ def light_surface(light: LightSpec, slots: list[PaintingSlot]) -> Surface:
     base = 4 * np.arange(len(panels), dtype=np.int64)[:, None]
     triangles = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
     area = sum(0.5 * np.linalg.norm(np.cross(p[2] - p[0], p[3] - p[1])) for p in panels)
-    light.details = {"radiance": radiance, "rgb": rgb.tolist(),
-                     "lumens": LUMENS_PER_WATT * math.pi * area * radiance * float(
-                         rgb @ np.asarray(LUMINANCE_WEIGHTS)),
+    light.details = {"radiance": float(radiance), "rgb": rgb.tolist(),
+                     "lumens": float(LUMENS_PER_WATT * math.pi * area * radiance
+                                     * float(rgb @ np.asarray(LUMINANCE_WEIGHTS))),
                      "area_m2": float(area)}
     return Surface(light.name, vertices, triangles, tuple(float(a) for a in light.albedo),
                    tuple(float(radiance * c) for c in rgb))

@@ -1,0 +1,193 @@
+"""`gigascroll light PACK --room scroll|hall|FILE [--lights FILE.json] [--category ...]
+[--hours-per-day H --days-per-year D] [-o DIR]`: the illuminance on every painting as
+conservators use it: false-colour maps in lux, min / mean / max and uniformity, the yearly dose
+in lux hours, and warnings against CIE 157:2004's limits for the chosen responsivity category;
+written as index.html, light.json and one PNG map per painting (default: next to the pack,
+PACK-light/)."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from ..errors import UserError
+
+COMMAND = "light"
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "light", help="illuminance maps and lux figures of the paintings (CIE 157 limits)",
+        description="Lights the room as the renders do (photon pass and bake) and computes the "
+        "illuminance on a grid over every painting: false-colour maps in lux, min / mean / max "
+        "and uniformity (min / mean), the yearly exposure in lux hours for the opening hours, "
+        "and warnings where CIE 157:2004's limits for the chosen responsivity category are "
+        "exceeded. Lux = 683 lm/W x (0.2126 R + 0.7152 G + 0.0722 B) of the irradiance "
+        "(linear sRGB, W/m^2 per channel). Writes index.html, light.json and the maps.")
+    p.add_argument("pack", metavar="PACK", help="the tile pack whose paintings the room shows")
+    p.add_argument("--room", default="scroll", help="scroll, hall, or a room file (glTF/OBJ/PLY)")
+    p.add_argument("--lights", default=None, metavar="FILE.json",
+                   help="light specs in place of the room's lights: a JSON list of {name, "
+                        "centre, aim, width, height, [across], [kelvin], lumens | lux + "
+                        "painting}")
+    p.add_argument("--category", default="high", choices=["high", "medium", "low", "none"],
+                   help="CIE 157:2004 responsivity category whose limits apply (default high: "
+                        "ink and colours on silk; none = irresponsive)")
+    p.add_argument("--hours-per-day", type=float, default=8.0, metavar="H",
+                   help="opening hours a day, lights on (default 8)")
+    p.add_argument("--days-per-year", type=float, default=300.0, metavar="D",
+                   help="opening days a year (default 300)")
+    p.add_argument("--lighting", choices=["baked", "full"], default="baked",
+                   help="the baked irradiance the renders use (default), or direct light and "
+                        "gather at every point")
+    p.add_argument("--samples", type=int, default=256,
+                   help="grid cells along each painting's longer side (2..4096, default 256)")
+    p.add_argument("--photons", type=int, default=1 << 18, help="photons for the lighting")
+    p.add_argument("--bake-spacing", type=float, default=None, metavar="M",
+                   help="bake lattice spacing in metres (default: the room's diagonal / 200)")
+    p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    p.add_argument("-o", "--out", default=None,
+                   help="report directory (default: next to the pack, PACK-light); an earlier "
+                        "light report there is replaced")
+    p.set_defaults(func=run)
+
+
+def _check_args(args) -> None:
+    from ..gallery.conservation import annual_exposure
+    for name, value in (("--hours-per-day", args.hours_per_day),
+                        ("--days-per-year", args.days_per_year)):
+        if not math.isfinite(value):
+            raise UserError(f"{name} must be a finite number, got {value}")
+    try:
+        annual_exposure(1.0, args.hours_per_day, args.days_per_year)
+    except ValueError as e:
+        raise UserError(f"--hours-per-day / --days-per-year: {e}") from None
+    if not 2 <= args.samples <= 4096:
+        raise UserError(f"--samples must be in [2, 4096], got {args.samples}")
+    if not 1 <= args.photons <= 1 << 26:
+        raise UserError(f"--photons must be in [1, {1 << 26}], got {args.photons}")
+    if args.bake_spacing is not None and not (math.isfinite(args.bake_spacing)
+                                              and 1e-4 <= args.bake_spacing <= 100):
+        raise UserError(f"--bake-spacing must be in [1e-4, 100] m, got {args.bake_spacing}")
+
+
+def _room(args, pack):
+    """The room spec, its lights replaced by --lights when given."""
+    from ..gallery.lights import light_surface, load_lights
+    from ..gallery.rooms import ROOM_NAMES, builtin_room
+    from .gallery import load_room
+    lights = load_lights(args.lights) if args.lights else None
+    if args.room in ROOM_NAMES:
+        return builtin_room(args.room, pack, lights=lights)
+    room = load_room(args.room, pack)
+    if lights is not None:  # the file's emitters stay as surfaces, dark
+        for s in room.surfaces:
+            s.emission = (0.0, 0.0, 0.0)
+        room.surfaces += [light_surface(light, room.paintings) for light in lights]
+        room.lights = lights
+    return room
+
+
+def _light_entry(light) -> dict:
+    if light.lux is not None:
+        where = (f" on painting {light.painting!r}" if light.painting is not None
+                 else " at given points")
+        target = f", solved for {light.lux:g} lx mean direct illuminance{where}"
+    else:
+        target = ""
+    return {"name": light.name, "kelvin": light.kelvin,
+            "colour": f"{light.kelvin:g} K" if light.kelvin is not None else "white (sRGB D65)",
+            "lumens": light.details.get("lumens"), "radiance": light.details.get("radiance"),
+            "rgb": light.details.get("rgb"), "target_lux": light.lux, "target": target,
+            "panels": len(light.panels)}
+
+
+def _measure(args, pack, room) -> tuple[dict, dict]:
+    """Lights the room, computes every painting's lux and figures: (results, maps)."""
+    import numpy as np
+
+    from ..gallery import Gallery
+    from ..gallery.conservation import SOURCE, annual_exposure, limits_of
+    from ..gallery.illuminance import direct_lux, painting_figures, painting_lux
+    from ..gallery.light_report import map_png
+    from ..runtime import VirtualTexture
+
+    limits = limits_of(args.category)
+    gallery = Gallery.from_room(room, pack)
+    vt = VirtualTexture(pack, (8, 8))  # albedo is not read: irradiance only
+    gallery.light(vt, photons=args.photons, threads=args.threads)
+    if args.lighting == "baked":
+        gallery.bake(spacing=args.bake_spacing, threads=args.threads)
+    grids, paintings = [], []
+    for i, slot in enumerate(room.paintings):
+        lux, _ = painting_lux(gallery, vt, i, args.samples, args.lighting, args.threads)
+        f = painting_figures(lux, limits, args.hours_per_day, args.days_per_year)
+        direct = direct_lux(room, i, args.samples)
+        f["direct_mean_lux_analytic"] = None if direct is None else float(direct.mean())
+        paintings.append({"slot": i, "name": slot.name or f"slot {i}",
+                          "width_m": float(slot.width_m), "height_m": float(slot.height_m),
+                          "grid": [int(lux.shape[1]), int(lux.shape[0])], **f,
+                          "map": f"map{i:03d}.png"})
+        grids.append(lux)
+    finite = [float(np.nanmax(g)) for g in grids if np.isfinite(g).any()]
+    vmax = max(finite + [limits.lux or 0.0, 1.0])
+    maps = {}
+    for p, lux in zip(paintings, grids):
+        title = (f"{p['name']}: min {p['min_lux'] or 0:.1f}, mean {p['mean_lux'] or 0:.1f}, "
+                 f"max {p['max_lux'] or 0:.1f} lx")
+        maps[p["map"]] = map_png(lux, p["width_m"], p["height_m"], title, vmax, limits.lux)
+    results = {
+        "room": room.name, "lighting": args.lighting, "pack": os.path.abspath(args.pack),
+        "units": {"illuminance": "lx", "exposure": "lx h per year"},
+        "lux_conversion": "683 lm/W x (0.2126 R + 0.7152 G + 0.0722 B) of the irradiance "
+                          "(linear sRGB, W/m^2 per channel)",
+        "grid_note": f"the cell centres of a grid of {args.samples} cells along its longer side",
+        "category": {"category": limits.category, "name": limits.name, "lux": limits.lux,
+                     "lux_hours": limits.lux_hours, "examples": limits.examples},
+        "source": SOURCE, "hours_per_day": args.hours_per_day,
+        "days_per_year": args.days_per_year,
+        "hours_per_year": annual_exposure(1.0, args.hours_per_day, args.days_per_year),
+        "lights": [_light_entry(light) for light in room.lights],
+        "paintings": paintings, "stats": {k: v for k, v in gallery.stats.items()
+                                          if k != "albedo_levels"},
+    }
+    return results, maps
+
+
+def run(args) -> int:
+    from ..gallery.light_report import write_report
+    from ..outputs import (beside, check_output, owned_by, replace_dir, signals_interrupt,
+                           temp_dir, write_mark)
+    from ..pack import TilePack
+
+    _check_args(args)
+    p = Path(args.pack)
+    if not (p / "manifest.json").is_file():
+        raise UserError(f"{p} is not a tile pack (no manifest.json)")
+    out = Path(args.out) if args.out is not None else beside(p, "light")
+    try:
+        check_output(out, force=True, directory=True, owned=owned_by(COMMAND),
+                     what="a light report")
+    except OSError as e:
+        raise UserError(f"--out {e}") from None
+    pack = TilePack(p)
+    room = _room(args, pack)
+    results, maps = _measure(args, pack, room)
+    with signals_interrupt():
+        tmp = temp_dir(out, hidden=True)
+        try:
+            write_report(tmp, results, maps)
+            write_mark(tmp, COMMAND)
+            replace_dir(tmp, out, owned=owned_by(COMMAND))
+        except BaseException:
+            import shutil
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+    for q in results["paintings"]:
+        line = (f"{q['name']}: min {q['min_lux'] or 0:.1f} lx, mean {q['mean_lux'] or 0:.1f} lx, "
+                f"max {q['max_lux'] or 0:.1f} lx, uniformity {q['uniformity'] or 0:.2f}, "
+                f"{q['annual_lux_hours_max'] or 0:,.0f} lx h a year at the brightest point")
+        print(line + "".join(f"\n  warning: {w}" for w in q["warnings"]))
+    print(f"wrote {os.path.abspath(out)}/ (index.html, light.json, {len(maps)} maps)")
+    return 0
