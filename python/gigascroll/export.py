@@ -27,8 +27,8 @@ from typing import Iterator
 import numpy as np
 
 from .outputs import (atomic_file, check_output, encode_image, owned_by, refuse_protected,
-                      replace_dir, signals_interrupt, temp_dir, write_bytes, write_mark,
-                      write_text)
+                      replace_dir, signals_deferred, signals_interrupt, temp_dir, write_bytes,
+                      write_mark, write_text)
 
 __all__ = ["export_pack", "FORMATS", "open_pack", "level_bands"]
 
@@ -294,8 +294,9 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
                 _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_dzi(
                     pack, p, tmp, out.name, quality, pool, bar))
                 write_mark(tmp / final[1].name, "export", format=fmt)
-                replace_dir(tmp / final[1].name, final[1], owned)
-                os.replace(tmp / final[0].name, final[0])
+                with signals_deferred():  # the tiles and their .dzi: both or neither
+                    replace_dir(tmp / final[1].name, final[1], owned)
+                    os.replace(tmp / final[0].name, final[0])
                 tmp.rmdir()
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -31,10 +31,11 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "check_output", "write_mark", "has_mark", "owned_by",
-           "temp_dir", "atomic_file", "write_bytes", "write_text", "replace_dir",
-           "write_image", "encode_image", "Interrupted", "signals_interrupt", "ignore_sigxfsz",
-           "write_error", "WriteError", "oiio_reason", "full_reason"]
+__all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "check_output",
+           "write_mark", "has_mark", "owned_by", "temp_dir", "atomic_file", "write_bytes",
+           "write_text", "replace_dir", "write_image", "encode_image", "Interrupted",
+           "signals_interrupt", "signals_deferred", "ignore_sigxfsz", "write_error", "WriteError",
+           "oiio_reason", "full_reason"]
 
 MARK = ".gigascroll-output.json"   # in a directory a command made: which command made it
 
@@ -327,9 +328,7 @@ def replace_dir(tmp, out, owned: Callable[[Path], bool] | None = None) -> None:
     old or the new one, never none) and then deleted; without RENAME_EXCHANGE it is moved
     aside first. Signals wait until the swap is done."""
     tmp, out = Path(tmp), Path(out)
-    blocked = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
-    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)  # no half-done swap
-    try:
+    with signals_deferred():  # no half-done swap
         if out.exists() or out.is_symlink():
             if out.is_symlink() or os.path.samefile(tmp, out):
                 raise OSError(f"{out}: is not a directory this command may replace")
@@ -346,6 +345,16 @@ def replace_dir(tmp, out, owned: Callable[[Path], bool] | None = None) -> None:
         else:
             os.rename(tmp, out)
             fsync_dir(out.parent)  # make the rename itself durable
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """SIGINT, SIGTERM and SIGHUP wait (blocked) while the block runs: renames that together
+    publish an output are done all or none."""
+    blocked = {signal.SIGINT, signal.SIGTERM, signal.SIGHUP}
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+    try:
+        yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
 
