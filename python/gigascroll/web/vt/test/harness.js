@@ -275,7 +275,17 @@ async function benchFeedback(views, placements, frames = 200, step = [0, 0, 0]) 
     for (let j = 1; j <= run; ++j) vt.requests.process(buffers, frames + k * run + j);
     together.push((performance.now() - t0) / run);
   }
-  return { ms, processMs, requests: counts, pixels, together, togetherRequests: vt.requests.last.requests,
+  // The baseline in the same run: Barrett's CPU scan, every pixel into a hash set (a JS Set).
+  const naive = [];
+  for (let k = 0; k < frames; ++k) {
+    const t0 = performance.now();
+    for (let j = 0; j < run; ++j) {
+      const seen = new Set();
+      for (const b of buffers) for (let i = 0; i < b.length; ++i) if (b[i] !== 0xFFFFFFFF) seen.add(b[i]);
+    }
+    naive.push((performance.now() - t0) / run);
+  }
+  return { ms, processMs, requests: counts, pixels, together, naive, togetherRequests: vt.requests.last.requests,
            stats: vt.stats() };
 }
 
