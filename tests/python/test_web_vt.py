@@ -359,3 +359,22 @@ def test_bad_pack_descriptions_are_refused(vt_page, vt_pack):
                         [good] + bad)
     assert out[0] == "accepted"
     assert all(m.startswith("pack: ") for m in out[1:]), out
+
+
+def test_feedback_garbage_is_ignored(vt_page):
+    """Feedback pixels that name no tile (any 32-bit value past the pack's tiles, as a
+    corrupted or foreign target would hold) are skipped; the valid ones among them are still
+    requested, each once."""
+    page, info = vt_page
+    out = page.evaluate("""async (tiles) => {
+        const { RequestProcessor } = await import("/client/vt/requests.js");
+        const r = new RequestProcessor(vt.geometry, vt.cache, vt.pageTable, { tableBits: 16 });
+        const buf = new Uint32Array(100000);
+        let x = 12345;
+        for (let i = 0; i < buf.length; ++i) { x = (Math.imul(x, 1103515245) + 12345) >>> 0; buf[i] = x; }
+        for (let i = 0; i < buf.length; i += 1000) buf[i] = i % tiles;
+        const got = r.process([buf, new Uint32Array(7)], 3);
+        return { got, bad: got.filter((i) => !(i < tiles)).length };
+    }""", info["tiles"])
+    assert out["bad"] == 0
+    assert sorted(out["got"]) == sorted({i % info["tiles"] for i in range(0, 100000, 1000)} | {0})
