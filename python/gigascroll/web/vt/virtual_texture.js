@@ -15,9 +15,13 @@
 //       float vtLod(int painting, vec2 uv)   // lambda = log2(texels per display pixel) from
 //             // the uv derivatives, the OpenGL rule the core's feedback pass uses
 //       vec4  vtFeedbackOut(int painting, vec2 uv)  // the feedback pass's output colour
+//             // (the requested tile's 32-bit flat index as RGBA8; call it unconditionally:
+//             // it takes derivatives)
+//       vec4  vtFeedbackNone()               // what surfaces other than paintings write
 //   vt.bind(program)                // sets its textures and uniforms on a program using vt.glsl
-//                                   // (call after gl.useProgram; it uses texture units
-//                                   // vt.firstUnit .. vt.firstUnit + 3)
+//                                   // (call after gl.useProgram, and after feedback.begin in
+//                                   // a feedback pass: it sets the pass's pixel scale; it
+//                                   // uses texture units vt.firstUnit .. vt.firstUnit + 3)
 //   vt.beginFrame(frameNumber)      // once a frame before drawing: polls the feedback
 //                                   // readbacks, turns them into requests (the paper's hash
 //                                   // with the frame salt), issues fetches, uploads arrived
@@ -36,8 +40,11 @@
 //                                   //  feedback was drawn in), ...}
 //   vt.dispose()
 //
-// Test hooks (tests/python/test_web_vt.py): vt.insertTile(key, rgbBytes) inserts a tile
-// directly; vt.cache, vt.pageTable, vt.requests expose the parts.
+// Options also take slots: [x, y] (the physical texture's grid instead of the budget's) and
+// useWorker: false (fetch on the main thread). The page table is R32UI entries holding the
+// core's PageEntry bits verbatim (level << 24 | slot). Test hooks (tests/python/
+// test_web_vt.py, web/vt/test/harness.js): vt.insertTile(index, rgbBytes) inserts a tile
+// directly; vt.geometry, vt.cache, vt.pageTable, vt.requests, vt.loader expose the parts.
 import { PackGeometry } from "./geometry.js";
 import { PageTable } from "./page_table.js";
 import { TileCache, slotGrid } from "./cache.js";
