@@ -10,8 +10,8 @@
 // On the GPU: an R32UI texture whose mip level l is the merged table's level l (texelFetch
 // at that level), an R32UI atlas of every painting's tail levels, and an RGBA32UI info texture:
 // texel (l, p) = (x, y of the painting's level-l grid origin, 0 merged / 1 tail, flat index
-// of the level's first tile), texel (32, p) = (width, height, levels, 0). Only the rectangle
-// of each level that changed since the last upload is sent (texSubImage2D).
+// of the level's first tile), texel (32, p) = (width, height, levels, 0). Only the
+// rectangles of each level that changed since the last upload are sent (texSubImage2D).
 
 export const NONE = 0xFFFFFFFF;
 export const INFO_COLUMNS = 33;
@@ -19,19 +19,35 @@ export const INFO_COLUMNS = 33;
 export function entryLevel(e) { return e >>> 24; }
 export function entrySlot(e) { return e & 0xFFFFFF; }
 
-class Grid {  // one level of the merged table or the tail atlas, with its dirty rectangle
+// Rectangles a grid keeps before it uploads their bounding box instead (a frame's 16 inserts
+// and their evictions touch at most 32 a level).
+const MAX_RECTS = 64;
+
+class Grid {  // one level of the merged table or the tail atlas, with its changed rectangles
   constructor(width, height) {
     this.width = width;
     this.height = height;
     this.data = new Uint32Array(width * height).fill(NONE);
     this.clean();
   }
-  clean() { this.x0 = this.y0 = Infinity; this.x1 = this.y1 = -Infinity; }
+  clean() {
+    this.rects = [];
+    this.x0 = this.y0 = Infinity;
+    this.x1 = this.y1 = -Infinity;
+  }
   touch(x0, y0, x1, y1) {  // [x0, x1) x [y0, y1) changed
+    if (this.rects.length < MAX_RECTS) this.rects.push([x0, y0, x1, y1]);
     this.x0 = Math.min(this.x0, x0); this.y0 = Math.min(this.y0, y0);
     this.x1 = Math.max(this.x1, x1); this.y1 = Math.max(this.y1, y1);
   }
   get dirty() { return this.x1 > this.x0; }
+  // What to upload: each rectangle, or their bounding box when there were too many (scattered
+  // tiles' bounding box can be most of a level: megabytes a frame instead of kilobytes).
+  uploads() {
+    if (!this.dirty) return [];
+    if (this.rects.length >= MAX_RECTS) return [[this.x0, this.y0, this.x1, this.y1]];
+    return this.rects;
+  }
 }
 
 export class PageTable {
@@ -102,18 +118,23 @@ export class PageTable {
   upload(gl) {
     if (!this.tableTexture) this.createTextures(gl);
     gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+    let entries = 0;
     const send = (texture, level, g) => {
       if (!g.dirty) return;
       gl.bindTexture(gl.TEXTURE_2D, texture);
       gl.pixelStorei(gl.UNPACK_ROW_LENGTH, g.width);
-      gl.texSubImage2D(gl.TEXTURE_2D, level, g.x0, g.y0, g.x1 - g.x0, g.y1 - g.y0, gl.RED_INTEGER,
-                       gl.UNSIGNED_INT, g.data, g.y0 * g.width + g.x0);
+      for (const [x0, y0, x1, y1] of g.uploads()) {
+        gl.texSubImage2D(gl.TEXTURE_2D, level, x0, y0, x1 - x0, y1 - y0, gl.RED_INTEGER,
+                         gl.UNSIGNED_INT, g.data, y0 * g.width + x0);
+        entries += (x1 - x0) * (y1 - y0);
+      }
       g.clean();
     };
     this.merged.forEach((g, l) => send(this.tableTexture, l, g));
     send(this.tailTexture, 0, this.tail);
     gl.pixelStorei(gl.UNPACK_ROW_LENGTH, 0);
     gl.bindTexture(gl.TEXTURE_2D, null);
+    this.uploadedEntries = entries;  // this call's, for stats
   }
 
   createTextures(gl) {

@@ -180,6 +180,7 @@ export class VirtualTexture {
       inFlight: this.loader.tilesInFlight,
       pending: this.requests.pending.length + this.loader.arrived.length,
       uploads: this.counters.uploads,
+      tableEntriesUploaded: this.pageTable.uploadedEntries,
       feedbackMs: this.counters.feedbackMs,   // readback copies + processing, this frame
       processMs: this.counters.processMs,     // processing alone
       readbacks: this.counters.readbacks,     // frames that processed a readback
