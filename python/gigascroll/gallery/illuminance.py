@@ -23,8 +23,7 @@ import numpy as np
 from .._core import Camera
 from .conservation import CategoryLimits, annual_exposure, check_exposure
 from .light_colour import luminance
-from .lights import LUMENS_PER_WATT, light_colour
-from .polygon import unit_irradiance
+from .lights import LUMENS_PER_WATT, light_colour, panels_irradiance
 from .slot_grid import grid_shape, slot_front, slot_points
 
 __all__ = ["CAMERA_DISTANCE_M", "painting_lux", "direct_lux", "lux_stats", "painting_figures"]
@@ -65,7 +64,7 @@ def direct_lux(room, slot: int, samples: int = 128) -> np.ndarray | None:
     points = slot_points(s, samples)
     total = np.zeros(points.shape[:2])
     for light in lights:
-        unit = unit_irradiance(points.reshape(-1, 3), slot_front(s), light.panels).sum(axis=1)
+        unit = panels_irradiance(points, slot_front(s), light.panels)
         y = light.details["radiance"] * float(luminance(light_colour(light)))
         total += (unit * y).reshape(total.shape)
     return LUMENS_PER_WATT * total

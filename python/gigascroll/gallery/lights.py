@@ -35,7 +35,8 @@ from .room import PaintingSlot, Surface
 from .slot_grid import slot_front, slot_points
 
 __all__ = ["LightSpec", "LIGHT_ALBEDO", "SOLVE_SAMPLES", "rectangle", "light_surface",
-           "light_colour", "solve_radiance", "lights_from_json", "load_lights"]
+           "light_colour", "solve_radiance", "panels_irradiance", "lights_from_json",
+           "light_from_extras", "load_lights"]
 
 LUMENS_PER_WATT = 683.0   # as gallery/rooms.py: lux equivalent per W / m^2
 LIGHT_ALBEDO = (0.70, 0.70, 0.70)  # a light panel's diffuser
@@ -43,14 +44,16 @@ SOLVE_SAMPLES = 64        # slot_grid cells along a painting's longer side for a
 MAX_EXTENT_M = 10_000.0
 MAX_LUMENS = 1e9
 MAX_LUX = 1e6
+MAX_PANELS = 100_000
 
 
 @dataclass
 class LightSpec:
-    """One light: `panels` (a list of (4, 3) corner arrays, counter-clockwise seen from the lit
-    side), `kelvin` (None: white), and exactly one of `lumens` (total luminous flux) or `lux`
-    (the target mean direct illuminance on `painting`, a slot's name or index, or else at
-    `points` (P, 3) facing `normal`)."""
+    """One light: `panels` (a list of planar convex polygons, (K, 3) corner arrays with
+    3 <= K <= 16, counter-clockwise seen from the lit side: rectangles, or a room file's
+    triangles), `kelvin` (None: white), and exactly one of `lumens` (total luminous flux) or
+    `lux` (the target mean direct illuminance on `painting`: a slot's name, its painting's
+    name, or the slot's index; or else at `points` (P, 3) facing `normal`)."""
 
     name: str
     panels: list
@@ -98,12 +101,11 @@ def solve_radiance(light: LightSpec, slots: list[PaintingSlot]) -> float:
         raise ValueError(f"light {light.name!r}: give exactly one of lumens or lux")
     if light.lumens is not None:
         lumens = _positive(light.lumens, f"light {light.name!r}: lumens", MAX_LUMENS)
-        area = sum(0.5 * np.linalg.norm(np.cross(p[2] - p[0], p[3] - p[1])) for p in panels)
-        return lumens / (LUMENS_PER_WATT * math.pi * area)
+        return lumens / (LUMENS_PER_WATT * math.pi * sum(_area(q) for q in panels))
     lux = _positive(light.lux, f"light {light.name!r}: lux", MAX_LUX)
     points, normal = _receivers(light, slots)
     try:
-        unit = unit_irradiance(points, normal, panels).sum(axis=1).mean()
+        unit = panels_irradiance(points, normal, panels).mean()
     except ValueError:
         raise ValueError(f"light {light.name!r}: a panel crosses the plane of the points it "
                          "lights (it must lie wholly in front of them)") from None
@@ -112,16 +114,28 @@ def solve_radiance(light: LightSpec, slots: list[PaintingSlot]) -> float:
     return lux / LUMENS_PER_WATT / float(unit)
 
 
+def panels_irradiance(points, normal, panels) -> np.ndarray:
+    """The unit-radiance irradiance (P,) at the points from all the panels (Lambert's
+    formula, the panels grouped by their number of corners)."""
+    p = np.asarray(points, np.float64).reshape(-1, 3)
+    total = np.zeros(len(p))
+    for k in sorted({len(q) for q in panels}):
+        total += unit_irradiance(p, normal, [q for q in panels if len(q) == k]).sum(axis=1)
+    return total
+
+
 def light_surface(light: LightSpec, slots: list[PaintingSlot]) -> Surface:
-    """The room's emitting surface for `light`: its panels as quads (triangles 2k, 2k + 1),
-    emission = solve_radiance x light_colour. Records radiance and lumens in light.details."""
+    """The room's emitting surface for `light`: its panels fanned into triangles (a
+    rectangle's are 2k, 2k + 1), emission = solve_radiance x light_colour. Records radiance,
+    colour, lumens and area in light.details."""
     panels = _panels(light)
     radiance = solve_radiance(light, slots)
     rgb = light_colour(light)
     vertices = np.concatenate(panels).astype(np.float64)
-    base = 4 * np.arange(len(panels), dtype=np.int64)[:, None]
-    triangles = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
-    area = sum(0.5 * np.linalg.norm(np.cross(p[2] - p[0], p[3] - p[1])) for p in panels)
+    starts = np.cumsum([0] + [len(q) for q in panels[:-1]])
+    triangles = np.array([[s0, s0 + j, s0 + j + 1] for s0, q in zip(starts, panels)
+                          for j in range(1, len(q) - 1)], dtype=np.int64)
+    area = sum(_area(q) for q in panels)
     light.details = {"radiance": float(radiance), "rgb": rgb.tolist(),
                      "lumens": float(LUMENS_PER_WATT * math.pi * area * radiance
                                      * float(rgb @ np.asarray(LUMINANCE_WEIGHTS))),
@@ -168,6 +182,25 @@ def lights_from_json(data) -> list[LightSpec]:
                                 lumens=item.get("lumens"), lux=item.get("lux"),
                                 painting=painting))
     return lights
+
+
+_EXTRAS_KEYS = {"kelvin", "lumens", "lux", "painting"}
+
+
+def light_from_extras(name: str, panels: list, extras, albedo) -> LightSpec:
+    """The LightSpec of a room file's light node: its triangles (or polygons) as panels, its
+    material's albedo, and from its glTF extras "light" {kelvin, lumens | lux + painting}."""
+    if not isinstance(extras, dict):
+        raise ValueError(f"light node {name!r}: extras.light must be an object")
+    unknown = set(extras) - _EXTRAS_KEYS
+    if unknown:
+        raise ValueError(f"light node {name!r}: unknown keys {sorted(map(str, unknown))[:5]} in "
+                         f"extras.light (known: {', '.join(sorted(_EXTRAS_KEYS))})")
+    painting = extras.get("painting")
+    if painting is not None and (isinstance(painting, bool) or not isinstance(painting, (str, int))):
+        raise ValueError(f"light node {name!r}: painting must be a name or an index")
+    return LightSpec(name, list(panels), kelvin=extras.get("kelvin"), lumens=extras.get("lumens"),
+                     lux=extras.get("lux"), painting=painting, albedo=tuple(albedo))
 
 
 def load_lights(path) -> list[LightSpec]:
@@ -221,18 +254,36 @@ def _positive(value, what: str, most: float) -> float:
     return v
 
 
+def _area(polygon: np.ndarray) -> float:
+    """The area of a planar polygon (K, 3)."""
+    return 0.5 * float(np.linalg.norm(np.cross(polygon, np.roll(polygon, -1, axis=0)).sum(axis=0)))
+
+
 def _panels(light: LightSpec) -> list[np.ndarray]:
+    """The panels as float64 arrays: each planar and convex with 3 to 16 finite corners."""
     if not isinstance(light, LightSpec):
         raise ValueError(f"a light must be a LightSpec, got {type(light).__name__}")
-    if not isinstance(light.panels, (list, tuple)) or not 1 <= len(light.panels) <= 10_000:
-        raise ValueError(f"light {light.name!r}: panels must be a list of 1 to 10000 rectangles")
+    if not isinstance(light.panels, (list, tuple)) or not 1 <= len(light.panels) <= MAX_PANELS:
+        raise ValueError(f"light {light.name!r}: panels must be a list of 1 to {MAX_PANELS} "
+                         "polygons")
     panels = []
     for k, p in enumerate(light.panels):
-        a = np.asarray(p, np.float64)
-        if a.shape != (4, 3) or not np.all(np.isfinite(a)) or np.abs(a).max() > MAX_EXTENT_M:
-            raise ValueError(f"light {light.name!r}: panel {k} must be 4 finite corners (4, 3)")
-        if np.linalg.norm(np.cross(a[2] - a[0], a[3] - a[1])) < 1e-12:
+        try:
+            a = np.asarray(p, np.float64)
+        except (TypeError, ValueError):
+            a = np.zeros((0, 3))
+        if a.ndim != 2 or a.shape[1] != 3 or not 3 <= len(a) <= 16 or not np.all(np.isfinite(a)) \
+                or np.abs(a).max() > MAX_EXTENT_M:
+            raise ValueError(f"light {light.name!r}: panel {k} must be 3 to 16 finite corners "
+                             f"(K, 3) within {MAX_EXTENT_M:g} m")
+        n = np.cross(a, np.roll(a, -1, axis=0)).sum(axis=0)
+        size = np.ptp(a, axis=0).max()
+        if np.linalg.norm(n) < 1e-12 or np.linalg.norm(n) < 1e-9 * size * size:
             raise ValueError(f"light {light.name!r}: panel {k} has no area")
+        n /= np.linalg.norm(n)
+        turns = np.cross(np.roll(a, -1, axis=0) - a, np.roll(a, -2, axis=0) - np.roll(a, -1, axis=0)) @ n
+        if np.abs((a - a[0]) @ n).max() > 1e-6 * size or turns.min() < -1e-9 * size * size:
+            raise ValueError(f"light {light.name!r}: panel {k} is not a planar convex polygon")
         panels.append(a)
     return panels
 
@@ -248,10 +299,14 @@ def _receivers(light: LightSpec, slots: list[PaintingSlot]) -> tuple[np.ndarray,
             raise ValueError(f"light {light.name!r}: points must be finite (P, 3)")
         return p, _unit(light.normal, f"light {light.name!r}: normal")
     which = light.painting
-    for i, s in enumerate(slots):
-        if (isinstance(which, str) and s.name == which) or (
-                isinstance(which, (int, np.integer)) and not isinstance(which, bool) and i == which):
-            return slot_points(s, SOLVE_SAMPLES).reshape(-1, 3), slot_front(s)
+    if isinstance(which, str):  # a slot's own name first, then its painting's
+        found = [s for s in slots if s.name == which] or [s for s in slots if s.painting == which]
+    elif isinstance(which, (int, np.integer)) and not isinstance(which, bool):
+        found = [slots[int(which)]] if 0 <= which < len(slots) else []
+    else:
+        found = []
+    if found:
+        return slot_points(found[0], SOLVE_SAMPLES).reshape(-1, 3), slot_front(found[0])
     names = [s.name for s in slots]
     raise ValueError(f"light {light.name!r}: no painting slot {which!r} in the room (slots: "
                      f"{', '.join(map(str, names[:10]))}{' ...' if len(names) > 10 else ''})")

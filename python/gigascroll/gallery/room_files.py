@@ -20,6 +20,11 @@ white (albedo 1).
 
 OBJ: one object (`o NAME`) per node, vertices already in world space (OBJ has no transforms);
 its material from the .mtl next to it: Kd -> albedo, Ke -> emission (radiance, no clamping).
+glTF light nodes: a node whose extras hold {"light": {"kelvin": K, "lumens": F}} or {"light":
+{"kelvin": K, "lux": E, "painting": KEY}} is a `LightSpec` (gallery/lights.py): its triangles are
+the panels (emitting toward their winding normal), its material gives the albedo, and its
+emission is solved for the luminous flux F or for the mean direct illuminance E on the slot (or
+painting) KEY; kelvin may be left out (white). Any emissiveFactor of the node is replaced.
 A glTF file's first camera node gives the RoomSpec's camera: eye at the node's world position,
 target from the node's extras {"target": [x, y, z]} or 1 m down its -z; the scene's name (else
 the file's stem) names the room.
@@ -54,6 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .lights import light_from_extras, light_surface
 from .room import PaintingSlot, RoomSpec, Surface
 from .room_assets import (MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES,  # noqa: F401
                           check_regular, check_triangles, read_regular)
@@ -552,7 +558,7 @@ def _up_of(node: _Node, n: np.ndarray, path: Path) -> np.ndarray:
 
 
 def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSpec:
-    surfaces, slots = [], []
+    surfaces, slots, light_nodes = [], [], []
     total = 0
     used_names = set()
     eye = target = None
@@ -567,6 +573,9 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
             slots.append(_slot(node, sizes, path))
             continue
         if len(node.triangles) == 0:
+            continue
+        if "light" in node.extras:
+            light_nodes.append(node)
             continue
         albedo, emission = node.albedo, node.emission
         if not all(0 <= a < 1 for a in albedo):
@@ -583,9 +592,33 @@ def _room_from_nodes(path: Path, nodes: list[_Node], sizes, name: str) -> RoomSp
         surfaces.append(Surface(surface_name, np.ascontiguousarray(node.vertices),
                                 np.ascontiguousarray(node.triangles), tuple(albedo),
                                 tuple(emission)))
+    lights = _lights(path, light_nodes, slots, used_names)
+    surfaces += [surface for _, surface in lights]
     if not any(max(s.emission) > 0 for s in surfaces):
         raise ValueError(f"{path}: the room has no light (no node with emission > 0)")
-    return RoomSpec(name, surfaces, slots, camera_eye=eye, camera_target=target)
+    return RoomSpec(name, surfaces, slots, camera_eye=eye, camera_target=target,
+                    lights=[light for light, _ in lights])
+
+
+def _lights(path: Path, nodes: list[_Node], slots: list[PaintingSlot], used_names: set) -> list:
+    """(LightSpec, its Surface) of each light node (extras "light"), solved once every
+    painting slot is known."""
+    result = []
+    for node in nodes:
+        if not all(0 <= a < 1 for a in node.albedo):
+            raise ValueError(f"{path}: node {node.name!r}: albedo {node.albedo} must be in "
+                             f"[0, 1) per channel (>= 1 creates energy)")
+        name, k = node.name, 1
+        while name in used_names:
+            name, k = f"{node.name}#{k}", k + 1
+        used_names.add(name)
+        try:
+            light = light_from_extras(name, list(node.vertices[node.triangles]),
+                                      node.extras["light"], node.albedo)
+            result.append((light, light_surface(light, slots)))
+        except ValueError as e:
+            raise ValueError(f"{path}: {e}") from None
+    return result
 
 
 # --- writing -----------------------------------------------------------------------------------
