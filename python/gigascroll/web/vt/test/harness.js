@@ -4,10 +4,11 @@
 //                                       server has none without a room), tails resident
 //   await vtTest.insertTiles(keys)      fetch [p, l, x, y] tiles and make them resident
 //   vtTest.sampleProbes(probes)         [p, u, v, lod] x n -> vtSample's RGBA (float target)
-//   vtTest.render(view, placements)     the display pass's vtSample at vtLod: RGBA8 bytes
+//   vtTest.render(view, placements)     the display pass's vtSample at vtLod: RGBA8, base64
 //   await vtTest.feedback(views, placements)
 //                                       one feedback pass per view, read back asynchronously:
-//                                       [{view, width, height, indices, keys}]
+//                                       [{view, width, height, indices (uint32 little-endian,
+//                                       base64), keys (index -> [p, l, x, y])}]
 //   await vtTest.stream(views, placements, maxFrames)
 //                                       the whole runtime from a cold cache until quiet
 //   await vtTest.benchFeedback(views, placements, frames)
@@ -156,8 +157,8 @@ void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
 const tick = () => new Promise((r) => requestAnimationFrame(() => r()));
 
 // The paintings of a view as the display pass samples them: vtSample at vtLod (the sRGB8
-// texel, no light), into an RGBA8 target of the display size; returns its bytes, rows bottom
-// up (a test's synchronous readback, not the frame path).
+// texel, no light), into an RGBA8 target of the display size; returns its bytes as base64,
+// rows bottom up (a test's synchronous readback, not the frame path).
 let displayProgram = null;
 function render(view, placements) {
   displayProgram ||= compile(HEADER + `
@@ -192,7 +193,14 @@ void main() { outColor = vtSample(uPainting, vUv, vtLod(uPainting, vUv)); }`);
   gl.deleteFramebuffer(fb);
   gl.deleteTexture(target);
   gl.deleteRenderbuffer(depth);
-  return Array.from(out);
+  return base64(out);
+}
+
+// Bytes as base64 (a JSON array of a 480 x 360 frame's bytes took seconds to hand over).
+function base64(bytes) {
+  let text = "";
+  for (let i = 0; i < bytes.length; i += 0x8000) text += String.fromCharCode(...bytes.subarray(i, i + 0x8000));
+  return btoa(text);
 }
 
 // Draws the placements' quads with `program` (uViewProj, uPainting, aPosition, aUv).
@@ -244,7 +252,8 @@ async function feedback(views, placements) {
   return views.map((v, k) => {
     const r = got[k], keys = {};
     for (const i of new Set(r.keys)) if (i !== 0xFFFFFFFF) keys[i] = vt.geometry.keyOf(i);
-    return { view: v.view, width: r.width, height: r.height, indices: Array.from(r.keys), keys };
+    return { view: v.view, width: r.width, height: r.height, keys,
+             indices: base64(new Uint8Array(r.keys.buffer, r.keys.byteOffset, r.keys.byteLength)) };
   });
 }
 
