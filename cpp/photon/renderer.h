@@ -36,8 +36,13 @@ struct RenderSettings {
     GridKind grid = GridKind::Adaptive;  // the fastest gather; Hash is seed 001's grid
     HashGrid::Mode hash_mode = HashGrid::Mode::Auto;
     GatherSettings gather;
-    int spp = 1;            // camera samples per pixel (jittered, box filter)
-    int light_samples = 1;  // emitter samples per shading point
+    // Camera samples per pixel (box filter). One: jittered per pixel. More: the points of a
+    // Roberts R2 lattice shifted by one random offset for the whole image (film_sample): each
+    // pixel's samples spread over it evenly, and an edge that crosses a row of pixels at the
+    // same height is covered by the same number of samples in each (no notched edges).
+    int spp = 1;
+    // Emitter samples per shading point. More than one: stratified (direct_irradiance).
+    int light_samples = 1;
     std::uint64_t seed = 0;
     Pipeline pipeline = Pipeline::Fused;
     bool cooperative = false;
@@ -107,8 +112,10 @@ public:
                              std::uint32_t pass = 0) const;
     // Direct irradiance at a hit point (W / m^2 per channel) from `samples` emitter samples
     // with shadow rays, seeded by position; the part of emitted_and_direct() before the albedo.
+    // stratified (the renders' own shading): more than one sample is stratified over the
+    // emitters and their area; false: independent samples (the gallery's lighting "full").
     Vec3f direct_irradiance(const Hit& hit, int samples, ShadeCounters& c,
-                            std::uint32_t pass = 0) const;
+                            std::uint32_t pass = 0, bool stratified = false) const;
 
     const RenderStats& photon_stats() const { return photon_stats_; }  // photon pass only
     const PhotonMap* photon_map() const { return map_.get(); }
@@ -117,6 +124,9 @@ public:
 
     // Deterministic per-pixel sample stream of one view (stereo eye) and pass.
     Rng pixel_rng(int x, int y, int view, std::uint32_t pass = 0) const;
+    // Film position of camera sample s of pixel (x, y) (see RenderSettings::spp); rng is the
+    // pixel's stream (drawn from with one sample per pixel only).
+    void film_sample(int x, int y, int s, Rng& rng, float& px, float& py) const;
     static void add(RenderStats& st, const ShadeCounters& c);
 
 private:
@@ -127,6 +137,7 @@ private:
     RenderSettings s_;
     std::unique_ptr<PhotonMap> map_;
     RenderStats photon_stats_;
+    double film_shift_[2] = {0.5, 0.5};  // the image's R2 lattice offset (film_sample)
 };
 
 }  // namespace gigascroll

@@ -48,7 +48,8 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
                 Rng rng = R.pixel_rng(x, int(y), 0);
                 Vec3f sum{0, 0, 0};
                 for (int s = 0; s < spp; ++s) {
-                    const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
+                    float px, py;
+                    R.film_sample(x, int(y), s, rng, px, py);
                     Hit hit;
                     if (!scene.intersect_camera(L.ray_origin(), L.ray_direction(px, py), hit)) continue;
                     const Vec3f col = R.surface_radiance(hit, heap, c);
@@ -91,7 +92,8 @@ StereoImages render_stereo(const Renderer& R, const StereoCamera& eyes, bool reu
                 Rng rng = R.pixel_rng(x, int(y), 1);
                 Vec3f sum{0, 0, 0};
                 for (int s = 0; s < spp; ++s) {
-                    const float px = float(x) + rng.uniform(), py = float(y) + rng.uniform();
+                    float px, py;
+                    R.film_sample(x, int(y), s, rng, px, py);
                     Hit hit;
                     if (scene.intersect_camera(Rt.ray_origin(), Rt.ray_direction(px, py), hit))
                         sum += R.surface_radiance(hit, heap, c);
