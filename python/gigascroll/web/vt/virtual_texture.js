@@ -130,7 +130,7 @@ export class VirtualTexture {
     this.counters.feedbackMs = t2 - t0;
     this.counters.processMs = t2 - t1;
     this.upload();
-    const room = Math.max(0, 64 * this.options.maxBatchesInFlight - this.loader.tilesInFlight);
+    const room = Math.max(0, this.loader.maxBatch * this.options.maxBatchesInFlight - this.loader.tilesInFlight);
     this.loader.request(this.requests.issue(room));
   }
 
