@@ -42,6 +42,12 @@ def files(tmp_path_factory):
         "behind": [{**good[0], "centre": [6, 1.5, 1.0], "aim": [0, 0, 1]}],
         "string_lux": [{**good[0], "lux": "50"}],
         "deep": "[" * 100000 + "]" * 100000,
+        "dup": good + good,
+        "same_target": good + [{**good[0], "name": "spot2", "lux": 500}],
+        "walls": [{**good[0], "name": "walls"}],
+        "panels_and_centre": [{**good[0], "panels": [{"centre": [6, 2.9, -1], "aim": [0, -1, 1],
+                                                      "width": 0.3, "height": 0.3}]}],
+        "bad_panel": [{"name": "p", "lumens": 100, "panels": [{"centre": [0, 1, 0]}]}],
     }
     for name, data in lights.items():
         (d / f"{name}.json").write_text(data if isinstance(data, str) else json.dumps(data))
@@ -75,6 +81,10 @@ BAD = [
     (["s.pack", "--lighting", "unlit"], "invalid choice"),
     (["s.pack", "--lights", "missing.json"], "no such lights file"),
     (["s.pack", "--hours-per-day", "abc"], "invalid float"),
+    (["s.pack", "--targets", "exact"], "invalid choice"),
+    (["s.pack", "--light-samples", "0"], "--light-samples"),
+    (["s.pack", "--light-samples", "100000"], "--light-samples"),
+    (["s.pack", "--targets", "total", "--lights", "same_target.json"], "cannot be"),
 ] + [(["s.pack", "--lights", f"{name}.json"], match) for name, match in (
     ("nan", "not a number JSON allows"), ("notjson", "not a JSON lights file"),
     ("empty", "list of 1 to 1000"), ("object", "list of 1 to 1000"),
@@ -82,7 +92,8 @@ BAD = [
     ("cold", "colour temperature"), ("huge", "width must be positive"),
     ("both", "exactly one of lumens or lux"), ("behind", "crosses the plane|faces the points"),
     ("string_lux", "lux must be a number"), ("deep", "nested|lights"),
-    ("binary", "not a JSON lights file"))]
+    ("binary", "not a JSON lights file"), ("dup", "given twice"), ("walls", "given twice"),
+    ("panels_and_centre", "not both"), ("bad_panel", "panel 0: missing"))]
 
 
 @pytest.mark.parametrize("args, match", BAD, ids=[" ".join(a[1:] or a) for a, _ in BAD])
@@ -129,7 +140,8 @@ OPTIONS = st.lists(st.sampled_from([
     ["--room", "scroll"], ["--room", "cave"], ["--lighting", "full"], ["--samples", "2"],
     ["--samples", "0"], ["--bake-spacing", "0.5"], ["--bake-spacing", "-1"],
     ["--photons", "1"], ["--photons", "-5"], ["--lights", "good.json"],
-    ["--lights", "nan.json"], ["--lights", "behind.json"],
+    ["--lights", "nan.json"], ["--lights", "behind.json"], ["--targets", "total"],
+    ["--light-samples", "4"], ["--lights", "same_target.json"],
 ]), max_size=4)
 
 

@@ -38,12 +38,20 @@ def register(sub) -> None:
                    help="opening hours a day, lights on (default 8)")
     p.add_argument("--days-per-year", type=float, default=300.0, metavar="D",
                    help="opening days a year (default 300)")
+    p.add_argument("--targets", choices=["direct", "total"], default="direct",
+                   help="what a light's lux target on a painting means: its direct "
+                        "illuminance, solved exactly (default), or the total with "
+                        "interreflections, solved from one lighting pass per such light")
     p.add_argument("--lighting", choices=["baked", "full"], default="baked",
                    help="the baked irradiance the renders use (default), or direct light and "
                         "gather at every point")
     p.add_argument("--samples", type=int, default=256,
                    help="grid cells along each painting's longer side (2..4096, default 256)")
     p.add_argument("--photons", type=int, default=1 << 18, help="photons for the lighting")
+    p.add_argument("--light-samples", type=int, default=None, metavar="N",
+                   help="emitter samples per point: the bake's (default 16) or, with "
+                        "--lighting full, each grid point's (default 1024: min and max are "
+                        "not to be made of noise)")
     p.add_argument("--bake-spacing", type=float, default=None, metavar="M",
                    help="bake lattice spacing in metres (default: the room's diagonal / 200)")
     p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
@@ -65,6 +73,8 @@ def _check_args(args) -> None:
         raise UserError(f"--hours-per-day / --days-per-year: {e}") from None
     if not 2 <= args.samples <= 4096:
         raise UserError(f"--samples must be in [2, 4096], got {args.samples}")
+    if args.light_samples is not None and not 1 <= args.light_samples <= 1 << 16:
+        raise UserError(f"--light-samples must be in [1, 65536], got {args.light_samples}")
     if not 1 <= args.photons <= 1 << 26:
         raise UserError(f"--photons must be in [1, {1 << 26}], got {args.photons}")
     if args.bake_spacing is not None and not (math.isfinite(args.bake_spacing)
@@ -79,13 +89,19 @@ def _room(args, pack):
     from .gallery import load_room
     lights = load_lights(args.lights) if args.lights else None
     if args.room in ROOM_NAMES:
-        return builtin_room(args.room, pack, lights=lights)
-    room = load_room(args.room, pack)
-    if lights is not None:  # the file's emitters stay as surfaces, dark
-        for s in room.surfaces:
-            s.emission = (0.0, 0.0, 0.0)
-        room.surfaces += [light_surface(light, room.paintings) for light in lights]
-        room.lights = lights
+        room = builtin_room(args.room, pack, lights=lights)
+    else:
+        room = load_room(args.room, pack)
+        if lights is not None:  # the file's emitters stay as surfaces, dark
+            for s in room.surfaces:
+                s.emission = (0.0, 0.0, 0.0)
+            room.surfaces += [light_surface(light, room.paintings) for light in lights]
+            room.lights = lights
+    names = [s.name for s in room.surfaces]
+    clash = sorted({n for n in names if names.count(n) > 1})
+    if clash:
+        raise UserError(f"--lights: the light names {', '.join(map(repr, clash[:5]))} are "
+                        "given twice or name a surface of the room; name each light once")
     return room
 
 
@@ -93,7 +109,8 @@ def _light_entry(light) -> dict:
     if light.lux is not None:
         where = (f" on painting {light.painting!r}" if light.painting is not None
                  else " at given points")
-        target = f", solved for {light.lux:g} lx mean direct illuminance{where}"
+        kind = "total" if "total_scale" in light.details else "direct"
+        target = f", solved for {light.lux:g} lx mean {kind} illuminance{where}"
     else:
         target = ""
     return {"name": light.name, "kelvin": light.kelvin,
@@ -103,25 +120,56 @@ def _light_entry(light) -> dict:
             "panels": len(light.panels)}
 
 
+def _lit(args, pack, room):
+    """(gallery, vt): the room lit as the renders light it (photon pass, and bake)."""
+    from ..gallery import Gallery
+    from ..runtime import VirtualTexture
+
+    gallery = Gallery.from_room(room, pack)
+    vt = VirtualTexture(pack, (8, 8))  # albedo is not read: irradiance only
+    samples = args.light_samples or (16 if args.lighting == "baked" else 1024)
+    gallery.light(vt, photons=args.photons, threads=args.threads, light_samples=samples)
+    if args.lighting == "baked":
+        gallery.bake(spacing=args.bake_spacing, threads=args.threads, light_samples=samples)
+    return gallery, vt
+
+
+def _lux_grids(args, pack, room) -> tuple[list, dict]:
+    """Every painting's lux grid, and the lighting's stats."""
+    from ..gallery.illuminance import painting_lux
+    gallery, vt = _lit(args, pack, room)
+    grids = [painting_lux(gallery, vt, i, args.samples, args.lighting, args.threads)[0]
+             for i in range(len(room.paintings))]
+    return grids, {k: v for k, v in gallery.stats.items() if k != "albedo_levels"}
+
+
+def _solve_total(args, pack, room) -> dict:
+    """--targets total: the painting-targeted lights rescaled to meet their targets in total
+    illuminance (gallery/light_solve.py)."""
+    import numpy as np
+
+    from ..gallery.light_solve import solve_total_targets
+
+    def measure(r):
+        grids, _ = _lux_grids(args, pack, r)
+        return {i: float(np.nanmean(g)) if np.isfinite(g).any() else 0.0
+                for i, g in enumerate(grids)}
+    return solve_total_targets(room, measure)
+
+
 def _measure(args, pack, room) -> tuple[dict, dict]:
     """Lights the room, computes every painting's lux and figures: (results, maps)."""
     import numpy as np
 
-    from ..gallery import Gallery
     from ..gallery.conservation import SOURCE, annual_exposure, limits_of
-    from ..gallery.illuminance import direct_lux, painting_figures, painting_lux
+    from ..gallery.illuminance import direct_lux, painting_figures
     from ..gallery.light_report import map_png
-    from ..runtime import VirtualTexture
 
     limits = limits_of(args.category)
-    gallery = Gallery.from_room(room, pack)
-    vt = VirtualTexture(pack, (8, 8))  # albedo is not read: irradiance only
-    gallery.light(vt, photons=args.photons, threads=args.threads)
-    if args.lighting == "baked":
-        gallery.bake(spacing=args.bake_spacing, threads=args.threads)
-    grids, paintings = [], []
-    for i, slot in enumerate(room.paintings):
-        lux, _ = painting_lux(gallery, vt, i, args.samples, args.lighting, args.threads)
+    solve = _solve_total(args, pack, room) if args.targets == "total" else None
+    grids, stats = _lux_grids(args, pack, room)
+    paintings = []
+    for i, (slot, lux) in enumerate(zip(room.paintings, grids)):
         f = painting_figures(lux, limits, args.hours_per_day, args.days_per_year)
         direct = direct_lux(room, i, args.samples)
         f["direct_mean_lux_analytic"] = None if direct is None else float(direct.mean())
@@ -129,7 +177,6 @@ def _measure(args, pack, room) -> tuple[dict, dict]:
                           "width_m": float(slot.width_m), "height_m": float(slot.height_m),
                           "grid": [int(lux.shape[1]), int(lux.shape[0])], **f,
                           "map": f"map{i:03d}.png"})
-        grids.append(lux)
     finite = [float(np.nanmax(g)) for g in grids if np.isfinite(g).any()]
     vmax = max(finite + [limits.lux or 0.0, 1.0])
     maps = {}
@@ -149,8 +196,8 @@ def _measure(args, pack, room) -> tuple[dict, dict]:
         "days_per_year": args.days_per_year,
         "hours_per_year": annual_exposure(1.0, args.hours_per_day, args.days_per_year),
         "lights": [_light_entry(light) for light in room.lights],
-        "paintings": paintings, "stats": {k: v for k, v in gallery.stats.items()
-                                          if k != "albedo_levels"},
+        "targets": args.targets, "total_solve": solve,
+        "paintings": paintings, "stats": stats,
     }
     return results, maps
 

@@ -147,13 +147,15 @@ def light_surface(light: LightSpec, slots: list[PaintingSlot]) -> Surface:
 # --- reading specs -----------------------------------------------------------------------------
 
 _KEYS = {"name", "centre", "aim", "width", "height", "across", "kelvin", "lumens", "lux",
-         "painting"}
+         "painting", "panels"}
+_PANEL_KEYS = {"centre", "aim", "width", "height", "across"}
 
 
 def lights_from_json(data) -> list[LightSpec]:
     """Light specs from JSON data: a list of objects with name, centre [x, y, z], aim
-    [x, y, z], width and height (metres), optional across [x, y, z], kelvin, and lumens or
-    lux with painting (a slot's name or index)."""
+    [x, y, z], width and height (metres), optional across [x, y, z] (or instead "panels": a
+    list of such {centre, aim, width, height[, across]}, lit together), kelvin, and lumens or
+    lux with painting (a slot's name, its painting's name, or its index)."""
     if not isinstance(data, list) or not data or len(data) > 1000:
         raise ValueError("lights: expected a list of 1 to 1000 light objects")
     lights = []
@@ -164,24 +166,48 @@ def lights_from_json(data) -> list[LightSpec]:
         if unknown:
             raise ValueError(f"lights[{i}]: unknown keys {sorted(unknown)[:5]} (known: "
                              f"{', '.join(sorted(_KEYS))})")
-        missing = {"centre", "aim", "width", "height"} - set(item)
-        if missing:
-            raise ValueError(f"lights[{i}]: missing {', '.join(sorted(missing))}")
         name = item.get("name", f"light{i}")
         if not isinstance(name, str) or not 0 < len(name) <= 200:
             raise ValueError(f"lights[{i}]: name must be a string of 1 to 200 characters")
         if "lux" in item and "painting" not in item:
             raise ValueError(f"light {name!r}: lux needs the painting it is measured on")
-        panel = rectangle(item["centre"], item["aim"], item["width"], item["height"],
-                          item.get("across", (1.0, 0.0, 0.0)))
+        panels = [_json_panel(p, f"light {name!r}: panel {k}")
+                  for k, p in enumerate(_json_panels(item, name))]
         painting = item.get("painting")
         if painting is not None and (isinstance(painting, bool)
                                      or not isinstance(painting, (str, int))):
             raise ValueError(f"light {name!r}: painting must be a slot's name or index")
-        lights.append(LightSpec(name, [panel], kelvin=item.get("kelvin"),
+        lights.append(LightSpec(name, panels, kelvin=item.get("kelvin"),
                                 lumens=item.get("lumens"), lux=item.get("lux"),
                                 painting=painting))
     return lights
+
+
+def _json_panels(item: dict, name: str) -> list:
+    """The panel objects of a light: its "panels", or the light object itself."""
+    if "panels" not in item:
+        return [{k: v for k, v in item.items() if k in _PANEL_KEYS}]
+    if set(item) & _PANEL_KEYS:
+        raise ValueError(f"light {name!r}: give panels or one panel's centre, aim, width and "
+                         "height, not both")
+    panels = item["panels"]
+    if not isinstance(panels, list) or not 1 <= len(panels) <= MAX_PANELS:
+        raise ValueError(f"light {name!r}: panels must be a list of 1 to {MAX_PANELS} objects")
+    return panels
+
+
+def _json_panel(p, what: str) -> np.ndarray:
+    if not isinstance(p, dict):
+        raise ValueError(f"{what}: expected an object")
+    unknown, missing = set(p) - _PANEL_KEYS, {"centre", "aim", "width", "height"} - set(p)
+    if unknown or missing:
+        raise ValueError(f"{what}: " + (f"unknown keys {sorted(map(str, unknown))[:5]}"
+                                         if unknown else f"missing {', '.join(sorted(missing))}"))
+    try:
+        return rectangle(p["centre"], p["aim"], p["width"], p["height"],
+                         p.get("across", (1.0, 0.0, 0.0)))
+    except ValueError as e:
+        raise ValueError(f"{what}: {e}") from None
 
 
 _EXTRAS_KEYS = {"kelvin", "lumens", "lux", "painting"}
