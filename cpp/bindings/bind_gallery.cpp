@@ -93,11 +93,13 @@ void bind_gallery(nb::module_& m) {
                                    std::array<float, 3>{float(b.x), float(b.y), float(b.z)});
         })
         .def("_light", [](Gallery& g, const VirtualTexture& vt, std::uint64_t photons, float radius,
-                          int light_samples, std::uint64_t seed, unsigned threads, bool disc) {
-            LightingSettings s{photons, radius, light_samples, seed, threads, disc};
+                          int light_samples, std::uint64_t seed, unsigned threads, bool disc,
+                          bool indirect) {
+            LightingSettings s{photons, radius, light_samples, seed, threads, disc, indirect};
             nb::gil_scoped_release release;
             g.light(vt, s);
-        }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a, "disc"_a)
+        }, "vt"_a, "photons"_a, "radius"_a, "light_samples"_a, "seed"_a, "threads"_a, "disc"_a,
+           "indirect"_a = true)
         .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads, bool stratified,
                          bool skip_unlit, int gather_stride, bool inset_edges, bool coarse_disc,
                          bool analytic_direct, int shadow_probes) {

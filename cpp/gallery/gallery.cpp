@@ -440,7 +440,8 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     renderer_ = std::make_unique<Renderer>(scene_, rs);
     auto t0 = Clock::now();
     std::vector<Photon>& photons = photon_scratch_;  // its capacity kept from the last light()
-    trace_photons(photons, scene_, s.photons, s.seed, s.threads);
+    if (s.indirect) trace_photons(photons, scene_, s.photons, s.seed, s.threads);
+    else photons.clear();  // direct light only: no photons, no map
     stats_.photon_seconds = seconds_since(t0);
     t0 = Clock::now();
     drop_hidden_photons(photons, placements_, radius, s.threads);

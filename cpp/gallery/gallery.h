@@ -81,6 +81,8 @@ struct LightingSettings {
     // where walls stand or the surface ends) instead of the sphere: no darkening at room edges
     // and painting borders, up to 24 rays per gather near other surfaces.
     bool disc = false;
+    // false: direct light only; no photon pass, no photon map (the gather is zero).
+    bool indirect = true;
 };
 
 struct BakeSettings {

@@ -117,9 +117,10 @@ def test_render_command_camera_on_a_builtin_scene(tmp_path, gigascroll_cli):
     img.close()
     scene, own = g.builtin_scene("cornell", resolution=(24, 20))
     cam = g.Camera((0.3, 0.2, 3.5), (0, -0.1, 0), (0, 1, 0), 35.0, (24, 20))
-    want = g.render(scene, cam, photons=4000, radius=0.02, spp=4, seed=3)
+    want = g.render(scene, cam, photons=4000, radius=0.02, spp=4, light_samples=16, seed=3)
     np.testing.assert_array_equal(got, want)
-    assert not np.array_equal(got, g.render(scene, own, photons=4000, radius=0.02, spp=4, seed=3))
+    assert not np.array_equal(got, g.render(scene, own, photons=4000, radius=0.02, spp=4,
+                                            light_samples=16, seed=3))
 
 
 @pytest.mark.parametrize("args,match", [

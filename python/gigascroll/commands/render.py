@@ -15,7 +15,12 @@ def register(sub) -> None:
     from ..photon import BUILTIN_SCENES
 
     p = sub.add_parser("render", help="render a built-in scene with the photon mapper",
-                       description="Render a built-in scene (photon mapping on Embree) to EXR or PNG.")
+                       description="Render a built-in scene (photon mapping on Embree) to EXR or PNG.",
+                       epilog="With --room the still applies --photons, --radius, --seed, --threads, "
+                              "--no-indirect, --spp (a square), --light-samples and --disc / "
+                              "--sphere; it refuses (exit 2) --progressive, --passes, "
+                              "--time-budget, --kernel cone, --grid hash|kdtree, --gather knn, -k, "
+                              "--pipeline two-pass and --cooperative, which the gallery does not have.")
     p.add_argument("scene", nargs="?", choices=sorted(BUILTIN_SCENES),
                    help="built-in scene (or --room for a gallery room)")
     p.add_argument("--room", help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply)")
@@ -34,27 +39,36 @@ def register(sub) -> None:
     p.add_argument("--grid", choices=["adaptive", "hash", "kdtree"], default="adaptive",
                    help="photon search structure (default adaptive; hash is seed 001's grid)")
     p.add_argument("--gather", choices=["radius", "knn"], default="radius")
-    p.add_argument("-k", type=int, default=50, help="photons of the k-nearest gather")
-    p.add_argument("--kernel", choices=["box", "cone"], default="box")
+    p.add_argument("-k", type=int, default=None, help="photons of the k-nearest gather (default 50)")
+    p.add_argument("--kernel", choices=["box", "cone"], default="box",
+                   help="gather kernel (--room: box only, the gallery's gather)")
     p.add_argument("--spp", type=int, default=None,
-                   help="camera samples per pixel (default 4; progressive renders take one per pass)")
+                   help="camera samples per pixel (default 4; progressive renders take one per pass). "
+                        "--room: a square k x k (default 1), the still supersampled on a k x k "
+                        "sub-pixel grid and averaged in linear radiance")
+    p.add_argument("--light-samples", type=int, default=None,
+                   help="emitter samples per shading point, stratified (default 16, 1 per pass "
+                        "with --progressive); --room: per pixel of lighting full and per point of "
+                        "the bake (default 16)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--pipeline", choices=["fused", "two-pass"], default="fused")
     p.add_argument("--cooperative", action="store_true", help="cooperative gather (two-pass pipeline)")
-    p.add_argument("--no-indirect", action="store_true", help="direct light only (skips the photon pass)")
+    p.add_argument("--no-indirect", action="store_true",
+                   help="direct light only (skips the photon pass; --room too)")
     p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
     p.add_argument("--progressive", action="store_true",
                    help="stochastic progressive photon mapping: --passes passes (or fewer within "
-                        "--time-budget), the radius shrinking per pixel; converges to the exact image")
-    p.add_argument("--passes", type=int, default=16, help="progressive passes (default 16)")
+                        "--time-budget), the radius shrinking per pixel; converges to the exact image "
+                        "(not for --room: refused)")
+    p.add_argument("--passes", type=int, default=None, help="progressive passes (default 16)")
     p.add_argument("--time-budget", type=float, default=None,
                    help="progressive: stop after this many seconds")
     disc = p.add_mutually_exclusive_group()
     disc.add_argument("--disc", dest="disc", action="store_true", default=None,
                       help="gather over the surface disc (no edge darkening or leaks; the default "
-                           "for box radius gathers)")
+                           "for box radius gathers of scenes; --room too)")
     disc.add_argument("--sphere", dest="disc", action="store_false",
-                      help="gather over the sphere (seed 001's estimator)")
+                      help="gather over the sphere (seed 001's estimator; --room's default)")
     p.set_defaults(func=run)
 
 
@@ -74,6 +88,49 @@ def _camera_numbers(text: str) -> list[float]:
     return values
 
 
+# The scene renderer's options a room's still (the gallery core) does not have: refused with
+# one line rather than ignored. (given, option, why)
+def _refused_room_options(args) -> list[tuple[bool, str, str]]:
+    return [
+        (args.progressive, "--progressive", "the gallery has no progressive photon mapping; "
+                                            "use --spp and --photons"),
+        (args.passes is not None, "--passes", "it counts progressive passes"),
+        (args.time_budget is not None, "--time-budget", "it bounds progressive passes"),
+        (args.kernel != "box", f"--kernel {args.kernel}", "the gallery gathers with the box kernel"),
+        (args.grid != "adaptive", f"--grid {args.grid}", "the gallery's photon map is the adaptive grid"),
+        (args.gather != "radius", f"--gather {args.gather}", "the gallery gathers within a radius"),
+        (args.k is not None, "-k", "it counts photons of the k-nearest gather"),
+        (args.pipeline != "fused", f"--pipeline {args.pipeline}", "the gallery shades each pixel in one pass"),
+        (args.cooperative, "--cooperative", "it is a mode of the two-pass pipeline"),
+    ]
+
+
+def _room_still_options(args) -> dict:
+    """What the scene renderer's options become for a room's still: keyword arguments of
+    Gallery.still (spp) and Gallery.light; the ones the gallery lacks raise UserError."""
+    import math
+
+    for given, option, why in _refused_room_options(args):
+        if given:
+            raise UserError(f"{option} does not apply to --room: {why}")
+    spp = 1 if args.spp is None else args.spp
+    if spp < 1 or math.isqrt(spp) ** 2 != spp:
+        raise UserError(f"--spp with --room must be a square (1, 4, 9, 16, ...): k x k samples "
+                        f"per pixel, got {spp}")
+    if args.width * args.height * spp > 1 << 26:
+        raise UserError(f"--room: {args.width} x {args.height} pixels x {spp} spp is more than "
+                        "2^26 samples")
+    options = {"spp": spp, "photons": args.photons, "seed": args.seed, "threads": args.threads,
+               "indirect": not args.no_indirect}
+    if args.radius is not None:
+        options["radius"] = args.radius
+    if args.disc is not None:
+        options["disc"] = args.disc
+    if args.light_samples is not None:
+        options["light_samples"] = args.light_samples
+    return options
+
+
 def run_room(args, out: Path) -> int:
     import time
 
@@ -86,6 +143,7 @@ def run_room(args, out: Path) -> int:
         raise UserError("give either a built-in SCENE or --room, not both")
     if not args.pack:
         raise UserError("--room needs --pack PACK")
+    options = _room_still_options(args)
     try:
         pack = TilePack(args.pack)
     except Exception as e:  # a missing or corrupt pack
@@ -105,8 +163,7 @@ def run_room(args, out: Path) -> int:
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
     t0 = time.perf_counter()
     try:
-        image = gallery.still(camera, lighting=args.lighting or "baked", progress=True, photons=args.photons, seed=args.seed,
-                              threads=args.threads, **({} if args.radius is None else {"radius": args.radius}))
+        image = gallery.still(camera, lighting=args.lighting or "baked", progress=True, **options)
     except ValueError as e:
         raise UserError(str(e)) from None
     total = time.perf_counter() - t0
@@ -114,8 +171,10 @@ def run_room(args, out: Path) -> int:
     st = gallery.stats
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"room {spec.name}: {gallery.triangle_count} triangles, {gallery.painting_count} paintings, "
-          f"{args.width}x{args.height}, lighting {args.lighting or 'baked'}")
-    if gallery.lit:
+          f"{args.width}x{args.height}, {options['spp']} spp, lighting {args.lighting or 'baked'}")
+    if gallery.lit and args.no_indirect:
+        print("photons   skipped (--no-indirect: direct light only)")
+    elif gallery.lit:
         print(f"photons   {ms(st['photon_seconds'])}  ({args.photons} emitted, {st['photons_stored']} stored, "
               f"radius {st['radius']:.4g} m)")
         print(f"grid      {ms(st['build_seconds'])}  (build)")
@@ -138,6 +197,8 @@ def run(args) -> int:
         raise UserError("--width and --height must be in [1, 16384]")
     if args.photons <= 0:
         raise UserError("--photons must be positive")
+    if args.light_samples is not None and not 1 <= args.light_samples <= 4096:
+        raise UserError("--light-samples must be in [1, 4096]")
     if args.room:
         return run_room(args, out)
     if args.scene is None:
@@ -148,6 +209,9 @@ def run(args) -> int:
                             "lit by the photon mapper's gather")
     radius = args.radius if args.radius is not None else 0.02 * BUILTIN_SCENES[args.scene]
     spp = args.spp if args.spp is not None else (1 if args.progressive else 4)
+    # 16 stratified: 1 left salt-and-pepper on the Cornell box's tall block and the floor's
+    # penumbrae; progressive passes average their own samples
+    light_samples = args.light_samples or (1 if args.progressive else 16)
     scene, camera = builtin_scene(args.scene, resolution=(args.width, args.height))
     if args.camera:  # the scene's own camera's field of view unless given; up is +y
         from .._core import Camera
@@ -158,15 +222,16 @@ def run(args) -> int:
         except ValueError as e:
             raise UserError(f"--camera: {e}") from None
     image, st = render(scene, camera, photons=args.photons, radius=radius, grid=args.grid,
-                       gather=args.gather, k=args.k, kernel=args.kernel, spp=spp, seed=args.seed,
+                       gather=args.gather, k=50 if args.k is None else args.k, kernel=args.kernel,
+                       spp=spp, light_samples=light_samples, seed=args.seed,
                        pipeline=args.pipeline, cooperative=args.cooperative,
                        indirect=not args.no_indirect, threads=args.threads, return_stats=True,
-                       progressive=args.progressive, passes=args.passes,
+                       progressive=args.progressive, passes=16 if args.passes is None else args.passes,
                        time_budget=args.time_budget, disc=args.disc)
     save_image(out, image)
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"{args.scene}: {scene.triangle_count} triangles, {args.width}x{args.height}, {spp} spp, "
-          f"radius {radius:g}")
+          f"{light_samples} light samples, radius {radius:g}")
     if args.progressive:
         print(f"progressive {st['passes']} passes, mean final radius {st['mean_radius']:g}")
     if st["photon_pass_skipped"]:

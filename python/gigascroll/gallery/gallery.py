@@ -149,17 +149,22 @@ class Gallery(_core._Gallery):
     # lighting ---------------------------------------------------------------------------------
 
     def light(self, vt, photons: int = 1 << 19, radius: float | None = None, light_samples: int = 16,
-              seed: int = 0, threads: int = 0, disc: bool = False) -> dict:
+              seed: int = 0, threads: int = 0, disc: bool = False, indirect: bool = True) -> dict:
         """The photon pass over the whole room and its photon map (replaces any previous
         lighting and bake). `radius` None: about 100 photons per gather disc. disc=True gathers
         over the surface disc (no darkening at room edges and painting borders; slower near
-        other surfaces) instead of the sphere. Returns `stats`."""
+        other surfaces) instead of the sphere. light_samples: emitter samples per pixel of
+        lighting "full". indirect=False: direct light only, no photon pass (no
+        photons traced, the gather zero). Returns `stats`."""
         for name, value in (("photons", photons), ("light_samples", light_samples), ("seed", seed),
                             ("threads", threads)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
                 raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
+        if not isinstance(indirect, (bool, np.bool_)):
+            raise ValueError(f"indirect must be True or False, got {indirect!r}")
         r = 0.0 if radius is None else positive_float32(radius, "radius")  # 0: automatic
-        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads), bool(disc))
+        self._light(vt, int(photons), r, int(light_samples), int(seed), int(threads), bool(disc),
+                    bool(indirect))
         return self.stats
 
     def bake(self, spacing: float | None = None, light_samples: int = 16, threads: int = 0,
@@ -289,10 +294,28 @@ class Gallery(_core._Gallery):
         return inserted
 
     def still(self, camera: Camera, lighting: str = "baked", vt=None, slots: int | None = None,
-              progress: bool = False, **light_options) -> np.ndarray:
+              progress: bool = False, spp: int = 1, **light_options) -> np.ndarray:
         """A still frame: a virtual texture sized for the view (`slots` x `slots` tiles, default
         from the view's requests), the view's tiles streamed in (`stream`), lighting as needed,
-        then `render_display`. light_options go to `light` when it has not run."""
+        then `render_display`. light_options go to `light` when it has not run (light_samples
+        to `bake` too).
+
+        spp = k^2 (1, 4, 9, 16, ...): k x k camera samples per pixel on a stratified sub-pixel
+        grid, averaged in linear radiance (box filter): the still rendered at k times the
+        resolution (each sample's texture level for its own footprint, and in lighting "full"
+        its own emitter samples) and each k x k block averaged."""
+        if isinstance(spp, bool) or not isinstance(spp, (int, np.integer)) or spp < 1 \
+                or math.isqrt(int(spp)) ** 2 != spp:
+            raise ValueError(f"spp must be a square (1, 4, 9, 16, ...): k x k samples per pixel, "
+                             f"got {spp!r}")
+        k = math.isqrt(int(spp))
+        if k > 1:
+            fine = Camera(list(camera.position), list(np.add(camera.position, camera.forward)),
+                          list(camera.up), float(camera.fov),
+                          resolution=(k * camera.width, k * camera.height))
+            image = self.still(fine, lighting, vt, slots, progress, **light_options)
+            h, w = camera.height, camera.width
+            return image.reshape(h, k, w, k, 3).mean(axis=(1, 3), dtype=np.float64).astype(np.float32)
         from .. import runtime
 
         if vt is None:
@@ -306,7 +329,8 @@ class Gallery(_core._Gallery):
         if lighting != "unlit" and not self.lit:
             self.light(vt, **light_options)
         if lighting == "baked" and not self.baked:
-            self.bake(progress=progress)
+            samples = light_options.get("light_samples")
+            self.bake(progress=progress, **({} if samples is None else {"light_samples": samples}))
         return self.render_display(camera, vt, lighting=lighting)
 
     def camera(self, resolution=(256, 256), fov: float = 60.0, eye=None, target=None) -> Camera:
