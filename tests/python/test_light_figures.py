@@ -145,6 +145,9 @@ def test_a_light_solved_for_50_lux_gives_50_lux(pack, tmp_path):
     assert 683 * light["radiance"] * unit.mean() == pytest.approx(50.0, rel=0.01)
     # The peak is above 50 lx: the high category's limit is exceeded there, and said.
     assert figures["max_lux"] > 50 and any("50 lx limit" in w for w in figures["warnings"])
+    # 8 h x 300 days by default; the high category's 15 000 lx h a year at the brightest point
+    assert figures["annual_lux_hours_mean"] == pytest.approx(2400 * figures["mean_lux"])
+    assert figures["max_hours_per_year"] == pytest.approx(15_000 / figures["max_lux"])
     assert (out / figures["map"]).stat().st_size > 1000
     assert "<img src='map000.png'" in (out / "index.html").read_text()
 

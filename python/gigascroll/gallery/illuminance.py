@@ -87,15 +87,20 @@ def lux_stats(lux: np.ndarray) -> dict:
 def painting_figures(lux: np.ndarray, limits: CategoryLimits, hours_per_day: float,
                      days_per_year: float) -> dict:
     """lux_stats with the yearly exposure (lux hours at the mean and at the brightest point
-    for these opening hours) and the category's warnings."""
+    for these opening hours), the hours a year the category's dose allows at the brightest
+    point, and the category's warnings."""
     f = lux_stats(lux)
     hours = annual_exposure(1.0, hours_per_day, days_per_year)
     if f["mean_lux"] is None:
-        f.update(annual_lux_hours_mean=None, annual_lux_hours_max=None,
+        f.update(annual_lux_hours_mean=None, annual_lux_hours_max=None, max_hours_per_year=None,
                  warnings=["the painting is not visible from its front: no figures"])
         return f
     f["annual_lux_hours_mean"] = f["mean_lux"] * hours
     f["annual_lux_hours_max"] = f["max_lux"] * hours
+    # How long a year the painting may be shown under this light (its brightest point within
+    # the category's yearly dose): what decides a rotation.
+    f["max_hours_per_year"] = (limits.lux_hours / f["max_lux"]
+                               if limits.lux_hours is not None and f["max_lux"] > 0 else None)
     f["warnings"] = check_exposure(limits, f["max_lux"], f["annual_lux_hours_max"])
     if not math.isfinite(f["max_lux"]):
         f["warnings"].append("the illuminance is not finite")

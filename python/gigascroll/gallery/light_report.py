@@ -86,7 +86,7 @@ def report_html(results: dict) -> str:
             f"<tr><td>{e(p['name'])}</td><td>{_fmt(p['min_lux'], 1)}</td>"
             f"<td>{_fmt(p['mean_lux'], 1)}</td><td>{_fmt(p['max_lux'], 1)}</td>"
             f"<td>{_fmt(p['uniformity'], 2)}</td><td>{_fmt(p['annual_lux_hours_mean'])}</td>"
-            f"<td>{_fmt(p['annual_lux_hours_max'])}</td>"
+            f"<td>{_fmt(p['annual_lux_hours_max'])}</td><td>{_fmt(p['max_hours_per_year'])}</td>"
             f"<td class='{'warn' if p['warnings'] else 'ok'}'>{warn}</td></tr>")
         sections.append(f"<h3>{e(p['name'])}</h3><img src='{e(p['map'])}' alt='illuminance map "
                         f"of {e(p['name'])}'>")
@@ -100,7 +100,7 @@ def report_html(results: dict) -> str:
 <html lang="en"><head><meta charset="utf-8"><title>Illuminance of the paintings: {e(results['room'])}</title>
 <style>body{{font-family:sans-serif;max-width:72em;margin:1em auto;padding:0 1em}}
 table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:0.25em 0.5em;text-align:right}}
-td:first-child,td:last-child{{text-align:left}}.warn{{color:#a00}}.ok{{color:#060}}
+td:first-child,td:last-child,th:last-child{{text-align:left}}.warn{{color:#a00}}.ok{{color:#060}}
 img{{max-width:100%}}</style></head><body>
 <h1>Illuminance of the paintings</h1>
 <p>Room <b>{e(results['room'])}</b>, lighting <b>{e(results['lighting'])}</b>. Illuminance is the
@@ -112,7 +112,7 @@ E<sub>G</sub> + 0.0722 E<sub>B</sub>).</p>
 ({_fmt(results['hours_per_year'])} h a year).</p>
 <p>Lights:</p><ul>{lights}</ul>
 <table><tr><th>painting</th><th>min lx</th><th>mean lx</th><th>max lx</th><th>uniformity
-(min/mean)</th><th>lx h / year (mean)</th><th>lx h / year (max)</th><th>CIE 157 limits</th></tr>
+(min/mean)</th><th>lx h / year (mean)</th><th>lx h / year (max)</th><th>hours a year the limit allows</th><th>CIE 157 limits</th></tr>
 {''.join(rows)}</table>
 <p>The numbers: <a href="light.json">light.json</a>.</p>
 <h2>Maps</h2>{''.join(sections)}
