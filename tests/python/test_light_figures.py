@@ -217,3 +217,34 @@ def test_a_light_behind_the_painting_is_refused():
                       painting="main")
     with pytest.raises(ValueError, match="crosses the plane|faces the points"):
         light_surface(light, black_room().paintings)
+
+
+def shifted_lux(pack, offset):
+    """The lux grid of the black room with its light, every coordinate moved by `offset`."""
+    light = LightSpec("panel", [rectangle(np.array((0.0, HEIGHT, 0.0)) + offset, (0, -1, 0),
+                                          *PANEL)], kelvin=4000, albedo=BLACK, lumens=2000.0)
+    room = black_room()
+    room.surfaces = [s for s in room.surfaces if s.name != "light"]
+    for s in room.surfaces:
+        s.vertices = s.vertices + offset
+    s0 = room.paintings[0]
+    room.paintings = [PaintingSlot(s0.painting, tuple(np.add(s0.origin, offset)), s0.u_axis,
+                                   s0.v_axis, s0.width_m, s0.height_m, name=s0.name)]
+    room.surfaces.append(light_surface(light, room.paintings))
+    gallery = Gallery.from_room(room, pack)
+    vt = g.VirtualTexture(pack, (8, 8))
+    gallery.light(vt, photons=5000, threads=2)
+    gallery.bake(spacing=0.05, threads=2)
+    lux, positions = painting_lux(gallery, vt, 0, samples=16)
+    return lux, positions, np.array(gallery.origin)
+
+
+def test_a_room_far_from_the_origin_measures_the_same(pack):
+    """The gallery holds a room 8.6 km out around itself (Gallery.origin); the measuring
+    camera and the returned positions are in world coordinates."""
+    offset = np.array([5000.0, 0.0, -7000.0])
+    near, p_near, o_near = shifted_lux(pack, np.zeros(3))
+    far, p_far, o_far = shifted_lux(pack, offset)
+    assert not o_near.any() and o_far.any()  # the second room is held around itself
+    np.testing.assert_allclose(p_far - offset, p_near, atol=1e-3)
+    np.testing.assert_allclose(far, near, rtol=1e-3)
