@@ -26,9 +26,9 @@ from typing import Iterator
 
 import numpy as np
 
-from .outputs import (atomic_file, check_output, encode_image, owned_by, refuse_protected,
-                      replace_dir, signals_deferred, signals_interrupt, temp_dir, write_bytes,
-                      write_mark, write_text)
+from .outputs import (MARK, atomic_file, check_output, encode_image, owned_by,
+                      refuse_protected, remove_stale_temps, replace_dir, signals_deferred,
+                      signals_interrupt, temp_dir, write_bytes, write_mark, write_text)
 
 __all__ = ["export_pack", "FORMATS", "open_pack", "level_bands"]
 
@@ -283,7 +283,8 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
                 _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_tiff(
                     pack, p, tmp, quality, compression, pool, bar))
             return out
-        tmp = temp_dir(out)
+        remove_stale_temps(out, "export", format=fmt)  # of runs killed outright
+        tmp = temp_dir(out, command="export", format=fmt)
         try:
             if fmt == "iiif":
                 _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_iiif(
@@ -297,6 +298,7 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
                 with signals_deferred():  # the tiles and their .dzi: both or neither
                     replace_dir(tmp / final[1].name, final[1], owned)
                     os.replace(tmp / final[0].name, final[0])
+                (tmp / MARK).unlink()
                 tmp.rmdir()
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)

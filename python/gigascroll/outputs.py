@@ -25,6 +25,7 @@ import io
 import itertools
 import json
 import os
+import re
 import shutil
 import signal
 import threading
@@ -32,7 +33,7 @@ from pathlib import Path
 from typing import Callable
 
 __all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "check_output",
-           "write_mark", "has_mark", "owned_by", "temp_dir", "atomic_file", "write_bytes",
+           "write_mark", "has_mark", "owned_by", "temp_dir", "remove_stale_temps", "atomic_file", "write_bytes",
            "write_text", "replace_dir", "write_image", "encode_image", "Interrupted",
            "signals_interrupt", "signals_deferred", "ignore_sigxfsz", "write_error", "WriteError",
            "oiio_reason", "full_reason"]
@@ -161,9 +162,11 @@ def beside(anchor, suffix: str) -> Path:
 
 # ----------------------------------------------------------------------------- temporaries
 
-def temp_dir(out, hidden: bool = False) -> Path:
+def temp_dir(out, hidden: bool = False, command: str | None = None, **details) -> Path:
     """A new empty directory beside `out`, `OUT.tmp-PID` (`.OUT.tmp-PID` when hidden; a
-    suffix -1, -2, ... when that name is taken: an existing one is never reused or removed)."""
+    suffix -1, -2, ... when that name is taken: an existing one is never reused or removed).
+    With `command` it is marked as that command's at once (write_mark), so that a run killed
+    outright leaves a temporary the next run can prove is one (remove_stale_temps)."""
     out = Path(out)
     base = f"{'.' if hidden else ''}{out.name}.tmp-{os.getpid()}"
     try:
@@ -174,12 +177,51 @@ def temp_dir(out, hidden: bool = False) -> Path:
         p = out.parent / (base if k == 0 else f"{base}-{k}")
         try:
             p.mkdir()
-            return p
         except FileExistsError:
             continue
         except OSError as e:
             raise write_error(out, e) from None
+        if command is not None:
+            try:
+                write_mark(p, command, **details)
+            except BaseException:
+                shutil.rmtree(p, ignore_errors=True)
+                raise
+        return p
     raise OSError(f"cannot write {out}: no free temporary name beside it")
+
+
+def _process_gone(pid: int) -> bool:
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # it exists and is someone else's
+        return False
+    return False
+
+
+def remove_stale_temps(out, command: str, hidden: bool = False, **details) -> list[Path]:
+    """Removes the temporaries of `out` (temp_dir's names, and replace_dir's `-old`) that a
+    run of `command` killed outright left: its process is gone and the directory holds its
+    mark. Anything else with such a name stays. Returns what was removed."""
+    out = Path(out)
+    pattern = re.compile(("\\." if hidden else "") + re.escape(out.name)
+                         + r"\.tmp-([0-9]{1,10})(-[0-9]{1,3}|-old)?")
+    removed = []
+    try:
+        siblings = list(out.parent.iterdir())
+    except OSError:
+        return removed
+    for p in siblings:
+        m = pattern.fullmatch(p.name)
+        if (m and int(m.group(1)) != os.getpid() and _process_gone(int(m.group(1)))
+                and p.is_dir() and not p.is_symlink() and has_mark(p, command, **details)):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
 
 
 @contextlib.contextmanager

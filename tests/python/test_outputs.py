@@ -243,3 +243,34 @@ def test_temporary_names_never_reuse_an_existing_one(tmp_path):
     (taken / "user.txt").write_text("keep")
     made = outputs.temp_dir(tmp_path / "o")
     assert made != taken and made.is_dir() and (taken / "user.txt").read_text() == "keep"
+
+
+def test_next_run_removes_only_provable_leftovers_of_dead_runs(tmp_path):
+    """A run killed outright (SIGKILL) leaves its marked temporary; the next run removes it,
+    and nothing that merely has such a name, nor a live process' temporary."""
+    from gigascroll.outputs import remove_stale_temps, temp_dir
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    out = tmp_path / "x"
+    stale = tmp_path / f"x.tmp-{dead.pid}"
+    stale_old = tmp_path / f"x.tmp-{dead.pid}-old"
+    for d in (stale, stale_old):
+        d.mkdir()
+        write_mark(d, "export", format="iiif")
+        (d / "info.json").write_text("{}")
+    unmarked = tmp_path / f"x.tmp-{dead.pid}-1"  # a user's directory with such a name
+    unmarked.mkdir()
+    (unmarked / "keep.txt").write_text("keep")
+    other_kind = tmp_path / f"x.tmp-{dead.pid}-2"  # another export format's
+    other_kind.mkdir()
+    write_mark(other_kind, "export", format="dzi")
+    live = tmp_path / f"x.tmp-{os.getppid()}"  # a live process (our parent)
+    live.mkdir()
+    write_mark(live, "export", format="iiif")
+    mine = temp_dir(out, command="export", format="iiif")
+    assert has_mark(mine, "export", format="iiif")
+    removed = remove_stale_temps(out, "export", format="iiif")
+    assert sorted(removed) == sorted([stale, stale_old])
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert left == sorted([unmarked.name, other_kind.name, live.name, mine.name])
+    assert (unmarked / "keep.txt").read_text() == "keep"

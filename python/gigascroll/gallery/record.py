@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UserError
-from ..outputs import (check_output, has_mark, replace_dir, signals_interrupt, temp_dir,
-                       write_image, write_mark, write_text)
+from ..outputs import (check_output, has_mark, remove_stale_temps, replace_dir,
+                       signals_interrupt, temp_dir, write_image, write_mark, write_text)
 from .frame_rates import fps_text
 from .video import VideoWriter, check_fps
 from .walk import DISPLAY_PARTS, WALK_STAGES, GalleryWalk, compose_frame, tone_map
@@ -52,7 +52,8 @@ def prepare_output(out: Path) -> Path:
     try:
         check_output(out, force=True, directory=True, owned=is_gallery_output,
                      what="a gallery output")
-        tmp = temp_dir(out, hidden=True)
+        remove_stale_temps(out, "gallery", hidden=True)  # of runs killed outright
+        tmp = temp_dir(out, hidden=True, command="gallery")
         (tmp / "frames").mkdir()
     except OSError as e:
         raise UserError(f"--out {e}") from None
