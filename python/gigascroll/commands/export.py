@@ -4,6 +4,10 @@ pyramidal BigTIFF, streamed from the pack's tiles."""
 from __future__ import annotations
 
 import time
+from pathlib import Path
+from urllib.parse import quote
+
+DEFAULT_PORT = 8000
 
 
 def register(sub) -> None:
@@ -19,9 +23,13 @@ def register(sub) -> None:
     p.add_argument("--quality", type=int, default=90, help="JPEG quality 1..100 (default 90)")
     p.add_argument("--compression", default="jpeg", choices=["jpeg", "deflate"],
                    help="tiff only: JPEG or lossless deflate (default jpeg)")
-    p.add_argument("--iiif-id", default=None,
-                   help="iiif only: the image service's id (its base URI) in info.json "
-                   "(default: the painting's name)")
+    p.add_argument("--base-url", "--iiif-id", dest="base_url", default=None, metavar="URL",
+                   help="iiif only: the image service's id in info.json, the absolute http(s) "
+                   "URI the directory is served at (the Image API requires an absolute id; "
+                   "tile URLs are URL/REGION/SIZE/0/default.jpg). Default "
+                   f"http://localhost:{DEFAULT_PORT}/NAME, NAME the output directory's name: "
+                   f"where `python -m http.server {DEFAULT_PORT}` run in the output's parent "
+                   "directory serves it")
     p.add_argument("--reader", default="core", choices=["core", "python"],
                    help="read the pack with the core or the pure-Python reader (default core)")
     p.add_argument("--threads", type=int, default=0, help="worker threads (default: all cores)")
@@ -33,10 +41,18 @@ def run(args) -> int:
     from ..export import export_pack
     if args.threads < 0:
         raise ValueError("--threads must be >= 0")
+    base_url = args.base_url
+    if args.format == "iiif":
+        from ..iiif_presentation import check_http_uri
+        name = Path(args.output).resolve().name
+        base_url = check_http_uri(base_url or f"http://localhost:{DEFAULT_PORT}/{quote(name)}",
+                                  "--base-url")
+    elif base_url is not None:
+        raise ValueError("--base-url applies to --format iiif only")
     t0 = time.perf_counter()
     path = export_pack(args.pack, args.output, args.format, painting=args.painting,
                        quality=args.quality, compression=args.compression, force=args.force,
                        reader=args.reader, threads=args.threads, progress=True,
-                       service_id=args.iiif_id)
+                       service_id=base_url)
     print(f"exported {path} in {time.perf_counter() - t0:.1f} s")
     return 0
