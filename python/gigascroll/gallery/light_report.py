@@ -106,7 +106,10 @@ img{{max-width:100%}}</style></head><body>
 <p>Room <b>{e(results['room'])}</b>, lighting <b>{e(results['lighting'])}</b>. Illuminance is the
 irradiance on each painting's visible side at {e(results['grid_note'])}, converted to lux with
 the photometric weighting of linear sRGB: lx = 683 lm/W &times; (0.2126 E<sub>R</sub> + 0.7152
-E<sub>G</sub> + 0.0722 E<sub>B</sub>).</p>
+E<sub>G</sub> + 0.0722 E<sub>B</sub>). The interreflected part comes from a photon map of
+{_fmt(results['stats'].get('photons_stored'))} stored photons and carries its noise (patches of a
+few percent at the scale of the gather radius, {_fmt(1000 * (results['stats'].get('radius') or 0))}
+mm): min and max include it; more photons (<code>--photons</code>) make it smaller.</p>
 <p>Category: <b>{e(cat['name'])}</b> ({limit}; {e(results['source'])}). Opening hours:
 {_fmt(results['hours_per_day'], 1)} h a day, {_fmt(results['days_per_year'])} days a year
 ({_fmt(results['hours_per_year'])} h a year).</p>
