@@ -39,7 +39,7 @@ $(VENV)/.deps-stamp: pyproject.toml | deps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q scikit-build-core nanobind ninja "cmake>=3.26"
 	$(PIP) install -q numpy "OpenImageIO>=2.5" tqdm matplotlib pytest hypothesis pytest-timeout "pyvips[binary]" mitsuba trimesh
-	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science
+	$(PIP) install -q xxhash zstandard jsonschema pillow tifffile imagecodecs colour-science shapely
 	$(PIP) install -q imageio-ffmpeg pyglet
 	$(PIP) install -q "dask[distributed]"
 	$(PIP) install -q flip-evaluator
