@@ -9,7 +9,10 @@
 //   texel in the slot (eqs 7-10): j = clamp(i - (c >> (al - l)) P + E, 0, T - 2), so the
 //     2 x 2 footprint stays inside the tile and its border;
 //   bilinear with weights (1-f)(1-g), f(1-g), (1-f)g, fg, by texelFetch in float (not the
-//     hardware filter, whose weights have 8 bits of fraction on many GPUs);
+//     hardware filter, whose weights have 8 bits of fraction on many GPUs; with
+//     VT_HARDWARE_BILINEAR defined, the option hardwareBilinear, one filtered fetch instead
+//     of four, for GPUs short of texture rate: 0.02 of a code from the core's on SwiftShader,
+//     up to about half a code with 8-bit weight fractions);
 //   trilinear: l0 = floor(lod) (lod clamped to [0, levels - 1]), blended with l0 + 1 by
 //     lod - l0.
 //
@@ -81,10 +84,16 @@ highp vec3 vtBilinear(int p, highp vec2 x0, int l, ivec2 size) {
   }
   int jx = clamp(i - (cx >> s) * P + E, 0, T - 2), jy = clamp(j - (cy >> s) * P + E, 0, T - 2);
   ivec2 at = ivec2(slot % uVtTile.w, slot / uVtTile.w) * T + ivec2(jx, jy);
+#ifdef VT_HARDWARE_BILINEAR
+  // One filtered fetch at the footprint's position: 1 texture read instead of 4, weights
+  // rounded by the hardware (8 bits of fraction on many GPUs).
+  return textureLod(uVtPhysical, (vec2(at) + vec2(f, g) + 0.5) / vec2(textureSize(uVtPhysical, 0)), 0.0).rgb;
+#else
   highp vec3 t00 = texelFetch(uVtPhysical, at, 0).rgb, t10 = texelFetch(uVtPhysical, at + ivec2(1, 0), 0).rgb;
   highp vec3 t01 = texelFetch(uVtPhysical, at + ivec2(0, 1), 0).rgb, t11 = texelFetch(uVtPhysical, at + ivec2(1, 1), 0).rgb;
   highp float w00 = (1.0 - f) * (1.0 - g), w10 = f * (1.0 - g), w01 = (1.0 - f) * g, w11 = f * g;
   return w00 * t00 + w10 * t10 + w01 * t01 + w11 * t11;
+#endif
 }
 
 // The painting's sRGB8 colour as 0..1 at uv (clamped to [0, 1]), trilinear at lod.

@@ -60,6 +60,7 @@ export const DEFAULTS = {
   maxBatchesInFlight: 4,      // POSTs of at most tiles.max_batch keys each
   tableBits: 16,              // the request hash table: 2^16 slots
   firstUnit: 8,               // texture units firstUnit .. firstUnit + 3
+  hardwareBilinear: false,    // one filtered fetch a level instead of four texelFetch
 };
 
 export class VirtualTexture {
@@ -86,7 +87,7 @@ export class VirtualTexture {
     this.ready = this.loadPinned(pins);
   }
 
-  get glsl() { return samplerGlsl; }
+  get glsl() { return (this.options.hardwareBilinear ? "#define VT_HARDWARE_BILINEAR\n" : "") + samplerGlsl; }
 
   // Fetches and uploads every pinned tile (no budget: nothing is drawn before they are in).
   async loadPinned(pins) {

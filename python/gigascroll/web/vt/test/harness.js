@@ -3,7 +3,8 @@
 //   await vtTest.init({slots, scene})   the pack from scene (default /api/scene.json; the
 //                                       server has none without a room), tails resident
 //   await vtTest.insertTiles(keys)      fetch [p, l, x, y] tiles and make them resident
-//   vtTest.sampleProbes(probes)         [p, u, v, lod] x n -> vtSample's RGBA (float target)
+//   vtTest.sampleProbes(probes, hw)     [p, u, v, lod] x n -> vtSample's RGBA (float target;
+//                                       hw: the hardware-bilinear variant)
 //   vtTest.render(view, placements)     the display pass's vtSample at vtLod: RGBA8, base64
 //   await vtTest.feedback(views, placements)
 //                                       one feedback pass per view, read back asynchronously:
@@ -68,18 +69,20 @@ async function insertTiles(keys) {
   return vt.cache.resident;
 }
 
-let probeProgram = null;
-function sampleProbes(probes) {
+const probePrograms = new Map();
+// hardware: the sampler's VT_HARDWARE_BILINEAR variant.
+function sampleProbes(probes, hardware = false) {
   const n = probes.length / 4, w = Math.min(n, 256), h = Math.ceil(n / 256);
   if (!gl.getExtension("EXT_color_buffer_float")) throw new Error("no EXT_color_buffer_float");
-  probeProgram ||= compile(HEADER + "void main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, 0, 1); }",
-    HEADER + vt.glsl + `
+  if (!probePrograms.has(hardware)) probePrograms.set(hardware, compile(HEADER + "void main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, 0, 1); }",
+    HEADER + (hardware ? "#define VT_HARDWARE_BILINEAR\n" : "") + vt.glsl + `
 uniform highp sampler2D uProbes;
 out vec4 outColor;
 void main() {
   vec4 q = texelFetch(uProbes, ivec2(gl_FragCoord.xy), 0);
   outColor = vtSample(int(q.x), q.yz, q.w);
-}`);
+}`));
+  const probeProgram = probePrograms.get(hardware);
   const data = new Float32Array(w * h * 4);
   data.set(probes);
   const tex = (format, pixels) => {
