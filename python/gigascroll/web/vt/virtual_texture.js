@@ -109,7 +109,9 @@ export class VirtualTexture {
   // Inserts a tile at once (tests; the pinned ones go to their slots): the page table is
   // uploaded at the next beginFrame or flushTable.
   insertTile(index, rgb) {
-    const s = this.cache.place(index, this.geometry.isPinned(...this.geometry.keyOf(index)));
+    const key = this.geometry.keyOf(index);
+    if (!key) throw new Error(`tile index ${index} is outside the pack`);
+    const s = this.cache.place(index, this.geometry.isPinned(key[0], key[1]));
     if (s >= 0) this.cache.upload(this.gl, s, rgb);
     return s;
   }
