@@ -266,7 +266,7 @@ def _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_sample
 
 def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float | None = None,
            grid: str = "adaptive", gather: str = "radius", k: int = 50, spp: int = 1, seed: int = 0,
-           kernel: str = "box", light_samples: int = 1, pipeline: str = "fused",
+           kernel: str = "box", light_samples: int | None = None, pipeline: str = "fused",
            cooperative: bool = False, direct: bool = True, indirect: bool = True, threads: int = 0,
            hash_mode: str = "auto", return_stats: bool = False, progressive: bool = False,
            passes: int = 16, time_budget: float | None = None, alpha: float = 2 / 3,
@@ -275,7 +275,13 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     """Render linear radiance, float32 (H, W, 3).
 
     `scene` may be a `gigascroll.Gallery`: its still (`Gallery.still`) with `lighting`
-    "baked", "full" or "unlit" (photons, radius, seed and threads go to its photon pass).
+    "baked", "full" or "unlit": photons, radius, seed, threads, indirect, disc and
+    light_samples go to its photon pass (and bake), spp (a square k^2) supersamples the still;
+    options the gallery does not have (progressive, another grid, gather, kernel or pipeline,
+    direct=False) raise ValueError rather than being ignored.
+
+    light_samples: emitter samples per shading point (None: 1 for a scene, stratified when
+    more; the gallery's 16).
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
     in the photon map (grid 'adaptive': cells sized from the photon density and culled against the
@@ -306,9 +312,22 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     from .gallery import Gallery
 
     if isinstance(scene, Gallery):  # a gallery still (Gallery.still)
-        image = scene.still(camera, lighting=lighting, photons=photons, seed=seed, threads=threads,
-                            **({} if radius is None else {"radius": radius}))
+        lacks = {"progressive": progressive, "snapshots": bool(snapshots), "final_gather": final_gather,
+                 "grid": grid != "adaptive", "gather": gather != "radius", "kernel": kernel != "box",
+                 "pipeline": pipeline != "fused", "cooperative": cooperative, "direct": not direct}
+        given = [name for name, on in lacks.items() if on]
+        if given:
+            raise ValueError(f"{', '.join(given)}: a Gallery's still does not have "
+                             f"{'this option' if len(given) == 1 else 'these options'} (the "
+                             "gallery's gather is a box radius gather on the adaptive grid, "
+                             "one pass, direct light always)")
+        options = {"radius": radius, "disc": disc, "light_samples": light_samples}
+        image = scene.still(camera, lighting=lighting, spp=spp, photons=photons, seed=seed,
+                            threads=threads, indirect=indirect,
+                            **{k: v for k, v in options.items() if v is not None})
         return (image, dict(scene.stats)) if return_stats else image
+    if light_samples is None:
+        light_samples = 1
     if disc is None:  # where the options allow it; otherwise their own error message comes first
         disc = kernel == "box" and gather == "radius" and not cooperative
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, pipeline,

@@ -225,3 +225,25 @@ def test_random_option_combinations(fork_worker, room_files, options):
     if o.code == 0:
         assert out.exists()
         out.unlink()
+
+
+# ------------------------------------------------------------------ the API: render(Gallery)
+
+def test_render_of_a_gallery_applies_or_refuses_the_same_options(pack):
+    """gigascroll.render(gallery, ...) is the still with the options the gallery has, and a
+    ValueError for the others (they were ignored too)."""
+    cam = down_camera((16, 12))
+    for bad in (dict(progressive=True), dict(kernel="cone"), dict(grid="hash"), dict(gather="knn"),
+                dict(pipeline="two-pass"), dict(direct=False), dict(final_gather=True)):
+        gallery = Gallery.from_room(box_room(painting="gradient"), pack)
+        with pytest.raises(ValueError, match="does not have"):
+            g.render(gallery, cam, photons=2000, **bad)
+        assert not gallery.lit  # refused before any work
+    for options in (dict(indirect=False), dict(spp=4), dict(disc=True), dict(light_samples=3)):
+        a = Gallery.from_room(box_room(painting="gradient"), pack)
+        b = Gallery.from_room(box_room(painting="gradient"), pack)
+        got = g.render(a, cam, photons=2000, lighting="full", **options)
+        want = b.still(cam, lighting="full", photons=2000, seed=0, threads=0, **options)
+        np.testing.assert_array_equal(got, want)
+        c = Gallery.from_room(box_room(painting="gradient"), pack)
+        assert not np.array_equal(got, g.render(c, cam, photons=2000, lighting="full")), options
