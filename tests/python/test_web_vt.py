@@ -111,21 +111,32 @@ def test_gpu_sampler_equals_core_sampler(vt_page, vt_pack, hardware):
 
 
 def test_gpu_sampler_after_evictions(vt_pack, browser):  # noqa: F811
-    """A cache smaller than the tiles inserted: the same LRU evicts the same tiles on both
-    sides (the evicted tiles' entries fall back to their parents), and the samples agree."""
+    """A cache smaller than the tiles inserted, with a frame's requests between inserts: the
+    same LRU (hits made most recent) evicts the same tiles into the same slots on both sides
+    (the evicted tiles' entries fall back to their parents), and the samples agree."""
     pack = g.TilePack(str(vt_pack))
     rng = np.random.default_rng(11)
     slots = (8, 6)
     vt = g.VirtualTexture(pack, slots=slots)
     keys = streamed_tiles(pack, rng, 0.8)
     keys += keys[: len(keys) // 3]  # re-inserting a resident tile makes it most recent
-    for k in keys:
+    first, second = keys[: len(keys) // 2], keys[len(keys) // 2:]
+    # Between the halves a frame's requests: the resident ones (hits) become most recent.
+    asked = [keys[i] for i in rng.choice(len(keys), 40, replace=False)]
+    for k in first:
         vt.insert(k, pack.read_tile(*k))
-    assert vt.stats()["evictions"] > 50
+    missed = vt.request(asked)
+    for k in second:
+        vt.insert(k, pack.read_tile(*k))
+    assert vt.stats()["evictions"] > 50 and 0 < len(missed) < len(asked)
     with serve_pack(vt_pack) as url:
         page = open_page(browser, f"{url}/client/vt/test/harness.html")
         page.evaluate("([slots, scene]) => vtTest.init({slots, scene})", [list(slots), pack_scene(vt_pack)])
-        page.evaluate("(keys) => vtTest.insertTiles(keys)", [list(k) for k in keys])
+        page.evaluate("(keys) => vtTest.insertTiles(keys)", [list(k) for k in first])
+        hits = page.evaluate("(keys) => keys.map((k) => vt.cache.request(vt.geometry.tileIndex(...k)))",
+                             [list(k) for k in asked])
+        page.evaluate("(keys) => vtTest.insertTiles(keys)", [list(k) for k in second])
+        assert {tuple(k) for k, h in zip(asked, hits) if not h} == set(missed)
         assert page.evaluate("() => vt.cache.stats.evictions") == vt.stats()["evictions"]
         tables = page.evaluate("""() => vt.geometry.paintings.map((q, p) => q.levelWidth.map((_, l) => {
             const w = q.gridWidth(l), h = q.gridHeight(l), e = [];
