@@ -29,8 +29,8 @@ def register(sub) -> None:
     p.add_argument("--room", default="scroll", help="scroll, hall, or a room file (glTF/OBJ/PLY)")
     p.add_argument("--lights", default=None, metavar="FILE.json",
                    help="light specs in place of the room's lights: a JSON list of {name, "
-                        "centre, aim, width, height, [across], [kelvin], lumens | lux + "
-                        "painting}")
+                        "centre, aim, width, height, [across] (or panels: a list of such "
+                        "rectangles lit together), [kelvin], lumens | lux + painting}")
     p.add_argument("--category", default="high", choices=["high", "medium", "low", "none"],
                    help="CIE 157:2004 responsivity category whose limits apply (default high: "
                         "ink and colours on silk; none = irresponsive)")
@@ -47,7 +47,8 @@ def register(sub) -> None:
                         "gather at every point")
     p.add_argument("--samples", type=int, default=256,
                    help="grid cells along each painting's longer side (2..4096, default 256)")
-    p.add_argument("--photons", type=int, default=1 << 18, help="photons for the lighting")
+    p.add_argument("--photons", type=int, default=1 << 18,
+                   help="photons for the lighting (default 262144)")
     p.add_argument("--light-samples", type=int, default=None, metavar="N",
                    help="emitter samples per point: the bake's (default 16) or, with "
                         "--lighting full, each grid point's (default 1024: min and max are "
