@@ -402,3 +402,24 @@ def test_feedback_garbage_is_ignored(vt_page):
     }""", info["tiles"])
     assert out["bad"] == 0
     assert sorted(out["got"]) == sorted({i % info["tiles"] for i in range(0, 100000, 1000)} | {0})
+
+
+def test_tile_server_failures(browser, vt_pack):  # noqa: F811
+    """A batch endpoint that fails: the pinned tiles' load rejects vt.ready with the server's
+    answer; failing streamed tiles are counted and the frame loop keeps running on the
+    resident tails."""
+    scene = pack_scene(vt_pack)
+    bad = {**scene, "tiles": {**scene["tiles"], "batch": "/api/tiles/0123/batch"}}
+    with serve_pack(vt_pack) as url:
+        page = open_page(browser, f"{url}/client/vt/test/harness.html")
+        err = page.evaluate("""(scene) => vtTest.init({scene}).then(() => "resolved", (e) => String(e))""", bad)
+        assert "pinned tiles failed to load" in err and "404" in err
+        page.close()
+        page = open_page(browser, f"{url}/client/vt/test/harness.html")
+        info = page.evaluate("(scene) => vtTest.init({scene})", scene)
+        page.evaluate("() => { vt.loader.url = '/api/tiles/0123/batch'; }")
+        views = [{"view": 0, "camera": list(POSES[1][0]), "display": list(POSES[1][1]), "reduction": 8}]
+        out = page.evaluate("([v, p]) => vtTest.stream(v, p, 40)", [views, PLACEMENTS])
+        page.close()
+    assert out["frames"] == 40 and out["stats"]["failed"] > 0
+    assert out["stats"]["resident"] == len(out["resident"]) == info["pinned"]  # the tails only
