@@ -14,12 +14,13 @@ import select
 import signal
 import sys
 
-from .commands import (bench, demo, export, gallery, info, light, pack, render, scenario, serve,
-                       synth, view)
+from .commands import (bench, demo, exhibit, export, gallery, info, light, pack, render, scenario,
+                       serve, synth, view)
 from .errors import UserError
 
 # Subcommand modules, in the order `gigascroll --help` lists them.
-COMMANDS = [demo, synth, pack, info, export, bench, render, scenario, gallery, light, view, serve]
+COMMANDS = [demo, synth, pack, info, export, bench, render, scenario, gallery, light, view, serve,
+            exhibit]
 
 
 # Integer options the core takes as fixed-width integers: checked when parsed, so a value

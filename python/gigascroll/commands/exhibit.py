@@ -1,0 +1,64 @@
+"""`gigascroll exhibit build show.toml -o show/`: an exhibition file (docs/exhibitions.md) to
+a show directory: the paintings packed (or a given pack used as is; unchanged images are not
+packed again), the room built, the light baked (the glb `serve --exhibition` shows) and the
+tour written. `render`, `gallery`, `view` and `serve` then take `--exhibition show/`."""
+
+from __future__ import annotations
+
+import os
+
+from ..errors import UserError
+
+
+def register(sub) -> None:
+    p = sub.add_parser("exhibit", help="build a show from an exhibition file",
+                       description=__doc__.split("\n\n", 1)[0].split(": ", 1)[1])
+    actions = p.add_subparsers(dest="action", metavar="ACTION")
+    actions.required = True
+    b = actions.add_parser("build", help="exhibition file (TOML) to a show directory")
+    b.add_argument("exhibition", metavar="EXHIBITION.toml")
+    b.add_argument("-o", "--output", required=True, metavar="DIR",
+                   help="the show directory (made by this command; a show it made before is "
+                        "replaced, its unchanged pack reused)")
+    b.add_argument("--no-bake", action="store_true",
+                   help="skip baking the light (serve then bakes it when it starts)")
+    b.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    b.set_defaults(func=run)
+
+
+def _bake(threads: int):
+    def bake(gallery, spec, pack, directory):
+        from ..outputs import write_bytes
+        from ..serve import pack_hash
+        from ..serve.room_bake import bake_glb, lighting_options, room_key
+        key = room_key(spec, pack_hash(pack), lighting_options())
+        data, stats = bake_glb(gallery, spec, pack, threads)
+        write_bytes(directory / f"{key}.glb", data)
+        return {"glb": f"bake/{key}.glb", "bake_points": stats.get("bake_points"),
+                "seconds": stats.get("photon_seconds", 0) + stats.get("build_seconds", 0)
+                + stats.get("bake_seconds", 0)}
+    return bake
+
+
+def run(args) -> int:
+    from ..exhibit.build import build_show
+    from ..exhibit.schema import ExhibitionError
+    from ..outputs import signals_interrupt
+    if not 0 <= args.threads <= 4096:
+        raise UserError("--threads must be in [0, 4096]")
+    try:
+        with signals_interrupt():
+            record = build_show(args.exhibition, args.output, progress=True,
+                                threads=args.threads,
+                                bake=None if args.no_bake else _bake(args.threads))
+    except ExhibitionError as e:
+        raise UserError(str(e)) from None
+    pack = ("reused (unchanged)" if record["reused_pack"] else
+            "packed" if record["packed"] else "used as given")
+    print(f"{record['paintings']} paintings, pack {pack}"
+          + (f", light baked ({record['bake']['bake_points']} points)" if "bake" in record else "")
+          + f", {record['seconds']:.1f} s")
+    print(f"wrote {os.path.abspath(args.output)}/ (exhibition.json, tour.json, build.json"
+          + (", paintings.pack" if record["packed"] or record["reused_pack"] else "")
+          + (", bake/" if "bake" in record else "") + ")")
+    return 0

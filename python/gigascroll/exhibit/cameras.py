@@ -1,0 +1,67 @@
+"""A camera in front of one painting (`--look-at TITLE|N [--distance M]`).
+
+The eye stands on the painting's normal through its centre, on the visitor's side, and looks
+at the centre, so the painting is centred in the view. A wall painting is seen square on (the
+eye at its centre height); a painting lying flat or tilted on a table is seen from its
+normal turned 45 degrees toward the visitor's side when it faces up (a camera looking straight
+down has no up direction). The default distance makes the painting fill FILL of the view's
+width or height (whichever it reaches first) at the vertical field of view `fov` and the
+view's aspect (width / height): d = max(w / (2 FILL tan(fov_x / 2)), h / (2 FILL tan(fov / 2))).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["FILL", "look_at", "slot_index", "fill_distance"]
+
+FILL = 0.8
+
+
+def slot_index(room, which, titles: dict | None = None) -> int:
+    """The index of the room's painting slot named by `which`: an index (int or digits), a
+    title in `titles` (title -> pack painting name), a slot's name or its painting's name.
+    ValueError listing what exists."""
+    slots = room.paintings
+    text = str(which).strip()
+    if isinstance(which, int) or text.isdigit():
+        k = int(text)
+        if not 0 <= k < len(slots):
+            raise ValueError(f"--look-at {k}: the room has {len(slots)} paintings "
+                             f"(0..{len(slots) - 1})")
+        return k
+    name = (titles or {}).get(which, which)
+    for k, s in enumerate(slots):
+        if name in (s.name, s.painting):
+            return k
+    known = list(titles or {}) or [s.name or str(s.painting) for s in slots]
+    raise ValueError(f"--look-at: no painting titled {text[:80]!r} (known: "
+                     f"{', '.join(repr(t) for t in known[:12])})")
+
+
+def fill_distance(width_m: float, height_m: float, fov: float, aspect: float) -> float:
+    """The distance at which a width_m x height_m painting fills FILL of the view."""
+    ty = math.tan(math.radians(fov) / 2)
+    tx = aspect * ty
+    return max(width_m / (2 * FILL * tx), height_m / (2 * FILL * ty))
+
+
+def look_at(slot, distance: float | None = None, fov: float = 60.0, aspect: float = 1.0):
+    """(eye, target) 3-tuples for a camera in front of `slot` (a PaintingSlot)."""
+    if not (math.isfinite(fov) and 0 < fov < 180):
+        raise ValueError(f"the field of view must be in (0, 180) degrees, got {fov}")
+    if distance is None:
+        distance = fill_distance(slot.width_m, slot.height_m, fov, aspect)
+    if not (math.isfinite(distance) and 0.05 <= distance <= 1000):
+        raise ValueError(f"--distance must be in [0.05, 1000] metres, got {distance}")
+    u, v = np.array(slot.u_axis, float), np.array(slot.v_axis, float)
+    centre = np.array(slot.origin, float) + u * slot.width_m / 2 + v * slot.height_m / 2
+    front = np.cross(v, u)  # u x v points into the wall: the visitor is on v x u's side
+    front /= np.linalg.norm(front)
+    if abs(front[1]) > 0.9:  # facing up or down: from the visitor's side (image bottom, +v)
+        down = v / np.linalg.norm(v)
+        front = (front + down) / np.linalg.norm(front + down)
+    eye = centre + distance * front
+    return tuple(float(x) for x in eye), tuple(float(x) for x in centre)
