@@ -28,8 +28,16 @@ def register(sub) -> None:
                         "and packed once into the user cache ($XDG_CACHE_HOME/gigascroll, else "
                         "~/.cache/gigascroll)")
     p.add_argument("--room", default="scroll", help="scroll, hall, or a room file (glTF/OBJ/PLY)")
-    p.add_argument("--path", default="walk",
-                   help="walk (along the painting, with stops and a close look) or a camera path JSON")
+    p.add_argument("--path", default=None,
+                   help="walk (along the painting, with stops and a close look; the default "
+                        "without --exhibition) or a camera path JSON")
+    p.add_argument("--tour", metavar="FILE", default=None,
+                   help="a tour JSON file (docs/cameras-and-tours.md): keyframes walked along "
+                        "centripetal Catmull-Rom curves (default with --exhibition: the show's "
+                        "tour, every painting in turn)")
+    from .exhibition_options import add_exhibition_option, add_look_at_options
+    add_exhibition_option(p)
+    add_look_at_options(p)
     p.add_argument("--eye", default="1800x1920", help="per-eye resolution WxH (default the headset's)")
     p.add_argument("--no-magnifier", action="store_true", help="no magnifier")
     p.add_argument("--lighting", choices=["baked", "full"], default="baked",
@@ -111,6 +119,42 @@ def load_path(path: str, room, seconds: float):
     return v.CameraPath.load(p)
 
 
+def walk_camera_path(args, room, show, eye):
+    """The walk's CameraPath: --look-at (standing there for --seconds), --tour FILE, --path,
+    or with --exhibition and neither the show's tour; one of them at most."""
+    from ..exhibit import ExhibitionError
+    from ..exhibit.tours import load_tour, tour_path
+    from .exhibition_options import look_at_pose
+    given = [o for o, v in (("--look-at", args.look_at), ("--tour", args.tour),
+                            ("--path", args.path)) if v is not None]
+    if len(given) > 1:
+        raise UserError(f"give one of {', '.join(given)}, not several")
+    pose = look_at_pose(args, room, show, 90.0, eye[0] / eye[1])  # the headset's ~90 degrees
+    try:
+        if pose is not None:
+            return standing_path(pose, args.seconds)
+        if args.tour is not None:
+            return tour_path(load_tour(args.tour))
+        if args.path is None and show is not None:
+            return tour_path(show.tour)
+    except (ExhibitionError, ValueError) as e:
+        raise UserError(f"--tour: {e}" if args.tour else str(e)) from None
+    return load_path(args.path or "walk", room, args.seconds)
+
+
+def standing_path(pose, seconds: float):
+    """A CameraPath standing at (eye, target) for `seconds` (the views' frame rate)."""
+    import numpy as np
+
+    from .. import views as v
+    n = max(2, int(round(seconds * v.FPS)))
+    eye, target = np.array(pose[0]), np.array(pose[1])
+    fwd = target - eye
+    up = [0.0, 1.0, 0.0] if abs(fwd[1]) < 0.999 * np.linalg.norm(fwd) else [0.0, 0.0, -1.0]
+    return v.CameraPath(np.tile(eye, (n, 1)), np.tile(fwd, (n, 1)), np.tile(up, (n, 1)),
+                        name="look-at")
+
+
 def user_cache() -> Path:
     """$XDG_CACHE_HOME/gigascroll, else ~/.cache/gigascroll (serve's baked rooms live there
     too): data the commands make for themselves, kept between runs."""
@@ -174,6 +218,8 @@ def default_out(args) -> Path:
     from ..outputs import beside
     if args.out is not None:
         return Path(args.out)
+    if getattr(args, "exhibition", None):
+        return beside(args.exhibition, "walk")
     return beside(args.pack, "walk") if args.pack else Path("gallery-walk")
 
 
@@ -184,15 +230,20 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     from ..gallery.walk import GallerySource, GalleryWalk
     from ..pack import TilePack
 
-    if args.pack:
+    from .exhibition_options import open_exhibition
+    show = open_exhibition(args, room_default="scroll")
+    if show is not None:
+        pack, room = show.pack, show.room
+    elif args.pack:
         p = Path(args.pack)
         if not (p / "manifest.json").is_file():
             raise UserError(f"{p} is not a tile pack (no manifest.json)")
         pack = TilePack(p)
     else:
         pack = builtin_pack()
-    room = load_room(args.room, pack)
-    path = load_path(args.path, room, args.seconds)
+    if show is None:
+        room = load_room(args.room, pack)
+    path = walk_camera_path(args, room, show, eye)
     if not args.no_video:
         try:
             check_fps(path.fps)  # before the room is lit
@@ -206,7 +257,8 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
                        reuse=not args.no_reuse, oracle=not args.no_oracle, pace=args.pace,
                        threads=args.threads, foveation=foveation)
-    settings = {"room": args.room, "path": args.path, "eye": f"{eye[0]}x{eye[1]}",
+    settings = {"room": room.name if show is not None else args.room, "path": path.name,
+                "exhibition": args.exhibition, "eye": f"{eye[0]}x{eye[1]}",
                 "magnifier": not args.no_magnifier, "lighting": args.lighting,
                 "seconds": args.seconds, "reuse": not args.no_reuse,
                 "photons": args.photons, "frames": len(path)}

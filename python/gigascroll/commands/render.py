@@ -25,6 +25,9 @@ def register(sub) -> None:
                    help="built-in scene (or --room for a gallery room)")
     p.add_argument("--room", help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply)")
     p.add_argument("--pack", help="tile pack whose paintings hang in --room")
+    from .exhibition_options import add_exhibition_option, add_look_at_options
+    add_exhibition_option(p)
+    add_look_at_options(p)
     p.add_argument("--camera", metavar="EX,EY,EZ,TX,TY,TZ[,FOV]",
                    help="eye and target in metres and the vertical field of view in degrees "
                         "(default: the scene's camera, or the room's suggested view at 60 degrees)")
@@ -132,18 +135,21 @@ def _room_still_options(args) -> dict:
 
 
 def run_room(args, out: Path) -> int:
-    import time
-
     from .. import TilePack
     from ..gallery import Gallery, builtin_room
     from ..gallery.rooms import ROOM_NAMES
-    from ..photon import save_image
 
     if args.scene:
         raise UserError("give either a built-in SCENE or --room, not both")
-    if not args.pack:
+    from .exhibition_options import open_exhibition
+    show = open_exhibition(args)
+    if show is None and not args.room:
+        raise UserError("--look-at needs --room ROOM --pack PACK or --exhibition DIR")
+    if show is None and not args.pack:
         raise UserError("--room needs --pack PACK")
     options = _room_still_options(args)
+    if show is not None:
+        return _still(args, out, show.pack, show.room, options, show)
     try:
         pack = TilePack(args.pack)
     except Exception as e:  # a missing or corrupt pack
@@ -158,8 +164,30 @@ def run_room(args, out: Path) -> int:
         gallery = Gallery.from_room(spec, pack)
     except (OSError, ValueError) as e:
         raise UserError(f"room {args.room}: {e}") from None
+    return _still(args, out, pack, spec, options, None, gallery)
+
+
+def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) -> int:
+    """Renders and writes the still of a room (--room or --exhibition's)."""
+    import time
+
+    from ..gallery import Gallery
+    from ..photon import save_image
+    from .exhibition_options import look_at_pose
+
+    if gallery is None:
+        try:
+            gallery = Gallery.from_room(spec, pack)
+        except (OSError, ValueError) as e:
+            raise UserError(f"room {spec.name}: {e}") from None
     cam = _camera_numbers(args.camera) if args.camera else None
-    camera = gallery.camera((args.width, args.height), fov=cam[6] if cam and len(cam) == 7 else 60.0,
+    fov = cam[6] if cam and len(cam) == 7 else 60.0
+    if args.look_at is not None and cam is not None:
+        raise UserError("give --camera or --look-at, not both")
+    pose = look_at_pose(args, spec, show, fov, args.width / args.height)
+    if pose is not None:
+        cam = [*pose[0], *pose[1]]
+    camera = gallery.camera((args.width, args.height), fov=fov,
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
     t0 = time.perf_counter()
     try:
@@ -199,7 +227,7 @@ def run(args) -> int:
         raise UserError("--photons must be positive")
     if args.light_samples is not None and not 1 <= args.light_samples <= 4096:
         raise UserError("--light-samples must be in [1, 4096]")
-    if args.room:
+    if args.room or args.exhibition or args.look_at is not None:
         return run_room(args, out)
     if args.scene is None:
         raise UserError("give a built-in SCENE or --room ROOM --pack PACK")

@@ -12,9 +12,13 @@ def register(sub) -> None:
     p = sub.add_parser("serve", help="serve a pack and its lit room to a browser or headset",
                        description="Serve a tile pack and a lit gallery room over HTTP(S) to "
                                    "the WebXR client (loopback by default).")
-    p.add_argument("pack", metavar="PACK", help="pack directory")
-    p.add_argument("--room", required=True,
-                   help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply)")
+    p.add_argument("pack", metavar="PACK", nargs="?", default=None,
+                   help="pack directory (or --exhibition)")
+    p.add_argument("--room", default=None,
+                   help="gallery room: scroll, hall or a room file (.glb, .gltf, .obj, .ply); "
+                        "required with PACK")
+    from .exhibition_options import add_exhibition_option
+    add_exhibition_option(p)
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1; a headset on the LAN needs "
                         "--tls-cert and --tls-key)")
@@ -32,12 +36,25 @@ def _say(text: str) -> None:
     print(f"gigascroll serve: {text}", file=sys.stderr, flush=True)
 
 
+def _cache_dir(args, show, content_hash: str):
+    """--cache-dir; for a show whose bake (exhibit build's) holds this room's glb, the show's
+    bake/ (read only: a miss bakes into the user cache, never into the show)."""
+    if show is None or args.cache_dir is not None:
+        return args.cache_dir
+    from ..serve.room_bake import lighting_options, room_key
+    key = room_key(show.room, content_hash, lighting_options())
+    return show.path / "bake" if (show.path / "bake" / f"{key}.glb").is_file() else None
+
+
 def run(args) -> int:
     from .. import TilePack
     from ..outputs import signals_interrupt
     from ..serve import baked_room, make_app, pack_hash, serve_forever, tls_context
     from ..serve.run import LOOPBACK_HOSTS, listen_socket, log_to_stderr
 
+    from .exhibition_options import open_exhibition
+    if args.exhibition is None and (args.pack is None or args.room is None):
+        raise UserError("give PACK --room ROOM, or --exhibition DIR")
     if not 0 <= args.port <= 65535:
         raise UserError(f"--port must be in [0, 65535], got {args.port}")
     if args.cache_dir is not None and not args.cache_dir.strip():
@@ -58,15 +75,18 @@ def run(args) -> int:
         sock = listen_socket(args.host, args.port)
     except OSError as e:
         raise UserError(f"cannot listen on {args.host}:{args.port}: {e.strerror or e}") from None
+    show = open_exhibition(args)
     try:
-        pack = TilePack(args.pack)
+        pack = show.pack if show is not None else TilePack(args.pack)
     except Exception as e:  # a missing or corrupt pack
         raise UserError(f"cannot open pack {args.pack}: {e}") from None
     content_hash = pack_hash(pack)
     try:
         with signals_interrupt():  # SIGTERM during the bake: the same clean exit as Ctrl-C
-            room = baked_room(args.room, pack, content_hash, args.cache_dir,
-                              threads=args.threads, announce=_say)
+            room = baked_room(args.room or "exhibition", pack, content_hash,
+                              _cache_dir(args, show, content_hash),
+                              threads=args.threads, announce=_say,
+                              spec=show.room if show is not None else None)
     except (OSError, ValueError) as e:
         raise UserError(f"room {args.room}: {e}") from None
     log_to_stderr()

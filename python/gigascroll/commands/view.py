@@ -3,7 +3,8 @@
 Keys: W / S walk forward and back, A / D step left and right, arrow keys (or a mouse drag)
 turn, R / F up and down, M toggles the magnifier, V toggles the fixed foveation (--fovea's,
 or a 30 degree fovea at 1/2 density without it), P saves the window's frame (--screenshot),
-Esc quits. An overlay shows the frame rate, the stage times and the primary rays the eyes
+T starts and stops recording the walk as a tour (keyframes every 0.25 s, written to
+--record-tour when it stops), Esc quits. An overlay shows the frame rate, the stage times and the primary rays the eyes
 traced; the eyes' resolution adapts so the window stays responsive (each frame's display is
 upscaled to the window)."""
 
@@ -24,7 +25,13 @@ from ..errors import UserError
 def register(sub) -> None:
     p = sub.add_parser("view", help="a window onto the live gallery loop",
                        description=__doc__.split("\n\n", 1)[1].replace("\n", " "))
-    p.add_argument("pack", help="tile pack")
+    p.add_argument("pack", nargs="?", default=None, help="tile pack (or --exhibition)")
+    from .exhibition_options import add_exhibition_option, add_look_at_options
+    add_exhibition_option(p)
+    add_look_at_options(p)
+    p.add_argument("--record-tour", metavar="FILE", default=None,
+                   help="where T writes the recorded tour (default: next to the pack or show, "
+                        "NAME-tour-{n}.json; {n} a counter)")
     p.add_argument("--room", default="scroll", help="scroll, hall, or a room file")
     p.add_argument("--lighting", choices=["baked", "full", "unlit"], default="baked")
     p.add_argument("--window", default="1200x640", help="window size WxH (both eyes side by side)")
@@ -58,9 +65,13 @@ def run(args) -> int:
                                             and 0 <= args.quit_after <= 1e7):
         raise UserError(f"--quit-after must be a number of seconds in [0, 1e7], got "
                         f"{args.quit_after}")
+    if (args.pack is None) == (args.exhibition is None):
+        raise UserError("give a PACK or --exhibition DIR (one of them)")
+    anchor = args.pack or args.exhibition
     # The default is beside the pack, valid whenever the pack is (checked before the window).
     args.screenshot = (screenshot_pattern(args.screenshot) if args.screenshot is not None
-                       else default_screenshot(args.pack))
+                       else default_screenshot(anchor))
+    args.record_tour = tour_pattern(args.record_tour, anchor)
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
@@ -68,12 +79,18 @@ def run(args) -> int:
         raise UserError("no display to open a window on (DISPLAY is not set); "
                         "use `gigascroll gallery` to write the walk to files")
     from ..pack import TilePack
+    from .exhibition_options import look_at_pose, open_exhibition
     from .gallery import load_room
-    p = Path(args.pack)
-    if not (p / "manifest.json").is_file():
-        raise UserError(f"{p} is not a tile pack (no manifest.json)")
-    pack = TilePack(p)
-    room = load_room(args.room, pack)
+    show = open_exhibition(args, room_default="scroll")
+    if show is not None:
+        pack, room = show.pack, show.room
+    else:
+        p = Path(args.pack)
+        if not (p / "manifest.json").is_file():
+            raise UserError(f"{p} is not a tile pack (no manifest.json)")
+        pack = TilePack(p)
+        room = load_room(args.room, pack)
+    args.pose = look_at_pose(args, room, show, 90.0, eye[0] / eye[1])
     try:
         import pyglet
         pyglet.options["shadow_window"] = False
@@ -85,6 +102,25 @@ def run(args) -> int:
 
 
 SCREENSHOT_FORMATS = (".png", ".jpg", ".jpeg")
+
+
+def tour_pattern(text: str | None, anchor: str) -> str:
+    """--record-tour: a .json path whose only field is {n} (default: beside the pack or
+    show, NAME-tour-{n}.json), in an existing directory."""
+    from ..outputs import beside
+    if text is None:
+        return str(beside(anchor, "tour-")).replace("{", "{{").replace("}", "}}") + "{n}.json"
+    try:
+        fields = [f for _, f, _, _ in string.Formatter().parse(text) if f is not None]
+        if any(f != "n" for f in fields):
+            raise ValueError("its only field may be {n}, the recording's counter")
+        first = Path(text.format(n=0))
+    except (ValueError, KeyError, IndexError) as e:
+        raise UserError(f"--record-tour {text[:80]!r}: not a file pattern ({e})") from None
+    if "\0" in text or first.suffix.lower() != ".json" or not first.parent.is_dir():
+        raise UserError(f"--record-tour {text[:80]!r}: expected a .json file in an existing "
+                        "directory")
+    return text
 
 
 def default_screenshot(pack: str) -> str:
@@ -149,6 +185,14 @@ class Viewer:
         self.position = np.array(path.position[0])
         self.yaw = math.atan2(path.forward[0][0], path.forward[0][2])
         self.pitch = 0.0
+        pose = getattr(args, "pose", None)
+        if pose is not None:  # --look-at: in front of the painting, looking at its centre
+            self.position = np.array(pose[0], float)
+            f = np.array(pose[1], float) - self.position
+            self.yaw = math.atan2(f[0], f[2])
+            self.pitch = max(-1.4, min(1.4, math.atan2(f[1], math.hypot(f[0], f[2]))))
+        self.recording = None  # [(position, target, time)] while T records a tour
+        self.tours = 0
         self.focus = 0.40  # magnifier distance ahead (its target on the painting)
         self.magnifier = True
         self.eye = list(eye)
@@ -223,7 +267,43 @@ class Viewer:
             self.foveate = not self.foveate
         if symbol == key.P:
             self.want_shot = True  # saved right after the next frame is drawn
+        if symbol == key.T:
+            self.toggle_recording()
         return None
+
+    def toggle_recording(self):
+        """T: start recording the walk as tour keyframes, or stop and write the tour."""
+        if self.recording is None:
+            self.recording = []
+            self.record_start = time.perf_counter()
+            print("tour: recording (T stops)", flush=True)
+            return
+        keys, self.recording = self.recording, None
+        if len(keys) < 2:
+            print("tour: too short to keep (under 2 keyframes)", flush=True)
+            return
+        from ..exhibit.tours import Tour, save_tour
+        pattern = self.args.record_tour
+        name = pattern.format(n=self.tours)
+        while pattern.format(n=0) != pattern.format(n=1) and os.path.lexists(name):
+            self.tours += 1
+            name = pattern.format(n=self.tours)
+        self.tours += 1
+        try:
+            save_tour(Tour(*map(list, zip(*keys)), name="recorded"), name)
+        except (OSError, ValueError) as e:
+            print(f"tour: {e}", flush=True)
+            return
+        print(f"tour: {len(keys)} keyframes written to {os.path.abspath(name)}", flush=True)
+
+    def record_keyframe(self):
+        """While recording: a keyframe every 0.25 s (position, 2 m ahead, time)."""
+        if self.recording is None:
+            return
+        t = time.perf_counter() - self.record_start
+        if not self.recording or t - self.recording[-1][2] >= 0.25:
+            f = self.forward()
+            self.recording.append((self.position.copy(), self.position + 2.0 * f, t))
 
     def on_mouse_drag(self, x, y, dx, dy, buttons, modifiers):
         self.yaw += 0.005 * dx
@@ -265,6 +345,7 @@ class Viewer:
         """One frame of the loop; the resolution adapts toward the target frame rate."""
         np = self.np
         moved = self.move(dt if dt < 0.5 else 0.5)
+        self.record_keyframe()
         t0 = time.perf_counter()
         rec, (left, right, mag, lenses) = self.walk.step(self.frame, self.state,
                                                          views=self.views(), moving=moved,

@@ -26,7 +26,12 @@ def slot_index(room, which, titles: dict | None = None) -> int:
     ValueError listing what exists."""
     slots = room.paintings
     text = str(which).strip()
-    if isinstance(which, int) or text.isdigit():
+    if (isinstance(which, int) or text.isdigit()) and titles:  # a show: painting k's slot
+        if not 0 <= int(text) < len(titles):
+            raise ValueError(f"--look-at {int(text)}: the exhibition has {len(titles)} "
+                             f"paintings (0..{len(titles) - 1})")
+        which = list(titles)[int(text)]
+    elif isinstance(which, int) or text.isdigit():
         k = int(text)
         if not 0 <= k < len(slots):
             raise ValueError(f"--look-at {k}: the room has {len(slots)} paintings "

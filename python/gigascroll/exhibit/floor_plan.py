@@ -148,7 +148,8 @@ def _floor_plan_room(ex: Exhibition, lights) -> RoomSpec:
     poly = floor_polygon(ex)
     walls = wall_frames(ex)
     height = float(ex.room["height_m"])
-    slots, frames, tables, items, footprints = [], [], [], [], []
+    # Slot k shows painting k; the labels' slots follow the paintings'.
+    slots, labels, frames, tables, items, footprints = [], [], [], [], [], []
     for p in ex.paintings:
         h = p.hang
         if h.wall is not None:
@@ -157,11 +158,12 @@ def _floor_plan_room(ex: Exhibition, lights) -> RoomSpec:
                                     h.along_m, h.centre_height_m, *outer, height))
             slots.append(slot)
             if ex.labels:
-                slots.append(_label_slot(ex, p, walls[h.wall], outer, items, height))
+                labels.append(_label_slot(ex, p, walls[h.wall], outer, items, height))
         else:
             slot, table = _table_slot(ex, p, poly, footprints)
             slots.append(slot)
             tables += table
+    slots += labels
     _check_overlaps(ex, items, walls)
     bounds = np.array(poly.bounds)  # minx, minz, maxx, maxz
     lo, hi = np.array([bounds[0], 0.0, bounds[1]]), np.array([bounds[2], height, bounds[3]])

@@ -146,9 +146,10 @@ def bake_glb(gallery: Gallery, spec, pack, threads: int = 0) -> tuple[bytes, dic
 
 
 def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None,
-               threads: int = 0, announce=None) -> BakedRoom:
+               threads: int = 0, announce=None, spec: RoomSpec | None = None) -> BakedRoom:
     """The room `room` (built-in name or file) with the pack's paintings, its glb baked or
-    taken from the cache. announce(text), when given, hears one line: hit or bake."""
+    taken from the cache. announce(text), when given, hears one line: hit or bake. `spec`:
+    a RoomSpec to serve instead of `room`'s (an exhibition's)."""
     expect_type(room, str, "room")
     expect_type(pack, TilePack, "pack")
     expect_type(content_hash, str, "content_hash")
@@ -156,7 +157,9 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
         expect_type(cache_dir, (str, os.PathLike), "cache_dir")
         if not str(cache_dir).strip():
             raise ValueError("cache_dir must name a directory")
-    spec = load_room_spec(room, pack)
+    if spec is None:
+        spec = load_room_spec(room, pack)
+    expect_type(spec, RoomSpec, "spec")
     gallery = Gallery.from_room(spec, pack)
     key = room_key(spec, content_hash, lighting_options())
     path = Path(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
