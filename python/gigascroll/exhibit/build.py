@@ -116,6 +116,8 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
     owned = owned_by(COMMAND)
     check_output(out, force=True, directory=True, owned=owned, what="a show of exhibit build")
     given_pack = _one_pack(ex)
+    # The room (and whether everything fits) before any packing, where it needs no pack.
+    spec = None if "file" in ex.room else build_room(ex)
     previous = _previous(out) if owned(out) else None
     tmp = temp_dir(out)
     try:
@@ -136,7 +138,7 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
             pack = TilePack(tmp / PACK_NAME)
         else:
             digest, pack_path, pack = None, given_pack, TilePack(given_pack)
-        spec = build_room(ex, pack)
+        spec = spec if spec is not None else build_room(ex, pack)
         try:
             gallery = Gallery.from_room(spec, pack)
         except ValueError as e:

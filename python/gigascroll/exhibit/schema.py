@@ -48,8 +48,7 @@ def _expected(error) -> str:
         return f"expected exactly one of: {'; '.join(options)}"
     if v == "additionalProperties":
         allowed = sorted(error.schema.get("properties", {}))
-        return f"{error.message.split(' (')[0].split('Additional properties are not allowed ')[-1]}: " \
-               f"unknown key (known: {', '.join(allowed)})"
+        return f"unknown key (expected one of: {', '.join(allowed)})"
     if v == "required":
         return error.message.replace("is a required property", "is required")
     if v == "type":
@@ -91,6 +90,7 @@ def validate(data, where: str, name: str = "exhibition") -> None:
     error = best_match(_validator(name).iter_errors(data))
     if error is not None:
         path = list(error.absolute_path)
-        if error.validator == "required":
-            pass
+        if error.validator == "additionalProperties" and isinstance(error.instance, dict):
+            known = error.schema.get("properties", {})
+            path.append(sorted(str(k) for k in error.instance if k not in known)[0])
         raise ExhibitionError(f"{where}: {key_name(path)}: {_expected(error)}")
