@@ -232,6 +232,10 @@ void bind_pack(nb::module_& m) {
             return std::make_pair(p.geometry.uv_scale_u(), p.geometry.uv_scale_v()); },
             "(W / (Mp P), H / (Np P)): seed 000 eqs (3, 4)")
         .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.total_tiles(); })
+        .def_prop_ro("instance_of", [](const PaintingInfo& p) -> nb::object {
+            if (p.instance_of < 0) return nb::none();
+            return nb::int_(p.instance_of); },
+            "the index of the painting whose tiles this one shares, or None (it stores its own)")
         .def("__repr__", [](const PaintingInfo& p) {
             const PaintingGeometry& g = p.geometry;
             return "PackPainting('" + p.name + "', " + std::to_string(g.width()) + " x " +
@@ -304,6 +308,13 @@ void bind_pack(nb::module_& m) {
                        static_cast<std::uint32_t>(rows.shape(1))); },
             "rows"_a, "uint8 array (n, width, 3), the next rows of the current painting")
         .def("end_painting", &PackBuilder::end_painting)
+        .def("add_instance", [](PackBuilder& b, const std::string& name, std::uint32_t source,
+                                std::uint32_t tx, std::uint32_t ty) {
+            PaintingSpec s{name, "", "", 0, 0, tx, ty, ""};
+            s.instance_of = source;
+            b.add_instance(s); },
+            "name"_a, "source"_a, "table_x"_a = 0, "table_y"_a = 0,
+            "Adds a painting sharing stored painting `source`'s tiles, after every stored one.")
         .def("finish", &PackBuilder::finish, "table_width"_a, "table_height"_a,
              "page_table_json"_a = "{}")
         .def("finish_shard", &PackBuilder::finish_shard)
@@ -313,7 +324,9 @@ void bind_pack(nb::module_& m) {
                                                                 std::string, std::string, std::uint32_t,
                                                                 std::uint32_t, std::string>>& paintings,
                                    std::uint32_t table_width, std::uint32_t table_height,
-                                   const std::string& page_table_json) {
+                                   const std::string& page_table_json,
+                                   const std::vector<std::tuple<std::string, std::uint32_t,
+                                                                std::uint32_t, std::uint32_t>>& instances) {
             PackOptions o;
             o.tile_size = tile_size;
             o.border = border;
@@ -321,12 +334,18 @@ void bind_pack(nb::module_& m) {
             std::vector<PaintingSpec> specs;
             for (const auto& [name, w, h, source, conversion, x, y, colour] : paintings)
                 specs.push_back(PaintingSpec{name, source, conversion, w, h, x, y, colour});
+            for (const auto& [name, source, x, y] : instances) {
+                specs.push_back(PaintingSpec{name, "", "", 0, 0, x, y, ""});
+                specs.back().instance_of = source;
+            }
             nb::gil_scoped_release release;
             PackBuilder::assemble(dir.string(), o, specs, table_width, table_height, page_table_json); },
             "directory"_a, "tile_size"_a, "border"_a, "codec"_a, "paintings"_a, "table_width"_a,
             "table_height"_a, "page_table_json"_a = "{}",
+            "instances"_a = std::vector<std::tuple<std::string, std::uint32_t, std::uint32_t, std::uint32_t>>{},
             "Merges shards (paintings: (name, width, height, source, conversion, table_x, table_y, "
-            "colour) each) into a pack: writes index.bin and manifest.json.")
+            "colour) each) into a pack: writes index.bin and manifest.json. instances: (name, "
+            "source painting, table_x, table_y) each, after the stored paintings.")
         .def_prop_ro("rows_done", &PackBuilder::rows_done)
         .def_prop_ro("tiles_written", &PackBuilder::tiles_written)
         .def_prop_ro("bytes_written", &PackBuilder::bytes_written);

@@ -130,6 +130,8 @@ void PackBuilder::write_all(const void* data, std::size_t size) {
 void PackBuilder::begin_painting(const PaintingSpec& spec) {
     require(!finished_, "pack already finished");
     require(!open_painting_, "begin_painting: previous painting not ended");
+    require(instances_.empty(), "begin_painting: instances come after every stored painting");
+    require(spec.instance_of < 0, "begin_painting: an instance is added with add_instance");
     require(std::uint64_t(first_painting_) + paintings_.size() < kMaxPackPaintings,
             "a pack holds at most " + std::to_string(kMaxPackPaintings) +
                 " paintings (the tile key's 16-bit painting field)");
@@ -307,6 +309,43 @@ void PackBuilder::end_painting() {
     open_painting_ = false;
 }
 
+void PackBuilder::add_instance(const PaintingSpec& spec) {
+    require(!finished_, "pack already finished");
+    require(!open_painting_, "add_instance: a painting is still open");
+    require(first_painting_ == 0, "add_instance: a shard builder has no instances (assemble "
+                                  "adds them)");
+    require(spec.instance_of >= 0 && std::uint64_t(spec.instance_of) < paintings_.size(),
+            "add_instance: painting '" + spec.name + "' names source " +
+                std::to_string(spec.instance_of) + ", the builder has " +
+                std::to_string(paintings_.size()) + " stored paintings");
+    require(paintings_.size() + instances_.size() < kMaxPackPaintings,
+            "a pack holds at most " + std::to_string(kMaxPackPaintings) +
+                " paintings (the tile key's 16-bit painting field)");
+    PaintingSpec s = spec;
+    const PaintingGeometry& src = paintings_[std::size_t(spec.instance_of)].geometry;
+    s.width = src.width(), s.height = src.height();
+    instances_.push_back(std::move(s));
+}
+
+namespace {
+
+// The manifest entry of an instance: its source's geometry, placed at its own table offset
+// and at the source's first entry.
+// Source, conversion and colour record describe the stored pixels: the source's.
+PaintingInfo instance_info(const PaintingSpec& s, const std::vector<PaintingInfo>& paintings,
+                           std::size_t stored) {
+    require(s.instance_of >= 0 && std::uint64_t(s.instance_of) < stored,
+            "instance '" + s.name + "': source " + std::to_string(s.instance_of) +
+                " is not a stored painting");
+    const PaintingInfo& src = paintings[std::size_t(s.instance_of)];
+    PaintingInfo info{s.name, src.source, src.conversion, src.geometry, src.colour};
+    info.geometry.place(s.table_x, s.table_y, src.geometry.first_entry());
+    info.instance_of = s.instance_of;
+    return info;
+}
+
+}  // namespace
+
 void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
                          const std::string& page_table_json) {
     require(!finished_, "pack already finished");
@@ -331,6 +370,9 @@ void PackBuilder::finish(std::uint32_t table_width, std::uint32_t table_height,
         m.tile_count += p.entries.size();
         parts.push_back(&p.entries);
     }
+    const std::size_t stored = m.paintings.size();
+    for (const PaintingSpec& s : instances_)
+        m.paintings.push_back(instance_info(s, m.paintings, stored));
     m.tiles_bytes = paintings_.size() * sizeof(FileHeader) + data_bytes_;
     // Fails now (bad layout, malformed page_table_json) rather than after index.bin is written.
     (void)manifest_text(m);
@@ -363,8 +405,13 @@ void PackBuilder::assemble(const std::string& directory, const PackOptions& opti
     m.table_width = table_width;
     m.table_height = table_height;
     m.page_table_extra = page_table_json;
-    std::vector<std::vector<TileEntry>> entries(specs.size());
-    for (std::size_t i = 0; i < specs.size(); ++i) {
+    std::size_t stored = 0;
+    while (stored < specs.size() && specs[stored].instance_of < 0) ++stored;
+    for (std::size_t i = stored; i < specs.size(); ++i)
+        require(specs[i].instance_of >= 0, "assemble: painting '" + specs[i].name +
+                                                "' is stored after an instance (instances come last)");
+    std::vector<std::vector<TileEntry>> entries(stored);
+    for (std::size_t i = 0; i < stored; ++i) {
         const PaintingSpec& s = specs[i];
         const auto pi = static_cast<std::uint32_t>(i);
         PaintingInfo info{s.name, s.source, s.conversion,
@@ -400,6 +447,9 @@ void PackBuilder::assemble(const std::string& directory, const PackOptions& opti
         m.tile_count += n;
         m.tile_files.push_back(tile_file_name(pi));
         m.paintings.push_back(std::move(info));
+    }
+    for (std::size_t i = stored; i < specs.size(); ++i) {
+        m.paintings.push_back(instance_info(specs[i], m.paintings, stored));
     }
     (void)manifest_text(m);  // validate before writing anything
     std::vector<const std::vector<TileEntry>*> parts;

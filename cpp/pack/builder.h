@@ -42,6 +42,9 @@ struct PaintingSpec {
     std::uint32_t width = 0, height = 0;
     std::uint32_t table_x = 0, table_y = 0;  // offset in the merged page table
     std::string colour;  // a JSON object (colour management at ingest) or empty for none
+    // >= 0: an instance of that painting (manifest.h's PaintingInfo::instance_of): no rows,
+    // no tile file, no index entries; width and height are taken from the source.
+    std::int64_t instance_of = -1;
 };
 
 // The index file of a shard's painting: "shard-00042.idx" (FileHeader + its TileEntries).
@@ -62,6 +65,10 @@ public:
     // (InvalidArgument if width differs from the painting's or rows overflow its height).
     void add_rows(const std::uint8_t* rgb, std::uint32_t rows, std::uint32_t width);
     void end_painting();
+    // Adds a painting that is an instance of stored painting spec.instance_of (one built by
+    // this builder). Instances come after every stored painting: InvalidArgument for a
+    // stored painting begun after one, for a painting still open or a bad source.
+    void add_instance(const PaintingSpec& spec);
     // Checks the layout (aligned, inside the table, no overlap), writes index.bin and then
     // manifest.json. `page_table_json` is a JSON object merged into the manifest's
     // "page_table" entry (packer name, fill ratios, ...).
@@ -70,7 +77,8 @@ public:
                 const std::string& page_table_json = "{}");
     // Writes shard-NNNNN.idx of every painting built (fsync'ed); the builder is then done.
     void finish_shard();
-    // Merges shards in `directory` (one per spec, painting i's shard-i.idx and tile file):
+    // Merges shards in `directory` (one per stored spec, painting i's shard-i.idx and tile
+    // file; specs with instance_of >= 0, after the stored ones, are instances):
     // checks each shard's index against the painting's geometry, writes index.bin and
     // manifest.json (validated first). IoError for a missing or inconsistent shard.
     static void assemble(const std::string& directory, const PackOptions& options,
@@ -99,6 +107,7 @@ private:
     std::uint64_t data_bytes_ = 0;    // all tile files' data bytes
     std::uint64_t tiles_written_ = 0;
     std::vector<Painting> paintings_;
+    std::vector<PaintingSpec> instances_;  // after paintings_, in the order added
     std::unique_ptr<MipReducer> mip_;  // mip chain of the painting being built
     std::vector<TileRows> rows_;
     bool open_painting_ = false;

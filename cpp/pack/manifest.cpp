@@ -165,6 +165,30 @@ void check_disjoint(const std::vector<PaintingInfo>& ps) {
     }
 }
 
+// Painting i is an instance: of an earlier painting that stores its tiles, with its size
+// (so its levels, tiles and entries are the source's) and its first entry.
+void check_instance(const Manifest& m, std::size_t i) {
+    const PaintingInfo& p = m.paintings[i];
+    const std::string field = "field '" + painting_field(i, "instance_of") + "'";
+    require(m.version >= 2, field + ": a version-1 pack has no instances");
+    require(std::uint64_t(p.instance_of) < i,
+            field + " = " + std::to_string(p.instance_of) + " must name an earlier painting");
+    const PaintingInfo& src = m.paintings[std::size_t(p.instance_of)];
+    require(src.instance_of < 0, field + ": paintings[" + std::to_string(p.instance_of) +
+                                     "] is itself an instance");
+    const PaintingGeometry& g = p.geometry;
+    const PaintingGeometry& sg = src.geometry;
+    require(g.width() == sg.width() && g.height() == sg.height(),
+            "paintings[" + std::to_string(i) + "] ('" + p.name + "'): " +
+                std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                " differs from its source's " + std::to_string(sg.width()) + " x " +
+                std::to_string(sg.height()));
+    require(g.first_entry() == sg.first_entry(),
+            "field '" + painting_field(i, "first_entry") + "' = " +
+                std::to_string(g.first_entry()) + ", expected its source's " +
+                std::to_string(sg.first_entry()));
+}
+
 }  // namespace
 
 void validate_manifest(const Manifest& m) {
@@ -212,13 +236,17 @@ void validate_manifest(const Manifest& m) {
                     std::uint64_t(g.table_y()) + g.page_table_height() <= m.table_height,
                 "field '" + painting_field(i, "page_table") + "': the table lies outside the merged " +
                     std::to_string(m.table_width) + " x " + std::to_string(m.table_height) + " table");
+        area += std::uint64_t(g.page_table_width()) * g.page_table_height();
+        wmax = std::max<std::uint64_t>(wmax, g.page_table_width());
+        hmax = std::max<std::uint64_t>(hmax, g.page_table_height());
+        if (p.instance_of >= 0) {
+            check_instance(m, i);
+            continue;
+        }
         require(g.first_entry() == entries,
                 "field '" + painting_field(i, "first_entry") + "' = " +
                     std::to_string(g.first_entry()) + ", expected " + std::to_string(entries));
         entries += g.total_tiles();
-        area += std::uint64_t(g.page_table_width()) * g.page_table_height();
-        wmax = std::max<std::uint64_t>(wmax, g.page_table_width());
-        hmax = std::max<std::uint64_t>(hmax, g.page_table_height());
     }
     require(m.tile_count == entries, "field 'tile_count' = " + std::to_string(m.tile_count) +
                                          ", the paintings have " + std::to_string(entries) + " tiles");
@@ -277,6 +305,7 @@ std::string manifest_text(const Manifest& mf) {
         jp["name"] = p.name;
         jp["source"] = p.source;
         jp["conversion"] = p.conversion;
+        if (p.instance_of >= 0) jp["instance_of"] = p.instance_of;
         if (!p.colour.empty()) {
             json colour;
             try {
@@ -437,6 +466,10 @@ Manifest parse_json(const json& m) {
         if (!(std::abs(u - g.uv_scale_u()) <= 1e-9 * g.uv_scale_u()) ||
             !(std::abs(v - g.uv_scale_v()) <= 1e-9 * g.uv_scale_v()))
             throw InvalidArgument("field '" + uvw + "' does not match the painting's size");
+        if (jp.contains("instance_of"))  // the rules on it: validate_manifest
+            info.instance_of = std::int64_t(
+                uint_field(jp, "instance_of", painting_field(i, "instance_of"), 0,
+                           kMaxPackPaintings - 1));
         g.place(x, y, first);
         entries += g.total_tiles();
         info.geometry = std::move(g);

@@ -19,7 +19,19 @@ struct PaintingInfo {
     std::string conversion;  // how the input was turned into 8-bit RGB
     PaintingGeometry geometry;
     std::string colour;  // JSON object text: source profile, intent, transform; empty if absent
+    // An instance of an earlier, stored painting (its index; -1: the painting stores its own
+    // tiles): its own name and page-table placement, the source's size, index entries
+    // (geometry's first_entry is the source's) and tile data, whose checksums name the
+    // source's tiles. Written as "instance_of" only when set, so a pack without instances
+    // has the manifest it had before instances existed.
+    std::int64_t instance_of = -1;
 };
+
+// The painting whose stored tiles painting p reads (p itself unless p is an instance).
+inline std::uint32_t tile_source(const std::vector<PaintingInfo>& paintings, std::uint32_t p) {
+    const std::int64_t s = paintings[p].instance_of;
+    return s < 0 ? p : static_cast<std::uint32_t>(s);
+}
 
 struct Manifest {
     std::uint32_t version = kPackVersion;
@@ -42,7 +54,8 @@ inline constexpr std::uint64_t kMaxTableSlack = 16;
 
 // Everything a reader relies on, in 64-bit arithmetic: version, tile parameters, 1 to
 // kMaxPackPaintings paintings, each painting's geometry against its size (placed at the
-// running entry total), page tables aligned, inside the merged power-of-two table and
+// running entry total; an instance at its source's entries, with its source's size, its
+// source an earlier painting that is no instance), page tables aligned, inside the merged power-of-two table and
 // pairwise disjoint, the merged table not absurdly larger than the paintings need, the
 // entry total, and (version 2) the tile file names. InvalidArgument naming the field.
 void validate_manifest(const Manifest& m);

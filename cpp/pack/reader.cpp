@@ -298,7 +298,8 @@ void TilePack::read_tile(std::uint32_t p, std::uint32_t l, std::uint32_t tx, std
     if (codec_ == Codec::Raw) {
         const FileHandle file(*this, e.file);
         const int fd = file.fd;
-        const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
+        // An instance's tiles are its source's: their checksums name the source's tiles.
+        const std::uint64_t key = TileKey{tile_source(paintings_, p), l, tx, ty}.packed();
         if (e.length != bytes)
             throw IoError(directory_ + ": tile " + key_text(p, l, tx, ty) + " has length " +
                           std::to_string(e.length) + ", expected " + std::to_string(bytes));
@@ -331,7 +332,7 @@ const std::uint8_t* TilePack::read_stored(const TileEntry& e, std::uint32_t p, s
     const FileHandle file(*this, e.file);
     if (!pread_all(file.fd, into, e.length, e.offset))
         throw IoError(directory_ + ": short read of tile " + key_text(p, l, tx, ty));
-    const std::uint64_t key = TileKey{p, l, tx, ty}.packed();
+    const std::uint64_t key = TileKey{tile_source(paintings_, p), l, tx, ty}.packed();
     if (tile_checksum(version_, key, into, e.length) != e.checksum)
         throw IoError(directory_ + ": checksum mismatch in tile " + key_text(p, l, tx, ty));
     return into;

@@ -1,7 +1,8 @@
 // Read side of a tile pack (format in format.h), versions 1 and 2. Opening parses and
 // validates the manifest (the builder's own validator), checks every binary's magic, version
 // and size, and maps the index; a lookup is then O(1). A read checks the entry (flags, file,
-// bounds) and its checksum, which in version 2 also names the tile.
+// bounds) and its checksum, which in version 2 also names the tile. A painting that is an
+// instance of another (manifest.h) reads its source's entries and tiles under its own index.
 // Thread safety: after construction the object is logically immutable; read_tile uses pread
 // on shared descriptors (opened once, lazily past a budget) and per-thread scratch, so
 // loader threads may call it concurrently.

@@ -126,7 +126,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                black_point_compensation: bool = True, workers: int = 0,
                scheduler: str | None = None, executor: str = "dask", resume: bool = False,
                shard_hook: Callable[[int, str], None] | None = None,
-               timeout: float | None = None) -> TilePack:
+               timeout: float | None = None, instances=None) -> TilePack:
     """Builds a tile pack at `out` from one image or a list of images (file paths or numpy
     arrays, one painting each) and returns it opened. The build goes into a temporary sibling
     directory renamed into place at the end, so a failed or interrupted build leaves nothing
@@ -144,7 +144,12 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
     `timeout` bounds each wait on Dask, in seconds: connecting to the scheduler (default
     30), its first worker and any stretch without workers (default 60); each ends in an
     OSError naming the address and what it waited for. Only tcp:// addresses are supported.
-    `shard_hook(index, name)`, if given, runs on the worker before each painting (tests)."""
+    `shard_hook(index, name)`, if given, runs on the worker before each painting (tests).
+
+    Instances: `instances=[(name, source), ...]` adds, after the inputs' paintings, paintings
+    that share an input's tiles (`source`: its index or painting name): each has its own name
+    and page-table placement but no tile data of its own, so copies of one scan cost one
+    scan's disk. Without instances the pack is byte for byte what it was before they existed."""
     if isinstance(inputs, (str, os.PathLike, np.ndarray)):
         inputs = [inputs]
     inputs = list(inputs)
@@ -183,6 +188,7 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
         for n in names:
             if not isinstance(n, str) or "\0" in n or any(0xD800 <= ord(c) <= 0xDFFF for c in n):
                 raise ValueError(f"painting name {n!r} is not a valid UTF-8 text")
+    instances = _check_instances(instances, len(inputs))
     colour_options = {"mode": colour, "intent": intent,
                       "black_point_compensation": black_point_compensation}
     plan_colour("build_pack", 3, **colour_options)  # unknown mode / intent: now
@@ -193,7 +199,55 @@ def build_pack(inputs, out, tile_size: int = 128, border: int = 4, codec: str = 
                       zstd_level, progress, band_rows, colour_options,
                       dict(sharded=sharded, workers=workers, scheduler=scheduler,
                            executor=executor, resume=resume, hook=shard_hook,
-                           timeout=timeout), bc1_fit)
+                           timeout=timeout), bc1_fit, instances)
+
+
+def _check_instances(instances, n_inputs: int) -> list[tuple[str, int | str]]:
+    """[(name, source)] with each source an input index in range or a name (resolved once the
+    inputs are open); ValueError for anything else."""
+    if instances is None:
+        return []
+    if isinstance(instances, (str, bytes, dict)):
+        raise ValueError("instances must be a list of (name, source) pairs")
+    out = []
+    for item in instances:
+        if not (isinstance(item, (tuple, list)) and len(item) == 2):
+            raise ValueError(f"instance {item!r} is not a (name, source) pair")
+        name, source = item
+        if not isinstance(name, str) or not name or "\0" in name \
+                or any(0xD800 <= ord(c) <= 0xDFFF for c in name):
+            raise ValueError(f"instance name {name!r} is not a non-empty UTF-8 text")
+        if isinstance(source, (int, np.integer)) and not isinstance(source, bool):
+            if not 0 <= source < n_inputs:
+                raise ValueError(f"instance '{name}': source {source} is not an input index "
+                                 f"(there are {n_inputs} inputs)")
+            source = int(source)
+        elif not isinstance(source, str):
+            raise ValueError(f"instance '{name}': source must be an input's index or name, "
+                             f"not {type(source).__name__}")
+        out.append((name, source))
+    if n_inputs + len(out) > _core.MAX_PACK_PAINTINGS:
+        raise ValueError(f"{n_inputs + len(out)} paintings: a pack holds at most "
+                         f"{_core.MAX_PACK_PAINTINGS} (the tile key's 16-bit field)")
+    return out
+
+
+def _resolve_instances(instances, sources) -> list[tuple[str, int]]:
+    """Sources as input indices (a name is an input painting's); names unique among all."""
+    index = {s.name: i for i, s in enumerate(sources)}
+    used = set(index)
+    out = []
+    for name, source in instances:
+        if isinstance(source, str):
+            if source not in index:
+                raise ValueError(f"instance '{name}': no input painting named '{source}' "
+                                 f"(they are: {', '.join(list(index)[:10])})")
+            source = index[source]
+        if name in used:
+            raise ValueError(f"instance name '{name}' is already a painting's name")
+        used.add(name)
+        out.append((name, source))
+    return out
 
 
 def _mpx_bar():
@@ -208,7 +262,7 @@ def _mpx_bar():
 
 
 def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, zstd_level,
-           progress, band_rows, colour_options, sharding, bc1_fit) -> TilePack:
+           progress, band_rows, colour_options, sharding, bc1_fit, instances) -> TilePack:
     sources: list[ImageSource] = []
     bar = None
     tmp = None
@@ -224,8 +278,12 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
                 k += 1
                 s.name = f"{base}-{k}"
             used.add(s.name)
+        instances = _resolve_instances(instances, sources)
         geoms = [painting_geometry(s.width, s.height, tile_size, border) for s in sources]
-        table_w, table_h, offsets, info = plan_layout([g["table_size"] for g in geoms], layout, seed)
+        sizes = [g["table_size"] for g in geoms] + [geoms[i]["table_size"] for _, i in instances]
+        table_w, table_h, offsets, info = plan_layout(sizes, layout, seed)
+        placed = [(name, i, *offsets[len(sources) + k]) for k, (name, i) in enumerate(instances)]
+        offsets = offsets[:len(sources)]
         if sharding["sharded"]:
             for s in sources:  # the workers open their own
                 s.close()
@@ -236,7 +294,7 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
                           workers=int(sharding["workers"]), scheduler=sharding["scheduler"],
                           executor=sharding["executor"], resume=sharding["resume"],
                           progress=progress, hook=sharding["hook"], owned=_is_pack_dir,
-                          timeout=sharding["timeout"])
+                          timeout=sharding["timeout"], instances=placed)
             return TilePack(out)
 
         tmp = temp_dir(out)
@@ -252,6 +310,8 @@ def _build(inputs, out, tile_size, border, codec, names, layout, seed, threads, 
             feed(builder, s, bar)
             builder.end_painting()
             s.close()
+        for name, i, ox, oy in placed:
+            builder.add_instance(name, i, ox, oy)
         builder.finish(table_w, table_h, json.dumps(info))
         del builder
         if bar is not None:

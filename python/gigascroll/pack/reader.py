@@ -233,6 +233,27 @@ def _check_disjoint(m: dict, where: str) -> None:
         owner[y0] = i
 
 
+def _check_instance(m: dict, i: int, where: str) -> dict | None:
+    """The source painting of painting i if it is an instance (None if it stores its own
+    tiles): an earlier painting, itself no instance, of the same size; version 2 and later."""
+    p = m["paintings"][i]
+    if "instance_of" not in p:
+        return None
+    s = p["instance_of"]
+    field = f"field 'paintings[{i}].instance_of'"
+    if m["version"] < 2:
+        raise OSError(f"{where}: {field}: a version-1 pack has no instances")
+    if s >= i:
+        raise OSError(f"{where}: {field} = {s} must name an earlier painting")
+    src = m["paintings"][s]
+    if "instance_of" in src:
+        raise OSError(f"{where}: {field}: paintings[{s}] is itself an instance")
+    if (p["width"], p["height"]) != (src["width"], src["height"]):
+        raise OSError(f"{where}: paintings[{i}] ('{p['name']}'): {p['width']} x {p['height']} "
+                      f"differs from its source's {src['width']} x {src['height']}")
+    return src
+
+
 def validate_manifest(m: dict, where: str = "manifest.json") -> None:
     """Checks a parsed manifest as the core does: the schema with exact integer types, then
     its arithmetic (level sizes, tile grids, running entry totals, page-table sizes,
@@ -261,7 +282,9 @@ def validate_manifest(m: dict, where: str = "manifest.json") -> None:
         name = p["name"]
         levels = _expected_levels(p["width"], p["height"], P)
         pt = p["page_table"]
-        if (len(p["levels"]) != len(levels) or p["first_entry"] != entries
+        src = _check_instance(m, i, where)
+        if (len(p["levels"]) != len(levels) or p["first_entry"] != (entries if src is None
+                                                                     else src["first_entry"])
                 or pt["width"] != _next_pow2(levels[0][2]) or pt["height"] != _next_pow2(levels[0][3])):
             raise OSError(f"{where}: geometry of painting '{name}' does not match its size")
         if (pt["x"] % pt["width"] or pt["y"] % pt["height"] or pt["x"] + pt["width"] > Mc
@@ -281,7 +304,7 @@ def validate_manifest(m: dict, where: str = "manifest.json") -> None:
         if not (abs(u - eu) <= 1e-9 * eu and abs(v - ev) <= 1e-9 * ev):
             raise OSError(f"{where}: field 'paintings[{i}].uv_scale' does not match the "
                           "painting's size")
-        entries += first
+        entries += first if src is None else 0  # an instance's tiles are its source's
         area += pt["width"] * pt["height"]
         wmax, hmax = max(wmax, pt["width"]), max(hmax, pt["height"])
     if m["tile_count"] != entries:
@@ -311,6 +334,7 @@ class PurePainting:
     level_first: list[int]
     table_size: tuple[int, int]
     table_offset: tuple[int, int]
+    instance_of: int | None = None  # the painting whose stored tiles this one reads
 
     @property
     def levels(self) -> int:
@@ -369,7 +393,8 @@ class PurePack:
             [(lv["tiles_x"], lv["tiles_y"]) for lv in p["levels"]],
             [lv["first_entry"] for lv in p["levels"]],
             (p["page_table"]["width"], p["page_table"]["height"]),
-            (p["page_table"]["x"], p["page_table"]["y"])) for p in m["paintings"]]
+            (p["page_table"]["x"], p["page_table"]["y"]), p.get("instance_of"))
+            for p in m["paintings"]]
 
         ipath = d / "index.bin"
         size = ipath.stat().st_size
@@ -520,7 +545,8 @@ class PurePack:
         data = os.pread(self._fds[file], length, offset)
         if len(data) != length:
             raise OSError(f"{self.path}: short read of tile {key}")
-        seed = tile_seed(p, l, tx, ty) if self.version >= 2 else 0
+        source = self.paintings[p].instance_of  # an instance's checksums name its source's tiles
+        seed = tile_seed(p if source is None else source, l, tx, ty) if self.version >= 2 else 0
         if xxhash.xxh3_64_intdigest(data, seed=seed) != checksum:
             raise OSError(f"{self.path}: checksum mismatch in tile {key}")
         if self._zstd is not None:

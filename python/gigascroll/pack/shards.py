@@ -221,10 +221,11 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
                   executor: str, resume: bool, progress: bool,
                   hook: Callable[[int, str], None] | None,
                   owned: Callable[[Path], bool] | None = None,
-                  timeout: float | None = None) -> None:
+                  timeout: float | None = None, instances=()) -> None:
     """The sharded build of build_pack (which has opened `sources` for their sizes and names
     and planned the layout): shards in OUT.shards/, then the merge and the rename (over an
-    existing pack only where `owned` says it is one)."""
+    existing pack only where `owned` says it is one). `instances`: (name, source index,
+    table_x, table_y) of the paintings that share a stored one's tiles (no shard)."""
     shard_dir = _shard_dir(out, resume)
     n = len(sources)
     jobs = [{"index": i, "name": s.name, "input": input_identity(image), "options": opts}
@@ -291,7 +292,8 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
                   "" if r["colour"] is None else json.dumps(r["colour"]))
                  for r, (ox, oy) in ((records[i], offsets[i]) for i in range(n))]
     _core.PackBuilder.assemble(shard_dir, opts["tile_size"], opts["border"], opts["codec"],
-                               paintings, table[0], table[1], json.dumps(info))
+                               paintings, table[0], table[1], json.dumps(info),
+                               instances=list(instances))
     for i in range(n):  # the pack is complete: the shard records go
         _, idx, rec = _shard_paths(shard_dir, i)
         idx.unlink()
