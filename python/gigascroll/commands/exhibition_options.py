@@ -54,9 +54,9 @@ def look_at_pose(args, room, show=None, fov: float = 60.0, aspect: float = 1.0):
     if args.distance is not None and not (math.isfinite(args.distance)
                                           and 0.05 <= args.distance <= 1000):
         raise UserError(f"--distance must be in [0.05, 1000] metres, got {args.distance}")
-    from ..exhibit.cameras import look_at, slot_index
+    from ..exhibit.cameras import look_at, room_bounds, slot_index
     try:
         k = slot_index(room, args.look_at, show.titles if show is not None else None)
-        return look_at(room.paintings[k], args.distance, fov, aspect)
+        return look_at(room.paintings[k], args.distance, fov, aspect, room_bounds(room))
     except ValueError as e:
         raise UserError(str(e)) from None

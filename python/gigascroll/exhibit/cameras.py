@@ -6,7 +6,9 @@ eye at its centre height); a painting lying flat or tilted on a table is seen fr
 normal turned 45 degrees toward the visitor's side when it faces up (a camera looking straight
 down has no up direction). The default distance makes the painting fill FILL of the view's
 width or height (whichever it reaches first) at the vertical field of view `fov` and the
-view's aspect (width / height): d = max(w / (2 FILL tan(fov_x / 2)), h / (2 FILL tan(fov / 2))).
+view's aspect (width / height): d = max(w / (2 FILL tan(fov_x / 2)), h / (2 FILL tan(fov / 2))),
+but never beyond the room's bounding box (less 5 cm): a long scroll in a shallow room is seen
+from as far as the room allows, not from behind its wall. A given distance is taken as is.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import math
 
 import numpy as np
 
-__all__ = ["FILL", "look_at", "slot_index", "fill_distance"]
+__all__ = ["FILL", "look_at", "slot_index", "fill_distance", "room_bounds"]
 
 FILL = 0.8
 
@@ -53,12 +55,36 @@ def fill_distance(width_m: float, height_m: float, fov: float, aspect: float) ->
     return max(width_m / (2 * FILL * tx), height_m / (2 * FILL * ty))
 
 
-def look_at(slot, distance: float | None = None, fov: float = 60.0, aspect: float = 1.0):
-    """(eye, target) 3-tuples for a camera in front of `slot` (a PaintingSlot)."""
+def room_bounds(room):
+    """(lo, hi) corners of the box around the room's surfaces (None without surfaces)."""
+    pts = [np.asarray(s.vertices, float).reshape(-1, 3) for s in room.surfaces]
+    pts = [p for p in pts if p.size]
+    if not pts:
+        return None
+    allp = np.concatenate(pts)
+    return allp.min(axis=0), allp.max(axis=0)
+
+
+def _inside_distance(centre, direction, bounds) -> float:
+    """How far from `centre` along `direction` the box `bounds` ends."""
+    lo, hi = bounds
+    far = np.inf
+    for k in range(3):
+        if abs(direction[k]) > 1e-12:
+            wall = hi[k] if direction[k] > 0 else lo[k]
+            far = min(far, (wall - centre[k]) / direction[k])
+    return far
+
+
+def look_at(slot, distance: float | None = None, fov: float = 60.0, aspect: float = 1.0,
+            bounds=None):
+    """(eye, target) 3-tuples for a camera in front of `slot` (a PaintingSlot); `bounds`
+    (room_bounds) limits the default distance."""
     if not (math.isfinite(fov) and 0 < fov < 180):
         raise ValueError(f"the field of view must be in (0, 180) degrees, got {fov}")
-    if distance is None:
-        distance = fill_distance(slot.width_m, slot.height_m, fov, aspect)
+    given = distance is not None
+    if distance is None:  # at least 5 cm: a tiny painting is seen from a camera's nearest
+        distance = max(0.05, fill_distance(slot.width_m, slot.height_m, fov, aspect))
     if not (math.isfinite(distance) and 0.05 <= distance <= 1000):
         raise ValueError(f"--distance must be in [0.05, 1000] metres, got {distance}")
     u, v = np.array(slot.u_axis, float), np.array(slot.v_axis, float)
@@ -68,5 +94,9 @@ def look_at(slot, distance: float | None = None, fov: float = 60.0, aspect: floa
     if abs(front[1]) > 0.9:  # facing up or down: from the visitor's side (image bottom, +v)
         down = v / np.linalg.norm(v)
         front = (front + down) / np.linalg.norm(front + down)
+    if not given and bounds is not None:
+        room = _inside_distance(centre, front, bounds) - 0.05
+        if room > 0.05:
+            distance = min(distance, room)
     eye = centre + distance * front
     return tuple(float(x) for x in eye), tuple(float(x) for x in centre)

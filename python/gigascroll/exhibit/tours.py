@@ -227,13 +227,14 @@ def default_tour(room, ex=None, fov: float = 60.0, aspect: float = 1.0,
                  max_speed_mps: float = 1.0) -> Tour:
     """A tour of every painting of `room` (a RoomSpec; labels, slots named label-*, are
     skipped); `ex`, the Exhibition of a floor plan room, gives the free space to walk in."""
-    from .cameras import look_at
+    from .cameras import look_at, room_bounds
+    bounds = room_bounds(room)
     free = _free_space(ex) if ex is not None and "walls" in ex.room else None
     stops = []
     for slot in room.paintings:
         if str(slot.name).startswith("label-"):
             continue
-        eye, centre = look_at(slot, None, fov, aspect)
+        eye, centre = look_at(slot, None, fov, aspect, bounds)
         eye = np.array(eye)
         d = eye - np.array(centre)
         if free is not None and np.hypot(d[0], d[2]) < CLEARANCE_M + 0.2:
