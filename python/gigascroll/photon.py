@@ -380,10 +380,13 @@ def trace_photons(scene: Scene, count: int, seed: int = 0, threads: int = 0) -> 
     return _core._trace_photons(scene, int(count), int(seed), int(threads))
 
 
-def save_image(path, image: np.ndarray) -> None:
-    """Write linear radiance as EXR/HDR (float) or PNG/JPEG/TIFF (sRGB, 8 bit). Written by
-    outputs.write_image: under a temporary name, closed with errors checked, then renamed, so
-    a failed write (a full disk included) never leaves a complete-looking file."""
+def save_image(path, image: np.ndarray, display=None) -> None:
+    """Write linear radiance as EXR/HDR (float, the radiance itself) or PNG/JPEG/TIFF (8-bit
+    sRGB through `display`, a display_mapping.Display: exposure and tone curve; None: factor
+    1, the neutral curve). Written by outputs.write_image: under a temporary name, closed with
+    errors checked, then renamed, so a failed write (a full disk included) never leaves a
+    complete-looking file."""
+    from .display_mapping import Display
     from .outputs import write_image
 
     path = Path(path)
@@ -394,9 +397,7 @@ def save_image(path, image: np.ndarray) -> None:
     if ext in (".exr", ".hdr"):
         data = img
     elif ext in (".png", ".jpg", ".jpeg", ".tif", ".tiff"):
-        c = np.clip(np.nan_to_num(img), 0.0, 1.0)
-        srgb = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-        data = (srgb * 255 + 0.5).astype(np.uint8)
+        data = (display or Display()).srgb8(img)
     else:
         raise ValueError(f"unsupported image format {ext!r} (use .exr, .hdr, .png, .jpg or .tif)")
     if not path.parent.is_dir():

@@ -20,7 +20,7 @@ from serve_support import ServeProcess, client_context, get_request, raw_request
 import gigascroll
 from gigascroll import build_pack
 from gigascroll.experiments import pattern_image
-from gigascroll.gallery.walk import lit_exposure
+from gigascroll.gallery.exposure import room_display
 from gigascroll.serve import MAX_BATCH, ServerThread, baked_room, make_app, pack_hash
 
 
@@ -134,7 +134,9 @@ def test_scene_describes_the_pack_and_room(served):
     assert r["slots"][0]["width_m"] == slot.width_m and r["slots"][0]["painting"] == 0
     assert r["camera"]["eye"] == list(room.spec.camera_eye) and r["camera"]["fov"] == 60.0
     assert np.allclose(r["bounds"], room.gallery.bounds)
-    assert scene["display"] == {"exposure": lit_exposure(), "tone": "clip-srgb"}
+    # the room's automatic exposure (gallery/exposure.py) and the neutral curve
+    assert scene["display"] == room_display(room.spec).scene_json()
+    assert scene["display"]["tone"] == "neutral-srgb" and 5 < scene["display"]["ev100"] < 7
     assert scene["tiles"]["batch"] == f"/api/tiles/{h}/batch" and scene["tiles"]["max_batch"] == 64
     status, headers, glb = fetch(url + r["glb"])
     assert status == 200 and glb == room.glb_path.read_bytes() and glb[:4] == b"glTF"

@@ -47,6 +47,9 @@ def register(sub) -> None:
                    help="output directory (default: next to the pack, PACK-walk; without a "
                         "pack, gallery-walk in the working directory)")
     p.add_argument("--exr", action="store_true", help="also write each saved frame as linear EXR")
+    from .display_options import add_display_options
+    add_display_options(p, "the frames' EXRs stay linear radiance; results.json states what was "
+                           "used")
     p.add_argument("--png-every", type=int, default=None,
                    help="keep every n-th frame as PNG (default: about 40 over the walk)")
     p.add_argument("--no-video", action="store_true", help="skip the MP4")
@@ -249,9 +252,11 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
             check_fps(path.fps)  # before the room is lit
         except ValueError as e:
             raise UserError(f"--path: {e}") from None
+    from .display_options import display_of
+    display = display_of(args, room, args.lighting)
     t0 = time.perf_counter()
     source = GallerySource(room, pack, args.lighting, photons=args.photons,
-                           threads=args.threads)
+                           threads=args.threads, response=display)
     print(f"{source.name}: lit in {time.perf_counter() - t0:.1f} s "
           f"({source.light_stats.get('photons_stored', 0)} photons stored)")
     walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
@@ -261,7 +266,9 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
                 "exhibition": args.exhibition, "eye": f"{eye[0]}x{eye[1]}",
                 "magnifier": not args.no_magnifier, "lighting": args.lighting,
                 "seconds": args.seconds, "reuse": not args.no_reuse,
-                "photons": args.photons, "frames": len(path)}
+                "photons": args.photons, "frames": len(path),
+                "exposure": display.how if args.exposure.mode == "auto" else
+                f"{args.exposure.mode} {args.exposure.value:g}", "tone": args.tone}
     if foveation is not None:
         settings["foveation"] = {"fovea_deg": foveation.fovea_deg,
                                  "factor": foveation.factor, "blend": foveation.blend}

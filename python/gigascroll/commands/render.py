@@ -34,6 +34,9 @@ def register(sub) -> None:
     p.add_argument("--lighting", choices=["baked", "full", "unlit"], default=None,
                    help="--room: irradiance baked once per lighting (default), per pixel (full), or none")
     p.add_argument("-o", "--output", required=True, help="output image (.exr, .hdr: linear; .png, .jpg: sRGB)")
+    from .display_options import add_display_options
+    add_display_options(p, "applies to .png, .jpg and .tif; .exr and .hdr stay linear radiance "
+                           "(a scene's auto: factor 1)")
     p.add_argument("--width", type=int, default=256)
     p.add_argument("--height", type=int, default=256)
     p.add_argument("--photons", type=int, default=1 << 18, help="photons emitted (default 2^18)")
@@ -173,6 +176,7 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
 
     from ..gallery import Gallery
     from ..photon import save_image
+    from .display_options import display_of
     from .exhibition_options import look_at_pose
 
     if gallery is None:
@@ -195,7 +199,8 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
     except ValueError as e:
         raise UserError(str(e)) from None
     total = time.perf_counter() - t0
-    save_image(out, image)
+    display = display_of(args, spec, args.lighting or "baked")
+    save_image(out, image, display)
     st = gallery.stats
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"room {spec.name}: {gallery.triangle_count} triangles, {gallery.painting_count} paintings, "
@@ -209,8 +214,17 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
     if gallery.baked:
         print(f"bake      {ms(st['bake_seconds'])}  ({st['bake_points']} points, spacing {st['spacing']:.3g} m)")
     print(f"total     {ms(total)}")
+    _say_display(out, display)
     print(f"wrote {out}")
     return 0
+
+
+def _say_display(out: Path, display) -> None:
+    if out.suffix.lower() in (".exr", ".hdr"):
+        print("display   none: linear radiance")
+    else:
+        print(f"display   EV100 {display.ev100:.2f} (x{display.exposure:.4g}, {display.how}), "
+              f"tone {display.tone}, sRGB")
 
 
 def run(args) -> int:
@@ -256,7 +270,9 @@ def run(args) -> int:
                        indirect=not args.no_indirect, threads=args.threads, return_stats=True,
                        progressive=args.progressive, passes=16 if args.passes is None else args.passes,
                        time_budget=args.time_budget, disc=args.disc)
-    save_image(out, image)
+    from .display_options import display_of
+    display = display_of(args)
+    save_image(out, image, display)
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"{args.scene}: {scene.triangle_count} triangles, {args.width}x{args.height}, {spp} spp, "
           f"{light_samples} light samples, radius {radius:g}")
@@ -272,5 +288,6 @@ def run(args) -> int:
     print(f"gather    {ms(st['gather_seconds'])}  ({st['gathers']} gathers, {st['gathers_skipped']} skipped;"
           f" {st['shadow_rays']} shadow rays, {st['shadow_rays_skipped']} skipped)")
     print(f"total     {ms(st['total_seconds'])}")
+    _say_display(out, display)
     print(f"wrote {out}")
     return 0

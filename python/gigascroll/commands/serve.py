@@ -29,6 +29,8 @@ def register(sub) -> None:
                    help="where baked rooms are cached (default $XDG_CACHE_HOME/gigascroll/rooms "
                         "or ~/.cache/gigascroll/rooms)")
     p.add_argument("--threads", type=int, default=0, help="bake threads (0 = all cores)")
+    from .display_options import add_display_options
+    add_display_options(p, "scene.json's display block carries them to the client")
     p.set_defaults(func=run)
 
 
@@ -90,7 +92,10 @@ def run(args) -> int:
     except (OSError, ValueError) as e:
         raise UserError(f"room {args.room}: {e}") from None
     log_to_stderr()
-    app = make_app(pack, room, content_hash)
+    from .display_options import display_of
+    display = display_of(args, room.spec)
+    _say(f"display: EV100 {display.ev100:.2f} ({display.how}), tone {display.tone}")
+    app = make_app(pack, room, content_hash, display=display)
     caught = serve_forever(app, args.host, args.port, ssl_context, sock=sock,
                            announce=lambda url: print(f"serving {url}", flush=True))
     _say(f"stopped ({caught})")

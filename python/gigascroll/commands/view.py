@@ -34,6 +34,8 @@ def register(sub) -> None:
                         "NAME-tour-{n}.json; {n} a counter)")
     p.add_argument("--room", default="scroll", help="scroll, hall, or a room file")
     p.add_argument("--lighting", choices=["baked", "full", "unlit"], default="baked")
+    from .display_options import add_display_options
+    add_display_options(p, "screenshots show the same")
     p.add_argument("--window", default="1200x640", help="window size WxH (both eyes side by side)")
     p.add_argument("--eye", default=None,
                    help="initial per-eye resolution WxH (default: half the window's width)")
@@ -168,9 +170,11 @@ class Viewer:
         from .. import views as v
         from ..gallery.foveation import Foveation
         from ..gallery.walk import GallerySource, GalleryWalk, walk_path
+        from .display_options import display_of
         self.np, self.v, self.window, self.args = np, v, window, args
         self.source = GallerySource(room, pack, args.lighting, photons=args.photons,
-                                    threads=args.threads)
+                                    threads=args.threads,
+                                    response=display_of(args, room, args.lighting))
         path = walk_path(room, seconds=0.05)
         if args.per_frame < 1:
             raise UserError("--per-frame must be >= 1")
@@ -350,8 +354,8 @@ class Viewer:
         rec, (left, right, mag, lenses) = self.walk.step(self.frame, self.state,
                                                          views=self.views(), moving=moved,
                                                          foveate=self.foveate)
-        from ..gallery.walk import compose_frame, tone_map
-        rgb = tone_map(compose_frame(left, right, mag, lenses), self.source.exposure)
+        from ..gallery.walk import compose_frame
+        rgb = self.source.response.srgb8(compose_frame(left, right, mag, lenses))
         frame_s = time.perf_counter() - t0
         self.fps = 0.8 * self.fps + 0.2 / max(frame_s, 1e-6) if self.frame else 1 / frame_s
         target = 1.0 / self.args.target_fps

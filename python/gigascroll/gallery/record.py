@@ -20,7 +20,7 @@ from ..outputs import (check_output, has_mark, remove_stale_temps, replace_dir,
                        signals_interrupt, temp_dir, write_image, write_mark, write_text)
 from .frame_rates import fps_text
 from .video import VideoWriter, check_fps
-from .walk import DISPLAY_PARTS, WALK_STAGES, GalleryWalk, compose_frame, tone_map
+from .walk import DISPLAY_PARTS, WALK_STAGES, GalleryWalk, compose_frame
 
 __all__ = ["record_walk", "prepare_output", "is_gallery_output", "MARKER"]
 
@@ -92,7 +92,7 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
     if every < 1:
         raise UserError("--png-every must be >= 1")
     tmp = tmp or prepare_output(out)
-    exposure = walk.source.exposure
+    display = walk.source.response
     writer = None
     saved: list[str] = []
     with signals_interrupt():  # SIGTERM / SIGHUP: the temporaries go as for Ctrl-C
@@ -107,7 +107,7 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
             def on_frame(frame, rec, images):
                 left, right, mag, lenses = images
                 linear = compose_frame(left, right, mag, lenses)
-                rgb8 = tone_map(linear, exposure)
+                rgb8 = display.srgb8(linear)
                 if writer is not None:
                     writer.send(_even(rgb8))
                 if frame % every == 0 or frame == n - 1:
@@ -123,7 +123,7 @@ def record_walk(walk: GalleryWalk, out: Path, exr: bool = False, png_every: int 
                 w.close()
             results = {"settings": settings or {}, "summary": summary, "frames": walk.records,
                        "saved_frames": saved, "source": walk.source.name,
-                       "exposure": exposure,
+                       "exposure": display.exposure, "display": display.describe(),
                        "light_seconds": getattr(walk.source, "light_seconds", 0.0),
                        "light_stats": _jsonable(getattr(walk.source, "light_stats", {}))}
             _plots(walk.records, summary, tmp)
@@ -227,7 +227,8 @@ def _report(results: dict, tmp: Path, video: bool) -> None:
         "so it also pays for " + ("the oracle comparison and " if "oracle_ms" in s else "") +
         "composing, encoding and saving each frame (results.json: `fps_from_frame_time` and "
         "`fps`, explained in `fps_meaning`). "
-        f"Lighting took {results['light_seconds']:.1f} s once, before the walk.", "",
+        f"Lighting took {results['light_seconds']:.1f} s once, before the walk. "
+        f"{_display_text(results.get('display'))}", "",
         "| stage | mean ms / frame |", "|---|---|",
         *[f"| {k} | {ms(k + '_ms')} |" for k in WALK_STAGES],
         *[f"| display: {p} | {ms('display_' + p + '_ms')} |" for p in DISPLAY_PARTS],
@@ -254,3 +255,15 @@ def _report(results: dict, tmp: Path, video: bool) -> None:
     for name in pick:
         lines += [f"Frame {int(name.split('_')[1])}:", "", f"![{name}](frames/{name}.png)", ""]
     write_text(tmp / "report.md", "\n".join(lines))
+
+
+def _display_text(d: dict | None) -> str:
+    """The report's sentence on the camera response the frames went through."""
+    if not d:
+        return ""
+    return (f"Frames shown at EV100 {d['ev100']:.2f} (exposure factor {d['exposure']:.4g}, "
+            f"{d['how']}), tone curve {d['tone']}, sRGB; a white painting at "
+            f"{d['white_lux'] or 0:.4g} lux is exposed to {d['paper_white']:g}."
+            if d.get("white_lux") else
+            f"Frames shown at EV100 {d['ev100']:.2f} (exposure factor {d['exposure']:.4g}), "
+            f"tone curve {d['tone']}, sRGB.")

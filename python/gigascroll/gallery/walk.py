@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import _core
 from .. import runtime
+from ..display_mapping import Display, exposure_for_white, to_srgb8
 from .. import views as v
 from ..frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
 from ..views.exhibition import Headset
@@ -48,6 +49,7 @@ class FrameSource:
 
     name = "source"
     exposure = 1.0
+    response = Display(1.0, "neutral")   # the camera response of its frames (display_mapping)
     lit = False
     tiles: list = []
 
@@ -84,6 +86,7 @@ class ExhibitionSource(FrameSource):
 
     lit = False
     exposure = 1.0
+    response = Display(1.0, "neutral", "unlit: radiance = albedo")
 
     def __init__(self, room: RoomSpec, pack):
         check_room_paintings(room, pack)
@@ -133,7 +136,8 @@ class GallerySource(FrameSource):
 
     def __init__(self, room: RoomSpec, pack, lighting: str = "baked", photons: int = 1 << 18,
                  spacing: float | None = None, bake_samples: int = 32, threads: int = 0,
-                 exposure: float | None = None):
+                 exposure: float | None = None, response=None):
+        from .exposure import room_display
         from .gallery import Gallery
         if lighting not in ("baked", "full", "unlit"):
             raise ValueError(f"lighting must be baked, full or unlit, got {lighting!r}")
@@ -154,7 +158,13 @@ class GallerySource(FrameSource):
                 self.gallery.bake(spacing=spacing, light_samples=bake_samples, threads=threads)
             self.light_stats = dict(self.gallery.stats)
         self.light_seconds = time.perf_counter() - t0
-        self.exposure = 1.0 if lighting == "unlit" else exposure or lit_exposure()
+        # response: a display_mapping.Display (default: auto exposure for the room, neutral
+        # tone); a bare `exposure` factor keeps that factor with the neutral curve.
+        if response is None:
+            response = (room_display(room, lighting=lighting) if exposure is None else
+                        Display(float(exposure), "neutral", "given factor"))
+        self.response = response
+        self.exposure = response.exposure
 
     def feedback(self, camera, width, height, threads=0):
         return self.gallery.render_view(camera, width, height, threads=threads)["keys"]
@@ -196,18 +206,18 @@ def check_room_paintings(room: RoomSpec, pack) -> None:
 
 
 def lit_exposure() -> float:
-    """The display's exposure for a lit room: a white painting under the gallery's target
-    illuminance displays as 1 (the one definition; the browser client gets it in scene.json)."""
-    from .rooms import GALLERY_LUX, lux_to_irradiance
+    """The exposure factor of `white=GALLERY_LUX` (display_mapping): a white painting under
+    the gallery's target illuminance is exposed to paper white. Rooms expose automatically
+    (gallery/exposure.py); this is the fixed figure for callers without a room."""
+    from .rooms import GALLERY_LUX
 
-    return math.pi / lux_to_irradiance(GALLERY_LUX)
+    return exposure_for_white(GALLERY_LUX)
 
 
-def tone_map(linear: np.ndarray, exposure: float = 1.0) -> np.ndarray:
-    """Linear radiance to 8-bit sRGB (exposure, clamp, the sRGB curve)."""
-    c = np.clip(np.asarray(linear, np.float32) * np.float32(exposure), 0.0, 1.0)
-    s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    return (s * 255 + 0.5).astype(np.uint8)
+def tone_map(linear: np.ndarray, exposure: float = 1.0, tone: str = "neutral") -> np.ndarray:
+    """Linear radiance to 8-bit sRGB through the one camera response (display_mapping:
+    exposure, the tone curve, the sRGB curve)."""
+    return to_srgb8(linear, exposure, tone)
 
 
 def lens_in_view(camera, centre, lens_right, radius_m: float):

@@ -80,14 +80,15 @@ class _State:
     pool and the bound on tile requests in flight."""
 
     def __init__(self, pack, content_hash: str, room, client_dir, read_threads: int,
-                 max_inflight: int):
+                 max_inflight: int, display=None):
         self.pack, self.hash, self.room, self.client_dir = pack, content_hash, room, client_dir
         self.tile_shape = (pack.tile_size, pack.tile_size, 3)
         self.tile_bytes = pack.tile_size * pack.tile_size * 3
         self.level_tiles = [list(p.level_tiles) for p in pack.paintings]
         self.pool = ThreadPoolExecutor(max_workers=read_threads, thread_name_prefix="serve-read")
         self.inflight = asyncio.Semaphore(max_inflight)
-        self.scene = json.dumps(scene_document(pack, content_hash, room)).encode() if room else None
+        self.scene = (json.dumps(scene_document(pack, content_hash, room, display)).encode()
+                      if room else None)
         self.etag_prefix = f'"{content_hash}'
 
     def check_key(self, key) -> tuple[int, int, int, int]:
@@ -199,9 +200,10 @@ async def client_file(request: web.Request) -> web.StreamResponse:
 
 
 def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT_DIR,
-             read_threads: int = 4, max_inflight: int = 16) -> web.Application:
+             read_threads: int = 4, max_inflight: int = 16, display=None) -> web.Application:
     """The application serving `pack` (an open TilePack) and `room` (a BakedRoom, or None for
-    tiles only). content_hash: the pack's (computed when None)."""
+    tiles only). content_hash: the pack's (computed when None). display: the camera response
+    scene.json gives the client (a display_mapping.Display; None: the room's automatic one)."""
     from .room_bake import BakedRoom
 
     expect_type(pack, TilePack, "pack")
@@ -215,7 +217,7 @@ def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT
             raise ValueError(f"{name} must be an integer in [1, 256], got {value!r}")
     app = web.Application(middlewares=[one_line_errors], client_max_size=MAX_BODY)
     state = _State(pack, content_hash or pack_hash(pack), room, client_dir, read_threads,
-                   max_inflight)
+                   max_inflight, display)
     app[STATE_KEY] = state
     app.router.add_get("/", client_file)
     app.router.add_get("/client/{path:.+}", client_file)

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 from ..errors import expect_type
-from ..gallery.walk import lit_exposure
+from ..display_mapping import Display
+from ..gallery.exposure import room_display
 from .pack_info import pack_description
 
-__all__ = ["MAX_BATCH", "TONE", "scene_document"]
+__all__ = ["MAX_BATCH", "scene_document"]
 
 MAX_BATCH = 64          # tiles per batch request
-TONE = "clip-srgb"      # walk.tone_map: sRGB(clamp(exposure * radiance, 0, 1))
 DEFAULT_FOV = 60.0      # degrees, vertical: `render --room`'s suggested view
 
 
@@ -17,11 +17,15 @@ def _floats(v) -> list[float]:
     return [float(x) for x in v]
 
 
-def scene_document(pack, content_hash: str, room) -> dict:
-    """The scene of a served pack and BakedRoom."""
+def scene_document(pack, content_hash: str, room, display: Display | None = None) -> dict:
+    """The scene of a served pack and BakedRoom; `display`: the camera response the client
+    applies (display_mapping; None: the room's automatic exposure and the neutral curve)."""
     from .room_bake import BakedRoom
 
     expect_type(room, BakedRoom, "room")
+    if display is None:
+        display = room_display(room.spec)
+    expect_type(display, Display, "display")
     spec, gallery = room.spec, room.gallery
     camera = gallery.camera()
     slots = [{"slot": k, "painting": gallery.slot_paintings[k], "origin": _floats(s.origin),
@@ -38,7 +42,7 @@ def scene_document(pack, content_hash: str, room) -> dict:
                  "camera": {"eye": _floats(camera.position),
                             "target": _floats(_target(spec, camera)), "fov": DEFAULT_FOV},
                  "slots": slots},
-        "display": {"exposure": lit_exposure(), "tone": TONE},
+        "display": display.scene_json(),
         "tiles": {"tile": f"/api/tiles/{h}/{{painting}}/{{level}}/{{tx}}/{{ty}}",
                   "batch": f"/api/tiles/{h}/batch", "max_batch": MAX_BATCH},
     }

@@ -38,15 +38,45 @@ void main() {
 `;
 
 // The display mappings of scene.json's display.tone, each `vec3 displayMap(vec3 radiance)`
-// with uniform uExposure. "clip-srgb" is the walk's tone_map and save_image's PNG curve:
-// sRGB(clamp(exposure * radiance, 0, 1)); the 8-bit target rounds to nearest as the CPU's
-// (s * 255 + 0.5) does.
+// with uniform uExposure: the GLSL twins of python/gigascroll/display_mapping.py (to_display,
+// then srgb_encode), the one camera response of every image; tests/python/
+// test_display_mapping_browser.py draws a ramp through both. "neutral-srgb" is the Khronos PBR
+// Neutral tone mapper (KhronosGroup/ToneMapping, PBR_Neutral: the reference's constants) of the
+// exposed radiance; "clip-srgb" clamps it to [0, 1]. The 8-bit target rounds to nearest as the
+// CPU's (s * 255 + 0.5) does.
+const SRGB_ENCODE = `
+vec3 srgbEncode(vec3 c) {
+  return mix(1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, 12.92 * c, vec3(lessThanEqual(c, vec3(0.0031308))));
+}
+`;
+
 export const DISPLAY_MAPPINGS = {
-  'clip-srgb': `
+  'neutral-srgb': `${SRGB_ENCODE}
+uniform float uExposure;
+// display_mapping.pbr_neutral: identity less an offset up to startCompression, then the peak
+// channel compressed towards 1 and desaturated in the plane of the colour and white (no hue shift).
+vec3 pbrNeutral(vec3 color) {
+  const float startCompression = 0.8 - 0.04;
+  const float desaturation = 0.15;
+  float x = min(color.r, min(color.g, color.b));
+  float offset = x < 0.08 ? x - 6.25 * x * x : 0.04;
+  color -= offset;
+  float peak = max(color.r, max(color.g, color.b));
+  if (peak < startCompression) return color;
+  const float d = 1.0 - startCompression;
+  float newPeak = 1.0 - d * d / (peak + d - startCompression);
+  color *= newPeak / peak;
+  float g = 1.0 - 1.0 / (desaturation * (peak - newPeak) + 1.0);
+  return mix(color, newPeak * vec3(1.0), g);
+}
+vec3 displayMap(vec3 radiance) {
+  return srgbEncode(min(pbrNeutral(max(uExposure * radiance, 0.0)), 1.0));
+}
+`,
+  'clip-srgb': `${SRGB_ENCODE}
 uniform float uExposure;
 vec3 displayMap(vec3 radiance) {
-  vec3 c = clamp(uExposure * radiance, 0.0, 1.0);
-  return mix(1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, 12.92 * c, vec3(lessThanEqual(c, vec3(0.0031308))));
+  return srgbEncode(clamp(uExposure * radiance, 0.0, 1.0));
 }
 `,
 };
