@@ -271,3 +271,24 @@ def test_the_docs_example_is_valid(tmp_path):
     room = build_room(load_exhibition(tmp_path / "example.toml"))
     assert [s.name for s in room.paintings] == ["red-study", "blue-study", "label-red-study"]
     assert room.lights[0].kelvin == 3000
+
+
+def test_a_pack_is_used_as_is(show_dir):
+    from gigascroll.pack import build_pack
+    red = np.asarray(Image.open(show_dir / "red.png"))
+    blue = np.asarray(Image.open(show_dir / "blue.png"))
+    build_pack([red, blue], show_dir / "mine.pack", names=["r", "b"])
+    text = SHOW.replace('image = "red.png"', 'pack = "mine.pack"\npainting = "r"')
+    text = text.replace('image = "blue.png"', 'pack = "mine.pack"\npainting = 1')
+    (show_dir / "show.toml").write_text(text)
+    record = build_show(show_dir / "show.toml", show_dir / "show")
+    assert not record["packed"] and not record["reused_pack"]
+    assert not (show_dir / "show" / "paintings.pack").exists()
+    show = open_show(show_dir / "show")
+    assert Path(show.pack.path).resolve() == (show_dir / "mine.pack").resolve()
+    assert [s.painting for s in show.room.paintings] == ["r", "b"]  # no labels: not our pack
+    # Mixing images with a pack is refused, naming the key.
+    (show_dir / "show.toml").write_text(SHOW.replace('image = "red.png"',
+                                                     'pack = "mine.pack"'))
+    with pytest.raises(ExhibitionError, match=r"paintings\[1\].image: expected a pack"):
+        build_show(show_dir / "show.toml", show_dir / "show2")

@@ -123,3 +123,20 @@ def test_exhibition_option_values(fork_worker, show_files, target):
     problem = cli_message_ok(o)
     assert problem is None, f"{problem}: {argv}\n{o.describe()}"
     assert (o.code == 0) == (target == "show")
+
+
+@pytest.mark.parametrize("options", [
+    ["--record-tour", "x.txt"], ["--record-tour", "{m}.json"], ["--record-tour", "nodir/t.json"],
+    ["--record-tour", "t-{n}.json"], ["--record-tour", "{n:9999}.json"], ["--record-tour", ""],
+    ["--look-at", "Red study", "--distance", "nan"], ["PACK"], [],
+])
+def test_view_options_fail_before_the_window(fork_worker, show_files, options):
+    # Without a display every case ends with exit 2 and one line, bad options named first.
+    options = [str(show_files / "show" / "paintings.pack") if o == "PACK" else o for o in options]
+    argv = ["view", "--exhibition", str(show_files / "show"), *options]
+    code = ("import os\nfor k in ('DISPLAY', 'WAYLAND_DISPLAY'):\n    os.environ.pop(k, None)\n"
+            f"from gigascroll import cli\nraise SystemExit(cli.main({argv!r}))\n")
+    o = fork_worker.run({"kind": "python", "code": code}, timeout=60)
+    problem = cli_message_ok(o)
+    assert problem is None, f"{problem}: {argv}\n{o.describe()}"
+    assert o.code == 2

@@ -82,6 +82,11 @@ def wall_frames(ex: Exhibition) -> list[Wall]:
     return walls
 
 
+def pack_name(p) -> str:
+    """The name of painting `p` in the show's pack: its own, or its name in the given pack."""
+    return str(p.pack_painting) if p.pack else p.name
+
+
 def build_room(ex: Exhibition, pack=None) -> RoomSpec:
     """The exhibition's RoomSpec; its slots show the pack's paintings by name (Painting.name;
     labels: `label-NAME`). `pack` (a TilePack) is needed for a room file only."""
@@ -92,9 +97,12 @@ def build_room(ex: Exhibition, pack=None) -> RoomSpec:
         sizes = [PaintingSize(p.name, p.pixels[0], p.pixels[1], p.width_m, p.height_m)
                  for p in ex.paintings]
         try:
-            return builtin_room(ex.room["builtin"], sizes, lights=lights)
+            spec = builtin_room(ex.room["builtin"], sizes, lights=lights)
         except ValueError as e:
             raise ExhibitionError(f"{ex.path}: room.builtin: {e}") from None
+        for slot in spec.paintings:  # by name: a given pack's order may differ
+            slot.painting = pack_name(ex.paintings[int(slot.painting)])
+        return spec
     if "file" in ex.room:
         return _file_room(ex, pack, lights)
     return _floor_plan_room(ex, lights)
@@ -119,7 +127,7 @@ def _file_room(ex: Exhibition, pack, lights) -> RoomSpec:
     except (OSError, ValueError) as e:
         raise ExhibitionError(f"{ex.path}: room.file: {e}") from None
     for slot in spec.paintings:  # the file's placeholder sizes must be the physical sizes
-        p = next((q for q in ex.paintings if q.name == slot.painting), None)
+        p = next((q for q in ex.paintings if pack_name(q) == slot.painting), None)
         if p is not None and (abs(slot.width_m - p.width_m) > 1e-3
                               or abs(slot.height_m - p.height_m) > 1e-3):
             raise ExhibitionError(
@@ -213,7 +221,7 @@ def _wall_slot(p, w: Wall, frames: list):
     offset = WALL_GAP_M + (p.frame.depth_m if p.frame else 0.0)
     centre = base + np.array([0.0, h.centre_height_m, 0.0])
     origin = centre + w.n * offset - u * (p.width_m / 2) + np.array([0.0, p.height_m / 2, 0.0])
-    slot = PaintingSlot(p.name, tuple(float(x) for x in origin), tuple(float(x) for x in u),
+    slot = PaintingSlot(pack_name(p), tuple(float(x) for x in origin), tuple(float(x) for x in u),
                         (0.0, -1.0, 0.0), p.width_m, p.height_m, name=p.name)
     if p.frame:
         halves = (p.width_m / 2 + fw, p.height_m / 2 + fw, (offset - 1e-3) / 2)
@@ -290,7 +298,7 @@ def _table_slot(ex, p, poly, footprints: list):
     u, v, back = table_axes(h)
     centre = np.array([h.position_m[0], h.height_m, h.position_m[1]])
     origin = centre - u * p.width_m / 2 - v * p.height_m / 2
-    slot = PaintingSlot(p.name, tuple(float(x) for x in origin), tuple(float(x) for x in u),
+    slot = PaintingSlot(pack_name(p), tuple(float(x) for x in origin), tuple(float(x) for x in u),
                         tuple(float(x) for x in v), p.width_m, p.height_m, name=p.name)
     depth = p.height_m * math.cos(math.radians(h.tilt_deg))
     hw, hd = p.width_m / 2 + TABLE_MARGIN_M, depth / 2 + TABLE_MARGIN_M
