@@ -41,12 +41,14 @@
     renderState: { baseLayer: null },
     updateRenderState(s) { Object.assign(this.renderState, s); },
     async requestReferenceSpace(type) { return { type }; },
+    // Paced by the page's own animation frames, as a headset's compositor paces a real
+    // session (the page's loop skips its desktop frame while a session is on).
     requestAnimationFrame(cb) {
-      return setTimeout(() => {
+      return window.requestAnimationFrame((t) => {
         if (state.ended) return;
         state.framesServed++;
-        cb(performance.now(), frame);
-      }, 16);
+        cb(t, frame);
+      });
     },
     addEventListener(type, fn) { (listeners[type] ||= []).push(fn); },
     async end() {

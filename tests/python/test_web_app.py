@@ -27,9 +27,11 @@ from gigascroll.gallery.walk import tone_map
 
 EYE_W, EYE_H = 320, 240
 IPD = 0.064
-# (eye, target, fov): the room's suggested view from 3 m, an oblique one and a close one.
+# (eye, target, fov): the room's suggested view from 3 m, an oblique one, and a wide one down
+# the room (floor, ceiling, walls and their seams); the close pose of the streaming test.
+WIDE = ((10.0, 1.6, -3.8), (4.0, 1.2, 0.0), 75.0)
 POSES = [((6.0, 1.6, -3.0), (6.0, 1.5, 0.0), 60.0),
-         ((3.0, 1.55, -1.2), (4.5, 1.45, 0.0), 50.0)]
+         ((3.0, 1.55, -1.2), (4.5, 1.45, 0.0), 50.0), WIDE]
 CLOSE = ((8.0, 1.5, -0.45), (8.0, 1.5, 0.0), 60.0)
 FAKE_XR = (Path(__file__).parent / "fake_webxr.js").read_text()
 
@@ -106,7 +108,13 @@ def psnr(a, b, mask=None) -> float:
 
 
 def wait_exact(page, timeout_s=180):
-    page.wait_for_function("window.gigascroll.stats().exact === true", timeout=timeout_s * 1000)
+    """Until the stats panel confirms the view exact (stats.js); on a timeout the panel's
+    numbers are in the message."""
+    try:
+        page.wait_for_function("window.gigascroll.stats().exact === true", timeout=timeout_s * 1000,
+                               polling=100)
+    except Exception as e:
+        raise AssertionError(f"not exact after {timeout_s} s: {page.evaluate('window.gigascroll.stats()')}") from e
 
 
 @pytest.mark.parametrize("pose", range(len(POSES)))
@@ -133,7 +141,7 @@ def test_frames_equal_cpu_display(browser, server, cpu_room, pose):  # noqa: F81
         linear, mask = cpu_eye(gallery, vt, eye, target, fov, offset)
         cpu = tone_map(linear, exposure)
         gpu = frame[:, k * EYE_W:(k + 1) * EYE_W]
-        assert mask.sum() > 0.05 * mask.size, "the pose must show the painting"
+        assert mask.sum() > 0.02 * mask.size, "the pose must show the painting"
         whole, paintings = psnr(gpu, cpu), psnr(gpu, cpu, mask)
         print(f"pose {pose} eye {k}: PSNR {whole:.1f} dB frame, {paintings:.1f} dB paintings")
         assert paintings >= 35 and whole >= 30, (pose, k, whole, paintings)
@@ -157,13 +165,14 @@ STREAM_PROBE = """() => {
 
 
 def test_streaming_cold_cache(browser, server):  # noqa: F811
-    """From a cold cache (only the coarse tails resident) the page draws the room's view, then
+    """From a cold cache (only the coarse tails resident) the page draws a wide view of the room
+    (its surfaces' seams: crack_fill.js), then
     the camera stops close to the scroll (level-0 tiles), then at another close pose with the
     magnifier on. Every frame is read back: no pixel is black (the tail answers every lookup);
     after each stop the image becomes final within a bounded number of frames of the stop and
     of the last tile's upload (seed 000 Table 2: 4-5 frames from stop to exact on the
     headset), and the stats panel's figure agrees with the pixels'."""
-    page = open_app(browser, server, f"{camera_query(*POSES[0])}&size={EYE_W}x{EYE_H}")
+    page = open_app(browser, server, f"{camera_query(*WIDE)}&size={EYE_W}x{EYE_H}")
     try:
         page.evaluate(STREAM_PROBE)
         for k, (x, magnifier) in enumerate(((CLOSE[0][0], False), (CLOSE[0][0] - 2.5, True))):
@@ -226,8 +235,7 @@ def test_xr_eyes_disparity_and_magnifier(browser, server):  # noqa: F811
         plain = decode(page.evaluate("window.gigascroll.capture()"))
         page.evaluate("window.fakeXr.select()")
         page.wait_for_function("window.gigascroll.app.magnifier.on === true")
-        wait_exact(page)
-        lens = decode(page.evaluate("window.gigascroll.capture()"))
+        lens = decode(page.evaluate("window.gigascroll.capture()"))  # exact or not: the inset is there
         page.evaluate("window.fakeXr.select()")
         page.wait_for_function("window.gigascroll.app.magnifier.on === false")
         again = decode(page.evaluate("window.gigascroll.capture()"))

@@ -18,22 +18,34 @@ precision highp int;
 `;
 
 // Attribute locations shared by every program drawing the room's meshes.
-export const ATTRIBUTES = { position: 0, irradianceFront: 1, irradianceBack: 2, texcoord: 3 };
+export const ATTRIBUTES = { position: 0, irradianceFront: 1, irradianceBack: 2, texcoord: 3, normal: 4 };
 
 export const ROOM_VS = `
 layout(location = 0) in vec3 aPosition;
 layout(location = 1) in vec3 aIrradianceFront;
 layout(location = 2) in vec3 aIrradianceBack;
 layout(location = 3) in vec2 aTexcoord;
+layout(location = 4) in vec3 aNormal;   // crack-fill lines only (crack_fill.js)
 uniform mat4 uViewProj;
+uniform bool uLines;
+uniform vec3 uEye;
+// Crack-fill lines slide 1% farther along their eye ray (the same pixels): a crack shows what
+// lies beyond the room (nothing), so they still fill it, while at a surface's silhouette over
+// another one close behind (a light panel 2 cm under the ceiling) they stay hidden.
+const float LINE_PUSH = 0.01;
 out vec3 vIrradianceFront;
 out vec3 vIrradianceBack;
 out vec2 vUv;
+out vec3 vWorld;
+out vec3 vNormal;
 void main() {
   vIrradianceFront = aIrradianceFront;
   vIrradianceBack = aIrradianceBack;
   vUv = aTexcoord;
-  gl_Position = uViewProj * vec4(aPosition, 1.0);
+  vWorld = aPosition;
+  vNormal = aNormal;
+  vec3 p = uLines ? aPosition + LINE_PUSH * (aPosition - uEye) : aPosition;
+  gl_Position = uViewProj * vec4(p, 1.0);
 }
 `;
 
@@ -93,9 +105,16 @@ uniform vec3 uEmission;
 in vec3 vIrradianceFront;
 in vec3 vIrradianceBack;
 in vec2 vUv;
+in vec3 vWorld;
+in vec3 vNormal;
+uniform bool uLines;   // lines have no facing: their owning triangle's normal decides
+uniform vec3 uEye;
 out vec4 fragColor;
 const float PI = 3.14159265358979;
-vec3 irradiance() { return gl_FrontFacing ? vIrradianceFront : vIrradianceBack; }
+vec3 irradiance() {
+  bool front = uLines ? dot(vNormal, uEye - vWorld) > 0.0 : gl_FrontFacing;
+  return front ? vIrradianceFront : vIrradianceBack;
+}
 vec3 srgbToLinear(vec3 s) {
   return mix(pow((s + 0.055) / 1.055, vec3(2.4)), s / 12.92, vec3(lessThanEqual(s, vec3(0.04045))));
 }

@@ -79,6 +79,10 @@ class App {
     this.stats.update(this.frame, now, lens ? [...views, lens] : views, feedbackViews, vt.stats());
     this.afterFrame?.({ frame: this.frame, gl, canvas: this.canvas, views });
     if (this.captures.length && framebuffer === null) this.#capture();
+    // The frame's commands (and the feedback readbacks' fences) go to the GPU now: a loop not
+    // paced by the page's compositor (a fake XR device's timer) would otherwise leave the
+    // fences unsignalled and the readbacks waiting.
+    gl.flush();
     this.frame++;
   }
 

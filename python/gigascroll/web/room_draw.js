@@ -6,22 +6,18 @@ import { multiply } from './camera.js';
 import { ATTRIBUTES, HEADER, PAINTING_FS, ROOM_FS, ROOM_VS, displayMapping } from './display.glsl.js';
 import { makeProgram } from './gl_util.js';
 import { FEEDBACK_FS } from './feedback.glsl.js';
+import { openEdges } from './crack_fill.js';
 
 function upload(gl, mesh) {
   const vao = gl.createVertexArray();
+  const lines = mesh.painting < 0 ? uploadLines(gl, openEdges(mesh)) : null;
   gl.bindVertexArray(vao);
-  const attribute = (location, data, size) => {
-    const buffer = gl.createBuffer();
-    gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
-    gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
-    gl.enableVertexAttribArray(location);
-    gl.vertexAttribPointer(location, size, gl.FLOAT, false, 0, 0);
-  };
-  attribute(ATTRIBUTES.position, mesh.positions, 3);
-  attribute(ATTRIBUTES.irradianceFront, mesh.irradianceFront, 3);
-  attribute(ATTRIBUTES.irradianceBack, mesh.irradianceBack, 3);
-  if (mesh.texcoords) attribute(ATTRIBUTES.texcoord, mesh.texcoords, 2);
+  attribute(gl, ATTRIBUTES.position, mesh.positions, 3);
+  attribute(gl, ATTRIBUTES.irradianceFront, mesh.irradianceFront, 3);
+  attribute(gl, ATTRIBUTES.irradianceBack, mesh.irradianceBack, 3);
+  if (mesh.texcoords) attribute(gl, ATTRIBUTES.texcoord, mesh.texcoords, 2);
   else gl.vertexAttrib2f(ATTRIBUTES.texcoord, 0, 0);
+  gl.vertexAttrib3f(ATTRIBUTES.normal, 0, 0, 0);
   let indexType = null, count = mesh.vertexCount;
   if (mesh.indices) {
     const buffer = gl.createBuffer();
@@ -31,7 +27,29 @@ function upload(gl, mesh) {
     count = mesh.indices.length;
   }
   gl.bindVertexArray(null);
-  return { vao, indexType, count, albedo: mesh.albedo, emission: mesh.emission, painting: mesh.painting };
+  return { vao, indexType, count, albedo: mesh.albedo, emission: mesh.emission, painting: mesh.painting, lines };
+}
+
+function attribute(gl, location, data, size) {
+  const buffer = gl.createBuffer();
+  gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+  gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
+  gl.enableVertexAttribArray(location);
+  gl.vertexAttribPointer(location, size, gl.FLOAT, false, 0, 0);
+}
+
+// The crack-fill line list of a room surface (crack_fill.js), or null.
+function uploadLines(gl, edges) {
+  if (!edges) return null;
+  const vao = gl.createVertexArray();
+  gl.bindVertexArray(vao);
+  attribute(gl, ATTRIBUTES.position, edges.positions, 3);
+  attribute(gl, ATTRIBUTES.irradianceFront, edges.irradianceFront, 3);
+  attribute(gl, ATTRIBUTES.irradianceBack, edges.irradianceBack, 3);
+  attribute(gl, ATTRIBUTES.normal, edges.normals, 3);
+  gl.vertexAttrib2f(ATTRIBUTES.texcoord, 0, 0);
+  gl.bindVertexArray(null);
+  return { vao, count: edges.vertexCount };
 }
 
 export class RoomRenderer {
@@ -61,6 +79,7 @@ export class RoomRenderer {
       if (paintings) this.vt.bind(prog.program);
       gl.uniformMatrix4fv(prog.uniforms.uViewProj, false, viewProj);
       gl.uniform1f(prog.uniforms.uExposure, this.exposure);
+      gl.uniform3fv(prog.uniforms.uEye, view.position);
       for (const m of this.meshes) {
         if ((m.painting >= 0) !== paintings) continue;
         if (paintings) gl.uniform1i(prog.uniforms.uPainting, m.painting);
@@ -69,6 +88,7 @@ export class RoomRenderer {
         this.#draw(m);
       }
     }
+    this.#fillCracks();
     gl.bindVertexArray(null);
   }
 
@@ -89,6 +109,22 @@ export class RoomRenderer {
     }
     gl.colorMask(true, true, true, true);
     gl.bindVertexArray(null);
+  }
+
+  // The room surfaces' open edges as lines, after every triangle: they land only where the
+  // depth test finds nothing nearer, i.e. in the cracks (crack_fill.js).
+  #fillCracks() {
+    const gl = this.gl, prog = this.room;
+    gl.useProgram(prog.program);
+    gl.uniform1i(prog.uniforms.uLines, 1);
+    for (const m of this.meshes) {
+      if (!m.lines) continue;
+      gl.uniform3fv(prog.uniforms.uAlbedo, m.albedo);
+      gl.uniform3fv(prog.uniforms.uEmission, m.emission);
+      gl.bindVertexArray(m.lines.vao);
+      gl.drawArrays(gl.LINES, 0, m.lines.count);
+    }
+    gl.uniform1i(prog.uniforms.uLines, 0);
   }
 
   #begin(view) {  // viewport, scissored clear, depth test
