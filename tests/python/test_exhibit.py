@@ -292,3 +292,39 @@ def test_a_pack_is_used_as_is(show_dir):
                                                      'pack = "mine.pack"'))
     with pytest.raises(ExhibitionError, match=r"paintings\[1\].image: expected a pack"):
         build_show(show_dir / "show.toml", show_dir / "show2")
+
+
+def test_a_room_file_with_the_physical_sizes(tmp_path):
+    from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
+    write_example_room(tmp_path / "room.glb")
+    Image.fromarray(np.full((40, 60, 3), 150, np.uint8)).save(tmp_path / "land.png")
+    Image.fromarray(np.full((60, 20, 3), 90, np.uint8)).save(tmp_path / "scroll.png")
+    assert set(EXAMPLE_PAINTINGS) == {"landscape", "hanging_scroll"}
+    text = """
+[room]
+file = "room.glb"
+[[paintings]]
+title = "A landscape"
+name = "landscape"
+image = "land.png"
+width_cm = 150
+height_cm = 100
+[[paintings]]
+title = "A hanging scroll"
+name = "hanging_scroll"
+image = "scroll.png"
+width_cm = SCROLL_W
+height_cm = 100
+"""
+    # The example's placeholders: the landscape 1.5 m x 1 m, the scroll 1 m tall at 1:3.
+    (tmp_path / "ok.toml").write_text(text.replace("SCROLL_W", str(100 / 3)))
+    record = build_show(tmp_path / "ok.toml", tmp_path / "show")
+    assert record["packed"]
+    slots = open_show(tmp_path / "show").room.paintings
+    assert sorted(round(s.width_m, 4) for s in slots) == [0.3333, 1.5]
+    # A physical size the room file's placeholder does not have: an error naming both.
+    (tmp_path / "bad.toml").write_text(text.replace("SCROLL_W", str(100 / 3)).replace(
+        "width_cm = 150\nheight_cm = 100", "width_cm = 120\nheight_cm = 80"))
+    with pytest.raises(ExhibitionError, match=r"paintings\[0\].width_cm / height_cm: expected "
+                                              r"the room file's slot 1.5 m x 1 m, got 1.2 m x 0.8 m"):
+        build_show(tmp_path / "bad.toml", tmp_path / "show2")

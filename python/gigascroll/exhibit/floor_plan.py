@@ -84,7 +84,7 @@ def wall_frames(ex: Exhibition) -> list[Wall]:
 
 def pack_name(p) -> str:
     """The name of painting `p` in the show's pack: its own, or its name in the given pack."""
-    return str(p.pack_painting) if p.pack else p.name
+    return p.pack_name
 
 
 def build_room(ex: Exhibition, pack=None) -> RoomSpec:
@@ -126,8 +126,11 @@ def _file_room(ex: Exhibition, pack, lights) -> RoomSpec:
         spec = load_room(ex.room["file"], pack)
     except (OSError, ValueError) as e:
         raise ExhibitionError(f"{ex.path}: room.file: {e}") from None
+    names = [q.name for q in pack.paintings] if pack is not None else []
     for slot in spec.paintings:  # the file's placeholder sizes must be the physical sizes
-        p = next((q for q in ex.paintings if pack_name(q) == slot.painting), None)
+        shown = names[slot.painting] if isinstance(slot.painting, int) and \
+            0 <= slot.painting < len(names) else slot.painting
+        p = next((q for q in ex.paintings if pack_name(q) == shown), None)
         if p is not None and (abs(slot.width_m - p.width_m) > 1e-3
                               or abs(slot.height_m - p.height_m) > 1e-3):
             raise ExhibitionError(

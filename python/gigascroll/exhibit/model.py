@@ -85,6 +85,12 @@ class Painting:
         return self.height_cm / 100
 
     @property
+    def pack_name(self) -> str:
+        """The painting's name in the pack the show shows: its own (`name`), or its name
+        in the given pack."""
+        return str(self.pack_painting) if self.pack else self.name
+
+    @property
     def key(self) -> str:
         return f"paintings[{self.index}]"
 
@@ -166,8 +172,11 @@ def exhibition_from_dict(data: dict, where: str, base: Path) -> Exhibition:
             raise ExhibitionError(f"{where}: {key}.title: expected a title no other painting "
                                   f"has ({item['title'][:80]!r} is paintings[{titles[item['title']]}]'s)")
         titles[item["title"]] = i
+        if item.get("name") in names:
+            raise ExhibitionError(f"{where}: {key}.name: expected a name no other painting "
+                                  f"has, got {item['name']!r}")
         p = Painting(i, item["title"], float(item["width_cm"]), float(item["height_cm"]),
-                     _unique_name(item["title"], names),
+                     _unique_name(item["title"], names, item.get("name")),
                      **{k: item.get(k) for k in ("artist", "date", "credit", "rights", "accession")})
         if "image" in item:
             p.image = _existing(base, item["image"], where, f"{key}.image", "image file")
@@ -192,8 +201,12 @@ def exhibition_from_dict(data: dict, where: str, base: Path) -> Exhibition:
                       float(data.get("aspect_tolerance", DEFAULT_ASPECT_TOLERANCE)))
 
 
-def _unique_name(title: str, taken: set[str]) -> str:
-    """A pack painting name from a title: lower-case letters, digits and dashes, unique."""
+def _unique_name(title: str, taken: set[str], given: str | None = None) -> str:
+    """The given name, or a pack painting name from a title: lower-case letters, digits and
+    dashes, unique."""
+    if given is not None:
+        taken.add(given)
+        return given
     base = re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")[:60] or "painting"
     name, k = base, 2
     while name in taken:
