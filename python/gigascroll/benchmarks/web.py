@@ -42,6 +42,9 @@ def add_arguments(p) -> None:
     p.add_argument("--batch", type=int, default=16, help="tiles per batch request (default 16)")
     p.add_argument("--out", default="bench/web", help="directory of results.json (default bench/web)")
     p.add_argument("--quick", action="store_true", help="tiny sizes and one short round (a smoke run)")
+    p.add_argument("--walk-metres", type=float, default=None,
+                   help="metres of the client's walk of the scroll room in headless chromium "
+                        "(benchmarks/web_walk.py; default 2, with --quick 0; 0 skips it)")
 
 
 def _tile_files(pack, root: Path) -> list[tuple[int, int, int, int]]:
@@ -142,6 +145,9 @@ def run(args) -> int:
         raise UserError("--width, --height (at most 2^25 texels), --connections (<= 1024), "
                         "--rounds (<= 10), --batch (<= 64) and --duration (<= 600) must be "
                         "positive")
+    walk_metres = (0.0 if args.quick else 2.0) if args.walk_metres is None else args.walk_metres
+    if not 0 <= walk_metres <= 10:
+        raise UserError("--walk-metres must be in [0, 10] (the scroll is 12 m long)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="gigascroll-bench-web-") as tmp:
@@ -180,6 +186,14 @@ def run(args) -> int:
         except ValueError:
             doc = {}
     doc["server"] = result
+    if walk_metres > 0:  # the client app's walk of the scroll room
+        from .web_walk import walk_figures, walk_text
+
+        try:
+            doc["client_walk"] = walk_figures(metres=walk_metres)
+            print(walk_text(doc["client_walk"]))
+        except (RuntimeError, ImportError) as e:  # no chromium or no playwright
+            print(f"client walk: not measured ({e})")
     from .web_client import feedback_figures, format_figures  # the virtual texture's part
     try:
         doc["client_feedback"] = feedback_figures(frames=30 if args.quick else 240)
