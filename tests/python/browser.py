@@ -42,17 +42,30 @@ def chromium_path():
     return path
 
 
+# One Playwright and one chromium for the whole session, however many test modules import the
+# fixture: each import is a fixture of its own to pytest, and a second sync_playwright() in the
+# same thread fails ("Sync API inside the asyncio loop"). Closed when the last user is done.
+_shared = {"users": 0, "playwright": None, "browser": None}
+
+
 @pytest.fixture(scope="session")
 def browser(chromium_path):
     """A headless chromium with WebGL2 on SwiftShader, for the whole session."""
     from playwright.sync_api import sync_playwright  # the Makefile installs it: no skip
 
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=chromium_path, headless=True, args=CHROMIUM_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+    if _shared["browser"] is None:
+        _shared["playwright"] = sync_playwright().start()
+        _shared["browser"] = _shared["playwright"].chromium.launch(
+            executable_path=chromium_path, headless=True, args=CHROMIUM_ARGS)
+    _shared["users"] += 1
+    try:
+        yield _shared["browser"]
+    finally:
+        _shared["users"] -= 1
+        if _shared["users"] == 0:
+            _shared["browser"].close()
+            _shared["playwright"].stop()
+            _shared["browser"] = _shared["playwright"] = None
 
 
 def open_page(browser, url: str, ready: str = "window.vtTestReady === true", timeout_s: float = 60):

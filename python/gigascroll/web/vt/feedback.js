@@ -6,12 +6,16 @@
 // view, the newest readback whose fence has signalled (getSyncParameter: no stall), read
 // with getBufferSubData. No synchronous readPixels into client memory ever happens on the
 // frame path. A view whose buffers are all waiting skips its readback that frame; one whose
-// fence has not signalled STALE_FRAMES frames later is given up.
+// fence has not signalled LATE_FRAMES frames later is read all the same (see there).
 
 export const RING = 3;  // readbacks in flight per view
-// A readback whose fence has not signalled this many frames after it was drawn is given up
-// (its buffer reused): a fence that never signals must not stop tile determination.
-export const STALE_FRAMES = 60;
+// A readback whose fence has not signalled this many frames after it was drawn is read all
+// the same: its commands finished frames ago on any GPU (browsers keep two or three frames in
+// flight), so getBufferSubData costs a round trip, not a wait for the GPU. On a headset fences
+// signal within a few frames; headless chromium was seen to leave some unsignalled for good
+// when frames come from setTimeout (a WebXR session's frames may), and tile determination
+// must not stop there.
+export const LATE_FRAMES = 6;
 
 class ViewTarget {
   constructor(gl, width, height) {
@@ -49,6 +53,15 @@ class ViewTarget {
   }
 }
 
+// Whether a fence has signalled, without waiting: clientWaitSync with timeout 0 (never a
+// stall) and the flush bit, which also pushes the fence to the GPU (chromium was seen never to
+// signal a fence whose commands sat in its command buffer between setTimeout-driven frames,
+// as a WebXR session's frames or a test's ticks may be).
+function signalled(gl, sync) {
+  const r = gl.clientWaitSync(sync, gl.SYNC_FLUSH_COMMANDS_BIT, 0);
+  return r === gl.ALREADY_SIGNALED || r === gl.CONDITION_SATISFIED;
+}
+
 export class FeedbackPass {
   constructor(gl) {
     this.gl = gl;
@@ -57,7 +70,7 @@ export class FeedbackPass {
     this.frame = 0;
     this.pixelScale = [1, 1];
     this.skipped = 0;
-    this.abandoned = 0;
+    this.late = 0;
   }
 
   // Binds view's target at max(1, floor(display / reduction)) per axis (the core's 1/8
@@ -100,21 +113,19 @@ export class FeedbackPass {
     gl.bindFramebuffer(gl.FRAMEBUFFER, null);
   }
 
-  // Per view, the newest signalled readback as {view, frame, width, height, keys: Uint32Array}
-  // (row 0 at the bottom, as GL reads); older signalled ones are dropped.
+  // Per view, the newest signalled (or late) readback as {view, frame, width, height, keys:
+  // Uint32Array} (row 0 at the bottom, as GL reads); older ones are dropped.
   poll() {
     const gl = this.gl, out = [];
     this.views.forEach((t, view) => {
       if (!t) return;
       let best = null;
       for (const r of t.ring) {
-        if (r.sync && this.frame - r.frame > STALE_FRAMES) {
-          gl.deleteSync(r.sync);
-          r.sync = null;
-          ++this.abandoned;
-          continue;
+        if (!r.sync) continue;
+        if (!signalled(gl, r.sync)) {
+          if (this.frame - r.frame < LATE_FRAMES) continue;
+          ++this.late;
         }
-        if (!r.sync || gl.getSyncParameter(r.sync, gl.SYNC_STATUS) !== gl.SIGNALED) continue;
         gl.deleteSync(r.sync);
         r.sync = null;
         if (!best || r.frame > best.frame) best = r;

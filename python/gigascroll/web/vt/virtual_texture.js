@@ -194,7 +194,7 @@ export class VirtualTexture {
       failed: this.counters.failed,
       bytesReceived: this.loader.bytesReceived,
       skippedReadbacks: this.feedback.skipped,
-      abandonedReadbacks: this.feedback.abandoned,
+      lateReadbacks: this.feedback.late,      // read LATE_FRAMES after drawing, unsignalled
     };
   }
 

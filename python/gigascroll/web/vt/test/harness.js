@@ -155,8 +155,8 @@ void main() { outColor = vtFeedbackOut(uPainting, vUv); }`);
   }
 }
 
-// One animation frame, as the app's loop ticks: chromium updates a fence's status between
-// tasks, and with setTimeout ticks alone it was seen never to signal some of them.
+// One animation frame, as the app's desktop loop ticks (with setTimeout ticks chromium leaves
+// some fences unsignalled; feedback.js then reads them late).
 const tick = () => new Promise((r) => requestAnimationFrame(() => r()));
 
 // The paintings of a view as the display pass samples them: vtSample at vtLod (the sRGB8
