@@ -18,17 +18,19 @@ BENCHMARKS = {
     "layout": "merged page-table layout time and fill against painting count (BRKGA vs shelf)",
     "bc1": "the bc1 (DXT1) codec: PSNR and FLIP per painting, sampling cost, hit rate per byte",
     "web": "gigascroll serve's tiles on loopback against aiohttp's static-file handler",
+    "exhibition-full": "the paper's 40-painting hall at full size: eight scans, 32 instances",
 }
 
 
 def register(sub) -> None:
     from ..benchmarks import (bc1, cluster, export, gallery, layout, loader, pack, photon,
                               queues, views, walk)
-    from ..benchmarks import foveation, web
+    from ..benchmarks import exhibition_full, foveation, web
 
     modules = {"pack": pack, "cluster": cluster, "export": export, "queues": queues,
                "loader": loader, "views": views, "photon": photon, "gallery": gallery,
-               "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1, "web": web}
+               "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1, "web": web,
+               "exhibition-full": exhibition_full}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")
     whats.required = True
