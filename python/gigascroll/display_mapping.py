@@ -84,8 +84,10 @@ def to_display(radiance, exposure: float = 1.0, tone: str = "neutral") -> np.nda
     if tone not in TONES:
         raise ValueError(f"tone must be one of {', '.join(TONES)}, got {tone!r}")
     c = np.nan_to_num(np.asarray(radiance, dtype=np.float32), nan=0.0, posinf=1e18, neginf=0.0)
+    with np.errstate(over="ignore"):  # past float32's range: inf, clipped next
+        c *= np.float32(exposure)
     # at most 1e18: the curve's squares stay finite in float32 (it is at 1 long before)
-    c = np.clip(c * np.float32(exposure), np.float32(0.0), np.float32(1e18))
+    c = np.clip(c, np.float32(0.0), np.float32(1e18), out=c)
     if tone == "clip":
         return np.minimum(c, np.float32(1.0))
     return np.minimum(pbr_neutral(c), np.float32(1.0))
