@@ -33,6 +33,15 @@ from .outputs import (MARK, atomic_file, check_output, encode_image, owned_by,
 __all__ = ["export_pack", "FORMATS", "open_pack", "level_bands"]
 
 FORMATS = ("iiif", "dzi", "tiff")
+# The default IIIF id: where `python -m http.server 8000` run in the output's parent serves
+# the output (the Image API requires an absolute id; a bare name resolves nowhere).
+DEFAULT_IIIF_PORT = 8000
+
+
+def default_base_url(out) -> str:
+    """http://localhost:8000/NAME, NAME the output directory's name (percent-encoded)."""
+    from urllib.parse import quote
+    return f"http://localhost:{DEFAULT_IIIF_PORT}/{quote(Path(out).resolve().name)}"
 IIIF_CONTEXT = "http://iiif.io/api/image/3/context.json"
 TIFF_TILE = 256
 
@@ -253,6 +262,8 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
                 threads: int = 0, progress: bool = False, service_id: str | None = None) -> Path:
     """Exports one painting of the pack at `pack_path` to `out` in format `fmt` (iiif, dzi,
     tiff; see the module doc) and returns the path written (for dzi, the .dzi file).
+    `service_id` (iiif): the absolute http(s) URI the export is served at, info.json's id
+    (default: default_base_url(out)).
     ValueError for a bad format, quality, compression or painting; OSError when the output
     exists (without force) or cannot be written."""
     if fmt not in FORMATS:
@@ -261,6 +272,11 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
         raise ValueError(f"quality must be an integer in [1, 100], got {quality}")
     if compression not in ("jpeg", "deflate"):
         raise ValueError(f"unknown compression '{compression}' (expected jpeg or deflate)")
+    if fmt == "iiif":
+        from .iiif_presentation import check_http_uri
+        service_id = check_http_uri(service_id or default_base_url(out), "service_id")
+    elif service_id is not None:
+        raise ValueError("service_id (--base-url) applies to the iiif format only")
     pack = open_pack(pack_path, reader)
     p = _painting_index(pack, painting)
     out = refuse_protected(out)
@@ -288,7 +304,7 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
         try:
             if fmt == "iiif":
                 _with_pool(threads, progress, pp, fmt, lambda pool, bar: _export_iiif(
-                    pack, p, tmp, quality, pool, bar, service_id or pp.name))
+                    pack, p, tmp, quality, pool, bar, service_id))
                 write_mark(tmp, "export", format=fmt)  # last: the output is whole
                 replace_dir(tmp, out, owned)
             else:  # the tiles first, the .dzi (which marks it complete) last

@@ -207,3 +207,16 @@ def test_presentation_errors(change, match):
         presentation_manifest([], "http://h/m.json", "S")
     with pytest.raises(TypeError):
         presentation_manifest([base], "http://h/m.json", "S")
+
+
+def test_the_python_api_has_the_same_default(pack, tmp_path):
+    from gigascroll.export import export_pack
+    out = export_pack(pack.path, tmp_path / "my painting", "iiif", painting="scroll")
+    info = json.loads((out / "info.json").read_text())
+    assert info["id"] == "http://localhost:8000/my%20painting"
+    check_image_info(info)
+    with pytest.raises(ValueError, match="absolute"):
+        export_pack(pack.path, tmp_path / "x", "iiif", service_id="x")
+    with pytest.raises(ValueError, match="iiif format only"):
+        export_pack(pack.path, tmp_path / "x.tif", "tiff", service_id="http://h/x")
+    assert not (tmp_path / "x").exists() and not (tmp_path / "x.tif").exists()

@@ -4,10 +4,8 @@ pyramidal BigTIFF, streamed from the pack's tiles."""
 from __future__ import annotations
 
 import time
-from pathlib import Path
-from urllib.parse import quote
 
-DEFAULT_PORT = 8000
+DEFAULT_PORT = 8000  # export.DEFAULT_IIIF_PORT (not imported here: --help stays light)
 
 
 def register(sub) -> None:
@@ -38,15 +36,13 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..export import export_pack
+    from ..export import default_base_url, export_pack
     if args.threads < 0:
         raise ValueError("--threads must be >= 0")
     base_url = args.base_url
     if args.format == "iiif":
         from ..iiif_presentation import check_http_uri
-        name = Path(args.output).resolve().name
-        base_url = check_http_uri(base_url or f"http://localhost:{DEFAULT_PORT}/{quote(name)}",
-                                  "--base-url")
+        base_url = check_http_uri(base_url or default_base_url(args.output), "--base-url")
     elif base_url is not None:
         raise ValueError("--base-url applies to --format iiif only")
     t0 = time.perf_counter()
