@@ -64,7 +64,7 @@ def mutated(draw) -> str:
     return "\n".join(lines) + "\n"
 
 
-@fuzz_settings(25)
+@fuzz_settings(20)
 @given(text=mutated())
 def test_mutated_exhibition_files(fork_worker, show_files, text):
     count_case("exhibit build mutations")
@@ -89,7 +89,7 @@ DISTANCE = st.one_of(st.none(), st.sampled_from(["0", "-1", "nan", "inf", "1e308
                                                  "2", "1000", "x"]))
 
 
-@fuzz_settings(20)
+@fuzz_settings(15)
 @given(look=LOOK, distance=DISTANCE, command=st.sampled_from(["render", "gallery"]),
        extra=st.sampled_from([[], ["--camera", "1,1.6,2,1,1.5,0"], ["--room", "hall"],
                               ["--tour", "nope.json"], ["--path", "walk"]]))
@@ -137,6 +137,19 @@ def test_view_options_fail_before_the_window(fork_worker, show_files, options):
     code = ("import os\nfor k in ('DISPLAY', 'WAYLAND_DISPLAY'):\n    os.environ.pop(k, None)\n"
             f"from gigascroll import cli\nraise SystemExit(cli.main({argv!r}))\n")
     o = fork_worker.run({"kind": "python", "code": code}, timeout=60)
+    problem = cli_message_ok(o)
+    assert problem is None, f"{problem}: {argv}\n{o.describe()}"
+    assert o.code == 2
+
+
+@pytest.mark.parametrize("options", [
+    ["--exhibition", "nope"], ["--exhibition", "SHOW", "PACK"], ["--exhibition", "SHOW", "--room", "hall"],
+    [], ["PACK"], ["--exhibition", "SHOW", "--port", "70000"], ["--exhibition", ""],
+])
+def test_serve_exhibition_misuse(fork_worker, show_files, options):
+    subst = {"SHOW": str(show_files / "show"), "PACK": str(show_files / "show" / "paintings.pack")}
+    argv = ["serve", *[subst.get(o, o) for o in options]]
+    o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=60)
     problem = cli_message_ok(o)
     assert problem is None, f"{problem}: {argv}\n{o.describe()}"
     assert o.code == 2
