@@ -25,8 +25,13 @@ export function readChunks(arrayBuffer) {
     const length = dv.getUint32(offset, true), type = dv.getUint32(offset + 4, true);
     const start = offset + 8;
     if (start + length > arrayBuffer.byteLength) fail('a chunk runs past the end of the file');
-    if (type === JSON_CHUNK && json === null)
-      json = JSON.parse(new TextDecoder().decode(new Uint8Array(arrayBuffer, start, length)));
+    if (type === JSON_CHUNK && json === null) {
+      try {
+        json = JSON.parse(new TextDecoder().decode(new Uint8Array(arrayBuffer, start, length)));
+      } catch {
+        fail('the JSON chunk is not JSON');
+      }
+    }
     else if (type === BIN_CHUNK && bin === null) bin = { offset: start, length };
     offset = start + ((length + 3) & ~3);
   }
