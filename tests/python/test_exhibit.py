@@ -328,3 +328,30 @@ height_cm = 100
     with pytest.raises(ExhibitionError, match=r"paintings\[0\].width_cm / height_cm: expected "
                                               r"the room file's slot 1.5 m x 1 m, got 1.2 m x 0.8 m"):
         build_show(tmp_path / "bad.toml", tmp_path / "show2")
+
+
+def test_a_killed_build_leaves_nothing_that_looks_like_a_show(show_dir):
+    import signal
+    import subprocess
+    import sys
+    import time
+    # Killed outright while packing a larger image: no show; the next build removes its
+    # temporary and succeeds.
+    big = np.zeros((1800, 2400, 3), np.uint8)
+    big[..., 0] = 200
+    Image.fromarray(big).save(show_dir / "red.png")
+    p = subprocess.Popen([sys.executable, "-m", "gigascroll", "exhibit", "build",
+                          str(show_dir / "show.toml"), "-o", str(show_dir / "show"), "--no-bake"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    for _ in range(300):
+        if any(x.name.startswith("show.tmp-") for x in show_dir.iterdir()):
+            break
+        time.sleep(0.05)
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    assert not (show_dir / "show").exists()
+    with pytest.raises(ExhibitionError):
+        open_show(show_dir / "show")
+    build_show(show_dir / "show.toml", show_dir / "show")
+    assert open_show(show_dir / "show").pack.paintings[0].width == 2400
+    assert not any(x.name.startswith("show.tmp-") for x in show_dir.iterdir())

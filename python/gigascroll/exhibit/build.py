@@ -9,9 +9,10 @@ command's `bake` hook) and build.json (what this build did: packed or reused, se
 Reuse: the pack's content hash (blake2b over every image file's bytes, every label's pixels,
 the painting names and the pack settings) is kept in exhibition.json; a later build whose
 hash is the same hard-links (or copies) the previous show's pack instead of packing again.
-The directory is built under a temporary name and swapped in (outputs.replace_dir), its mark
-(outputs.MARK, command "exhibit build") written last; only a directory with that mark, or an
-empty one, is replaced."""
+The directory is built under a temporary name beside `out` and swapped in
+(outputs.replace_dir), its mark (outputs.MARK, command "exhibit build") written again last;
+only a directory with that mark, or an empty one, is replaced. Temporaries of runs killed
+outright are removed by the next run (outputs.remove_stale_temps)."""
 
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ import shutil
 import time
 from pathlib import Path
 
-from ..outputs import (check_output, owned_by, replace_dir, temp_dir, write_mark, write_text)
+from ..outputs import (check_output, owned_by, remove_stale_temps, replace_dir, temp_dir,
+                       write_mark, write_text)
 from .floor_plan import build_room
 from .labels import label_image
 from .model import Exhibition, load_exhibition
@@ -119,7 +121,8 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
     # The room (and whether everything fits) before any packing, where it needs no pack.
     spec = None if "file" in ex.room else build_room(ex)
     previous = _previous(out) if owned(out) else None
-    tmp = temp_dir(out)
+    remove_stale_temps(out, COMMAND)  # what a run killed outright (SIGKILL) left beside it
+    tmp = temp_dir(out, command=COMMAND)
     try:
         record = {"exhibition": ex.path, "packed": False, "reused_pack": False}
         if given_pack is None:
