@@ -13,6 +13,7 @@ BENCHMARKS = {
     "views": "tile determination: the four request-processing methods against scale",
     "photon": "seed 001 Tables 1-5 and run time against error",
     "gallery": "gallery rooms: photon pass, bake, stills, error against Mitsuba 3",
+    "mottle": "the baked light's mottle against Mitsuba 3 on walls, floor and paintings",
     "walk": "the gallery walk: display vs bare rays, stereo reuse, fps per eye size, latency",
     "foveation": "the gallery walk foveated: rays and time saved, requests, error per region",
     "layout": "merged page-table layout time and fill against painting count (BRKGA vs shelf)",
@@ -25,11 +26,11 @@ BENCHMARKS = {
 def register(sub) -> None:
     from ..benchmarks import (bc1, cluster, export, gallery, layout, loader, pack, photon,
                               queues, views, walk)
-    from ..benchmarks import exhibition_full, foveation, web
+    from ..benchmarks import exhibition_full, foveation, mottle, web
 
     modules = {"pack": pack, "cluster": cluster, "export": export, "queues": queues,
                "loader": loader, "views": views, "photon": photon, "gallery": gallery,
-               "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1, "web": web,
+               "mottle": mottle, "walk": walk, "foveation": foveation, "layout": layout, "bc1": bc1, "web": web,
                "exhibition-full": exhibition_full}
     parser = sub.add_parser("bench", help="run a scenario benchmark")
     whats = parser.add_subparsers(dest="what", metavar="WHAT")

@@ -1,0 +1,217 @@
+"""`gigascroll bench mottle`: the mottle of the baked light against Mitsuba 3 (issue 40).
+
+For each room (`scroll`, `hall`, and the example glTF room of gallery.example_room) with
+paintings of one flat colour (so that relative radiance error is relative irradiance error):
+a high-spp Mitsuba 3 reference (cached, keyed as `bench gallery`'s), then our baked still at
+each configuration (photons x bake spacing x bake light samples; the first is the defaults of
+`Gallery.light` / `Gallery.bake`), measured by gallery.mottle: RMS relative error of the
+blurred luminance on walls, floor, ceiling, paintings and other surfaces separately. Times:
+photon pass + map (light) and bake, with Mitsuba's time for --timing-spp spp of the same
+view in the same run beside them (the machine may be loaded: compare ratios). Writes
+results.json and error_vs_bake.png to --out.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import UserError
+from ..experiments import pyplot, save_figure, write_json
+
+ROOMS = ("scroll", "hall", "hall_table", "example")
+# The flat paintings' colour (sRGB8): a light warm grey, albedo about 0.5.
+FLAT_RGB = (200, 196, 188)
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--rooms", default="scroll,hall,hall_table,example",
+                        help="comma-separated: scroll, hall, hall_table (the hall seen from above a "
+                             "table's paintings), example (default: all)")
+    parser.add_argument("--width", type=int, default=128, help="still width (default 128)")
+    parser.add_argument("--height", type=int, default=72, help="still height (default 72)")
+    parser.add_argument("--supersample", type=int, default=3,
+                        help="rays per pixel per axis of our stills (Mitsuba's box filter; default 3)")
+    parser.add_argument("--sigma", type=float, default=2.0,
+                        help="the blur's standard deviation in pixels (default 2)")
+    parser.add_argument("--photons", default="19",
+                        help="log2 photons, comma-separated (default 19: Gallery.light's default)")
+    parser.add_argument("--spacings", default="200",
+                        help="bake spacings as fractions 1/N of the room's diagonal (default 200: the default)")
+    parser.add_argument("--bake-samples", default="16", help="bake emitter samples (default 16: the default)")
+    parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
+    parser.add_argument("--timing-spp", type=int, default=16,
+                        help="Mitsuba spp timed in the same run, for time ratios (default 16)")
+    parser.add_argument("--reference-cache", default="build/gallery-reference",
+                        help="directory where the reference images are kept between runs")
+    parser.add_argument("--out", default="bench/mottle", help="directory for results.json and the plot")
+
+
+def flat_pack(directory: Path, sizes: dict):
+    """A pack of paintings of one flat colour, {name: (width, height)}."""
+    from .. import build_pack
+
+    images = [np.broadcast_to(np.array(FLAT_RGB, np.uint8), (h, w, 3)).copy() for w, h in sizes.values()]
+    return build_pack(images, Path(directory) / "flat.pack", tile_size=128, border=4, names=list(sizes),
+                      force=True)
+
+
+def room_and_pack(name: str, scratch: Path):
+    """The room's spec and its flat pack: the bench gallery's painting sizes for scroll and
+    hall, the example room's own for the glTF room."""
+    from ..gallery import builtin_room
+    from ..gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
+    from ..gallery.room_files import load_room
+
+    if name == "example":
+        pack = flat_pack(scratch / "example", EXAMPLE_PAINTINGS)
+        glb = write_example_room(scratch / "example_room.glb")
+        return load_room(glb, pack), pack
+    sizes = {"scroll": (8192, 342)} | {f"painting{s}": (2048, 1536) for s in range(1, 8)}
+    if name == "scroll":
+        sizes = {"scroll": sizes["scroll"]}
+    pack = flat_pack(scratch / name, sizes)
+    return builtin_room(name.split("_")[0], pack), pack
+
+
+def camera(gal, name: str, resolution):
+    """The room's suggested view; hall_table: 0.6 m above the table, 0.5 m beyond the second
+    painting's near edge, looking at its corner (the table between paintings, where the
+    stair-stepped band showed)."""
+    if name != "hall_table":
+        return gal.camera(resolution, fov=60.0)
+    s = gal.spec.paintings[1]
+    o, u, v = (np.array(x, np.float64) for x in (s.origin, s.u_axis, s.v_axis))
+    corner = o + 0.8 * s.width_m * u + s.height_m * v
+    eye = corner + np.array([0.0, 0.6, 0.5])
+    return gal.camera(resolution, fov=35.0, eye=tuple(eye), target=tuple(corner))
+
+
+def _ints(text: str, what: str) -> list[int]:
+    try:
+        values = [int(x) for x in text.split(",") if x]
+    except ValueError:
+        raise UserError(f"{what} is a comma-separated list of integers, got {text!r}") from None
+    if not values or min(values) < 1:
+        raise UserError(f"{what} needs positive integers, got {text!r}")
+    return values
+
+
+def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> dict:
+    """One room: its reference, Mitsuba's timing run, and each configuration's mottle."""
+    from .. import VirtualTexture
+    from ..gallery import Gallery
+    from ..gallery.accuracy import image_errors
+    from ..gallery.mottle import pool_segments, surface_segments
+    from ..gallery.mottle import mottle as measure
+    from .gallery import _mitsuba, cached_reference
+
+    spec, pack = room_and_pack(name, scratch)
+    gal = Gallery.from_room(spec, pack)
+    vt = VirtualTexture(pack, (48, 48))
+    k = args.supersample
+    cam = camera(gal, name, (args.width * k, args.height * k))
+    gal.stream(cam, vt)
+    mcam = camera(gal, name, (args.width, args.height))
+    ref, ref_seconds = cached_reference(mi, gal, mcam, args.reference_spp, Path(args.reference_cache))
+    _, mitsuba_seconds = _mitsuba(mi, mi.load_dict(gal.to_mitsuba_dict(mcam)), args.timing_spp, seed=1)
+    diag = math.dist(*gal.bounds)
+    r = {"triangles": gal.triangle_count, "paintings": gal.painting_count, "diagonal_m": diag,
+         "reference": {"spp": args.reference_spp, "seconds": ref_seconds},
+         "mitsuba_timing": {"spp": args.timing_spp, "seconds": mitsuba_seconds}, "configs": []}
+    segments = None
+    for photons, n, samples in configs:
+        t0 = time.perf_counter()
+        st = gal.light(vt, photons=1 << photons)
+        t1 = time.perf_counter()
+        bst = gal.bake(spacing=diag / n, light_samples=samples)
+        t2 = time.perf_counter()
+        img, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
+        if segments is None:
+            segments, seg_class = surface_segments(spec, hits["position"], hits["slot"])
+            segments = pool_segments(segments, k)
+            r["pixel_m"] = _pixel_size(hits["position"], cam, k)
+        img = img.reshape(args.height, k, args.width, k, 3).mean(axis=(1, 3))
+        c = {"photons_log2": photons, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": samples,
+             "radius_m": st["radius"], "light_seconds": t1 - t0, "bake_seconds": t2 - t1,
+             "bake_points": bst["bake_points"],
+             "light_and_bake_over_mitsuba": (t2 - t0) / mitsuba_seconds,
+             "mottle": measure(img, ref, segments, seg_class, args.sigma), **image_errors(img, ref)}
+        r["configs"].append(c)
+    return r
+
+
+def _pixel_size(position: np.ndarray, cam, k: int) -> float:
+    """The median footprint of one output pixel on the surfaces seen (metres)."""
+    dist = np.linalg.norm(position.reshape(-1, 3) - np.asarray(cam.position), axis=1)
+    dist = dist[np.isfinite(dist)]
+    return float(np.median(dist) * 2 * math.tan(math.radians(cam.fov) / 2) / (cam.height / k))
+
+
+def plot(results: dict, path: Path) -> None:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, r in results["rooms"].items():
+        for cl, marker in (("walls", "o"), ("floor", "s"), ("paintings", "^")):
+            pts = [(c["light_and_bake_over_mitsuba"], c["mottle"][cl]["rms"]) for c in r["configs"]
+                   if c["mottle"].get(cl)]
+            if pts:
+                x, y = zip(*sorted(pts))
+                ax.plot(x, np.array(y) * 100, marker=marker, label=f"{name} {cl}")
+    ax.axhline(1.0, color="grey", ls="--", lw=0.8)
+    ax.axhline(0.5, color="grey", ls=":", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"light + bake time / Mitsuba {results['settings']['timing_spp']} spp (same run)")
+    ax.set_ylabel("RMS relative error after blur (%)")
+    ax.legend(fontsize=7, ncol=2)
+    save_figure(fig, path)
+
+
+def run(args) -> int:
+    rooms = [r for r in args.rooms.split(",") if r]
+    for r in rooms:
+        if r not in ROOMS:
+            raise UserError(f"unknown room {r!r} (measured: {', '.join(ROOMS)})")
+    if min(args.width, args.height, args.supersample, args.reference_spp, args.timing_spp) < 1:
+        raise UserError("--width, --height, --supersample, --reference-spp and --timing-spp must be >= 1")
+    if not (math.isfinite(args.sigma) and 0.3 <= args.sigma <= 16):
+        raise UserError(f"--sigma must be in [0.3, 16] pixels, got {args.sigma}")
+    photons = _ints(args.photons, "--photons")
+    if max(photons) > 26:
+        raise UserError("--photons are powers of two up to 2^26")
+    configs = [(p, n, s) for p in photons for n in _ints(args.spacings, "--spacings")
+               for s in _ints(args.bake_samples, "--bake-samples")]
+    try:
+        import mitsuba as mi
+    except ImportError:
+        raise UserError("the mottle benchmark needs mitsuba (pip install mitsuba)") from None
+    mi.set_variant("scalar_rgb")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    results = {"settings": {k: getattr(args, k) for k in (
+        "width", "height", "supersample", "sigma", "photons", "spacings", "bake_samples", "reference_spp",
+        "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
+    with tempfile.TemporaryDirectory(prefix="gigascroll-bench-mottle-") as scratch:
+        for name in rooms:
+            results["rooms"][name] = measure_room(mi, name, args, Path(scratch), configs)
+            _print_room(name, results["rooms"][name])
+    results["load_average_after"] = os.getloadavg()
+    write_json(out / "results.json", results)
+    plot(results, out / "error_vs_bake.png")
+    print(f"wrote {out / 'results.json'}")
+    return 0
+
+
+def _print_room(name: str, r: dict) -> None:
+    for c in r["configs"]:
+        parts = [f"{cl} {c['mottle'][cl]['rms'] * 100:.2f}%" for cl in ("walls", "floor", "paintings", "other")
+                 if c["mottle"].get(cl)]
+        print(f"{name}: 2^{c['photons_log2']} photons, diag/{c['diagonal_over']}, {c['bake_samples']} samples: "
+              f"{', '.join(parts)}; light+bake {c['light_seconds'] + c['bake_seconds']:.2f} s "
+              f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)")
