@@ -196,7 +196,8 @@ def run(args) -> int:
             print(f"client walk: not measured ({e})")
     from .web_client import feedback_figures, format_figures  # the virtual texture's part
     try:
-        doc["client_feedback"] = feedback_figures(frames=30 if args.quick else 240)
+        doc["client_feedback"] = (feedback_figures(4000, 1000, frames=20) if args.quick
+                                  else feedback_figures(frames=240))
         print(format_figures(doc["client_feedback"]))
     except (RuntimeError, ImportError) as e:  # no chromium or no playwright
         print(f"client feedback: not measured ({e})")

@@ -88,9 +88,10 @@ def feedback_figures(width: int = 16000, height: int = 2000, frames: int = 240,
 
 
 def format_figures(f: dict) -> str:
+    loop = "n/a" if f["median_ms_in_loop"] is None else f"{f['median_ms_in_loop']:.3f} ms"
     return (f"feedback processing, both Quest 3 eyes at 1/8 + magnifier ({f['pixels_a_frame']} "
             f"pixels, {f['requests_all_views']} requests): median {f['median_ms_all_views']:.3f} ms, "
             f"p90 {f['p90_ms_all_views']:.3f} ms (goal <= {f['goal_ms']} ms), every pixel into a Set "
             f"{f['median_ms_naive_set']:.3f} ms ({f['ratio_naive_to_ours']:.1f}x); in the loop "
-            f"(readback copies + processing of what arrived): median {f['median_ms_in_loop']:.3f} ms "
+            f"(readback copies + processing of what arrived): median {loop} "
             f"over {f['frames_with_readbacks']} frames")
