@@ -355,3 +355,30 @@ def test_a_killed_build_leaves_nothing_that_looks_like_a_show(show_dir):
     build_show(show_dir / "show.toml", show_dir / "show")
     assert open_show(show_dir / "show").pack.paintings[0].width == 2400
     assert not any(x.name.startswith("show.tmp-") for x in show_dir.iterdir())
+
+
+TOUR = """
+[tour]
+max_speed_mps = 1.0
+keyframes = [
+  { position = [2.0, 1.6, 2.0], target = [2.0, 1.45, 0.0], time = 0.0 },
+  { position = [4.0, 1.6, 2.0], target = [6.0, 1.5, 2.0], time = TIME },
+]
+"""
+
+
+def test_the_files_tour_is_the_shows(show_dir):
+    f = show_dir / "show.toml"
+    f.write_text(SHOW + TOUR.replace("TIME", "4.0"))
+    build_show(f, show_dir / "show")
+    tour = open_show(show_dir / "show").tour
+    assert tour.time.tolist() == [0.0, 4.0]
+    assert tour.position[1].tolist() == [4.0, 1.6, 2.0]
+    # 2 m in 1 s is faster than walking: an error naming the keyframe, nothing built.
+    f.write_text(SHOW + TOUR.replace("TIME", "1.0"))
+    with pytest.raises(ExhibitionError, match=r"show.toml: tour: tour keyframe 0 .* faster"):
+        build_show(f, show_dir / "show2")
+    f.write_text(SHOW + TOUR.replace("TIME", "-1"))
+    with pytest.raises(ExhibitionError, match=r"tour.keyframes\[1\].time: expected a number >= 0"):
+        build_show(f, show_dir / "show2")
+    assert not (show_dir / "show2").exists()

@@ -106,6 +106,16 @@ def _link_tree(src: Path, dst: Path) -> None:
             shutil.copy2(f, dst / f.name)
 
 
+def _tour(ex: Exhibition, spec):
+    """The file's tour (limits checked) or the default one of the room."""
+    tour = tour_from_dict(ex.tour, f"{ex.path}: tour") if ex.tour else default_tour(spec, ex)
+    try:
+        check_limits(tour)
+    except ValueError as e:
+        raise ExhibitionError(f"{ex.path}: tour: {e}") from None
+    return tour
+
+
 def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: int = 0) -> dict:
     """Builds the show of `exhibition` (a path or an Exhibition) into `out`; returns the
     build's record (build.json). `bake(gallery, spec, pack, directory)`, when given, bakes
@@ -120,6 +130,7 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
     given_pack = _one_pack(ex)
     # The room (and whether everything fits) before any packing, where it needs no pack.
     spec = None if "file" in ex.room else build_room(ex)
+    tour = None if spec is None else _tour(ex, spec)
     previous = _previous(out) if owned(out) else None
     remove_stale_temps(out, COMMAND)  # what a run killed outright (SIGKILL) left beside it
     tmp = temp_dir(out, command=COMMAND)
@@ -146,11 +157,7 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
             gallery = Gallery.from_room(spec, pack)
         except ValueError as e:
             raise ExhibitionError(f"{ex.path}: room: {e}") from None
-        tour = tour_from_dict(ex.tour, f"{ex.path}: tour") if ex.tour else default_tour(spec, ex)
-        try:
-            check_limits(tour)
-        except ValueError as e:
-            raise ExhibitionError(f"{ex.path}: tour: {e}") from None
+        tour = tour if tour is not None else _tour(ex, spec)
         write_text(tmp / "tour.json", json.dumps(tour_to_dict(tour), indent=1) + "\n")
         write_text(tmp / "exhibition.json", json.dumps(
             {"format": 1, "pack": pack_path, "pack_hash": digest, "exhibition": ex.to_dict()},
