@@ -17,6 +17,7 @@ extension); annotations with motivation "painting" targeting their canvas."""
 from __future__ import annotations
 
 import json
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -106,7 +107,13 @@ def _positive_int(v, what: str) -> int:
 def _metadata(p: PresentationPainting, language: str) -> list[dict]:
     rows = [("Artist", p.artist), ("Date", p.date)]
     if p.size_cm is not None:
-        w, h = p.size_cm
+        size = p.size_cm
+        if not (isinstance(size, (tuple, list)) and len(size) == 2 and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                and x > 0 for x in size)):
+            raise ValueError(f"painting '{p.title}': size_cm must be two positive numbers "
+                             f"(width, height), got {size!r}")
+        w, h = size
         rows.append(("Dimensions", f"{h:g} x {w:g} cm (height x width)"))
     rows += [("Accession number", p.accession), *p.extra.items()]
     return [{"label": _lang(k, language), "value": _lang(v, language)} for k, v in rows if v]
