@@ -172,9 +172,10 @@ def exhibition_from_dict(data: dict, where: str, base: Path) -> Exhibition:
             raise ExhibitionError(f"{where}: {key}.title: expected a title no other painting "
                                   f"has ({item['title'][:80]!r} is paintings[{titles[item['title']]}]'s)")
         titles[item["title"]] = i
-        if item.get("name") in names:
+        if item.get("name") in names or str(item.get("name")).startswith("label-"):
             raise ExhibitionError(f"{where}: {key}.name: expected a name no other painting "
-                                  f"has, got {item['name']!r}")
+                                  f"has, not starting with label- (the labels' names), got "
+                                  f"{item['name']!r}")
         p = Painting(i, item["title"], float(item["width_cm"]), float(item["height_cm"]),
                      _unique_name(item["title"], names, item.get("name")),
                      **{k: item.get(k) for k in ("artist", "date", "credit", "rights", "accession")})
@@ -208,6 +209,8 @@ def _unique_name(title: str, taken: set[str], given: str | None = None) -> str:
         taken.add(given)
         return given
     base = re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")[:60] or "painting"
+    if base.startswith("label-"):  # the labels' names
+        base = f"painting-{base}"
     name, k = base, 2
     while name in taken:
         name, k = f"{base}-{k}", k + 1
