@@ -26,7 +26,8 @@ from urllib.parse import quote, urlsplit
 from .outputs import write_text
 
 __all__ = ["PRESENTATION_CONTEXT", "PresentationPainting", "check_http_uri", "check_rights",
-           "presentation_manifest", "write_presentation_manifest", "painting_from_info"]
+           "presentation_manifest", "write_presentation_manifest", "painting_from_info",
+           "exhibition_painting"]
 
 PRESENTATION_CONTEXT = "http://iiif.io/api/presentation/3/context.json"
 
@@ -208,3 +209,24 @@ def painting_from_info(info_path, title: str, **meta) -> PresentationPainting:
     return PresentationPainting(title=title, width=info.get("width"), height=info.get("height"),
                                 service=service, image=image, image_size=image_size,
                                 service_profile=str(info.get("profile", "level0")), **meta)
+
+
+def exhibition_painting(painting, service: str, *, info=None, width: int | None = None,
+                        height: int | None = None) -> PresentationPainting:
+    """The canvas entry of an exhibition's painting (any object with `title`, `width_cm`,
+    `height_cm` and optional `artist`, `date`, `credit`, `rights`, `accession`, as
+    gigascroll.exhibit's Painting) whose Image API service is at `service`: its pixel size
+    from `info` (the path of the service's exported info.json, whose id must be `service`)
+    or `width` and `height`. ValueError when the two disagree or a size is missing."""
+    meta = {k: getattr(painting, k, None) or "" for k in ("artist", "date", "credit",
+                                                          "accession")}
+    meta["rights"] = getattr(painting, "rights", None) or None
+    meta["size_cm"] = (painting.width_cm, painting.height_cm)
+    if info is not None:
+        entry = painting_from_info(info, painting.title, **meta)
+        if entry.service != check_http_uri(service, "the image service"):
+            raise ValueError(f"{info}: its id {entry.service} is not the service {service}")
+        return entry
+    if width is None or height is None:
+        raise ValueError(f"painting '{painting.title}': give its info.json or its pixel size")
+    return PresentationPainting(painting.title, width, height, service, **meta)

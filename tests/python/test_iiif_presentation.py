@@ -220,3 +220,23 @@ def test_the_python_api_has_the_same_default(pack, tmp_path):
     with pytest.raises(ValueError, match="iiif format only"):
         export_pack(pack.path, tmp_path / "x.tif", "tiff", service_id="http://h/x")
     assert not (tmp_path / "x").exists() and not (tmp_path / "x.tif").exists()
+
+
+def test_an_exhibition_painting_becomes_a_canvas(gigascroll_cli, pack, tmp_path):
+    from gigascroll.exhibit.model import Painting
+    from gigascroll.iiif_presentation import exhibition_painting
+    p = Painting(0, "Landscape", 230.0, 150.0, "landscape", artist="Anon.", date="1100",
+                 credit="Lent", rights="http://rightsstatements.org/vocab/NoC-US/1.0/")
+    info = export(gigascroll_cli, pack, tmp_path / "landscape")
+    entry = exhibition_painting(p, "http://localhost:8000/landscape/", info=tmp_path /
+                                "landscape" / "info.json")
+    assert (entry.width, entry.height, entry.size_cm) == (230, 150, (230.0, 150.0))
+    m = presentation_manifest([entry, exhibition_painting(p, "https://h/s", width=4, height=3)],
+                              "https://h/show/manifest.json", "Show")
+    check_manifest(m)
+    assert m["items"][0]["rights"] == p.rights and m["items"][1]["width"] == 4
+    assert info["id"] == entry.service
+    with pytest.raises(ValueError, match="is not the service"):
+        exhibition_painting(p, "http://other/x", info=tmp_path / "landscape" / "info.json")
+    with pytest.raises(ValueError, match="pixel size"):
+        exhibition_painting(p, "https://h/s")
