@@ -12,7 +12,9 @@ from ..errors import UserError
 
 def register(sub) -> None:
     p = sub.add_parser("exhibit", help="build a show from an exhibition file",
-                       description=__doc__.split("\n\n", 1)[0].split(": ", 1)[1])
+                       description="An exhibition file (docs/exhibitions.md) to a show "
+                                   "directory, which render, gallery, view and serve take "
+                                   "with --exhibition.")
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     actions.required = True
     b = actions.add_parser("build", help="exhibition file (TOML) to a show directory")
