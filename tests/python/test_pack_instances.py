@@ -243,3 +243,13 @@ def test_builder_order_rules(tmp_path):
     b.add_instance("x", 0, 32, 0)
     with pytest.raises(ValueError, match="instances come after"):
         b.begin_painting("d", 10, 10)
+
+
+def test_info_and_verify(packs, gigascroll_cli):
+    from gigascroll.pack.inspect import verify_pack
+    _, inst, copies, _ = packs
+    assert verify_pack(inst) == inst.tile_count < verify_pack(copies)
+    r = gigascroll_cli("info", "--verify", inst.path)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.count("an instance of [0] a:") == 2
+    assert f"verified {inst.tile_count} tiles" in r.stdout

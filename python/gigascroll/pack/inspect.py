@@ -40,7 +40,8 @@ def read_level(pack: TilePack, painting: int, level: int) -> np.ndarray:
 
 def verify_pack(pack: TilePack, progress: bool = False) -> int:
     """Reads every stored tile, verifying its checksum; returns the number of tiles read.
-    Raises OSError on the first corrupt tile."""
+    Raises OSError on the first corrupt tile. An instance's tiles are its source's: read
+    once, through the source."""
     expect_type(pack, (TilePack, PurePack), "verify_pack: pack")
     bar = None
     if progress:
@@ -49,6 +50,8 @@ def verify_pack(pack: TilePack, progress: bool = False) -> int:
     out = np.empty((pack.tile_size, pack.tile_size, 3), np.uint8)
     n = 0
     for i, p in enumerate(pack.paintings):
+        if getattr(p, "instance_of", None) is not None:
+            continue
         for l, (nx, ny) in enumerate(p.level_tiles):
             for ty in range(ny):
                 for tx in range(nx):
@@ -83,5 +86,8 @@ def pack_summary(pack: TilePack) -> str:
             f"  [{i}] {p.name}: {p.width} x {p.height}, {p.levels} levels, {p.tile_count} tiles, "
             f"page table {p.table_size[0]} x {p.table_size[1]} at {p.table_offset}, "
             f"uv scale ({p.uv_scale[0]:.6f}, {p.uv_scale[1]:.6f})")
-        lines.append(f"      source {p.source}; conversion: {p.conversion}")
+        src = getattr(p, "instance_of", None)
+        lines.append(f"      source {p.source}; conversion: {p.conversion}" if src is None else
+                     f"      an instance of [{src}] {pack.paintings[src].name}: its tiles, "
+                     "stored once")
     return "\n".join(lines)
