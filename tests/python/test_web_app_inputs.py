@@ -129,3 +129,46 @@ def test_bad_url_parameters(browser, served, query, message):  # noqa: F811
         assert p.evaluate("document.getElementById('error').hidden") is False
     finally:
         p.close()
+
+
+def test_desktop_walking(browser, served):  # noqa: F811
+    """WASD walks along the view's horizontal forward and right, Q lowers the eye, dragging to
+    the right turns right, and walking never leaves the room's bounds (directions only: no
+    timing is asserted)."""
+    p = browser.new_page(viewport={"width": 160, "height": 120})
+    try:
+        p.goto(f"{served}/?size=160x120")
+        p.wait_for_function("window.gigascroll && window.gigascroll.frame() > 0", timeout=120_000)
+        state = "(() => { const c = window.gigascroll.app.controls; return [...c.position, c.yaw]; })()"
+        bounds = p.evaluate("window.gigascroll.app.scene.room.bounds")
+        start = p.evaluate(state)
+        forward = np.array([-np.sin(start[3]), 0, -np.cos(start[3])])
+        right = np.array([np.cos(start[3]), 0, -np.sin(start[3])])
+
+        def hold(key, ms=400):
+            before = np.array(p.evaluate(state))
+            p.keyboard.down(key)
+            p.wait_for_timeout(ms)
+            p.keyboard.up(key)
+            p.wait_for_function(f"window.gigascroll.frame() > {p.evaluate('window.gigascroll.frame()')} + 1")
+            return np.array(p.evaluate(state)) - before
+
+        for key, direction in (("KeyW", forward), ("KeyD", right), ("KeyS", -forward), ("KeyA", -right)):
+            d = hold(key)[:3]
+            assert d @ direction > 0.01 and np.linalg.norm(d - (d @ direction) * direction) < 1e-6, (key, d)
+        d = hold("KeyQ")
+        assert d[1] < -0.01 and abs(d[0]) + abs(d[2]) < 1e-6
+        box = p.evaluate("document.getElementById('view').getBoundingClientRect().toJSON()")
+        p.mouse.move(box["x"] + 40, box["y"] + 60)
+        p.mouse.down()
+        p.mouse.move(box["x"] + 120, box["y"] + 60, steps=4)
+        p.mouse.up()
+        assert p.evaluate(state)[3] < start[3] - 0.1  # yaw down: turned right
+        hold("ShiftLeft", 0)
+        p.keyboard.down("ShiftLeft")
+        hold("KeyS", 3000)  # backwards toward a wall: stopped at the margin
+        p.keyboard.up("ShiftLeft")
+        pos = p.evaluate(state)[:3]
+        assert all(bounds[0][i] + 0.1 < pos[i] < bounds[1][i] - 0.1 for i in range(3)), (pos, bounds)
+    finally:
+        p.close()

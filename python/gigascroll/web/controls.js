@@ -16,7 +16,8 @@ export class Controls {
     this.bounds = bounds;
     this.fixed = fixed;
     this.start = start;
-    this.held = new Set();
+    this.held = new Map();     // key -> time (ms) from which its hold is not yet walked
+    this.walked = new Map();   // key -> seconds held and released since the last update
     this.keys = keys;
     let drag = null;
     element.addEventListener('pointerdown', (e) => { drag = [e.clientX, e.clientY]; element.setPointerCapture?.(e.pointerId); });
@@ -29,19 +30,36 @@ export class Controls {
     });
     window.addEventListener('keydown', (e) => {
       if (this.keys[e.code] && !e.repeat) this.keys[e.code]();
-      this.held.add(e.code);
+      if (!this.held.has(e.code)) this.held.set(e.code, performance.now());
     });
-    window.addEventListener('keyup', (e) => this.held.delete(e.code));
-    window.addEventListener('blur', () => this.held.clear());
+    window.addEventListener('keyup', (e) => this.#release(e.code, performance.now()));
+    window.addEventListener('blur', () => { for (const code of [...this.held.keys()]) this.#release(code, performance.now()); });
   }
 
-  // Advances the pose by dt seconds of held keys; returns the camera frame to draw.
-  update(dt) {
+  #release(code, now) {
+    if (!this.held.has(code)) return;
+    this.walked.set(code, (this.walked.get(code) ?? 0) + (now - this.held.get(code)) / 1000);
+    this.held.delete(code);
+  }
+
+  // Seconds each key was down since the last update (a tap between two slow frames counts).
+  #seconds(now) {
+    const s = new Map(this.walked);
+    for (const [code, since] of this.held) {
+      s.set(code, (s.get(code) ?? 0) + (now - since) / 1000);
+      this.held.set(code, now);
+    }
+    this.walked.clear();
+    return s;
+  }
+
+  // Advances the pose by the time the walking keys were down since the last update; returns
+  // the camera frame to draw.
+  update(now = performance.now()) {
+    const held = this.#seconds(now), t = (code) => held.get(code) ?? 0;
     if (this.fixed) return this.start;
-    const h = this.held, step = SPEED * (h.has('ShiftLeft') || h.has('ShiftRight') ? 3 : 1) * Math.min(dt, 0.1);
-    const forward = (h.has('KeyW') ? 1 : 0) - (h.has('KeyS') ? 1 : 0);
-    const strafe = (h.has('KeyD') ? 1 : 0) - (h.has('KeyA') ? 1 : 0);
-    const rise = (h.has('KeyE') ? 1 : 0) - (h.has('KeyQ') ? 1 : 0);
+    const step = SPEED * (this.held.has('ShiftLeft') || this.held.has('ShiftRight') ? 3 : 1);
+    const forward = t('KeyW') - t('KeyS'), strafe = t('KeyD') - t('KeyA'), rise = t('KeyE') - t('KeyQ');
     const s = Math.sin(this.yaw), c = Math.cos(this.yaw);
     const p = this.position;
     p[0] += step * (-s * forward + c * strafe);

@@ -110,14 +110,11 @@ class App {
 
   // The desktop loop (stopped while an XR session draws).
   run() {
-    let last = performance.now();
     const tick = (now) => {
       requestAnimationFrame(tick);
       if (this.xr.session) return;
-      const dt = (now - last) / 1000;
-      last = now;
       this.#fitCanvas();
-      const frame = this.controls.update(dt);
+      const frame = this.controls.update();
       this.drawFrame(desktopViews(frame, this.fov, this.canvas.width, this.canvas.height, this.stereo, this.opts.ipd), null, now);
     };
     requestAnimationFrame(tick);
