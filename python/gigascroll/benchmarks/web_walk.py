@@ -74,7 +74,7 @@ def _summary(result: dict, seconds_still: float) -> dict:
     }
 
 
-def _still_frame_ms(page, frames: int = 20) -> float:
+def _still_frame_ms(page, frames: int = 30) -> float:
     """Median frame time of the page standing still (the relative frame time's baseline)."""
     return page.evaluate("""(n) => new Promise((resolve) => {
       const app = window.gigascroll.app, t = [];
@@ -133,6 +133,7 @@ def _walk(browser, url, scene, size, metres, magnifier):
     cfg = {"x0": eye[0], "y": y, "z": eye[2], "tz": z, "fov": 60, "magnifier": magnifier,
            "step": SPEED / HEADSET_HZ, "frames": int(round(metres / SPEED * HEADSET_HZ)), "settle": 300}
     result = page.evaluate(WALK_JS, cfg)
+    still = (still + _still_frame_ms(page)) / 2  # before and after the walk: the host's load drifts
     page.close()
     return result, still
 

@@ -28,9 +28,10 @@ export class Magnifier {
     this.on = on;
   }
 
-  // The magnifier's view: the centre eye's frame with the field of view narrowed zoom times.
-  view(frame, fovYDeg) {
-    const t = Math.tan((fovYDeg * Math.PI) / 360) / this.zoom;
+  // The magnifier's view: the centre eye's frame with the eye's vertical field of view
+  // (given by the tangent of its half angle) narrowed zoom times.
+  view(frame, tanHalfY) {
+    const t = tanHalfY / this.zoom;
     return makeView(frame, (360 / Math.PI) * Math.atan(t), [0, 0, this.size, this.size]);
   }
 

@@ -65,7 +65,7 @@ class App {
     const { gl, vt, room, magnifier } = this;
     vt.beginFrame(this.frame);
     views.forEach((v, i) => this.#feedback(i, v, FEEDBACK_REDUCTION));
-    const lens = magnifier.on ? magnifier.view(centreFrame(views), this.fov) : null;
+    const lens = magnifier.on ? magnifier.view(centreFrame(views), views[0].tanHalfY) : null;
     if (lens) {
       this.#feedback(MAGNIFIER_VIEW, lens, 1);
       magnifier.render(room, lens);
