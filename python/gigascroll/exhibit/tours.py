@@ -17,7 +17,8 @@ a violation is a ValueError naming the keyframe. The tour JSON format is tour.sc
 `default_tour` visits every painting: it stands at each painting's look-at point (cameras.py)
 for STOP_S seconds and walks between them at WALK_MPS, in a floor plan room through the free
 space (CLEARANCE_M from the walls and tables, around corners by the shortest route through
-the free space's corners); in other rooms straight."""
+the free space's corners, looking along each leg until the last, which turns to the next
+painting); in other rooms straight."""
 
 from __future__ import annotations
 
@@ -226,25 +227,11 @@ def tour_path(tour: Tour, fps: float | None = None):
 def default_tour(room, ex=None, fov: float = 60.0, aspect: float = 1.0,
                  max_speed_mps: float = 1.0) -> Tour:
     """A tour of every painting of `room` (a RoomSpec; labels, slots named label-*, are
-    skipped); `ex`, the Exhibition of a floor plan room, gives the free space to walk in."""
-    from .cameras import look_at, room_bounds
-    bounds = room_bounds(room)
+    skipped); `ex`, the Exhibition of a floor plan room, gives the free space to walk in.
+    The head turns in place (TURN_STEP_DEG at a time) before and after each walk, and looks
+    2 m ahead along each leg while walking, so the target never passes through the head."""
     free = _free_space(ex) if ex is not None and "walls" in ex.room else None
-    stops = []
-    for slot in room.paintings:
-        if str(slot.name).startswith("label-"):
-            continue
-        eye, centre = look_at(slot, None, fov, aspect, bounds)
-        eye = np.array(eye)
-        d = eye - np.array(centre)
-        if free is not None and np.hypot(d[0], d[2]) < CLEARANCE_M + 0.2:
-            flat = np.array([d[0], 0.0, d[2]])
-            if np.linalg.norm(flat) > 1e-9:
-                eye = eye + flat / np.linalg.norm(flat) * (CLEARANCE_M + 0.2 - np.linalg.norm(flat))
-        eye[1] = min(1.9, max(1.3, eye[1]))
-        stops.append((eye, np.array(centre)))
-    if not stops:
-        raise ValueError(f"room {room.name!r} has no paintings to tour")
+    stops = _stops(room, free, fov, aspect)
     pos, tgt, times = [stops[0][0]], [stops[0][1]], [0.0]
 
     def add(p, t, dt):
@@ -252,16 +239,68 @@ def default_tour(room, ex=None, fov: float = 60.0, aspect: float = 1.0,
         tgt.append(np.asarray(t, float))
         times.append(times[-1] + dt)
     add(stops[0][0], stops[0][1], STOP_S)
-    for (a, _), (b, tb) in zip(stops, stops[1:]):
+    for (a, ta), (b, tb) in zip(stops, stops[1:]):
         route = _route(free, a, b)
-        for p, q in zip(route, route[1:]):
-            add(q, tb, max(0.2, float(np.linalg.norm(q - p)) / WALK_MPS))
+        _turn(add, a, ta, a + 2.0 * _unit(route[1] - a))
+        for k, (p, q) in enumerate(zip(route, route[1:])):
+            ahead = q + 2.0 * _unit((route[k + 2] if k + 2 < len(route) else q + (q - p)) - q)
+            add(q, ahead, max(0.2, float(np.linalg.norm(q - p)) / WALK_MPS))
+        _turn(add, b, tgt[-1], tb)
         add(b, tb, STOP_S)
     tour = Tour(pos, tgt, times, max_speed_mps=max_speed_mps, name="default")
     speed, _ = max_speed(tour)
     if speed > 0.95 * max_speed_mps:  # slow down uniformly until the curve keeps the limit
         tour.time = tour.time * (speed / (0.95 * max_speed_mps))
     return tour
+
+
+def _stops(room, free, fov: float, aspect: float) -> list:
+    """(eye, painting centre) of each painting: its look-at point, at least CLEARANCE_M +
+    0.2 m from its wall in a floor plan, the head between 1.3 and 1.9 m."""
+    from .cameras import look_at, room_bounds
+    bounds = room_bounds(room)
+    stops = []
+    for slot in room.paintings:
+        if str(slot.name).startswith("label-"):
+            continue
+        eye, centre = look_at(slot, None, fov, aspect, bounds)
+        eye = np.array(eye)
+        flat = (eye - np.array(centre)) * [1.0, 0.0, 1.0]
+        reach = float(np.linalg.norm(flat))
+        if free is not None and 1e-9 < reach < CLEARANCE_M + 0.2:
+            eye = eye + flat / reach * (CLEARANCE_M + 0.2 - reach)
+        eye[1] = min(1.9, max(1.3, eye[1]))
+        stops.append((eye, np.array(centre)))
+    if not stops:
+        raise ValueError(f"room {room.name!r} has no paintings to tour")
+    return stops
+
+
+TURN_STEP_DEG = 45.0
+TURN_STEP_S = 0.5
+
+
+def _turn(add, at: np.ndarray, start: np.ndarray, end: np.ndarray) -> None:
+    """Keyframes turning the head at `at` from looking at `start` to looking at `end` about
+    the vertical, through targets 2 m away every TURN_STEP_DEG (the last one `end`)."""
+    def yaw(p):
+        d = np.asarray(p, float) - at
+        return math.atan2(d[0], d[2]) if math.hypot(d[0], d[2]) > 1e-9 else None
+    y0, y1 = yaw(start), yaw(end)
+    if y0 is None or y1 is None:
+        add(at, end, TURN_STEP_S)
+        return
+    delta = (y1 - y0 + math.pi) % (2 * math.pi) - math.pi
+    steps = max(1, math.ceil(abs(math.degrees(delta)) / TURN_STEP_DEG))
+    for k in range(1, steps):
+        a = y0 + delta * k / steps
+        add(at, at + 2.0 * np.array([math.sin(a), 0.0, math.cos(a)]), TURN_STEP_S)
+    add(at, end, TURN_STEP_S)
+
+
+def _unit(d: np.ndarray) -> np.ndarray:
+    n = float(np.linalg.norm(d))
+    return d / n if n > 1e-9 else np.array([0.0, 0.0, -1.0])
 
 
 def _free_space(ex):
