@@ -158,6 +158,17 @@ hang = {{ wall = 4, along_m = 1.5 }}
         assert any(np.allclose(tg, centre) for tg in t.target)
     cam = tour_path(t)
     assert len(cam) == int(np.floor(t.time[-1] * t.fps)) + 1
+    # While walking the head looks where it goes (within 60 degrees of its velocity: a
+    # target interpolated from the painting behind to the next one ahead had it walk
+    # backwards for a fifth of the way), and the view turns smoothly.
+    v = np.diff(cam.position, axis=0) * cam.fps
+    speed = np.linalg.norm(v, axis=1)
+    f = cam.forward / np.linalg.norm(cam.forward, axis=1, keepdims=True)
+    moving = speed > 0.1
+    assert moving.sum() > 30
+    assert (np.sum(f[:-1][moving] * v[moving], axis=1) / speed[moving]).min() > 0.5
+    turn = np.degrees(np.arccos(np.clip(np.sum(f[1:] * f[:-1], axis=1), -1, 1)))
+    assert turn.max() < 10.0
 
 
 def test_tour_file_errors_name_the_key(tmp_path, capsys):
