@@ -217,3 +217,45 @@ def test_exr_stays_linear_radiance(packs, tmp_path):
     assert np.allclose(ra, radiance, rtol=1e-5, atol=1e-7)
     expected = room_display(room).srgb8(rb)
     assert np.abs(np.asarray(Image.open(png)).astype(int) - expected).max() <= 1
+
+
+def test_the_default_walk_clips_no_painting_pixel(packs):
+    """The demo's walk (`gigascroll gallery`: the scroll room, the default 6 s walk, the
+    built-in ink landscape's colours at a lower resolution, the same shape) at the automatic
+    exposure, every 30th frame's eyes and magnifier, per pixel with hits: no painting pixel
+    reaches the curve's maximum (8-bit 255 in any channel), nor does any pixel of the frame;
+    the brightest paper stays less than a stop above paper white, well below the exposure
+    at which the neutral curve would round to 255. The clip curve at the same exposure clips
+    the paper under the spots: the curve is what keeps it."""
+    from gigascroll import views as v
+    from gigascroll.gallery.walk import walk_path
+    from gigascroll.views.exhibition import Headset
+
+    pack = g.TilePack(str(packs[1]))
+    room = builtin_room("scroll", pack)
+    gallery = Gallery.from_room(room, pack)
+    vt = g.VirtualTexture(pack, (40, 40))
+    gallery.light(vt, photons=1 << 18, threads=2)
+    gallery.bake(light_samples=32, threads=2)
+    display = room_display(room)
+    path = walk_path(room)
+    assert len(path) == 540
+    headset = Headset(width=60, height=64)
+    top = 1.0
+    while int(srgb_encode(pbr_neutral(np.full((1, 3), top, np.float32)))[0, 0] * 255 + 0.5) < 255:
+        top *= 1.05
+    peak, clipped_by_clip = 0.0, 0
+    for frame in range(0, len(path), 30):
+        for cam, _, _ in v.frame_cameras(path, frame, headset=headset, magnifier=v.MAGNIFIER):
+            gallery.stream(cam, vt)
+            linear, hits = gallery.render_display(cam, vt, hits=True)
+            painting = hits["slot"] >= 0
+            codes = display.srgb8(linear)
+            assert codes.max() < 255, frame
+            peak = max(peak, float((linear[painting] * display.exposure).max(initial=0)))
+            clip = Display(display.exposure, "clip").srgb8(linear)
+            clipped_by_clip += int((clip[painting] == 255).any(axis=-1).sum())
+    print(f"brightest painting pixel exposed to {peak:.3f}; neutral reaches 255 at {top:.2f}; "
+          f"{clipped_by_clip} painting pixels clip with the clip curve")
+    assert 0.8 < peak < 1.5 < top
+    assert clipped_by_clip > 0
