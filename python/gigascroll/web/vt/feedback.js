@@ -15,7 +15,7 @@ export const RING = 3;  // readbacks in flight per view
 // signal within a few frames; headless chromium was seen to leave some unsignalled for good
 // when frames come from setTimeout (a WebXR session's frames may), and tile determination
 // must not stop there.
-export const LATE_FRAMES = 6;
+export const LATE_FRAMES = 12;
 
 class ViewTarget {
   constructor(gl, width, height) {
