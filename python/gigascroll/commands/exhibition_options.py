@@ -8,7 +8,8 @@ import math
 
 from ..errors import UserError
 
-__all__ = ["add_exhibition_option", "add_look_at_options", "open_exhibition", "look_at_pose"]
+__all__ = ["add_exhibition_option", "add_look_at_options", "open_exhibition", "look_at_pose",
+           "headset_view"]
 
 
 def add_exhibition_option(p) -> None:
@@ -42,6 +43,14 @@ def open_exhibition(args, pack_option: str = "pack", room_default=None):
         return open_show(args.exhibition)
     except ExhibitionError as e:
         raise UserError(str(e)) from None
+
+
+def headset_view(eye) -> tuple[float, float]:
+    """(vertical field of view in degrees, aspect) of the headset's eye at resolution `eye`
+    (views.exhibition.Headset: square pixels), what gallery and view show."""
+    from ..views.exhibition import Headset
+    hs = Headset(width=int(eye[0]), height=int(eye[1]))
+    return 2 * math.degrees(math.atan(hs.tan_half_y)), hs.tan_half_x / hs.tan_half_y
 
 
 def look_at_pose(args, room, show=None, fov: float = 60.0, aspect: float = 1.0):

@@ -127,12 +127,12 @@ def walk_camera_path(args, room, show, eye):
     or with --exhibition and neither the show's tour; one of them at most."""
     from ..exhibit import ExhibitionError
     from ..exhibit.tours import load_tour, tour_path
-    from .exhibition_options import look_at_pose
+    from .exhibition_options import headset_view, look_at_pose
     given = [o for o, v in (("--look-at", args.look_at), ("--tour", args.tour),
                             ("--path", args.path)) if v is not None]
     if len(given) > 1:
         raise UserError(f"give one of {', '.join(given)}, not several")
-    pose = look_at_pose(args, room, show, 90.0, eye[0] / eye[1])  # the headset's ~90 degrees
+    pose = look_at_pose(args, room, show, *headset_view(eye))
     try:
         if pose is not None:
             return standing_path(pose, args.seconds)

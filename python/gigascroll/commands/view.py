@@ -81,7 +81,7 @@ def run(args) -> int:
         raise UserError("no display to open a window on (DISPLAY is not set); "
                         "use `gigascroll gallery` to write the walk to files")
     from ..pack import TilePack
-    from .exhibition_options import look_at_pose, open_exhibition
+    from .exhibition_options import headset_view, look_at_pose, open_exhibition
     from .gallery import load_room
     show = open_exhibition(args, room_default="scroll")
     if show is not None:
@@ -92,7 +92,7 @@ def run(args) -> int:
             raise UserError(f"{p} is not a tile pack (no manifest.json)")
         pack = TilePack(p)
         room = load_room(args.room, pack)
-    args.pose = look_at_pose(args, room, show, 90.0, eye[0] / eye[1])
+    args.pose = look_at_pose(args, room, show, *headset_view(eye))
     try:
         import pyglet
         pyglet.options["shadow_window"] = False
