@@ -82,6 +82,7 @@ export class VirtualTexture {
     this.feedback = new FeedbackPass(gl);
     this.firstUnit = o.firstUnit;
     this.frame = 0;
+    this.isReady = false;
     this.counters = { uploads: 0, feedbackMs: 0, processMs: 0, readbacks: 0, readbackFrame: -1, failed: 0 };
     this.pageTable.upload(gl);
     this.ready = this.loadPinned(pins);
@@ -103,6 +104,7 @@ export class VirtualTexture {
       }
     }
     this.pageTable.upload(this.gl);
+    this.isReady = true;
     return this;
   }
 
@@ -117,8 +119,10 @@ export class VirtualTexture {
   }
   flushTable() { this.pageTable.upload(this.gl); }
 
-  // The frame's work before drawing (the paper's five stages less the display).
+  // The frame's work before drawing (the paper's five stages less the display); nothing
+  // before vt.ready (the pinned tiles must reach their pinned slots first).
   beginFrame(frameNumber = this.frame + 1) {
+    if (!this.isReady) return;
     this.frame = frameNumber;
     this.feedback.frame = frameNumber;
     const t0 = performance.now();
