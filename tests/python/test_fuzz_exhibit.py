@@ -107,7 +107,7 @@ def test_random_look_at(fork_worker, show_files, look, distance, command, extra)
         extra = [] if extra in (["--tour", "nope.json"], ["--path", "walk"]) else extra
     else:
         argv += ["--eye", "16x16", "--seconds", "0.05", "--no-video", "--no-oracle",
-                 "--lighting", "baked", "--photons", "500", "--out", str(show_files / f"w{n}")]
+                 "--lighting", "full", "--photons", "500", "--out", str(show_files / f"w{n}")]
         extra = [] if extra and extra[0] == "--camera" else extra
     argv += extra
     o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=120)

@@ -192,7 +192,8 @@ def test_gallery_walks_a_tour_file(tmp_path, capsys):
         {"position": [1.0, 1.5, 1.5], "target": [1.0, 1.5, 0], "time": 1}]}))
     out = tmp_path / "walk"
     code = main(["gallery", str(pack.path), "--room", "scroll", "--tour", str(f), "--eye",
-                 "32x32", "--no-video", "--no-oracle", "--photons", "2000", "--out", str(out)])
+                 "32x32", "--no-video", "--no-oracle", "--photons", "2000", "--lighting", "full",
+                 "--out", str(out)])
     assert code == 0
     results = json.loads((out / "results.json").read_text())
     assert results["summary"]["frames"] == 11
