@@ -63,6 +63,9 @@ export const DEFAULTS = {
   hardwareBilinear: false,    // one filtered fetch a level instead of four texelFetch
 };
 
+// The sampler's uniforms: its four textures in unit order, then its two parameters.
+const UNIFORMS = ["uVtTable", "uVtTail", "uVtInfo", "uVtPhysical", "uVtTile", "uVtPixelScale"];
+
 export class VirtualTexture {
   constructor(gl, pack, options = {}) {
     const o = { ...DEFAULTS, ...options };
@@ -81,6 +84,7 @@ export class VirtualTexture {
                                                            useWorker: o.useWorker !== false });
     this.feedback = new FeedbackPass(gl);
     this.firstUnit = o.firstUnit;
+    this.locations = new WeakMap();
     this.frame = 0;
     this.isReady = false;
     this.counters = { uploads: 0, feedbackMs: 0, processMs: 0, readbacks: 0, readbackFrame: -1, failed: 0 };
@@ -162,17 +166,21 @@ export class VirtualTexture {
   // the feedback target's pixel scale, so call it after begin.
   bind(program) {
     const gl = this.gl, u = this.firstUnit, pt = this.pageTable;
-    const units = [[pt.tableTexture, "uVtTable"], [pt.tailTexture, "uVtTail"], [pt.infoTexture, "uVtInfo"],
-                   [this.cache.texture, "uVtPhysical"]];
-    units.forEach(([texture, name], k) => {
+    let at = this.locations.get(program);  // uniform locations, looked up once a program
+    if (!at) {
+      at = Object.fromEntries(UNIFORMS.map((name) => [name, gl.getUniformLocation(program, name)]));
+      this.locations.set(program, at);
+    }
+    const textures = [pt.tableTexture, pt.tailTexture, pt.infoTexture, this.cache.texture];
+    textures.forEach((texture, k) => {
       gl.activeTexture(gl.TEXTURE0 + u + k);
       gl.bindTexture(gl.TEXTURE_2D, texture);
-      gl.uniform1i(gl.getUniformLocation(program, name), u + k);
+      gl.uniform1i(at[UNIFORMS[k]], u + k);
     });
     gl.activeTexture(gl.TEXTURE0);
     const g = this.geometry;
-    gl.uniform4i(gl.getUniformLocation(program, "uVtTile"), g.tileSize, g.border, g.payload, this.cache.slotsX);
-    gl.uniform2f(gl.getUniformLocation(program, "uVtPixelScale"), ...this.feedback.pixelScale);
+    gl.uniform4i(at.uVtTile, g.tileSize, g.border, g.payload, this.cache.slotsX);
+    gl.uniform2f(at.uVtPixelScale, ...this.feedback.pixelScale);
   }
 
   stats() {
