@@ -382,3 +382,18 @@ def test_the_files_tour_is_the_shows(show_dir):
     with pytest.raises(ExhibitionError, match=r"tour.keyframes\[1\].time: expected a number >= 0"):
         build_show(f, show_dir / "show2")
     assert not (show_dir / "show2").exists()
+
+
+def test_the_bake_is_the_one_serve_looks_for(show_dir):
+    # exhibit build bakes the light into show/bake/KEY.glb under serve's cache key, so
+    # `serve --exhibition` starts without baking.
+    from types import SimpleNamespace
+
+    from gigascroll.commands.serve import _cache_dir
+    from gigascroll.serve import pack_hash
+    assert main(["exhibit", "build", str(show_dir / "show.toml"), "-o", str(show_dir / "show")]) == 0
+    show = open_show(show_dir / "show")
+    record = json.loads((show_dir / "show" / "build.json").read_text())
+    assert (show_dir / "show" / record["bake"]["glb"]).is_file()
+    where = _cache_dir(SimpleNamespace(cache_dir=None), show, pack_hash(show.pack))
+    assert where == show_dir / "show" / "bake"
