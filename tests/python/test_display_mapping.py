@@ -14,7 +14,7 @@ from gigascroll import cli
 from gigascroll.display_mapping import (PAINTING_WHITE, PAPER_WHITE, Display, ExposureSetting,
                                         ev100_of_exposure, exposure_for_white,
                                         exposure_of_ev100, pbr_neutral, srgb_encode,
-                                        to_display, to_srgb8)
+                                        to_srgb8)
 from gigascroll.gallery import Gallery, builtin_room
 from gigascroll.gallery.exposure import auto_lux, painting_lux, room_display
 from gigascroll.gallery.rooms import LUMENS_PER_WATT, direct_irradiance

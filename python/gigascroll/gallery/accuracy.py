@@ -10,7 +10,7 @@ import numpy as np
 
 from ..photon import relmse
 
-__all__ = ["flip", "image_errors", "psnr"]
+__all__ = ["flip", "image_errors", "psnr", "write_comparison"]
 
 
 def psnr(image: np.ndarray, reference: np.ndarray) -> float:
@@ -33,6 +33,18 @@ def flip(image: np.ndarray, reference: np.ndarray) -> float:
 
     diff = oiio.ImageBufAlgo.FLIP_diff(buf(reference), buf(image))
     return float(np.asarray(diff.get_pixels(oiio.FLOAT))[..., 0].mean())
+
+
+def write_comparison(path, images: list, display) -> None:
+    """Linear stills of one view (ours, Mitsuba's reference, ...) side by side as one PNG,
+    each through the same camera response (a display_mapping.Display: the room's exposure and
+    tone curve, as `render` and the walk show them), 4 dark pixels apart."""
+    from ..outputs import write_image
+
+    tiles = [display.srgb8(np.asarray(im, np.float32)) for im in images]
+    gap = np.full((tiles[0].shape[0], 4, 3), 16, np.uint8)
+    row = [x for t in tiles for x in (t, gap)][:-1]
+    write_image(path, np.concatenate(row, axis=1))
 
 
 def image_errors(image: np.ndarray, reference: np.ndarray) -> dict:
