@@ -9,7 +9,9 @@ main camera 40 cm away, the magnifier showing 2.5 cm from 20 cm), served by `gig
 serve`'s application. Reported: the median over frames of (a) the processing of all three
 views' last feedback together (the steady state of a headset, whose readbacks arrive every
 frame), (b) beginFrame's feedback time in the loop (the readbacks' copies and processing of
-whatever arrived that frame), and the requests a frame; the baseline in the same run is Barrett's
+whatever arrived that frame), the requests a frame, and the JS time of a frame's uploads (tiles'
+texSubImage2D calls and the page table's incremental update and upload, in frames that
+uploaded); the baseline in the same run is Barrett's
 CPU scan, every pixel into a hash set (a JS Set), as a ratio. The pixel loop is plain JS;
 SwiftShader draws the passes, which does not enter these figures."""
 
@@ -84,6 +86,9 @@ def feedback_figures(width: int = 16000, height: int = 2000, frames: int = 240,
             "median_ms_in_loop_processing": statistics.median(r["processMs"]) if r["processMs"] else None,
             "frames_with_readbacks": len(r["ms"]),
             "median_requests_in_loop": statistics.median(r["requests"]) if r["requests"] else None,
+            "median_upload_ms": statistics.median(r["uploadMs"]) if r["uploadMs"] else None,
+            "median_uploads": statistics.median(r["uploads"]) if r["uploads"] else None,
+            "frames_with_uploads": len(r["uploads"]),
             "resident_at_end": r["stats"]["resident"], "goal_ms": 1.0}
 
 
@@ -94,4 +99,6 @@ def format_figures(f: dict) -> str:
             f"p90 {f['p90_ms_all_views']:.3f} ms (goal <= {f['goal_ms']} ms), every pixel into a Set "
             f"{f['median_ms_naive_set']:.3f} ms ({f['ratio_naive_to_ours']:.1f}x); in the loop "
             f"(readback copies + processing of what arrived): median {loop} "
-            f"over {f['frames_with_readbacks']} frames")
+            f"over {f['frames_with_readbacks']} frames; uploads: median "
+            f"{'n/a' if f['median_upload_ms'] is None else format(f['median_upload_ms'], '.3f') + ' ms'} "
+            f"for {f['median_uploads']} tiles a frame")

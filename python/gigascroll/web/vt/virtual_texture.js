@@ -87,7 +87,7 @@ export class VirtualTexture {
     this.locations = new WeakMap();
     this.frame = 0;
     this.isReady = false;
-    this.counters = { uploads: 0, feedbackMs: 0, processMs: 0, readbacks: 0, readbackFrame: -1, failed: 0 };
+    this.counters = { uploads: 0, uploadMs: 0, feedbackMs: 0, processMs: 0, readbacks: 0, readbackFrame: -1, failed: 0 };
     this.pageTable.upload(gl);
     this.ready = this.loadPinned(pins);
   }
@@ -147,6 +147,7 @@ export class VirtualTexture {
 
   // Uploads arrived tiles within the per-frame budget and the page table's changes.
   upload() {
+    const t0 = performance.now();
     for (const f of this.loader.takeFailed()) {
       this.counters.failed += f.indices.length;
       for (const i of f.indices) this.requests.arrived(i);
@@ -159,6 +160,7 @@ export class VirtualTexture {
     }
     this.counters.uploads = tiles.length;
     this.pageTable.upload(this.gl);
+    this.counters.uploadMs = performance.now() - t0;
   }
 
   // Sets the textures (units firstUnit .. firstUnit + 3) and uniforms of a program that
@@ -196,6 +198,7 @@ export class VirtualTexture {
       pending: this.requests.pending.length + this.loader.arrived.length,
       uploads: this.counters.uploads,
       tableEntriesUploaded: this.pageTable.uploadedEntries,
+      uploadMs: this.counters.uploadMs,       // JS time of the tiles' and page table's uploads
       feedbackMs: this.counters.feedbackMs,   // readback copies + processing, this frame
       processMs: this.counters.processMs,     // processing alone
       readbacks: this.counters.readbacks,     // frames that processed a readback

@@ -263,10 +263,11 @@ async function feedback(views, placements) {
 // `step`: metres a frame by which every camera (eye and target) moves.
 async function benchFeedback(views, placements, frames = 200, step = [0, 0, 0]) {
   quads = null;
-  const ms = [], processMs = [], counts = [], pixels = [];
+  const ms = [], processMs = [], counts = [], pixels = [], uploadMs = [], uploads = [];
   for (let f = 1; f <= frames; ++f) {
     const seen = vt.counters.readbacks;
     vt.beginFrame(f);
+    if (vt.counters.uploads > 0) { uploadMs.push(vt.counters.uploadMs); uploads.push(vt.counters.uploads); }
     if (vt.counters.readbacks > seen) {
       ms.push(vt.counters.feedbackMs);
       processMs.push(vt.counters.processMs);
@@ -298,7 +299,7 @@ async function benchFeedback(views, placements, frames = 200, step = [0, 0, 0]) 
     naive.push((performance.now() - t0) / run);
   }
   return { ms, processMs, requests: counts, pixels, together, naive, togetherRequests: vt.requests.last.requests,
-           stats: vt.stats() };
+           uploadMs, uploads, stats: vt.stats() };
 }
 
 // The runtime from a cold cache: every frame beginFrame (readbacks -> requests -> fetches ->
