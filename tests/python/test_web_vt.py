@@ -296,8 +296,8 @@ def test_streaming_loads_what_the_core_requests(browser, vt_pack):  # noqa: F811
               "reduction": POSES[k][2]} for v, k in enumerate((1, 3, 5))]
     with serve_pack(vt_pack) as url:
         page = open_page(browser, f"{url}/client/vt/test/harness.html")
-        page.evaluate("(scene) => vtTest.init({scene, slots: [20, 20], maxRequestsPerFrame: 8, maxUploadsPerFrame: 4})",
-                      pack_scene(vt_pack))
+        page.evaluate("(scene) => vtTest.init({scene, slots: [20, 20], maxRequestsPerFrame: 8, "
+                      "maxUploadsPerFrame: 4})", pack_scene(vt_pack))
         out = page.evaluate("([v, p]) => vtTest.stream(v, p, 400)", [views, PLACEMENTS])
         page.close()
     resident = {int(g.pack_request(*k)) for k in out["resident"]}

@@ -71,10 +71,12 @@ function checkPack(pack) {
   if (!Array.isArray(pack.paintings) || pack.paintings.length === 0) throw new Error("pack: no paintings");
   pack.paintings.forEach((p, i) => {
     const ok = p && p.index === i && int(p.width) && int(p.height) && p.width > 0 && p.height > 0 &&
-      int(p.levels) && p.levels >= 1 && p.levels <= 32 && Array.isArray(p.table_size) && p.table_size.every(pow2) &&
+      int(p.levels) && p.levels >= 1 && p.levels <= 32 &&
+      Array.isArray(p.table_size) && p.table_size.every(pow2) &&
       Array.isArray(p.table_offset) && p.table_offset.every(int) &&
       p.table_offset[0] % p.table_size[0] === 0 && p.table_offset[1] % p.table_size[1] === 0 &&
-      p.table_offset[0] + p.table_size[0] <= pack.table_size[0] && p.table_offset[1] + p.table_size[1] <= pack.table_size[1];
+      p.table_offset[0] + p.table_size[0] <= pack.table_size[0] &&
+      p.table_offset[1] + p.table_size[1] <= pack.table_size[1];
     if (!ok) throw new Error(`pack: painting ${i} is not a valid placement in the merged page table`);
   });
 }

@@ -81,7 +81,8 @@ async function fetchBatch({ id, url, keys, indices, tileBytes }) {
     if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
     const body = await r.arrayBuffer();
     if (body.byteLength !== keys.length * tileBytes) throw new Error(`${url}: short batch`);
-    return { id, tiles: indices.map((index, k) => ({ index, bytes: body.slice(k * tileBytes, (k + 1) * tileBytes) })) };
+    const tile = (k) => body.slice(k * tileBytes, (k + 1) * tileBytes);
+    return { id, tiles: indices.map((index, k) => ({ index, bytes: tile(k) })) };
   } catch (e) {
     return { id, error: String(e && e.message ? e.message : e) };
   }

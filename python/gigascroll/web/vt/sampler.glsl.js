@@ -89,8 +89,10 @@ highp vec3 vtBilinear(int p, highp vec2 x0, int l, ivec2 size) {
   // rounded by the hardware (8 bits of fraction on many GPUs).
   return textureLod(uVtPhysical, (vec2(at) + vec2(f, g) + 0.5) / vec2(textureSize(uVtPhysical, 0)), 0.0).rgb;
 #else
-  highp vec3 t00 = texelFetch(uVtPhysical, at, 0).rgb, t10 = texelFetch(uVtPhysical, at + ivec2(1, 0), 0).rgb;
-  highp vec3 t01 = texelFetch(uVtPhysical, at + ivec2(0, 1), 0).rgb, t11 = texelFetch(uVtPhysical, at + ivec2(1, 1), 0).rgb;
+  highp vec3 t00 = texelFetch(uVtPhysical, at, 0).rgb;
+  highp vec3 t10 = texelFetch(uVtPhysical, at + ivec2(1, 0), 0).rgb;
+  highp vec3 t01 = texelFetch(uVtPhysical, at + ivec2(0, 1), 0).rgb;
+  highp vec3 t11 = texelFetch(uVtPhysical, at + ivec2(1, 1), 0).rgb;
   highp float w00 = (1.0 - f) * (1.0 - g), w10 = f * (1.0 - g), w01 = (1.0 - f) * g, w11 = f * g;
   return w00 * t00 + w10 * t10 + w01 * t01 + w11 * t11;
 #endif

@@ -87,7 +87,8 @@ export class VirtualTexture {
     this.locations = new WeakMap();
     this.frame = 0;
     this.isReady = false;
-    this.counters = { uploads: 0, uploadMs: 0, feedbackMs: 0, processMs: 0, readbacks: 0, readbackFrame: -1, failed: 0 };
+    this.counters = { uploads: 0, uploadMs: 0, feedbackMs: 0, processMs: 0, readbacks: 0,
+                      readbackFrame: -1, failed: 0 };
     this.pageTable.upload(gl);
     this.ready = this.loadPinned(pins);
   }

@@ -74,7 +74,8 @@ const probePrograms = new Map();
 function sampleProbes(probes, hardware = false) {
   const n = probes.length / 4, w = Math.min(n, 256), h = Math.ceil(n / 256);
   if (!gl.getExtension("EXT_color_buffer_float")) throw new Error("no EXT_color_buffer_float");
-  if (!probePrograms.has(hardware)) probePrograms.set(hardware, compile(HEADER + "void main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, 0, 1); }",
+  const fullScreen = "void main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, 0, 1); }";
+  if (!probePrograms.has(hardware)) probePrograms.set(hardware, compile(HEADER + fullScreen,
     HEADER + (hardware ? "#define VT_HARDWARE_BILINEAR\n" : "") + vt.glsl + `
 uniform highp sampler2D uProbes;
 out vec4 outColor;
