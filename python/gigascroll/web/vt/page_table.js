@@ -139,8 +139,10 @@ export class PageTable {
 
   createTextures(gl) {
     const max = gl.getParameter(gl.MAX_TEXTURE_SIZE), geo = this.geometry;
-    if (geo.tableWidth > max || geo.tableHeight > max || this.tail.width > max || this.tail.height > max)
-      throw new Error(`page table ${geo.tableWidth} x ${geo.tableHeight} exceeds MAX_TEXTURE_SIZE ${max}`);
+    if (geo.tableWidth > max || geo.tableHeight > max || this.tail.width > max || this.tail.height > max ||
+        geo.paintings.length > max)
+      throw new Error(`page table ${geo.tableWidth} x ${geo.tableHeight} (tails ${this.tail.width} x ` +
+                      `${this.tail.height}, ${geo.paintings.length} paintings) exceeds MAX_TEXTURE_SIZE ${max}`);
     const make = (levels, w, h, format) => {
       const t = gl.createTexture();
       gl.bindTexture(gl.TEXTURE_2D, t);
