@@ -427,3 +427,28 @@ def test_tile_server_failures(browser, vt_pack):  # noqa: F811
         page.close()
     assert out["frames"] == 40 and out["stats"]["failed"] > 0
     assert out["stats"]["resident"] == len(out["resident"]) == info["pinned"]  # the tails only
+
+
+def test_gpu_sampler_on_a_packed_gallery(browser, tmp_path):  # noqa: F811
+    """Six paintings the pack's layout packer placed in a 32 x 32 merged table (offsets along
+    both axes, tails of one to three levels): the GPU sampler still equals the core's."""
+    rng = np.random.default_rng(2)
+    sizes = [(3000, 260), (900, 900), (500, 1400), (2000, 700), (300, 300), (1200, 200)]
+    images = [rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for w, h in sizes]
+    path = tmp_path / "gallery.pack"
+    pack = g.build_pack(images, path)
+    assert any(q.table_offset[1] > 0 for q in pack.paintings)
+    vt = g.VirtualTexture(pack, slots=(24, 24))
+    keys = streamed_tiles(pack, rng, 0.5)
+    for k in keys:
+        vt.insert(k, pack.read_tile(*k))
+    with serve_pack(path) as url:
+        page = open_page(browser, f"{url}/client/vt/test/harness.html")
+        page.evaluate("(scene) => vtTest.init({scene, slots: [24, 24]})", pack_scene(path))
+        page.evaluate("(keys) => vtTest.insertTiles(keys)", [list(k) for k in keys])
+        pr = probes(pack, rng, 300)
+        gpu = np.asarray(page.evaluate("(p) => vtTest.sampleProbes(p)", pr.ravel().tolist()),
+                         np.float32).reshape(-1, 4)
+        page.close()
+    cpu, _ = cpu_samples(vt, pr)
+    assert np.abs(gpu[:, :3] * 255 - cpu).max() <= 2.0
