@@ -117,3 +117,27 @@ def test_fuzz_bench_exhibition_full_options(fork_worker, tmp_path_factory, argv)
             str(d / "r.json"), "--parts", "multi"]
     o = fork_worker.run({"kind": "cli", "argv": argv, "memory": 2 << 30}, timeout=120)
     assert cli_message_ok(o) is None, f"{argv}: {cli_message_ok(o)}\n{o.describe()}"
+
+
+@pytest.fixture(scope="module")
+def two_pngs(tmp_path_factory):
+    from PIL import Image
+    d = tmp_path_factory.mktemp("pngs")
+    Image.fromarray(np.full((20, 30, 3), 5, np.uint8)).save(d / "a.png")
+    Image.fromarray(np.full((9, 12, 3), 9, np.uint8)).save(d / "b.png")
+    return d
+
+
+@fuzz_settings(12)
+@given(items=st.lists(st.one_of(st.text(max_size=8), st.sampled_from(
+    ["c=a", "c=1", "c=2", "c=-1", "a=0", "=", "c==a", "c=0x1", "c=١", "c=" + "9" * 30])),
+    min_size=1, max_size=3))
+def test_fuzz_pack_instance_option(fork_worker, two_pngs, tmp_path_factory, items):
+    count_case("pack-instance")
+    out = tmp_path_factory.mktemp("pi") / "p.pack"
+    argv = ["pack", str(two_pngs / "a.png"), str(two_pngs / "b.png"), "-o", str(out),
+            "--tile-size", "16", "--border", "2"]
+    for item in items:
+        argv.append(f"--instance={item}")
+    o = fork_worker.run({"kind": "cli", "argv": argv, "memory": 2 << 30}, timeout=60)
+    assert cli_message_ok(o) is None, f"{items!r}: {cli_message_ok(o)}\n{o.describe()}"

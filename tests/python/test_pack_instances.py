@@ -253,3 +253,23 @@ def test_info_and_verify(packs, gigascroll_cli):
     assert r.returncode == 0, r.stderr
     assert r.stdout.count("an instance of [0] a:") == 2
     assert f"verified {inst.tile_count} tiles" in r.stdout
+
+
+def test_the_pack_command_takes_instances(gigascroll_cli, tmp_path):
+    from PIL import Image
+    for name, img in zip("ab", images()[:2]):
+        Image.fromarray(img).save(tmp_path / f"{name}.png")
+    r = gigascroll_cli("pack", "a.png", "b.png", "-o", "p.pack", "--tile-size", "32",
+                       "--border", "2", "--instance", "a=b=0", "--instance", "b2=b",
+                       cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    pack = TilePack(tmp_path / "p.pack")
+    assert [(p.name, p.instance_of) for p in pack.paintings] == \
+        [("a", None), ("b", None), ("a=b", 0), ("b2", 1)]
+    for bad, match in (("x", "NAME=SOURCE"), ("=0", "NAME=SOURCE"), ("x=", "NAME=SOURCE"),
+                       ("x=7", "not an input index"), ("x=c", "no input painting"),
+                       ("a=0", "already a painting")):
+        r = gigascroll_cli("pack", "a.png", "b.png", "-o", "q.pack", "--instance", bad,
+                           cwd=tmp_path)
+        assert r.returncode == 2 and match in r.stderr and "Traceback" not in r.stderr, r.stderr
+        assert not (tmp_path / "q.pack").exists()

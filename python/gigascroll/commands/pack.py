@@ -43,7 +43,23 @@ def register(sub) -> None:
                    "its first worker and any stretch without workers (default 60 s)")
     p.add_argument("--resume", action="store_true",
                    help="reuse the verified shards a failed sharded build left in OUTPUT.shards/")
+    p.add_argument("--instance", action="append", default=[], metavar="NAME=SOURCE",
+                   help="add painting NAME sharing input SOURCE's tiles (its index from 0, or "
+                   "its painting name): a copy with its own name and page-table place that "
+                   "stores nothing; repeatable, the instances follow the inputs")
     p.set_defaults(func=run)
+
+
+def parse_instances(items) -> list[tuple[str, int | str]]:
+    """NAME=SOURCE items as (name, source), SOURCE an index when it is all digits."""
+    out = []
+    for item in items:
+        name, eq, source = item.rpartition("=")
+        if not eq or not name or not source:
+            raise ValueError(f"--instance {item!r}: expected NAME=SOURCE (SOURCE an input's "
+                             "index or painting name)")
+        out.append((name, int(source) if source.isascii() and source.isdigit() else source))
+    return out
 
 
 def run(args) -> int:
@@ -58,9 +74,9 @@ def run(args) -> int:
                       threads=args.threads, bc1_fit=args.bc1_fit, progress=True, colour=args.colour,
                       intent=args.intent, black_point_compensation=args.bpc,
                       workers=args.workers, scheduler=args.scheduler, resume=args.resume,
-                      timeout=args.timeout)
+                      timeout=args.timeout, instances=parse_instances(args.instance) or None)
     seconds = time.perf_counter() - t0
-    mpx = sum(p.width * p.height for p in pack.paintings) / 1e6
+    mpx = sum(p.width * p.height for p in pack.paintings if p.instance_of is None) / 1e6
     print(pack_summary(pack))
     print(f"built in {seconds:.1f} s ({mpx / seconds:.1f} Mpixel/s)")
     return 0
