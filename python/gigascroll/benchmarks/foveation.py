@@ -12,7 +12,7 @@ per-eye resolution and in the same run, alternating:
   the mean requested level of the periphery's camera against the unfoveated eye's;
 - the foveated frame's error against the unfoveated frame, separately in the fovea, the
   blend band and the periphery: mean absolute difference and PSNR of the display values
-  (exposure, clamp, sRGB), and the mean FLIP (LDR, at the headset's pixels per degree) when
+  (the walk's camera response: exposure, neutral curve, sRGB), and the mean FLIP (LDR, at the headset's pixels per degree) when
   flip-evaluator is installed;
 - a figure: bench/foveation/error.png (the close look at the largest size).
 """
