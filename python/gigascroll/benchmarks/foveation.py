@@ -12,8 +12,8 @@ per-eye resolution and in the same run, alternating:
   the mean requested level of the periphery's camera against the unfoveated eye's;
 - the foveated frame's error against the unfoveated frame, separately in the fovea, the
   blend band and the periphery: mean absolute difference and PSNR of the display values
-  (the walk's camera response: exposure, neutral curve, sRGB), and the mean FLIP (LDR, at the headset's pixels per degree) when
-  flip-evaluator is installed;
+  (the walk's camera response: exposure, neutral curve, sRGB), and the mean FLIP (LDR, at
+  the headset's pixels per degree) when flip-evaluator is installed;
 - a figure: bench/foveation/error.png (the close look at the largest size).
 """
 
