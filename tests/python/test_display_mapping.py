@@ -259,3 +259,27 @@ def test_the_default_walk_clips_no_painting_pixel(packs):
           f"{clipped_by_clip} painting pixels clip with the clip curve")
     assert 0.8 < peak < 1.5 < top
     assert clipped_by_clip > 0
+
+
+def test_the_walk_report_states_the_response(packs, tmp_path):
+    """`gallery --exposure 6.5 --tone clip`: results.json and report.md say what was used, and
+    the saved frame is the linear frame (--exr) through exactly that response."""
+    import json
+
+    import OpenImageIO as oiio
+    from PIL import Image
+
+    out = tmp_path / "walk"
+    rc = cli.main(["gallery", str(packs[1]), "--eye", "32x32", "--seconds", "0.05",
+                   "--no-video", "--no-oracle", "--photons", "20000", "--threads", "2", "--exr",
+                   "--exposure", "6.5", "--tone", "clip", "--out", str(out)])
+    assert rc == 0
+    results = json.loads((out / "results.json").read_text())
+    d = results["display"]
+    assert d["tone"] == "clip" and d["ev100"] == pytest.approx(6.5)
+    assert d["exposure"] == pytest.approx(683 / (1.2 * 2 ** 6.5))
+    assert results["settings"]["tone"] == "clip" and "EV100 6.50" in (out / "report.md").read_text()
+    name = results["saved_frames"][-1]
+    linear = oiio.ImageInput.open(str(out / "frames" / f"{name}.exr")).read_image("float")
+    png = np.asarray(Image.open(out / "frames" / f"{name}.png"))
+    assert np.array_equal(png, to_srgb8(linear, d["exposure"], "clip"))
