@@ -3,13 +3,13 @@
 
 import pytest
 
-from browser import chromium_path  # noqa: F401 - fixture
+from browser import browser, chromium_path  # noqa: F401 - fixtures
 
 
-def test_feedback_figures(chromium_path):  # noqa: F811
+def test_feedback_figures(browser):  # noqa: F811 - the session's chromium
     from gigascroll.benchmarks.web_client import feedback_figures, format_figures
 
-    f = feedback_figures(2000, 600, frames=12, chromium=chromium_path)
+    f = feedback_figures(2000, 600, frames=12, browser=browser)
     # Both Quest 3 eyes at 1/8 and the magnifier at full size.
     assert f["feedback_pixels"] == [258 * 276, 258 * 276, 512 * 512]
     assert f["pixels_a_frame"] == 2 * 258 * 276 + 512 * 512

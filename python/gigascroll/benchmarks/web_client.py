@@ -44,18 +44,18 @@ def _views(height_m: float) -> list[dict]:
 
 
 def feedback_figures(width: int = 16000, height: int = 2000, frames: int = 240,
-                     chromium: str | None = None) -> dict:
+                     chromium: str | None = None, browser=None) -> dict:
     """Builds a pattern painting's pack (width x height, 0.25 mm texels on the wall at
-    x = 0..), serves it and measures in headless chromium; returns the figures (ms)."""
-    from playwright.sync_api import sync_playwright
-
+    x = 0..), serves it and measures in headless chromium (a Playwright browser of the
+    caller's, or the system chromium launched here); returns the figures (ms)."""
     from .. import TilePack, build_pack
     from ..experiments import pattern_image
     from ..serve import MAX_BATCH, ServerThread, make_app, pack_description, pack_hash
 
-    chromium = chromium or shutil.which("chromium") or shutil.which("chromium-browser")
-    if chromium is None:
-        raise RuntimeError("chromium not found (the Makefile installs Debian's chromium)")
+    if browser is None:
+        chromium = chromium or shutil.which("chromium") or shutil.which("chromium-browser")
+        if chromium is None:
+            raise RuntimeError("chromium not found (the Makefile installs Debian's chromium)")
     w_m, h_m = width * TEXEL_M, height * TEXEL_M
     placements = [{"painting": 0, "origin": [0.0, 1.5, 0.0], "u_axis": [1, 0, 0],
                    "v_axis": [0, -1, 0], "width_m": w_m, "height_m": h_m}]
@@ -64,17 +64,18 @@ def feedback_figures(width: int = 16000, height: int = 2000, frames: int = 240,
         h = pack_hash(pack)
         scene = {"version": 1, "pack": pack_description(pack, h),
                  "tiles": {"batch": f"/api/tiles/{h}/batch", "max_batch": MAX_BATCH}}
-        with ServerThread(make_app(TilePack(str(pack.path)), None, h)) as url, \
-                sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=chromium, headless=True, args=CHROMIUM_ARGS)
-            page = browser.new_page()
-            page.goto(f"{url.rstrip('/')}/client/vt/test/harness.html")
-            page.wait_for_function("window.vtTestReady === true")
-            page.evaluate("(scene) => vtTest.init({scene})", scene)
-            step = [SPEED / HZ, 0, 0]
-            r = page.evaluate("([v, p, n, s]) => vtTest.benchFeedback(v, p, n, s)",
-                              [_views(h_m), placements, frames, step])
-            browser.close()
+        with ServerThread(make_app(TilePack(str(pack.path)), None, h)) as url:
+            if browser is not None:
+                r = _measure(browser, url, scene, h_m, placements, frames)
+            else:
+                from playwright.sync_api import sync_playwright
+
+                with sync_playwright() as p:
+                    own = p.chromium.launch(executable_path=chromium, headless=True, args=CHROMIUM_ARGS)
+                    try:
+                        r = _measure(own, url, scene, h_m, placements, frames)
+                    finally:
+                        own.close()
     return {"painting": f"{width}x{height}", "frames": frames,
             "feedback_pixels": r["pixels"], "pixels_a_frame": sum(r["pixels"]),
             "median_ms_all_views": statistics.median(r["together"]),
@@ -90,6 +91,19 @@ def feedback_figures(width: int = 16000, height: int = 2000, frames: int = 240,
             "median_uploads": statistics.median(r["uploads"]) if r["uploads"] else None,
             "frames_with_uploads": len(r["uploads"]),
             "resident_at_end": r["stats"]["resident"], "goal_ms": 1.0}
+
+
+def _measure(browser, url: str, scene: dict, h_m: float, placements, frames: int) -> dict:
+    """The test page's benchFeedback on a new page of `browser`."""
+    page = browser.new_page()
+    try:
+        page.goto(f"{url.rstrip('/')}/client/vt/test/harness.html")
+        page.wait_for_function("window.vtTestReady === true")
+        page.evaluate("(scene) => vtTest.init({scene})", scene)
+        return page.evaluate("([v, p, n, s]) => vtTest.benchFeedback(v, p, n, s)",
+                             [_views(h_m), placements, frames, [SPEED / HZ, 0, 0]])
+    finally:
+        page.close()
 
 
 def format_figures(f: dict) -> str:
