@@ -75,9 +75,14 @@ def test_a_second_run_reuses_the_pack(run):
                                          (["--scale", "x"], "--scale"),
                                          (["--parts", "walk"], "--parts"),
                                          (["--seconds", "nan"], "--seconds"),
-                                         (["--workers", "0"], "--workers")])
+                                         (["--workers", "0"], "--workers"),
+                                         (["--eye", "10x10"], "--eye"),
+                                         (["--eye", "ax2"], "--eye"),
+                                         (["--methods", "hash,nope"], "--methods"),
+                                         ([], "--scale")])  # required: a run may take hours
 def test_bad_options(gigascroll_cli, tmp_path, argv, match):
+    scale = [] if not argv else ["--scale", "1/256"]
     r = gigascroll_cli("bench", "exhibition-full", "--work", tmp_path / "w", "--out",
-                       tmp_path / "r.json", *argv)
+                       tmp_path / "r.json", *scale, *argv)
     assert r.returncode == 2 and match in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "w").exists()

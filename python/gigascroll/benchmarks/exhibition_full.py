@@ -39,10 +39,11 @@ COPIES = 5
 
 
 def add_arguments(p) -> None:
-    p.add_argument("--scale", default="1",
-                   help="1 (full size, about 6 Gpixel of scans) or 1/N, N a power of two: the "
-                   "scans at 1/N per axis, physical sizes kept (1/16: the multi scenario's; "
-                   "1/256: a smoke run)")
+    p.add_argument("--scale", required=True,
+                   help="required, as the run's cost depends on it: 1 (full size, about 6 "
+                   "Gpixel of scans, ~40 GB of disk, tens of minutes) or 1/N, N a power of "
+                   "two: the scans at 1/N per axis, physical sizes kept (1/16: the multi "
+                   "scenario's; 1/256: a smoke run)")
     p.add_argument("--work", default="bench/exhibition-full/work",
                    help="scans and pack (full size: ~18 GB of scans, the pack about as much "
                    "with zstd; reused when complete)")
@@ -72,6 +73,15 @@ def parse_scale(text: str) -> Fraction:
     if s.numerator != 1 or n & (n - 1) or n > 4096:
         raise ValueError(f"--scale must be 1 or 1/N with N a power of two up to 4096, got {text!r}")
     return s
+
+
+def parse_eye(text: str) -> tuple[int, int]:
+    """WxH, each in [16, 16384] (ValueError otherwise)."""
+    w, x, h = str(text).lower().partition("x")
+    if not (x and w.isascii() and w.isdigit() and h.isascii() and h.isdigit()
+            and 16 <= int(w) <= 16384 and 16 <= int(h) <= 16384):
+        raise ValueError(f"--eye must be WxH with sides in [16, 16384], got {text!r}")
+    return int(w), int(h)
 
 
 def scaled_specs(scale: Fraction):
@@ -212,7 +222,7 @@ def hall(args, pack, specs, scale: Fraction) -> dict:
     room = hall_room(specs, n, texel_m=TEXEL_M * scale.denominator)
     room = dataclasses.replace(room, paintings=[dataclasses.replace(s, painting=k)
                                                 for k, s in enumerate(room.paintings)])
-    w, h = (int(x) for x in args.eye.lower().split("x"))
+    w, h = parse_eye(args.eye)
     walk = GalleryWalk(ExhibitionSource(room, pack), pack, walk_path(room, args.seconds),
                        eye=(w, h), oracle=False, pace=not args.no_pace, threads=args.threads)
     summary = walk.run()
@@ -233,6 +243,12 @@ def run(args) -> int:
         raise ValueError(f"--seconds must be in (0, 600], got {args.seconds}")
     if not 1 <= args.workers <= 64:
         raise ValueError(f"--workers must be in [1, 64], got {args.workers}")
+    parse_eye(args.eye)
+    methods = [m for m in args.methods.split(",") if m]
+    from ..views import PROCESSING_METHODS
+    if not methods or not set(methods) <= set(PROCESSING_METHODS):
+        raise ValueError(f"--methods: a comma-separated subset of "
+                         f"{', '.join(PROCESSING_METHODS)}, got {args.methods!r}")
     specs = scaled_specs(scale)
     work = Path(args.work) / f"scale-1_{scale.denominator}"
     res = {"scale": str(scale), "paintings": COPIES * len(specs), "workers": args.workers,
