@@ -5,7 +5,7 @@ and a server for a pack and the client's files.
 Fixtures (import them into a test module: ``from browser import browser, chromium_path``):
 
 - ``chromium_path``: the system chromium, or the test skips with the reason;
-- ``browser``: one headless chromium for the session (``browser.new_page()``).
+- ``browser``: one headless chromium for a test module (``browser.new_page()``).
 
 ``pack_scene(pack_path)`` is the scene.json part the test page needs when no room is served.
 ``serve_pack(pack_path, room=None)`` is a context manager yielding the base URL of
@@ -42,15 +42,17 @@ def chromium_path():
     return path
 
 
-# One Playwright and one chromium for the whole session, however many test modules import the
-# fixture: each import is a fixture of its own to pytest, and a second sync_playwright() in the
-# same thread fails ("Sync API inside the asyncio loop"). Closed when the last user is done.
+# One Playwright and one chromium at a time, however many test modules import the fixture:
+# each import is a fixture of its own to pytest, and a second sync_playwright() in the same
+# thread fails ("Sync API inside the asyncio loop"). Module-scoped, and closed when its last
+# user is done, so that code under test may start its own Playwright in later modules (the
+# web benchmarks do).
 _shared = {"users": 0, "playwright": None, "browser": None}
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser(chromium_path):
-    """A headless chromium with WebGL2 on SwiftShader, for the whole session."""
+    """A headless chromium with WebGL2 on SwiftShader, for a test module."""
     from playwright.sync_api import sync_playwright  # the Makefile installs it: no skip
 
     if _shared["browser"] is None:
