@@ -3,8 +3,8 @@
 // magnifier) renders at reduced resolution into its own RGBA8 target, each pixel the 32-bit
 // flat index of the tile it needs (sampler.glsl.js, vtFeedbackOut) or 0xFFFFFFFF for none.
 // end() copies the target into a pixel-pack buffer and sets a fence; poll() hands back, per
-// view, the newest readback whose fence has signalled (getSyncParameter: no stall), read
-// with getBufferSubData. No synchronous readPixels into client memory ever happens on the
+// view, the newest readback whose fence has signalled (clientWaitSync with timeout 0: no
+// stall), read with getBufferSubData. No synchronous readPixels into client memory ever happens on the
 // frame path. A view whose buffers are all waiting skips its readback that frame; one whose
 // fence has not signalled LATE_FRAMES frames later is read all the same (see there).
 

@@ -10,8 +10,8 @@
 // a = 2862933555777941757; on a collision the smaller level wins (ties: the smaller key),
 // the other request is lost for this frame and comes back in a later one under another salt.
 // 64-bit products are done on 16-bit limbs (exact in doubles), only for the few keys that pass
-// the repeat filter (the previous pixel's key and a cache of recent keys, the
-// core's RepeatFilter), so the per-pixel loop is a comparison.
+// the repeat filter (the core's RepeatFilter: runs of the last key skipped 8 pixels at a
+// time, and a cache of recent keys), so the per-pixel work is mostly one comparison.
 
 import { NONE } from "./page_table.js";
 
