@@ -6,6 +6,8 @@
 //                                   // (tiles: scene.json's "tiles"; by default the batch URL
 //                                   // /api/tiles/{pack.hash}/batch, 64 keys a batch)
 //   await vt.ready;                 // every painting's coarse tail resident: no pixel is black
+//                                   // (rejects with the server's answer if they cannot load;
+//                                   // beginFrame does nothing before)
 //   vt.glsl                         // GLSL ES 3.00 to paste after "#version 300 es" and the
 //                                   // precision lines of any shader that samples or writes
 //                                   // feedback; it declares:
