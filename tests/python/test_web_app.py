@@ -3,7 +3,7 @@ on SwiftShader, served by `gigascroll serve PACK --room scroll`, against the C++
 
 - frames: the lit scroll room from fixed poses, both eyes of the side-by-side stereo mode, once
   the view is exact, against the CPU display of the same bake and pose (Gallery.render_display
-  with the server's lighting options, then the display mapping scene.json names);
+  with the server's lighting options, then display_mapping's response that scene.json names);
 - streaming from a cold cache: no black pixel in any frame, and the frames from the stop (and
   from the last tile's upload) to the exact view, measured on the pixels, are bounded;
 - XR through a small fake navigator.xr: two eyes whose disparity matches the IPD, and the
@@ -23,7 +23,7 @@ import pytest
 import gigascroll as g
 from browser import browser, chromium_path, open_page, serve_pack  # noqa: F401 - fixtures
 from gigascroll.gallery import Gallery, builtin_room
-from gigascroll.gallery.walk import tone_map
+from gigascroll.display_mapping import to_srgb8
 
 EYE_W, EYE_H = 320, 240
 IPD = 0.064
@@ -134,12 +134,12 @@ def test_frames_equal_cpu_display(browser, server, cpu_room, pose):  # noqa: F81
     try:
         wait_exact(page)
         frame = decode(page.evaluate("window.gigascroll.capture()"))
-        exposure = page.evaluate("window.gigascroll.app.scene.display.exposure")
+        display = page.evaluate("window.gigascroll.app.scene.display")
     finally:
         page.close()
     for k, offset in enumerate((-IPD / 2, IPD / 2)):
         linear, mask = cpu_eye(gallery, vt, eye, target, fov, offset)
-        cpu = tone_map(linear, exposure)
+        cpu = to_srgb8(linear, display["exposure"], display["tone"].removesuffix("-srgb"))
         gpu = frame[:, k * EYE_W:(k + 1) * EYE_W]
         assert mask.sum() > 0.02 * mask.size, "the pose must show the painting"
         whole, paintings = psnr(gpu, cpu), psnr(gpu, cpu, mask)
