@@ -764,11 +764,118 @@ void Gallery::irradiance_baked_batch(const std::uint32_t* tri, const bool* front
     }
 }
 
+namespace {
+// BakeSettings::fill_covered's test: every one of nine probe rays from p (along the normal n,
+// and eight at 60 degrees around it) meets a surface within `reach`. The ray along the
+// normal goes first: on open surfaces (nearly every point) it is the only one.
+bool covered_point(const Scene& scene, Vec3f p, Vec3f n, float reach) {
+    const Vec3f o = p + n * scene.epsilon();
+    if (!scene.occluded(o, n, reach)) return false;
+    const Vec3f a = std::abs(n.x) > 0.5f ? Vec3f(0, 1, 0) : Vec3f(1, 0, 0);
+    const Vec3f t = normalize(cross(n, a)), b = cross(n, t);
+    constexpr float kCos = 0.5f, kSin = 0.8660254f;
+    for (int k = 0; k < 8; ++k) {
+        const float phi = float(k) * float(M_PI) / 4.0f;
+        const Vec3f d = n * kCos + (t * std::cos(phi) + b * std::sin(phi)) * kSin;
+        if (!scene.occluded(o, d, reach)) return false;
+    }
+    return true;
+}
+
+// Fills the covered points (mask, cleared as they are filled) of one side of one triangle's
+// lattice of n segments, ring by ring: each gets the mean of its valid neighbours among the six
+// of the triangular lattice. Points with no valid point anywhere on the lattice keep theirs.
+void fill_covered_points(Vec3f* E, std::uint8_t* mask, std::uint32_t n) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo;
+    for (std::uint32_t i = 0; i <= n; ++i)
+        for (std::uint32_t j = 0; i + j <= n; ++j)
+            if (mask[lattice_index(i, j, n)]) todo.emplace_back(i, j);
+    static constexpr int kDi[6] = {1, -1, 0, 0, 1, -1}, kDj[6] = {0, 0, 1, -1, -1, 1};
+    std::vector<std::pair<std::uint64_t, Vec3f>> ring;
+    while (!todo.empty()) {
+        ring.clear();
+        std::size_t kept = 0;
+        for (const auto [i, j] : todo) {
+            Vec3f sum{0, 0, 0};
+            int count = 0;
+            for (int k = 0; k < 6; ++k) {
+                const std::int64_t a = std::int64_t(i) + kDi[k], b = std::int64_t(j) + kDj[k];
+                if (a < 0 || b < 0 || a + b > std::int64_t(n)) continue;
+                const std::uint64_t q = lattice_index(std::uint32_t(a), std::uint32_t(b), n);
+                if (!mask[q]) sum += E[q], ++count;
+            }
+            if (count) ring.emplace_back(lattice_index(i, j, n), sum * (1.0f / float(count)));
+            else todo[kept++] = {i, j};
+        }
+        if (ring.empty()) return;  // nothing valid left to fill from
+        for (const auto& [q, value] : ring) E[q] = value, mask[q] = 0;
+        todo.resize(kept);
+    }
+}
+
+// BakeSettings::indirect_filter on one side of one triangle's lattice of n segments (lattice
+// steps a = e1 / n, b = e2 / n): each point's G replaced by the value at the point of the
+// weighted least-squares plane through its neighbours' (Gaussian weights of standard
+// deviation sigma metres, within 2.5 sigma, at most 8 steps each way; masked points left
+// out). Where the fit is ill-posed (too few neighbours on a line), the weighted mean.
+void filter_indirect(const Vec3f* G, const std::uint8_t* mask, std::uint32_t n, Vec3f a, Vec3f b, float sigma,
+                     Vec3f* out) {
+    const float cell = length(cross(a, b));
+    const float reach = 2.5f * sigma;
+    if (!(cell > 0) || !(sigma > 0)) {
+        std::copy(G, G + lattice_points(n), out);
+        return;
+    }
+    const int ki = std::min(8, int(std::ceil(reach * length(b) / cell)));
+    const int kj = std::min(8, int(std::ceil(reach * length(a) / cell)));
+    const float inv2s2 = 1.0f / (2 * sigma * sigma);
+    for (std::uint32_t i = 0; i <= n; ++i)
+        for (std::uint32_t j = 0; i + j <= n; ++j) {
+            double m[6] = {0, 0, 0, 0, 0, 0};  // sum w [1 x y]^T [1 x y]: 00 01 02 11 12 22
+            double r[3][3] = {};               // per channel: sum w v [1 x y]
+            for (int di = -ki; di <= ki; ++di) {
+                const std::int64_t ia = std::int64_t(i) + di;
+                if (ia < 0 || ia > std::int64_t(n)) continue;
+                for (int dj = -kj; dj <= kj; ++dj) {
+                    const std::int64_t jb = std::int64_t(j) + dj;
+                    if (jb < 0 || ia + jb > std::int64_t(n)) continue;
+                    const Vec3f d = a * float(di) + b * float(dj);
+                    const float d2 = dot(d, d);
+                    if (d2 > reach * reach) continue;
+                    const std::uint64_t q = lattice_index(std::uint32_t(ia), std::uint32_t(jb), n);
+                    if (mask && mask[q]) continue;
+                    const double w = std::exp(-d2 * inv2s2), x = di, y = dj;
+                    m[0] += w, m[1] += w * x, m[2] += w * y, m[3] += w * x * x, m[4] += w * x * y, m[5] += w * y * y;
+                    const float v[3] = {G[q].x, G[q].y, G[q].z};
+                    for (int c = 0; c < 3; ++c) r[c][0] += w * v[c], r[c][1] += w * v[c] * x, r[c][2] += w * v[c] * y;
+                }
+            }
+            const std::uint64_t k = lattice_index(i, j, n);
+            if (!(m[0] > 0)) {
+                out[k] = G[k];
+                continue;
+            }
+            // The plane's value at (0, 0): Cramer's rule on the 3 x 3 normal equations.
+            const double c00 = m[3] * m[5] - m[4] * m[4], c01 = m[2] * m[4] - m[1] * m[5], c02 = m[1] * m[4] - m[2] * m[3];
+            const double det = m[0] * c00 + m[1] * c01 + m[2] * c02;
+            // Well posed: the neighbours spread in both directions (det relative to m0^3 x var).
+            const bool fit = det > 1e-3 * m[0] * m[0] * m[0];
+            float v[3];
+            for (int c = 0; c < 3; ++c)
+                v[c] = float(fit ? (r[c][0] * c00 + r[c][1] * c01 + r[c][2] * c02) / det : r[c][0] / m[0]);
+            // A fit never makes light negative (extrapolated at a lattice corner).
+            out[k] = Vec3f(std::max(v[0], 0.0f), std::max(v[1], 0.0f), std::max(v[2], 0.0f));
+        }
+}
+}  // namespace
+
 void Gallery::bake(const BakeSettings& s) {
     require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
     require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
             "Gallery.bake: light_samples must be in [1, 65536]");
     require(s.shadow_probes >= 0 && s.shadow_probes <= 1 << 16, "Gallery.bake: shadow_probes must be in [0, 65536]");
+    require(std::isfinite(s.indirect_filter) && s.indirect_filter >= 0 && s.indirect_filter <= 16,
+            "Gallery.bake: indirect_filter must be in [0, 16] gather radii");
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
     require_lit();
@@ -835,6 +942,11 @@ void Gallery::bake(const BakeSettings& s) {
         const float l = std::max({length(tri_e1_[t]), length(tri_e2_[t]), length(tri_e2_[t] - tri_e1_[t])});
         inset[t] = std::max(l / float(n[t]) / 16.0f, 32.0f * scene_.epsilon());
     }
+    // BakeSettings::fill_covered: per point and side, whether it is covered.
+    std::vector<std::uint8_t> covered_front(s.fill_covered ? total : 0), covered_back(s.fill_covered ? total : 0);
+    // BakeSettings::indirect_filter: the gathers kept apart from the direct light until filtered.
+    const bool filter = s.indirect_filter > 0 && map_ && gather_.radius > 0;
+    std::vector<Vec3f> indirect_front(filter ? total : 0), indirect_back(filter ? total : 0);
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -859,9 +971,18 @@ void Gallery::bake(const BakeSettings& s) {
                     if (!(reachable[t] >> side & 1)) continue;  // stays zero
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
+                    const bool on_sub = stride > 1 && i % stride == 0 && j % stride == 0;
+                    if (s.fill_covered && covered_point(scene_, h.p, h.n, 8.0f * inset[t])) {
+                        (h.front ? covered_front : covered_back)[k] = 1;
+                        if (on_sub)  // the gathers' sub-lattice interpolates onto uncovered points too
+                            (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(
+                                i / stride, j / stride, nt / stride)] = indirect(h.p, h.n, heap, detail);
+                        continue;
+                    }
                     Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c, s.analytic_direct ? s.shadow_probes : -1)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (stride == 1) E += indirect(h.p, h.n, heap, detail);
+                    if (stride == 1 && filter) (h.front ? indirect_front : indirect_back)[k] = indirect(h.p, h.n, heap, detail);
+                    else if (stride == 1) E += indirect(h.p, h.n, heap, detail);
                     else if (i % stride == 0 && j % stride == 0)
                         (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
                                                                                              nt / stride)] =
@@ -896,12 +1017,43 @@ void Gallery::bake(const BakeSettings& s) {
                             g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
                                 G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
                         }
-                        E[lattice_index(i, j, nt)] += g;
+                        if (filter) (side == 0 ? indirect_front : indirect_back)[offset[t] + lattice_index(i, j, nt)] = g;
+                        else E[lattice_index(i, j, nt)] += g;
                     }
                 }
             }
             bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
         }, s.threads ? s.threads : lighting_.threads);
+    if (filter)
+        parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
+            std::vector<Vec3f> smooth;
+            for (std::size_t t = tb; t < te; ++t) {
+                if (!(max_component(scene_.albedo(std::uint32_t(t))) > 0)) continue;
+                const float inv_n = 1.0f / float(n[t]);
+                smooth.resize(lattice_points(n[t]));
+                for (int side = 0; side < 2; ++side) {
+                    if (!(reachable[t] >> side & 1)) continue;
+                    const Vec3f* G = (side == 0 ? indirect_front : indirect_back).data() + offset[t];
+                    const std::uint8_t* mask =
+                        s.fill_covered ? (side == 0 ? covered_front : covered_back).data() + offset[t] : nullptr;
+                    filter_indirect(G, mask, n[t], tri_e1_[t] * inv_n, tri_e2_[t] * inv_n,
+                                    s.indirect_filter * gather_.radius, smooth.data());
+                    Vec3f* E = (side == 0 ? front : back).data() + offset[t];
+                    for (std::size_t q = 0; q < smooth.size(); ++q) E[q] += smooth[q];
+                }
+            }
+        }, s.threads ? s.threads : lighting_.threads);
+    std::uint64_t covered = 0;
+    if (s.fill_covered) {
+        for (std::uint64_t k = 0; k < total; ++k) covered += covered_front[k] + covered_back[k];
+        parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
+            for (std::size_t t = tb; t < te; ++t) {
+                fill_covered_points(front.data() + offset[t], covered_front.data() + offset[t], n[t]);
+                fill_covered_points(back.data() + offset[t], covered_back.data() + offset[t], n[t]);
+            }
+        }, s.threads ? s.threads : lighting_.threads);
+    }
+    stats_.bake_points_covered = covered;
     bake_n_ = std::move(n);
     offset.pop_back();
     bake_offset_ = std::move(offset);

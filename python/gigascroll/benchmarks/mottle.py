@@ -3,7 +3,8 @@
 For each room (`scroll`, `hall`, and the example glTF room of gallery.example_room) with
 paintings of one flat colour (so that relative radiance error is relative irradiance error):
 a high-spp Mitsuba 3 reference (cached, keyed as `bench gallery`'s), then our baked still at
-each configuration (photons x bake spacing x bake light samples; the first is the defaults of
+each configuration (photons x bake spacing x bake light samples x gather radius x sphere or
+disc x gather stride x bake(fill_covered) x bake(indirect_filter); the defaults are those of
 `Gallery.light` / `Gallery.bake`), measured by gallery.mottle: RMS relative error of the
 blurred luminance on walls, floor, ceiling, paintings and other surfaces separately. Times:
 photon pass + map (light) and bake, with Mitsuba's time for --timing-spp spp of the same
@@ -44,6 +45,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--spacings", default="200",
                         help="bake spacings as fractions 1/N of the room's diagonal (default 200: the default)")
     parser.add_argument("--bake-samples", default="16", help="bake emitter samples (default 16: the default)")
+    parser.add_argument("--radius-factors", default="1",
+                        help="gather radii as multiples of the automatic one, comma-separated (default 1)")
+    parser.add_argument("--disc", default="0",
+                        help="gather over the sphere (0) and/or the surface disc (1), comma-separated (default 0)")
+    parser.add_argument("--gather-strides", default="1", help="bake gather strides (default 1)")
+    parser.add_argument("--indirect-filters", default="0",
+                        help="bake(indirect_filter=...) values, comma-separated (default 0: the default)")
+    parser.add_argument("--fill-covered", default="1",
+                        help="bake(fill_covered=...): 1 and/or 0, comma-separated (default 1)")
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
     parser.add_argument("--timing-spp", type=int, default=16,
                         help="Mitsuba spp timed in the same run, for time ratios (default 16)")
@@ -125,11 +135,17 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
          "reference": {"spp": args.reference_spp, "seconds": ref_seconds},
          "mitsuba_timing": {"spp": args.timing_spp, "seconds": mitsuba_seconds}, "configs": []}
     segments = None
-    for photons, n, samples in configs:
+    auto_radius = {}
+    for cf in configs:
+        photons, n, samples = cf["photons"], cf["diagonal_over"], cf["bake_samples"]
+        if photons not in auto_radius:
+            auto_radius[photons] = gal.light(vt, photons=1 << photons)["radius"]
+        radius = None if cf["radius_factor"] == 1 else cf["radius_factor"] * auto_radius[photons]
         t0 = time.perf_counter()
-        st = gal.light(vt, photons=1 << photons)
+        st = gal.light(vt, photons=1 << photons, radius=radius, disc=cf["disc"])
         t1 = time.perf_counter()
-        bst = gal.bake(spacing=diag / n, light_samples=samples)
+        bst = gal.bake(spacing=diag / n, light_samples=samples, gather_stride=cf["gather_stride"],
+                       fill_covered=cf["fill_covered"], indirect_filter=cf["indirect_filter"])
         t2 = time.perf_counter()
         img, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
         if segments is None:
@@ -138,6 +154,8 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
             r["pixel_m"] = _pixel_size(hits["position"], cam, k)
         img = img.reshape(args.height, k, args.width, k, 3).mean(axis=(1, 3))
         c = {"photons_log2": photons, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": samples,
+             "radius_factor": cf["radius_factor"], "disc": cf["disc"], "gather_stride": cf["gather_stride"],
+             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "points_covered": bst["bake_points_covered"],
              "radius_m": st["radius"], "light_seconds": t1 - t0, "bake_seconds": t2 - t1,
              "bake_points": bst["bake_points"],
              "light_and_bake_over_mitsuba": (t2 - t0) / mitsuba_seconds,
@@ -185,8 +203,29 @@ def run(args) -> int:
     photons = _ints(args.photons, "--photons")
     if max(photons) > 26:
         raise UserError("--photons are powers of two up to 2^26")
-    configs = [(p, n, s) for p in photons for n in _ints(args.spacings, "--spacings")
-               for s in _ints(args.bake_samples, "--bake-samples")]
+    factors = [float(x) for x in args.radius_factors.split(",") if x]
+    if not factors or min(factors) <= 0 or max(factors) > 16:
+        raise UserError(f"--radius-factors are multiples in (0, 16], got {args.radius_factors!r}")
+    flags = {}
+    for what in ("disc", "fill_covered"):
+        text = getattr(args, what)
+        if not set(text.split(",")) <= {"0", "1"}:
+            raise UserError(f"--{what.replace('_', '-')} takes 0 and/or 1, got {text!r}")
+        flags[what] = [x == "1" for x in text.split(",")]
+    try:
+        filters = [float(x) for x in args.indirect_filters.split(",") if x]
+    except ValueError:
+        raise UserError(f"--indirect-filters are numbers, got {args.indirect_filters!r}") from None
+    if not filters or not all(0 <= f <= 16 for f in filters):
+        raise UserError(f"--indirect-filters are in [0, 16], got {args.indirect_filters!r}")
+    strides = _ints(args.gather_strides, "--gather-strides")
+    if not set(strides) <= {1, 2, 4, 8}:
+        raise UserError("--gather-strides takes 1, 2, 4, 8")
+    configs = [dict(photons=p, diagonal_over=n, bake_samples=s, radius_factor=f, disc=d, gather_stride=st,
+                    fill_covered=fc, indirect_filter=fi)
+               for p in photons for n in _ints(args.spacings, "--spacings")
+               for s in _ints(args.bake_samples, "--bake-samples") for f in factors for d in flags["disc"]
+               for st in strides for fc in flags["fill_covered"] for fi in filters]
     try:
         import mitsuba as mi
     except ImportError:
@@ -195,8 +234,8 @@ def run(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = {"settings": {k: getattr(args, k) for k in (
-        "width", "height", "supersample", "sigma", "photons", "spacings", "bake_samples", "reference_spp",
-        "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
+        "width", "height", "supersample", "sigma", "photons", "spacings", "bake_samples", "radius_factors", "disc",
+        "gather_strides", "fill_covered", "indirect_filters", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
     with tempfile.TemporaryDirectory(prefix="gigascroll-bench-mottle-") as scratch:
         for name in rooms:
             results["rooms"][name] = measure_room(mi, name, args, Path(scratch), configs)
@@ -212,6 +251,8 @@ def _print_room(name: str, r: dict) -> None:
     for c in r["configs"]:
         parts = [f"{cl} {c['mottle'][cl]['rms'] * 100:.2f}%" for cl in ("walls", "floor", "paintings", "other")
                  if c["mottle"].get(cl)]
-        print(f"{name}: 2^{c['photons_log2']} photons, diag/{c['diagonal_over']}, {c['bake_samples']} samples: "
+        print(f"{name}: 2^{c['photons_log2']} photons, r x {c['radius_factor']:g}{' disc' if c['disc'] else ''}, "
+              f"diag/{c['diagonal_over']}, {c['bake_samples']} samples, stride {c['gather_stride']}, "
+              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}: "
               f"{', '.join(parts)}; light+bake {c['light_seconds'] + c['bake_seconds']:.2f} s "
               f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)")

@@ -170,7 +170,8 @@ class Gallery(_core._Gallery):
     def bake(self, spacing: float | None = None, light_samples: int = 16, threads: int = 0,
              progress: bool = False, stratified: bool = True, skip_unlit: bool = True,
              gather_stride: int = 1, inset_edges: bool = True, coarse_disc: bool = False,
-             analytic_direct: bool = True, shadow_probes: int = 4) -> dict:
+             analytic_direct: bool = True, shadow_probes: int = 4, fill_covered: bool = True,
+             indirect_filter: float = 0.0) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
         point with `light_samples` emitter samples plus the photon gather. stratified: the
@@ -189,7 +190,16 @@ class Gallery(_core._Gallery):
         where a point sees all of the light or none of it; False: the samples' plain mean.
         shadow_probes (with analytic_direct): that many samples' shadow rays first; when they
         all agree (all lit or all shadowed) the point's other samples are skipped (0: never).
-        progress=True shows a tqdm bar over the lattice rows. Returns `stats`."""
+        fill_covered: lattice points covered by a nearby surface (under a painting on a table,
+        behind one on a wall: nine probe rays all blocked within half the spacing) are filled
+        from their uncovered neighbours instead of computed, so that interpolation does not
+        spread their darkness a lattice cell beyond the painting's edge
+        (stats["bake_points_covered"]). indirect_filter: the photon gathers' part (indirect
+        light; the direct light is left sharp) smoothed over each triangle's lattice by a local
+        linear fit with Gaussian weights of this many gather radii (0: off): the photon map's
+        density noise, frozen into cloud-like patches, averaged down (measured: it lowers the
+        paintings' mottle but spreads the sphere gather's darkening at the room's edges, so it
+        is off by default). progress=True shows a tqdm bar over the lattice rows. Returns `stats`."""
         s = 0.0 if spacing is None else float(spacing)
         if not math.isfinite(s) or s < 0 or (spacing is not None and s == 0):
             raise ValueError(f"spacing must be positive and finite, got {spacing!r}")
@@ -198,15 +208,19 @@ class Gallery(_core._Gallery):
         if isinstance(gather_stride, bool) or gather_stride not in (1, 2, 4, 8):
             raise ValueError(f"gather_stride must be 1, 2, 4 or 8, got {gather_stride!r}")
         for name, value in (("inset_edges", inset_edges), ("coarse_disc", coarse_disc),
-                            ("analytic_direct", analytic_direct)):
+                            ("analytic_direct", analytic_direct), ("fill_covered", fill_covered)):
             if not isinstance(value, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {value!r}")
         if isinstance(shadow_probes, bool) or not isinstance(shadow_probes, (int, np.integer)) \
                 or not 0 <= shadow_probes <= 1 << 16:
             raise ValueError(f"shadow_probes must be an integer in [0, 65536], got {shadow_probes!r}")
+        f = float(indirect_filter) if isinstance(indirect_filter, (int, float, np.integer, np.floating)) \
+            and not isinstance(indirect_filter, bool) else math.nan
+        if not (math.isfinite(f) and 0 <= f <= 16):
+            raise ValueError(f"indirect_filter must be a number in [0, 16] (gather radii), got {indirect_filter!r}")
         args = (s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit),
                 int(gather_stride), bool(inset_edges), bool(coarse_disc), bool(analytic_direct),
-                int(shadow_probes))
+                int(shadow_probes), bool(fill_covered), f)
         if not progress:
             self._bake(*args)
             return self.stats
