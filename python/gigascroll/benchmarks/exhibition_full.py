@@ -160,6 +160,11 @@ def build(args, work: Path, specs) -> tuple[dict, Path]:
     """Scans and the 40-painting pack of instances; the build's figures."""
     from .. import TilePack
     from ..pack import build_pack
+    try:
+        import distributed  # noqa: F401  (and its psutil, for the peak memory)
+    except ImportError:
+        raise ValueError("the build part runs on Dask: install the cluster extra "
+                         "(pip install 'gigascroll[cluster]')") from None
     scans, synth_s = synth_scans(work / "scans", specs, args.rebuild)
     pack_path = work / "hall40.pack"
     names = [s.name for s in specs]
