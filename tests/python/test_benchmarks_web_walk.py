@@ -12,11 +12,12 @@ TILE_BYTES = 128 * 128 * 3
 
 def test_summary_of_a_log():
     """Four walked frames and two after the stop, computed by hand."""
+    # Frame 3 processed no readback (its request figures repeat frame 2's): not counted again.
     log = [{"frame": 10 + k, "t": 100.0 * k, "uploads": u, "bytes": b, "requests": r, "hits": h,
-            "commands": 0, "inFlight": 0}
-           for k, (u, b, r, h) in enumerate([(0, 0, 10, 10), (2, 2 * TILE_BYTES, 10, 8),
-                                              (1, 3 * TILE_BYTES, 20, 19), (0, 3 * TILE_BYTES, 10, 10),
-                                              (0, 3 * TILE_BYTES, 10, 10), (0, 3 * TILE_BYTES, 10, 10)])]
+            "commands": 0, "inFlight": 0, "readbacks": rb}
+           for k, (u, b, r, h, rb) in enumerate([(0, 0, 10, 10, 1), (2, 2 * TILE_BYTES, 10, 8, 2),
+                                                  (1, 3 * TILE_BYTES, 20, 19, 3), (0, 3 * TILE_BYTES, 20, 19, 3),
+                                                  (0, 3 * TILE_BYTES, 10, 10, 4), (0, 3 * TILE_BYTES, 10, 10, 5)])]
     f = _summary({"log": log, "walked": 4,
                   "stats": {"framesStopToExact": 2, "framesStopToConfirmed": 5, "exact": True}}, 50.0)
     assert f["frames"] == 4
@@ -24,7 +25,7 @@ def test_summary_of_a_log():
     assert f["bytes_per_frame"] == 3 * TILE_BYTES / 3            # over the 3 frame intervals
     assert f["bytes_per_s_at_90hz"] == 90 * TILE_BYTES
     assert f["bytes_per_s_emulated"] == 3 * TILE_BYTES / 0.3     # 300 ms of walk
-    assert f["hit_rate"] == 47 / 50 and f["requests_per_frame"] == 50 / 4
+    assert f["hit_rate"] == 37 / 40 and f["requests_per_readback"] == 40 / 3 and f["readbacks"] == 3
     assert f["frames_stop_to_exact"] == 2 and f["frames_stop_to_confirmed"] == 5
     assert f["frame_time_walk_to_still"] == 100.0 / 50.0
 

@@ -38,7 +38,7 @@ WALK_JS = """(cfg) => new Promise((resolve) => {
     const s = app.vt.stats(), n = app.stats.numbers;
     log.push({frame, t: performance.now(), uploads: s.uploads, bytes: s.bytesReceived,
               requests: s.requests, commands: s.commands, hits: Math.round(s.hitRate * s.requests),
-              inFlight: s.inFlight});
+              inFlight: s.inFlight, readbacks: s.readbacks});
     k++;
     if (k < cfg.frames) pose(k);
     else if ((k > cfg.frames + 1 && n.exact && n.stopFrame >= log[cfg.frames - 1].frame) || k > cfg.frames + cfg.settle) {
@@ -54,7 +54,11 @@ def _summary(result: dict, seconds_still: float) -> dict:
     log, walked = result["log"], result["walked"]
     walk = log[:walked]
     uploads = [f["uploads"] for f in walk]
-    requests = sum(f["requests"] for f in walk)
+    # The request figures are the last processed readback's: counted once, in the frame that
+    # processed it (readbacks grew), not again in frames that processed none.
+    fresh = [f for prev, f in zip([None] + walk, walk)
+             if prev is None or f.get("readbacks", 0) != prev.get("readbacks", 0)]
+    requests = sum(f["requests"] for f in fresh)
     wall = (walk[-1]["t"] - walk[0]["t"]) / 1000
     nbytes = walk[-1]["bytes"] - walk[0]["bytes"]
     frame_ms = statistics.median(b["t"] - a["t"] for a, b in zip(walk, walk[1:]))
@@ -65,8 +69,9 @@ def _summary(result: dict, seconds_still: float) -> dict:
         "bytes_per_frame": nbytes / max(1, walked - 1),
         "bytes_per_s_at_90hz": nbytes / max(1, walked - 1) * HEADSET_HZ,
         "bytes_per_s_emulated": nbytes / wall if wall > 0 else 0.0,
-        "hit_rate": sum(f["hits"] for f in walk) / requests if requests else 1.0,
-        "requests_per_frame": requests / walked,
+        "hit_rate": sum(f["hits"] for f in fresh) / requests if requests else 1.0,
+        "requests_per_readback": requests / len(fresh),
+        "readbacks": len(fresh),
         "frames_stop_to_exact": result["stats"].get("framesStopToExact"),
         "frames_stop_to_confirmed": result["stats"].get("framesStopToConfirmed"),
         "exact_reached": bool(result["stats"].get("exact")),
@@ -123,10 +128,15 @@ def _walk(browser, url, scene, size, metres, magnifier):
     z = slot["origin"][2]
     y = slot["origin"][1] + 0.5 * slot["v_axis"][1] * slot["height_m"]
     page = browser.new_page(viewport={"width": size[0], "height": size[1]})
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
     eye = (1.0, y, z - DISTANCE)
     page.goto(f"{url}/?camera={eye[0]},{eye[1]},{eye[2]},{eye[0]},{eye[1]},{z},60&size={size[0]}x{size[1]}")
-    page.wait_for_function("window.gigascroll && (window.gigascroll.frame() > 0 || window.gigascroll.error)",
-                           timeout=600_000)
+    try:
+        page.wait_for_function("window.gigascroll && (window.gigascroll.frame() > 0 || window.gigascroll.error)",
+                               timeout=300_000)
+    except Exception as e:
+        raise RuntimeError(f"the client did not start: {errors[:3]}") from e
     if page.evaluate("window.gigascroll.error"):
         raise RuntimeError(page.evaluate("window.gigascroll.error"))
     still = _still_frame_ms(page)
