@@ -223,7 +223,7 @@ def test_sharded_build_gives_the_same_pack(packs, tmp_path):
     ([("x", 3)], "not an input index"), ([("x", -1)], "not an input index"),
     ([("x", "zz")], "no input painting named"), ([("a", 0)], "already a painting's name"),
     ([("x", 0), ("x", 1)], "already a painting's name"), ([("x",)], "pair"),
-    ("x", "pairs"), ([("", 0)], "non-empty"), ([("x", 1.0)], "index or name"),
+    ("x", "pairs"), (5, "pairs, not int"), ([("", 0)], "non-empty"), ([("x", 1.0)], "index or name"),
     ([("x", True)], "index or name")])
 def test_bad_instances(tmp_path, instances, match):
     with pytest.raises(ValueError, match=match):

@@ -209,8 +209,13 @@ def _check_instances(instances, n_inputs: int) -> list[tuple[str, int | str]]:
         return []
     if isinstance(instances, (str, bytes, dict)):
         raise ValueError("instances must be a list of (name, source) pairs")
+    try:
+        items = list(instances)
+    except TypeError:
+        raise ValueError(f"instances must be a list of (name, source) pairs, not "
+                         f"{type(instances).__name__}") from None
     out = []
-    for item in instances:
+    for item in items:
         if not (isinstance(item, (tuple, list)) and len(item) == 2):
             raise ValueError(f"instance {item!r} is not a (name, source) pair")
         name, source = item
