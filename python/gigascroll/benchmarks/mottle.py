@@ -172,15 +172,23 @@ def _pixel_size(position: np.ndarray, cam, k: int) -> float:
 
 
 def plot(results: dict, path: Path) -> None:
+    """RMS mottle against light + bake time (over Mitsuba's timing run), one line per room and
+    surface kind through the configurations that differ in photons only (the others at the
+    bench's first value of each option)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for name, r in results["rooms"].items():
-        for cl, marker in (("walls", "o"), ("floor", "s"), ("paintings", "^")):
-            pts = [(c["light_and_bake_over_mitsuba"], c["mottle"][cl]["rms"]) for c in r["configs"]
+    for room_index, (name, r) in enumerate(results["rooms"].items()):
+        colour = f"C{room_index}"
+        first = r["configs"][0]
+        same = [c for c in r["configs"] if all(c[k] == first[k] for k in (
+            "diagonal_over", "bake_samples", "radius_factor", "disc", "gather_stride", "fill_covered",
+            "indirect_filter"))]
+        for cl, marker in (("walls", "o"), ("floor", "s"), ("paintings", "^"), ("other", "x")):
+            pts = [(c["light_and_bake_over_mitsuba"], c["mottle"][cl]["rms"]) for c in same
                    if c["mottle"].get(cl)]
             if pts:
                 x, y = zip(*sorted(pts))
-                ax.plot(x, np.array(y) * 100, marker=marker, label=f"{name} {cl}")
+                ax.plot(x, np.array(y) * 100, marker=marker, color=colour, label=f"{name} {cl}")
     ax.axhline(1.0, color="grey", ls="--", lw=0.8)
     ax.axhline(0.5, color="grey", ls=":", lw=0.8)
     ax.set_xscale("log")
