@@ -240,3 +240,56 @@ def test_an_exhibition_painting_becomes_a_canvas(gigascroll_cli, pack, tmp_path)
         exhibition_painting(p, "http://other/x", info=tmp_path / "landscape" / "info.json")
     with pytest.raises(ValueError, match="pixel size"):
         exhibition_painting(p, "https://h/s")
+
+
+def test_an_exhibition_as_iiif(pack, server):
+    """write_exhibition_iiif: every painting's tiles and the manifest in one directory; served
+    at its base URL, the manifest follows the rules and each URL it names and each tile URL
+    its services' info.json derive resolves."""
+    from gigascroll.exhibit.model import Painting
+    from gigascroll.iiif_exhibition import write_exhibition_iiif
+    root, base = server
+    paintings = [Painting(0, "The landscape", 230.0, 150.0, "landscape", artist="Anon.",
+                          rights="http://creativecommons.org/publicdomain/mark/1.0/"),
+                 Painting(1, "A scroll", 90.0, 40.0, "scroll", credit="Lent by a friend")]
+    out = root / "show iiif"
+    path = write_exhibition_iiif(pack.path, paintings, out, f"{base}/show%20iiif",
+                                 label="A show")
+    assert path == out / "manifest.json"
+    with urllib.request.urlopen(f"{base}/show%20iiif/manifest.json") as r:
+        m = json.loads(r.read())
+    check_manifest(m)
+    assert [c["label"]["en"][0] for c in m["items"]] == ["The landscape", "A scroll"]
+    n = 0
+    for canvas in m["items"]:
+        (body,) = [a["body"] for page in canvas["items"] for a in page["items"]]
+        with urllib.request.urlopen(body["service"][0]["id"] + "/info.json") as r:
+            info = json.loads(r.read())
+        assert (info["width"], info["height"]) == (canvas["width"], canvas["height"])
+        for url in tile_urls(info) + [body["id"]]:
+            with urllib.request.urlopen(url) as r:
+                assert r.status == 200 and r.read(2) == b"\xff\xd8", url  # a JPEG
+            n += 1
+    assert n > 20
+    # written again only with force, over its own output; never over something else
+    with pytest.raises(OSError):
+        write_exhibition_iiif(pack.path, paintings, out, f"{base}/x", label="A show")
+    write_exhibition_iiif(pack.path, paintings[:1], out, f"{base}/x", label="A show", force=True)
+    assert len(json.loads((out / "manifest.json").read_text())["items"]) == 1
+    (root / "other").mkdir()
+    (root / "other" / "keep.txt").write_text("mine")
+    with pytest.raises(OSError):
+        write_exhibition_iiif(pack.path, paintings, root / "other", f"{base}/o", label="S",
+                              force=True)
+    assert (root / "other" / "keep.txt").read_text() == "mine"
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(name="nope"), "holds no painting"), (dict(rights="CC-BY"), "Creative Commons")])
+def test_an_exhibition_as_iiif_errors(pack, tmp_path, change, match):
+    from gigascroll.exhibit.model import Painting
+    from gigascroll.iiif_exhibition import write_exhibition_iiif
+    p = Painting(0, "T", 1.0, 1.0, **{"name": "landscape", **change})
+    with pytest.raises(ValueError, match=match):
+        write_exhibition_iiif(pack.path, [p], tmp_path / "o", "http://h/o", label="S")
+    assert list(tmp_path.iterdir()) == []  # no output, no temporary left
