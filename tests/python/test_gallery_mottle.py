@@ -215,3 +215,29 @@ def test_indirect_filter_smooths_the_gather_on_a_flat_floor(floor_room):
     _, direct_raw = deviation(indirect_filter=0.0)
     _, direct_filtered = deviation(indirect_filter=2.0)
     assert np.array_equal(direct_raw, direct_filtered)
+
+
+def test_bench_mottle_writes_figures_and_refuses_bad_options(tmp_path):
+    """A tiny run of `gigascroll bench mottle` (one room, 4 spp reference): results.json with
+    each class's figures and the plot; bad options exit with 2."""
+    pytest.importorskip("mitsuba")
+    import json
+
+    from gigascroll.cli import main
+
+    out = tmp_path / "out"
+    base = ["bench", "mottle", "--rooms", "example", "--width", "24", "--height", "14", "--supersample", "2",
+            "--reference-spp", "4", "--timing-spp", "1", "--photons", "12", "--spacings", "25",
+            "--bake-samples", "1", "--reference-cache", str(tmp_path / "cache"), "--out", str(out)]
+    assert main(base) == 0
+    r = json.loads((out / "results.json").read_text())
+    c = r["rooms"]["example"]["configs"][0]
+    assert c["photons_log2"] == 12 and c["mottle"]["walls"]["rms"] > 0 and c["mottle"]["walls"]["pixels"] > 0
+    assert (out / "error_vs_bake.png").stat().st_size > 0
+    for bad in (["--rooms", "attic"], ["--sigma", "0"], ["--sigma", "nan"], ["--photons", "40"],
+                ["--indirect-filters", "x"], ["--indirect-filters", "-1"], ["--disc", "2"],
+                ["--gather-strides", "3"], ["--radius-factors", "0"], ["--radius-factors", "x"],
+                ["--radius-factors", "nan"], ["--fill-covered", "yes"], ["--width", "0"]):
+        with pytest.raises(SystemExit) as e:
+            raise SystemExit(main(base + bad))
+        assert e.value.code == 2, bad

@@ -211,8 +211,11 @@ def run(args) -> int:
     photons = _ints(args.photons, "--photons")
     if max(photons) > 26:
         raise UserError("--photons are powers of two up to 2^26")
-    factors = [float(x) for x in args.radius_factors.split(",") if x]
-    if not factors or min(factors) <= 0 or max(factors) > 16:
+    try:
+        factors = [float(x) for x in args.radius_factors.split(",") if x]
+    except ValueError:
+        raise UserError(f"--radius-factors are numbers, got {args.radius_factors!r}") from None
+    if not factors or not all(0 < f <= 16 for f in factors):
         raise UserError(f"--radius-factors are multiples in (0, 16], got {args.radius_factors!r}")
     flags = {}
     for what in ("disc", "fill_covered"):
