@@ -141,3 +141,31 @@ def test_fuzz_pack_instance_option(fork_worker, two_pngs, tmp_path_factory, item
         argv.append(f"--instance={item}")
     o = fork_worker.run({"kind": "cli", "argv": argv, "memory": 2 << 30}, timeout=60)
     assert cli_message_ok(o) is None, f"{items!r}: {cli_message_ok(o)}\n{o.describe()}"
+
+
+_SHOW = """
+from math import inf, nan
+from types import SimpleNamespace
+from gigascroll.iiif_exhibition import write_exhibition_iiif
+p = SimpleNamespace(title={title!r}, width_cm={w!r}, height_cm=10.0, name={name!r},
+                    rights={rights!r})
+try:
+    write_exhibition_iiif({pack!r}, [p], {out!r}, {url!r}, label={label!r})
+except (ValueError, TypeError, OSError):
+    pass
+"""
+
+
+@fuzz_settings(12)
+@given(title=st.one_of(st.text(max_size=6), st.none()), w=st.one_of(st.floats(), st.none()),
+       name=st.sampled_from(["s", "x", "", None, "s/../s"]), url=URLS,
+       rights=st.sampled_from([None, "x", "http://rightsstatements.org/vocab/InC/1.0/"]),
+       label=st.one_of(st.text(max_size=5), st.none(), st.integers()))
+def test_fuzz_exhibition_iiif(fork_worker, small_pack, tmp_path_factory, title, w, name, url,
+                              rights, label):
+    count_case("exhibition-iiif")
+    out = str(tmp_path_factory.mktemp("x") / "show")
+    code = _SHOW.format(title=title, w=w, name=name, rights=rights, pack=small_pack, out=out,
+                        url=url, label=label)
+    o = fork_worker.run({"kind": "python", "code": code, "memory": 2 << 30}, timeout=60)
+    assert o.code == 0 and not o.timeout, o.describe()
