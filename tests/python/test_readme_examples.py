@@ -1,10 +1,11 @@
-"""The README's Python examples run as written.
+"""The Python examples of the README and of docs/*.md run as written.
 
-Each fenced ```python block right after a `<!-- test: NAME -->` comment runs in a fresh
+Each fenced ```python block right after a `<!-- test: NAME -->` comment (in README.md or any
+page of docs/) runs in a fresh
 namespace, in a directory holding what the examples open: `a.tif` (a random RGB image) and
 `scroll.pack` (a pack of one random 1500 x 480 painting). After a block has run, its names are
 checked against independent references where the example computes something checkable (the
-pack example's tile against the source image's texels). Every ```python block of the README
+pack example's tile against the source image's texels). Every ```python block of these pages
 must be marked, and no indented block may look like runnable gigascroll code, so an example
 cannot silently fall out of this test."""
 
@@ -17,31 +18,35 @@ import pytest
 
 import gigascroll
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+ROOT = Path(__file__).resolve().parents[2]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 MARKED = re.compile(r"<!-- test: (\w+) -->\n```python\n(.*?)\n```", re.S)
 FENCED = re.compile(r"^```python$", re.M)
 EXPECTED = {"pack", "runtime", "views", "photon", "rooms", "gallery"}
 
 
-def readme_blocks() -> dict[str, tuple[int, str]]:
-    text = README.read_text()
+def readme_blocks() -> dict[str, tuple[str, str]]:
+    """NAME -> ("page:line", code) over the README and docs/*.md."""
     blocks = {}
-    for m in MARKED.finditer(text):
-        line = text.count("\n", 0, m.start(2)) + 1
-        assert m.group(1) not in blocks, f"two README blocks named {m.group(1)}"
-        blocks[m.group(1)] = (line, m.group(2))
+    for page in PAGES:
+        text = page.read_text()
+        for m in MARKED.finditer(text):
+            line = text.count("\n", 0, m.start(2)) + 1
+            assert m.group(1) not in blocks, f"two blocks named {m.group(1)}"
+            blocks[m.group(1)] = (f"{page.relative_to(ROOT)}:{line}", m.group(2))
     return blocks
 
 
 def test_every_python_block_is_marked():
-    text = README.read_text()
-    assert len(FENCED.findall(text)) == len(MARKED.findall(text))
     assert set(readme_blocks()) == EXPECTED
-    # An indented (unfenced) block starting with a gigascroll import would be an example that
-    # this test does not run.
-    for m in re.finditer(r"(?:\A|\n\n)((?: {4}.*\n)+)", text):
-        first = m.group(1).lstrip().splitlines()[0]
-        assert not re.match(r"(import|from) gigascroll", first), first
+    for page in PAGES:
+        text = page.read_text()
+        assert len(FENCED.findall(text)) == len(MARKED.findall(text)), page.name
+        # An indented (unfenced) block starting with a gigascroll import would be an example
+        # that this test does not run.
+        for m in re.finditer(r"(?:\A|\n\n)((?: {4}.*\n)+)", text):
+            first = m.group(1).lstrip().splitlines()[0]
+            assert not re.match(r"(import|from) gigascroll", first), (page.name, first)
 
 
 @pytest.fixture(scope="module")
@@ -69,9 +74,9 @@ def workdir(inputs, tmp_path, monkeypatch):
 
 
 def run_block(name: str) -> dict:
-    line, code = readme_blocks()[name]
+    where, code = readme_blocks()[name]
     ns = {"__name__": f"readme_{name}"}
-    exec(compile(code, f"README.md:{line}", "exec"), ns)  # noqa: S102 (the README's own code)
+    exec(compile(code, where, "exec"), ns)  # noqa: S102 (the docs' own code)
     return ns
 
 
