@@ -1,6 +1,6 @@
 """`gigascroll bench bc1`: the bc1 (DXT1) codec against the raw pack of the same paintings.
 
-- quality: the eight seed 000 Table 4 paintings (built-in ink landscapes, one seed each) at
+- quality: the eight VT-mobile-VR Table 4 paintings (built-in ink landscapes, one seed each) at
   1/--scale of their size, packed raw and bc1; per painting and level, PSNR and mean FLIP
   (NVIDIA's flip-evaluator, LDR, 67 pixels per degree) of the bc1 level (assembled from the
   decoded tiles' payloads) against the raw level.

@@ -1,4 +1,4 @@
-"""`gigascroll bench cluster`: sharded pack builds of seed 000's eight Table 4 paintings (at
+"""`gigascroll bench cluster`: sharded pack builds of VT-mobile-VR's eight Table 4 paintings (at
 reduced size, synthesized as tiled TIFFs) on 1 and 2 workers of a Dask LocalCluster, next to
 a plain process pool (the same shard function under concurrent.futures) as the floor to beat,
 and a single-process build. Every worker uses one thread, so the worker count is the

@@ -1,7 +1,7 @@
-"""`gigascroll bench loader`: seed 000 Table 1 (loading 50,000 tiles, lock-free vs locked),
+"""`gigascroll bench loader`: VT-mobile-VR Table 1 (loading 50,000 tiles, lock-free vs locked),
 the physical limit of the same bytes, and VT sampling cost against a plain mip texture.
 
-Workload (seed 000 §5.1): the built-in 152089 x 6083 painting, 12 m x 0.48 m on the wall
+Workload (VT-mobile-VR §5.1): the built-in 152089 x 6083 painting, 12 m x 0.48 m on the wall
 (texel 12 m / 152089); a camera 10 cm in front of it moves head to tail at 1 m/s and loops.
 Each frame's request set is computed geometrically: the tiles of the level whose texel matches
 the camera's pixel footprint (pinhole camera facing the wall: footprint d / f everywhere) that

@@ -1,5 +1,5 @@
-"""`gigascroll bench photon`: seed 001's Tables 1-5 on the CPU, the C++ radius-search benchmark
-against nanoflann, and run time against error (one-shot and progressive photon mapping
+"""`gigascroll bench photon`: VR-photon-mapping's Tables 1-5 on the CPU, the C++ radius-search
+benchmark against nanoflann, and run time against error (one-shot and progressive photon mapping
 against Mitsuba 3's path and particle tracers) for the Cornell box and the three test rooms.
 
 Every time is the median over --repeat runs, measured in this process on the same cores;
@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import UserError
 from ..experiments import pyplot, save_figure, write_json
 
-# Seed 001's settings and numbers (RTX 2080 Ti, ms), to print next to ours.
+# VR-photon-mapping's settings and numbers (RTX 2080 Ti, ms), to print next to ours.
 SEED_TABLE1 = {  # (photons side, radius): (kd-tree, hash grid)
     (512, 0.02): (7.28, 3.89), (512, 0.05): (118.35, 90.74), (512, 0.1): (426.39, 501.79),
     (256, 0.05): (8.32, 5.23), (256, 0.1): (72.05, 49.29), (256, 0.2): (287.87, 362.10),
@@ -116,7 +116,7 @@ def _tables(name: str, args) -> dict:
     configs = [(s, r) for (s, r) in SEED_TABLE1 if s in sides]
     bar = tqdm(total=len(configs) * 2 + len(configs) * 4, desc=f"{name} tables", unit="config")
 
-    # The seed's tables gather over the sphere (disc=False), as seed 001 does.
+    # The seed's tables gather over the sphere (disc=False), as VR-photon-mapping does.
     def gather_ms(side, r, repeat=args.repeat, **kw):
         def once():
             return P.render(scene, cam, photons=side * side, radius=r * sc, seed=1, return_stats=True,
@@ -218,7 +218,7 @@ BENCH_PHOTON_ARGS = ("--benchmark_filter=-BM_AdaptiveCells", "--benchmark_repeti
 
 
 def _nanoflann(quick: bool) -> dict | None:
-    """Runs the C++ Google Benchmark bench_photon: our adaptive grid, seed 001's hash grid,
+    """Runs the C++ Google Benchmark bench_photon: our adaptive grid, VR-photon-mapping's hash grid,
     nanoflann and our kd-tree on the same photons and queries, repeated 3 times with the runs
     interleaved at random (the machine is shared); reports the median CPU time per query set."""
     root = Path(__file__).resolve().parents[3]

@@ -1,5 +1,5 @@
 """`gigascroll bench views`: request-processing cost of the four methods against the number
-of paintings (seed 000 Fig. 11, 8..40 paintings on tables) and against the tile total (five
+of paintings (VT-mobile-VR Fig. 11, 8..40 paintings on tables) and against the tile total (five
 steps of 4096 tiles, static camera 25 cm away, Fig. 12); the cpu-async latency in frames at
 a 90 Hz pace; hash losses per frame and repeated losses against the table size and the salt.
 
@@ -46,7 +46,7 @@ def _painting_sweep(args, frames) -> list[dict]:
     return painting_sweep(PAINTING_COUNTS, frames, args.repeats, args.threads)
 
 
-# Seed 000 Fig. 12's five steps of 4096 tiles, then larger totals where a flag array shows.
+# VT-mobile-VR Fig. 12's five steps of 4096 tiles, then larger totals where a flag array shows.
 TILE_TOTALS = tuple(4096 * k for k in range(1, 6)) + (1 << 18, 1 << 20, 1 << 22)
 
 
@@ -141,7 +141,7 @@ def _hash_losses(args, frames) -> list[dict]:
 
 
 def _loop(args, quick) -> list[dict]:
-    """The first frame loop (seed 000 Tables 2, 3 set-up, scaled down): a synthetic painting
+    """The first frame loop (VT-mobile-VR Tables 2, 3 set-up, scaled down): a synthetic painting
     at the scroll's texel size, eyes at 40 cm plus the magnifier, 1 m/s then a stop, paced at
     90 Hz with the lock-free loader thread; Table 2's methods with direct loading, and
     mip-by-mip with the hash."""

@@ -4,7 +4,7 @@ virtual texture): the JS time a frame takes to turn the feedback of both eyes of
 views.Magnifier) into requests, in headless chromium on this machine's CPU.
 
 The virtual texture's test page (web/vt/test/harness.html) draws the three feedback passes of
-a painting on a wall every frame while the cameras walk along it at 1 m/s (seed 000 Table 2:
+a painting on a wall every frame while the cameras walk along it at 1 m/s (VT-mobile-VR Table 2:
 main camera 40 cm away, the magnifier showing 2.5 cm from 20 cm), served by `gigascroll
 serve`'s application. Reported: the median over frames of (a) the processing of all three
 views' last feedback together (the steady state of a headset, whose readbacks arrive every
@@ -27,7 +27,7 @@ QUEST3_FOV = 96.0                      # vertical, degrees
 IPD = 0.063
 MAGNIFIER = (512, 512)
 MAGNIFIER_FOV = 7.2                    # 2.5 cm seen from 20 cm
-DISTANCE, SPEED, HZ = 0.40, 1.0, 90.0  # seed 000 Table 2
+DISTANCE, SPEED, HZ = 0.40, 1.0, 90.0  # VT-mobile-VR Table 2
 TEXEL_M = 0.25e-3
 CHROMIUM_ARGS = ["--headless=new", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                  "--no-sandbox", "--enable-webgl", "--ignore-gpu-blocklist"]

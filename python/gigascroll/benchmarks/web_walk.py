@@ -3,7 +3,7 @@ part): tiles uploaded a frame, bytes a second, hit rate, and frames from the sto
 view, in headless chromium (WebGL2 on SwiftShader) against `gigascroll serve`'s application
 (on a thread of this process).
 
-The walk is seed 000 Table 2's: the main camera 40 cm from the scroll, the magnifier on, moving
+The walk is VT-mobile-VR Table 2's: the main camera 40 cm from the scroll, the magnifier on, moving
 left to right at 1 m/s, counted in frames of a 90 Hz headset (1/90 m a frame, whatever the
 emulated frame rate), then a stop; the client's own stats panel gives the frames from the stop
 to the exact view (stats.js). Frame times on SwiftShader are CPU emulation: they are reported
