@@ -43,7 +43,8 @@ def register(sub) -> None:
     p.add_argument("--radius", type=float, default=None,
                    help="gather radius (default 0.02 x the scene's scale: 0.02 in the Cornell box)")
     p.add_argument("--grid", choices=["adaptive", "hash", "kdtree"], default="adaptive",
-                   help="photon search structure (default adaptive; hash is seed 001's grid)")
+                   help="photon search structure (default adaptive; hash is "
+                        "VR-photon-mapping's grid)")
     p.add_argument("--gather", choices=["radius", "knn"], default="radius")
     p.add_argument("-k", type=int, default=None, help="photons of the k-nearest gather (default 50)")
     p.add_argument("--kernel", choices=["box", "cone"], default="box",
@@ -74,7 +75,8 @@ def register(sub) -> None:
                       help="gather over the surface disc (no edge darkening or leaks; the default "
                            "for box radius gathers of scenes; --room too)")
     disc.add_argument("--sphere", dest="disc", action="store_false",
-                      help="gather over the sphere (seed 001's estimator; --room's default)")
+                      help="gather over the sphere (VR-photon-mapping's estimator; "
+                           "--room's default)")
     p.set_defaults(func=run)
 
 

@@ -1,4 +1,4 @@
-"""`gigascroll scenario NAME`: the exhibition scenarios of seed 000 §5 (results JSON, plots,
+"""`gigascroll scenario NAME`: the exhibition scenarios of VT-mobile-VR §5 (results JSON, plots,
 a Markdown report and frames as PNG in --out)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from ..errors import UserError
 
 def register(sub) -> None:
     from ..scenarios import SCENARIOS
-    p = sub.add_parser("scenario", help="run an exhibition scenario (seed 000 §5)",
+    p = sub.add_parser("scenario", help="run an exhibition scenario (VT-mobile-VR §5)",
                        description="single: one scroll with eyes and magnifier (Tables 2, 3); "
                        "multi: 8-40 paintings on tables (Fig. 11, Table 5); sweep: tile totals "
                        "at a static camera against Ma VT and LOD mapping (Fig. 12); latency: "

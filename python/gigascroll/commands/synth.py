@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..errors import UserError
 
-# seed 000 Table 4: the test paintings' sizes.
+# VT-mobile-VR Table 4: the test paintings' sizes.
 TABLE4 = [(152089, 6083), (196301, 5197), (159010, 4339), (102680, 5229), (109321, 7183),
           (117968, 4722), (91403, 11161), (119177, 3858)]
 
@@ -15,7 +15,7 @@ def register(sub) -> None:
     p = sub.add_parser("synth", help="write the built-in procedural ink-landscape painting",
                        description="Writes the deterministic built-in painting (an ink landscape "
                        "with detail down to single pixels) as a tiled BigTIFF, streamed in bands. "
-                       "Seed 000 Table 4 sizes: " + ", ".join(f"{w}x{h}" for w, h in TABLE4))
+                       "VT-mobile-VR Table 4 sizes: " + ", ".join(f"{w}x{h}" for w, h in TABLE4))
     p.add_argument("--width", type=int, default=24000, help="pixels (default 24000)")
     p.add_argument("--height", type=int, default=1000, help="pixels (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="variation of the landscape (default 0)")
