@@ -1,4 +1,4 @@
-"""The exhibition scenarios of seed 000 §5 (issue 4 §5): `single`, `multi`, `sweep`, `latency`.
+"""The exhibition scenarios of VT-mobile-VR §5 (issue 4 §5): `single`, `multi`, `sweep`, `latency`.
 Each writes NAME.json (results), NAME.md (report) and PNG plots and frames into the output
 directory; `quick=True` runs a scaled-down version (tests run those and check their
 invariants); full runs are the benchmarks recorded in bench/RESULTS.md."""

@@ -30,7 +30,7 @@ class Options:
     quick: bool = False
     out: Path = Path("scenario-out")
     cache: Path | None = None     # where packs are kept between runs (default: out/cache)
-    threshold: int = 16           # direct loading: tiles per frame (seed 000: 16)
+    threshold: int = 16           # direct loading: tiles per frame (VT-mobile-VR: 16)
     methods: tuple[str, ...] | None = None
     pack: Path | None = None      # use this pack instead of building one
     path: Path | None = None      # camera path JSON instead of the scenario's own

@@ -1,6 +1,6 @@
-"""`latency`: seed 000 §5.5.2. The camera 25 cm from the scroll moves at 0.5 m/s, then stops;
+"""`latency`: VT-mobile-VR §5.5.2. The camera 25 cm from the scroll moves at 0.5 m/s, then stops;
 display latency (frames until every visible tile is resident at its requested level) of ours
-(hash + direct loading) against CPU async processing (Unreal SVT), Ma VT and seed 003's LOD
+(hash + direct loading) against CPU async processing (Unreal SVT), Ma VT and LOD-texture's LOD
 mapping, all with the same loader."""
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def run(opts: c.Options) -> dict:
         path = moving_then_stop(ex, 1.0, opts.duration or 2.0, warm=60, stop=90)
     path = c.user_path(opts, path, ex)
     rep = c.Report("latency", opts.out, "Scenario latency: display latency after a stop "
-                   "(seed 000 §5.5.2)")
+                   "(VT-mobile-VR §5.5.2)")
     res = rep.results
     res.update({"quick": opts.quick, "frames": len(path), "rows": []})
     for m in tqdm(methods, desc="latency: methods", unit="method"):
@@ -54,7 +54,7 @@ def run(opts: c.Options) -> dict:
                                           if opts.quick or r["method"] != "lod-mapping")}
     if "hash" in by:
         # Deterministic quick run: each frame's loads arrive within the frame, so the hash
-        # loop is sharp within a few frames of the stop (seed 000: 3-4).
+        # loop is sharp within a few frames of the stop (VT-mobile-VR: 3-4).
         if opts.quick:
             checks["hash_latency_at_most_5"] = (by["hash"]["display_latency_frames"] or 99) <= 5
         if "cpu-async" in by:
@@ -72,7 +72,7 @@ def _report(rep, res):
                 None if r["display_latency_frames"] is None
                 else 1e3 * r["display_latency_frames"] / 90, r["fps"], r["fps_from_frame_time"],
                 f"{100 * r['hit_rate']:.1f}%", r.get("lod_memory_mb")] for r in res["rows"]])
-    rep.text("Seed 000 §5.5.2: ours 3-4 frames (33-44 ms), Unreal SVT ~30 frames (~500 ms).\n")
+    rep.text("VT-mobile-VR §5.5.2: ours 3-4 frames (33-44 ms), Unreal SVT ~30 frames (~500 ms).\n")
     rep.hit_rate_figure(res["rows"], [r["method"] for r in res["rows"]], "latency_hit_rate.png",
                         "hit rate per frame; the camera stops near the end")
     rep.checks(res["checks"])

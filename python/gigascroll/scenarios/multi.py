@@ -1,4 +1,4 @@
-"""`multi`: seed 000 §5.4. The eight Table 4 paintings in copies on tables 70 cm high, the
+"""`multi`: VT-mobile-VR §5.4. The eight Table 4 paintings in copies on tables 70 cm high, the
 camera 170 cm high walking along them; 8..40 paintings. Fig. 11 (frame rate of flag-array vs
 hash against the painting count) and Table 5 (per-stage times).
 
@@ -39,7 +39,8 @@ def run(opts: c.Options) -> dict:
     if len(pack.paintings) < max(counts):
         raise ValueError(f"the pack has {len(pack.paintings)} paintings, the room needs "
                          f"{max(counts)}: a painting is missing from the pack")
-    rep = c.Report("multi", opts.out, "Scenario multi: 8-40 paintings on tables (seed 000 §5.4)")
+    rep = c.Report("multi", opts.out,
+                   "Scenario multi: 8-40 paintings on tables (VT-mobile-VR §5.4)")
     res = rep.results
     res.update({"quick": opts.quick, "scale": scale, "counts": list(counts), "rows": []})
     duration = opts.duration or (0.1 if opts.quick else 3.0)
@@ -94,7 +95,7 @@ def _report(rep, res, methods):
     rep.text("## Table 5: per-stage times (ms per frame, hash)\n")
     rows = [r for r in res["rows"] if r["method"] == "hash"] or res["rows"]
     rep.stage_table("paintings", rows, [r["paintings"] for r in rows])
-    rep.text("Seed 000 Table 5 (8..40 paintings): total 2.79..4.41 ms; request computation "
+    rep.text("VT-mobile-VR Table 5 (8..40 paintings): total 2.79..4.41 ms; request computation "
              "0.89..1.21; command issue 0.12; physical update 0.14..0.47; page-table update "
              "1.17..1.89.\n")
     rep.checks(res["checks"])

@@ -1,4 +1,4 @@
-"""`single`: seed 000 §5.3. The main view 40 cm from the scroll with the magnifier, both moving
+"""`single`: VT-mobile-VR §5.3. The main view 40 cm from the scroll with the magnifier, both moving
 left to right at 1 m/s for 10 s, then a stop; threshold 16. Table 2 (processing methods: fps,
 processing latency, hit rate), Table 3 (direct vs mip-by-mip: fps, fps std, display latency),
 frames with and without the magnifier's requests, and the hash's losses under the frame salt."""
@@ -26,7 +26,7 @@ def setup(opts: c.Options):
 
 def salt_losses(ex, path, frames: int, threads: int = 0) -> dict:
     """Requests the hash loses against the exact (basic) set, and how many of them it had
-    also lost the frame before (seed 000: the frame salt keeps that at zero)."""
+    also lost the frame before (VT-mobile-VR: the frame salt keeps that at zero)."""
     resident = ex.resident_set()
     basic, hashp = v.make_processor("basic", ex.tiles), v.make_processor("hash", ex.tiles, threads)
     lost_total = repeats = 0
@@ -48,7 +48,7 @@ def run(opts: c.Options) -> dict:
     methods = c.check_methods(opts, METHODS, METHODS[:3])
     ex, pack, path = setup(opts)
     rep = c.Report("single", opts.out, "Scenario single: one scroll, eyes and magnifier "
-                   "(seed 000 §5.3)")
+                   "(VT-mobile-VR §5.3)")
     res = rep.results
     res["quick"] = opts.quick
     res["frames"] = len(path)
@@ -107,13 +107,13 @@ def _report(rep, res, shown):
                 f"{r['latency_frames']:.2f} / {max(x['latency_frames'] for x in r['records'])}",
                 f"{100 * r['hit_rate']:.2f}%", r["display_latency_frames"]]
                for r in res["table2"]])
-    rep.text("Seed 000 Table 2: CPU async 89.97 fps, 13.24 frames, 76.96%; flag array 89.73, "
+    rep.text("VT-mobile-VR Table 2: CPU async 89.97 fps, 13.24 frames, 76.96%; flag array 89.73, "
              "2.00, 86.65%; hash 89.34, 2.00, 86.40%.\n")
     rep.text("## Table 3: loading strategies (hash)\n")
     rep.table(["strategy", "fps", "frame time std (ms)", "hit rate", "display latency (frames)"],
               [[r["strategy"], r["fps"], r["frame_ms_std"], f"{100 * r['hit_rate']:.2f}%",
                 r["display_latency_frames"]] for r in res["table3"]])
-    rep.text("Seed 000 Table 3: mip-by-mip 89.76 fps (std 0.65), 6 frames; direct 89.81 "
+    rep.text("VT-mobile-VR Table 3: mip-by-mip 89.76 fps (std 0.65), 6 frames; direct 89.81 "
              "(0.72), 3 frames.\n")
     rep.text("## Per-stage times (ms, mean per frame)\n")
     rows = res["table2"] + res["table3"][1:]

@@ -1,6 +1,6 @@
-"""`sweep`: seed 000 §5.5.1 / Fig. 12. A static camera 25 cm from one painting whose tile
+"""`sweep`: VT-mobile-VR §5.5.1 / Fig. 12. A static camera 25 cm from one painting whose tile
 total grows in five steps of 4096 tiles (the scroll's height and texel size, width cut to
-the total); frame rate and determination cost of the basic method, Ma VT, seed 003's LOD
+the total); frame rate and determination cost of the basic method, Ma VT, LOD-texture's LOD
 mapping and ours (hash). Both eyes, no magnifier."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def run(opts: c.Options) -> dict:
     totals = (256, 512, 768) if opts.quick else tuple(4096 * k for k in range(1, 6))
     frames = 20 if opts.quick else 90
     rep = c.Report("sweep", opts.out, "Scenario sweep: tile totals at a static camera "
-                   "(seed 000 §5.5.1, Fig. 12)")
+                   "(VT-mobile-VR §5.5.1, Fig. 12)")
     res = rep.results
     res.update({"quick": opts.quick, "totals": list(totals), "rows": []})
     for total in tqdm(totals, desc="sweep: tile totals", unit="config"):
@@ -87,7 +87,7 @@ def _report(rep, res, methods):
               [[r["tiles"], r["method"], r["fps"], r["fps_from_frame_time"], r["feedback_ms"],
                 r["processing_ms"], r["display_ms"], f"{100 * r['hit_rate']:.1f}%",
                 r.get("lod_memory_mb")] for r in res["rows"]])
-    rep.text("Seed 000 Fig. 12: ours and Unreal SVT stay at 90 fps, basic VT is slow, Ma VT "
+    rep.text("VT-mobile-VR Fig. 12: ours and Unreal SVT stay at 90 fps, basic VT is slow, Ma VT "
              "falls as the tiles grow. For the baselines the rays of the display pass count "
              "as display, not feedback.\n")
     rep.checks(res["checks"])
