@@ -1,12 +1,12 @@
 """Views and tile determination: the exhibition scene, the headset's eyes and the magnifier,
 camera paths shared by scenarios and tests, the feedback pass and the four request-processing
-methods (seed 000 sections 4.1, 5; seed 002's alive/remove lists), and the two baselines
+methods (VT-mobile-VR §§4.1, 5; Vulkan-SVT's alive/remove lists), and the two baselines
 without a feedback pass.
 
 - :mod:`.exhibition`: headset, magnifier, test paintings, the wall scroll and the tables room
 - :mod:`.camera_paths`: `CameraPath`, `scroll_path`, `multi_route`, `frame_cameras`
 - :mod:`.processing`: feedback, request processing, loading strategies, the display pass
-- :mod:`.baselines`: Ma VT and seed 003's LOD mapping
+- :mod:`.baselines`: Ma VT and LOD-texture's LOD mapping
 
 The frame loop that runs all of it (gigascroll.frame_loop) builds on this package; nothing
 here imports it.

@@ -1,4 +1,4 @@
-"""Tile determination without a feedback pass: the two baselines of seed 000 Fig. 12.
+"""Tile determination without a feedback pass: the two baselines of VT-mobile-VR Fig. 12.
 
 - `MaVT` (Ma et al. 2024): every level-0 tile of every painting is tested on the CPU each
   frame: is its centre in front of the head and inside the field of view, and how far is it?
@@ -6,7 +6,7 @@
   plane facing the viewer at that depth, the pinhole's exact footprint for a head-on
   painting), and the tile's ancestor at that level is requested. Its cost grows with the
   tile total.
-- `LodMapping` (seed 003): one whole mip level per painting, chosen by the viewer's distance
+- `LodMapping` (LOD-texture): one whole mip level per painting, chosen by the viewer's distance
   to the painting with the seed's bands LOD1 <= 100, LOD2 100-200, LOD3 200-300, LOD4
   300-500 (far = 500). The seed's scene units are not ours; we scale them so that LOD1 (our
   level 0) ends where our headset stops needing level 0 on a head-on painting (footprint 2
@@ -32,7 +32,7 @@ from .exhibition import HEADSET, TEXEL_M, Exhibition, Headset
 __all__ = ["BASELINES", "MaVT", "LodMapping", "make_baseline", "LOD_BANDS_M"]
 
 BASELINES = ("ma-vt", "lod-mapping")
-# Seed 003's bands (scene units 100, 200, 300, 500), scaled so that LOD1 ends where a
+# LOD-texture's bands (scene units 100, 200, 300, 500), scaled so that LOD1 ends where a
 # head-on view of the scroll's texels stops needing level 0: 2 texels per display pixel.
 _LEVEL0_END_M = 2 * TEXEL_M / (2 * HEADSET.tan_half_x / HEADSET.width)
 LOD_BANDS_M = tuple(_LEVEL0_END_M * b / 100 for b in (100, 200, 300, 500))
@@ -100,7 +100,7 @@ class MaVT:
 
 
 class LodMapping:
-    """Seed 003: one whole level per painting by viewer distance."""
+    """LOD-texture: one whole level per painting by viewer distance."""
 
     def __init__(self, exhibition: Exhibition, bands=LOD_BANDS_M):
         if any(not (b > 0 and math.isfinite(b)) for b in bands) or list(bands) != sorted(bands):

@@ -181,7 +181,7 @@ def scroll_path(distance: float = 0.40, speed: float = 1.0, duration: float = 10
                 start_x: float = 1.0, stop_frames: int = 0, loops: int = 1,
                 magnifier: bool = True, exhibition: Exhibition | None = None,
                 centre_height: float = 1.5, fps: float = FPS) -> CameraPath:
-    """Seed 000's single-painting behaviour: facing the wall scroll from `distance`, move
+    """VT-mobile-VR's single-painting behaviour: facing the wall scroll from `distance`, move
     left to right at constant `speed` for `duration` seconds, `loops` times (jumping back to
     the start, as in Table 1), then stand still for `stop_frames`. The magnifier looks at the
     point straight ahead of the head."""
@@ -211,7 +211,7 @@ def scroll_path(distance: float = 0.40, speed: float = 1.0, duration: float = 10
 def multi_route(n_paintings: int, speed: float = 1.0, duration: float = 10.0,
                 eye_height: float = 1.70, tilt_deg: float | None = None,
                 fps: float = FPS, specs: list[PaintingSpec] | None = None) -> CameraPath:
-    """Seed 000 section 5.4's routes: the camera 170 cm above the floor walks along the
+    """VT-mobile-VR §5.4's routes: the camera 170 cm above the floor walks along the
     tables' near edge (+x) at `speed`, tilted down so the tables in front are in view; more
     paintings = more tables behind, so the tilt flattens to take in the farther ones."""
     specs = specs or TABLE4_PAINTINGS

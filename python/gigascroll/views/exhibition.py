@@ -1,5 +1,5 @@
 """The exhibition: the headset's eyes and the magnifier, the test paintings (the scroll and
-seed 000's Table 4, all scanned at the scroll's texel size) and the two rooms of seed 000
+VT-mobile-VR's Table 4, all scanned at the scroll's texel size) and the two rooms of VT-mobile-VR
 sections 5.3 and 5.4.
 
 Units are metres; y is up. A painting hanging on a wall faces -z; paintings on tables face +y.
@@ -76,8 +76,8 @@ def spec_of(name: str, width: int, height: int) -> PaintingSpec:
     return PaintingSpec(name, width, height, width * TEXEL_M, height * TEXEL_M)
 
 
-SCROLL = PaintingSpec("qianli_jiangshan", 152089, 6083, 12.0, 0.5)  # 12 m x 0.5 m (seed 000)
-# Seed 000 Table 4 (the first is the scroll itself).
+SCROLL = PaintingSpec("qianli_jiangshan", 152089, 6083, 12.0, 0.5)  # 12 m x 0.5 m (VT-mobile-VR)
+# VT-mobile-VR Table 4 (the first is the scroll itself).
 TABLE4_PAINTINGS = [SCROLL] + [spec_of(f"table4_{i}", w, h) for i, (w, h) in enumerate(
     [(196301, 5197), (159010, 4339), (102680, 5229), (109321, 7183), (117968, 4722),
      (91403, 11161), (119177, 3858)], start=1)]
@@ -97,7 +97,7 @@ class Exhibition:
 
 def single_scroll(spec: PaintingSpec = SCROLL, tile_size: int = 128, border: int = 4,
                   centre_height: float = 1.5) -> Exhibition:
-    """Seed 000 section 5.3: one scroll on a wall (a box behind it) in the plane z = 0 from
+    """VT-mobile-VR §5.3: one scroll on a wall (a box behind it) in the plane z = 0 from
     x = 0 to width_m, seen from z < 0; the top edge at centre_height + height_m / 2. Texel
     (0, 0) is the top-left corner as a visitor sees it, at x = width_m: a camera looking +z
     has its right along -x, so image x runs along -x (with u = +x it would read mirrored)."""
@@ -116,7 +116,7 @@ def single_scroll(spec: PaintingSpec = SCROLL, tile_size: int = 128, border: int
 def multi_exhibition(n_paintings: int, specs: list[PaintingSpec] | None = None,
                      tile_size: int = 128, border: int = 4, table_height: float = 0.70,
                      gap: float = 0.10) -> Exhibition:
-    """Seed 000 section 5.4: the eight Table 4 paintings in copies (painting id i shows
+    """VT-mobile-VR §5.4: the eight Table 4 paintings in copies (painting id i shows
     specs[i % 8]), eight to a table, laid flat on tables 70 cm high. Table g runs along x at
     z from 1 + g * (depth + 1) m; its paintings lie side by side across it, long side along x,
     image top towards -z (towards the visitor)."""

@@ -1,5 +1,5 @@
-"""Tile determination: the feedback pass and the four request-processing methods (seed 000
-section 4.1; seed 002's alive/remove lists), the loading strategies that turn command sets
+"""Tile determination: the feedback pass and the four request-processing methods (VT-mobile-VR
+section 4.1; Vulkan-SVT's alive/remove lists), the loading strategies that turn command sets
 into loads, and the display pass.
 
 Request keys are 64-bit: painting << 37 | level << 32 | morton(tile x, tile y).
