@@ -66,7 +66,7 @@ def cached_pack(cache: Path, key: str, images, progress: bool = False) -> TilePa
 
 
 def scroll_pack(cache: Path, progress: bool = True) -> TilePack:
-    """The full 152089 x 6083 built-in ink landscape (seed 000's scroll), synthesized and
+    """The full 152089 x 6083 built-in ink landscape (VT-mobile-VR's scroll), synthesized and
     packed on first use (several minutes), then read from the cache."""
     cache = Path(cache)
     w, h = v.SCROLL.width, v.SCROLL.height

@@ -1,4 +1,4 @@
-"""The frame loop (seed 000 §4, issue 4 §4, first version): per frame the feedback pass,
+"""The frame loop (VT-mobile-VR §4, issue 4 §4, first version): per frame the feedback pass,
 request processing, command issue, loader drain, physical-cache and page-table update, and a
 display pass that samples the views through the virtual texture; the loader runs in its own
 threads. Per frame it records each stage's time, the hit rate (share of this frame's
@@ -7,7 +7,7 @@ the camera stops the display latency (frames until every visible tile is residen
 requested level).
 
 The methods are the four request-processing methods of views.PROCESSING_METHODS and the two
-baselines without a feedback pass (baselines.BASELINES: Ma VT, seed 003 LOD mapping). For
+baselines without a feedback pass (baselines.BASELINES: Ma VT, LOD-texture LOD mapping). For
 those the rays still render the views for the display pass, so their time counts as display,
 and the baseline's own determination plus the page-table lookup of its requests counts as
 processing.
@@ -34,7 +34,7 @@ __all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS", "load_stages"
 METHODS = v.PROCESSING_METHODS + BASELINES
 
 LOADING_STRATEGIES = ("direct", "mip-by-mip")
-# The columns of seed 000 Table 5. The physical and page-table updates are part of "drain"
+# The columns of VT-mobile-VR Table 5. The physical and page-table updates are part of "drain"
 # here (VirtualTexture.drain inserts each arrived tile into both); "update" is the loading
 # strategy's bookkeeping and the LRU touch of the tiles on screen.
 STAGES = ("feedback", "processing", "issue", "drain", "update", "display")
@@ -44,7 +44,7 @@ STAGES = ("feedback", "processing", "issue", "drain", "update", "display")
 class FrameLoop:
     """Runs a camera path over an exhibition whose painting p is painting p of `pack`.
 
-    method: a views.PROCESSING_METHODS name; strategy: "direct" (seed 000, at most
+    method: a views.PROCESSING_METHODS name; strategy: "direct" (VT-mobile-VR, at most
     `per_frame` requested tiles a frame) or "mip-by-mip" (van Waveren, same cap).
     pace: sleep to 90 Hz frame boundaries (False: run flat out, for tests).
     wait_loads: block each frame until that frame's loads arrived (deterministic tests;

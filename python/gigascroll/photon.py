@@ -1,4 +1,4 @@
-"""Photon mapping on Embree (seed 001): scenes, cameras, photon maps and the renderer.
+"""Photon mapping on Embree (VR-photon-mapping): scenes, cameras, photon maps and the renderer.
 
     scene, camera = gigascroll.builtin_scene("cornell", resolution=(128, 128))
     image = gigascroll.render(scene, camera, photons=512**2, radius=0.02)  # (H, W, 3) float32
@@ -27,7 +27,7 @@ __all__ = ["Scene", "StereoCamera", "PhotonMap", "builtin_scene", "BUILTIN_SCENE
 # The test rooms built from rectangles (see RoomScene); Mitsuba can render each of them.
 ROOMS = ("room_lit", "room_indirect", "room_partition")
 
-# name -> the scene's size scale: seed 001's radii (0.02-0.2, a Cornell box about 2 units
+# name -> the scene's size scale: VR-photon-mapping's radii (0.02-0.2, a Cornell box about 2 units
 # wide) are multiplied by it.
 BUILTIN_SCENES = {"cornell": 1.0, "office": 4.0, "furnace": 1.0, **{name: 2.0 for name in ROOMS}}
 
@@ -285,7 +285,7 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
 
     Direct light by sampling the emitters with shadow rays; indirect light by density estimation
     in the photon map (grid 'adaptive': cells sized from the photon density and culled against the
-    gather sphere, the fastest; 'hash': seed 001's grid; or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
+    gather sphere, the fastest; 'hash': VR-photon-mapping's grid; or 'kdtree'; gather 'radius' with no heap, or 'knn' with a
     heap of k; kernel 'box' or 'cone'). pipeline 'fused' or 'two-pass'; cooperative=True (two-pass,
     grid='hash', radius gather) streams each photon once through a block of hit points in one cell.
     The same seed gives the same image for any thread count. return_stats=True also returns a
@@ -365,7 +365,7 @@ def render_stereo(scene: Scene, eyes: StereoCamera, reuse: bool = True, photons:
                   spp: int = 1, seed: int = 0, kernel: str = "box", light_samples: int = 1,
                   direct: bool = True, indirect: bool = True, threads: int = 0):
     """Render both eyes: (left, right, stats). With reuse=True the left eye writes the colour of
-    each hit point the right eye can see into the right image (seed 001 §3.3); stats has
+    each hit point the right eye can see into the right image (VR-photon-mapping §3.3); stats has
     'reused_share' (fraction of right-eye pixels written that way) and pass times."""
     s = _settings(scene, photons, radius, grid, gather, k, kernel, spp, light_samples, seed, "fused",
                   False, direct, indirect, threads, "auto")

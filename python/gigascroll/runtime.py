@@ -1,5 +1,5 @@
 """Streaming runtime: the tile loader, the physical cache with its page table, and software
-virtual-texture sampling (seed 000 §4.2-4.4, seed 002's fallback, seed 004 §3.3).
+virtual-texture sampling (VT-mobile-VR §4.2-4.4, Vulkan-SVT's fallback, Mayer-VT §3.3).
 
 Tile keys are ``(painting, level, tx, ty)``; several keys are an ``(n, 4)`` integer array or a
 sequence of 4-tuples, or a 1-D uint64 array of request keys (the views' ``pack_request``

@@ -1,4 +1,4 @@
-"""The built-in rooms of the gallery, as `RoomSpec`s: `scroll` (seed 000 section 5.3) and `hall`
+"""The built-in rooms of the gallery, as `RoomSpec`s: `scroll` (VT-mobile-VR §5.3) and `hall`
 (section 5.4). Every dimension, albedo and light is written down here.
 
 Units: lengths in metres, y up. Emission is radiance in W / m^2 / sr per RGB channel, linear,
@@ -57,7 +57,7 @@ CEILING_ALBEDO = (0.85, 0.85, 0.85)
 FLOOR_ALBEDO = (0.35, 0.27, 0.20)
 TABLE_ALBEDO = (0.25, 0.20, 0.16)
 
-# --- scroll (seed 000 section 5.3) -----------------------------------------------------------
+# --- scroll (VT-mobile-VR §5.3) -----------------------------------------------------------
 SCROLL_LENGTH_M = 12.0        # the seed's 12 m scroll
 SCROLL_CENTRE_HEIGHT = 1.5    # eye height, single_scroll's default
 SCROLL_MAX_HEIGHT = 1.6       # a painting taller than this (at 12 m) is shrunk to it
@@ -74,7 +74,7 @@ FILL_LUX = 20.0               # direct illuminance the dim ceiling fill gives it
 FILL_INSET = 1.0              # the fill panel keeps 1 m from the side walls and the front wall
 FILL_BACK = 1.5               # and 1.5 m from the back wall (the spots hang there)
 
-# --- hall (seed 000 section 5.4) -------------------------------------------------------------
+# --- hall (VT-mobile-VR §5.4) -------------------------------------------------------------
 TABLE_HEIGHT = 0.70           # multi_exhibition's tables
 TABLE_GAP = 0.10              # multi_exhibition's margin between paintings and table edges
 TABLE_TOP = 0.04              # ExhibitionScene.add_table: top thickness and leg width
@@ -192,7 +192,7 @@ def _size_m(p: PaintingSize, width_m: float) -> tuple[float, float]:
 # --- the rooms -------------------------------------------------------------------------------
 
 def scroll_room(paintings, painting: int | str = 0, lights=None) -> RoomSpec:
-    """Seed 000 section 5.3: one scroll on a wall at eye height, the room sized to it.
+    """VT-mobile-VR §5.3: one scroll on a wall at eye height, the room sized to it.
 
     The painting (default the first) is 12 m long at its own aspect (or its physical size when
     given), centred at 1.5 m, in the plane z = 0 from x = 0 to its length, 5 mm in front of the
@@ -255,7 +255,7 @@ def scroll_room(paintings, painting: int | str = 0, lights=None) -> RoomSpec:
 
 def hall_room(paintings, count: int | None = None, texel_m: float = TEXEL_M,
               lights=None) -> RoomSpec:
-    """Seed 000 section 5.4: `count` paintings (default: one of each) laid flat on 70 cm tables,
+    """VT-mobile-VR §5.4: `count` paintings (default: one of each) laid flat on 70 cm tables,
     as `multi_exhibition` lays them: painting slot i shows painting i % n; eight (n) to a table,
     side by side across it, long side along x, 1 mm above the top; table g runs along x at z
     from 1 + g * (depth + 1) m. A painting given in texels is texel_m metres per texel (the

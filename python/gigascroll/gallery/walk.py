@@ -36,7 +36,7 @@ from .tile_keys import parent_keys
 __all__ = ["FrameSource", "ExhibitionSource", "GallerySource", "walk_path", "stops_of", "GalleryWalk", "WALK_STAGES", "DISPLAY_PARTS",
            "compose_frame", "tone_map", "lens_in_view", "parent_keys"]
 
-# The loop's stages in order (seed 000 Table 5's columns, as frame_loop.STAGES) and the parts
+# The loop's stages in order (VT-mobile-VR Table 5's columns, as frame_loop.STAGES) and the parts
 # of the display pass.
 WALK_STAGES = ("feedback", "processing", "issue", "drain", "update", "display")
 DISPLAY_PARTS = ("rays", "reuse", "vt", "shade")
