@@ -1,4 +1,4 @@
-// The magnifier: the virtual texturing paper's second camera (seed 000 §4.1), a narrower field
+// The magnifier: the virtual texturing paper's second camera (VT-mobile-VR §4.1), a narrower field
 // of view along the viewer's gaze, drawn offscreen and shown as an inset in every view. It has
 // its own feedback pass at full resolution (view 2), so the tiles it needs (finer levels than
 // the main view's) stream in as well.

@@ -1,7 +1,7 @@
 // The stats panel (toggle with a key) and its numbers, which window.gigascroll.stats() returns:
 // fps, feedback ms, requests, tiles in flight, uploads a frame, hit rate, and the frames from
 // the last stop of the camera until the view is exact (the virtual texturing paper's display
-// latency after stopping, seed 000 Table 2: 4-5 frames there).
+// latency after stopping, VT-mobile-VR Table 2: 4-5 frames there).
 //
 // A stop is the first frame of a run of frames drawn with the same views. The view is confirmed
 // exact once every drawn view's feedback from a frame at or after the stop has been processed,

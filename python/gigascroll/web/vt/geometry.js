@@ -6,7 +6,7 @@
 //
 // Tiles also get a flat index over all paintings (the core's TileIndex: painting after
 // painting, levels 0..l-1 first, row-major inside a level): the feedback pass writes it in
-// 32 bits (views/request_processing.h's seed 002 page index).
+// 32 bits (views/request_processing.h's Vulkan-SVT page index).
 
 export class PaintingInfo {
   constructor(p, tileSize, border, firstIndex) {

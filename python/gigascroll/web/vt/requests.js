@@ -92,7 +92,7 @@ export class RequestProcessor {
     this.last = { requests: 0, commands: 0, hits: 0, misses: 0, collisions: 0 };
   }
 
-  // Inserts tile `index` into the frame's table (seed 000's collision rule) under the salt's
+  // Inserts tile `index` into the frame's table (VT-mobile-VR's collision rule) under the salt's
   // words (sh, sl).
   insert(index, sh, sl) {
     const k = this.key;

@@ -1,5 +1,5 @@
 // The virtual texture on the GPU: the facade the client's app uses (the virtual texturing
-// paper's runtime, seed 000 §4: tile determination -> request processing -> loading ->
+// paper's runtime, VT-mobile-VR §4: tile determination -> request processing -> loading ->
 // physical texture and page-table update -> display), mirroring the C++ core's arithmetic.
 //
 //   const vt = new VirtualTexture(gl, scene.pack, {tiles: scene.tiles, budgetBytes, ...});
