@@ -240,6 +240,11 @@ def test_xr_eyes_disparity_and_magnifier(browser, server):  # noqa: F811
         page.wait_for_function("window.gigascroll.app.magnifier.on === false")
         again = decode(page.evaluate("window.gigascroll.capture()"))
         scene = page.evaluate("window.gigascroll.app.scene")
+        page.evaluate("window.fakeXr.session.end()")  # the headset's own exit
+        page.wait_for_function("document.getElementById('enter-vr').textContent === 'Enter VR'"
+                               " && window.gigascroll.app.xr.session === null")
+        resumed = page.evaluate("window.gigascroll.frame()")
+        page.wait_for_function(f"window.gigascroll.frame() > {resumed} + 2")  # the desktop loop again
     finally:
         page.close()
     assert counts[0] == counts[1] > 0, f"frames drawn {counts[0]}, XR frames {counts[1]}: only the XR loop draws"

@@ -191,6 +191,7 @@ async function setupVrButton(app) {
   const button = document.getElementById('enter-vr');
   if (!button || !(await xrAvailable())) return;
   button.hidden = false;
+  app.xr.onEnd = () => { button.textContent = 'Enter VR'; };
   button.addEventListener('click', async () => {
     try {
       if (app.xr.session) await app.xr.exit();

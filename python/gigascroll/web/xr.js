@@ -40,6 +40,7 @@ export class XrPresenter {
     Object.assign(this, { gl, start, drawFrame, onSelect });
     this.session = null;
     this.frames = 0;
+    this.onEnd = null;   // called when a session ends (the headset's button or exit())
   }
 
   async enter() {
@@ -61,7 +62,7 @@ export class XrPresenter {
     this.session = session;
     this.space = space;
     session.addEventListener('select', () => this.onSelect?.());
-    session.addEventListener('end', () => { this.session = null; });
+    session.addEventListener('end', () => { this.session = null; this.onEnd?.(); });
     session.requestAnimationFrame((t, f) => this.#frame(t, f));
   }
 
