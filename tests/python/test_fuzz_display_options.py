@@ -1,5 +1,5 @@
 """--exposure and --tone on every command that writes or shows an image (render, gallery, view,
-serve): bad values are one line and exit 2, with no output left behind; random --exposure
+serve, demo): bad values are one line and exit 2, with no output left behind; random --exposure
 text gives exit 0 with an image or exit 2 with one line; the Python API (ExposureSetting,
 Display, to_srgb8) raises ValueError on bad input and maps any float radiance, NaN and
 infinities included, to valid codes. CLI cases run in forked children (fuzz_support)."""
@@ -44,14 +44,15 @@ def commands(files):
                      "--out", str(files / "walk")], files / "walk"),
         "view": (["view", pack, "--quit-after", "0.1"], None),
         "serve": (["serve", pack, "--room", "scroll", "--port", "0"], None),
+        "demo": (["demo", "--workdir", str(files / "demo"), "--width", "3000", "--height", "120",
+                  "--no-stream", "--no-walk"], files / "demo"),
     }
 
 
-BAD = [(c, ["--exposure", e], "--exposure") for c in ("render scene", "render room", "gallery",
-                                                       "view", "serve") for e in BAD_EXPOSURE[:6]]
+IMAGE_COMMANDS = ("render scene", "render room", "gallery", "view", "serve", "demo")
+BAD = [(c, ["--exposure", e], "--exposure") for c in IMAGE_COMMANDS for e in BAD_EXPOSURE[:6]]
 BAD += [("render room", ["--exposure", e], "--exposure") for e in BAD_EXPOSURE[6:]]
-BAD += [(c, ["--tone", t], "--tone") for c in ("render scene", "render room", "gallery", "view",
-                                               "serve") for t in BAD_TONE[:3]]
+BAD += [(c, ["--tone", t], "--tone") for c in IMAGE_COMMANDS for t in BAD_TONE[:3]]
 BAD += [("render room", ["--tone", t], "--tone") for t in BAD_TONE[3:]]
 
 

@@ -24,6 +24,8 @@ def register(sub) -> None:
     p.add_argument("--walk-seconds", type=float, default=3.0,
                    help="length of the gallery walk (default 3 s of 90 Hz frames)")
     p.add_argument("--eye", default="720x792", help="per-eye resolution of the walk (default 720x792)")
+    from .display_options import add_display_options
+    add_display_options(p, "the Cornell box's auto is factor 1")
     p.set_defaults(func=run)
 
 
@@ -47,14 +49,15 @@ def run(args) -> int:
     if not args.no_stream:
         stream_view(pack, work / "streamed_view.png")
     if not args.no_render:
-        render_room(work / "cornell.png")
+        from .display_options import display_of
+        render_room(work / "cornell.png", display_of(args))
     if not args.no_walk:
-        gallery_walk(pack, work / "walk", args.eye, args.walk_seconds)
+        gallery_walk(pack, work / "walk", args.eye, args.walk_seconds, args)
     print(f"everything the demo made is in {work.resolve()}/")
     return 0
 
 
-def gallery_walk(pack, out: Path, eye: str, seconds: float) -> None:
+def gallery_walk(pack, out: Path, eye: str, seconds: float, args=None) -> None:
     """The main job: the walk along the painting in the lit `scroll` room, both eyes streamed
     through the virtual texture with the magnifier, written as video, frames and report."""
     from ..gallery import builtin_room
@@ -65,7 +68,11 @@ def gallery_walk(pack, out: Path, eye: str, seconds: float) -> None:
     w, h = parse_eye(eye)
     room = builtin_room("scroll", pack)
     t0 = time.perf_counter()
-    source = GallerySource(room, pack, "baked", photons=1 << 18)
+    response = None
+    if args is not None:
+        from .display_options import display_of
+        response = display_of(args, room)
+    source = GallerySource(room, pack, "baked", photons=1 << 18, response=response)
     print(f"gallery: the scroll room lit in {time.perf_counter() - t0:.1f} s "
           f"({source.light_stats.get('photons_stored', 0)} photons stored, irradiance baked)")
     path = walk_path(room, seconds)
@@ -151,13 +158,13 @@ def stream_view(pack, png: Path, frames_max: int = 200, per_frame: int = 16) -> 
 DEMO_CORNELL = {"photons": 1 << 20, "spp": 4, "light_samples": 16}
 
 
-def render_room(png: Path) -> None:
+def render_room(png: Path, display=None) -> None:
     """The lighting half: the Cornell box rendered by the Embree photon mapper."""
     from ..photon import builtin_scene, render, save_image
 
     scene, cam = builtin_scene("cornell", resolution=(256, 256))
     img, stats = render(scene, cam, **DEMO_CORNELL, return_stats=True)
-    save_image(png, img)
+    save_image(png, img, display)
     print(f"photon-mapped Cornell box: {stats['photons_stored']} photons stored, "
           f"{stats['total_seconds']:.2f} s: {png}")
 
