@@ -25,7 +25,7 @@ def test_direct_sharpens_faster_than_mip_by_mip(small):
     direct, rec = _run(small, method="hash", strategy="direct")
     mip, _ = _run(small, method="hash", strategy="mip-by-mip")
     # The camera stops; with every tile loaded within its frame both end fully sharp,
-    # direct loading in fewer frames (seed 000 Table 3: 3 vs 6 video frames); here 1 vs 3,
+    # direct loading in fewer frames (VT-mobile-VR Table 3: 3 vs 6 video frames); here 1 vs 3,
     # and mip-by-mip misses more while moving (each tile needs a round trip per level).
     assert direct["display_latency_frames"] is not None
     assert mip["display_latency_frames"] is not None

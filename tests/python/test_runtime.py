@@ -136,7 +136,7 @@ def test_missing_tiles_answer_with_the_finest_resident_ancestor(pack, levels, rn
 
 
 def test_far_end_of_a_196301_texel_painting_is_exact_to_a_256th_texel(tmp_path):
-    # Seed 000 Table 4's widest painting, 64 rows high to keep the pack small. Columns
+    # VT-mobile-VR Table 4's widest painting, 64 rows high to keep the pack small. Columns
     # alternate 0 / 255, so a bilinear sample between two texels reads its fraction directly.
     Wf, Hf = 196301, 64
     img = np.zeros((Hf, Wf, 3), np.uint8)

@@ -1,5 +1,5 @@
 """The feedback-free baselines (gigascroll.views.baselines): Ma VT's per-tile test against the
-ray-cast feedback (the brute-force reference of what the view needs), seed 003's LOD bands
+ray-cast feedback (the brute-force reference of what the view needs), LOD-texture's LOD bands
 and memory."""
 
 import numpy as np

@@ -18,7 +18,7 @@ def _sets(result):
 
 
 def test_eye_and_magnifier_levels_match_seed(scroll):
-    # Seed 000 5.3: main view 40 cm from the scroll asks level 2, the magnifier level 0.
+    # VT-mobile-VR §5.3: main view 40 cm from the scroll asks level 2, the magnifier level 0.
     path = v.scroll_path(duration=0.1)
     left, right, mag = v.feedback_buffers(scroll, path, 0)
     for buf, level in ((left, 2), (right, 2), (mag, 0)):

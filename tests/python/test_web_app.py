@@ -170,7 +170,7 @@ def test_streaming_cold_cache(browser, server):  # noqa: F811
     the camera stops close to the scroll (level-0 tiles), then at another close pose with the
     magnifier on. Every frame is read back: no pixel is black (the tail answers every lookup);
     after each stop the image becomes final within a bounded number of frames of the stop and
-    of the last tile's upload (seed 000 Table 2: 4-5 frames from stop to exact on the
+    of the last tile's upload (VT-mobile-VR Table 2: 4-5 frames from stop to exact on the
     headset), and the stats panel's figure agrees with the pixels'."""
     page = open_app(browser, server, f"{camera_query(*WIDE)}&size={EYE_W}x{EYE_H}")
     try:
