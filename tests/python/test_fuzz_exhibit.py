@@ -5,6 +5,7 @@ and one line (no traceback, crash or hang); a failed build leaves no show behind
 
 from __future__ import annotations
 
+import json
 import itertools
 import re
 
@@ -153,3 +154,26 @@ def test_serve_exhibition_misuse(fork_worker, show_files, options):
     problem = cli_message_ok(o)
     assert problem is None, f"{problem}: {argv}\n{o.describe()}"
     assert o.code == 2
+
+
+BASE_URL = st.one_of(st.sampled_from(["http://localhost:8000/iiif", "https://x.example/a b",
+                                      "ftp://x/y", "", "http://", "/relative", "http://[::1",
+                                      "http://x/\x00", "javascript:alert(1)", "http://x/" + "a" * 3000]),
+                     st.text(max_size=40))
+
+
+@fuzz_settings(12)
+@given(base=BASE_URL)
+def test_random_iiif_base_urls(fork_worker, show_files, base):
+    count_case("exhibit build --base-url")
+    n = next(_counter)
+    out = show_files / f"iiif{n}"
+    argv = ["exhibit", "build", str(show_files / "show.toml"), "-o", str(out), "--no-bake",
+            "--threads", "1", f"--base-url={base}"]
+    o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=120)
+    problem = cli_message_ok(o)
+    assert problem is None, f"{problem}: {base!r}\n{o.describe()}"
+    if o.code == 2:
+        assert not out.exists()
+    else:
+        assert json.loads((out / "iiif" / "manifest.json").read_text())["id"].endswith("/manifest.json")

@@ -9,6 +9,8 @@ import os
 
 from ..errors import UserError
 
+DEFAULT_BASE_URL = "http://localhost:8000/iiif"
+
 
 def register(sub) -> None:
     p = sub.add_parser("exhibit", help="build a show from an exhibition file",
@@ -24,6 +26,13 @@ def register(sub) -> None:
                         "replaced, its unchanged pack reused)")
     b.add_argument("--no-bake", action="store_true",
                    help="skip baking the light (serve then bakes it when it starts)")
+    b.add_argument("--base-url", default=DEFAULT_BASE_URL, metavar="URL",
+                   help="where the show's iiif/ folder will be served: the IIIF Presentation "
+                        "manifest and the Image API ids point there (default "
+                        f"{DEFAULT_BASE_URL}: `python -m http.server 8000` run in the show "
+                        "directory serves it)")
+    b.add_argument("--no-iiif", action="store_true",
+                   help="skip the IIIF export (Image API tiles and Presentation 3.0 manifest)")
     b.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
     b.set_defaults(func=run)
 
@@ -52,7 +61,8 @@ def run(args) -> int:
         with signals_interrupt():
             record = build_show(args.exhibition, args.output, progress=True,
                                 threads=args.threads,
-                                bake=None if args.no_bake else _bake(args.threads))
+                                bake=None if args.no_bake else _bake(args.threads),
+                                iiif_base=None if args.no_iiif else args.base_url)
     except ExhibitionError as e:
         raise UserError(str(e)) from None
     pack = ("reused (unchanged)" if record["reused_pack"] else
@@ -62,5 +72,6 @@ def run(args) -> int:
           + f", {record['seconds']:.1f} s")
     print(f"wrote {os.path.abspath(args.output)}/ (exhibition.json, tour.json, build.json"
           + (", paintings.pack" if record["packed"] or record["reused_pack"] else "")
-          + (", bake/" if "bake" in record else "") + ")")
+          + (", bake/" if "bake" in record else "")
+          + (", iiif/manifest.json" if "iiif" in record else "") + ")")
     return 0

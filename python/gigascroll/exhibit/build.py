@@ -35,6 +35,7 @@ __all__ = ["COMMAND", "PACK_NAME", "build_show", "pack_inputs", "content_hash"]
 
 COMMAND = "exhibit build"
 PACK_NAME = "paintings.pack"
+IIIF_NAME = "iiif"  # the IIIF Image API tiles and the Presentation 3.0 manifest
 PACK_SETTINGS = {"tile_size": 128, "border": 4, "codec": "raw", "format": 1}
 
 
@@ -115,11 +116,13 @@ def _tour(ex: Exhibition, spec):
         raise ExhibitionError(f"{ex.path}: tour: {e}") from None
     return tour
 
-
-def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: int = 0) -> dict:
+def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
+               progress: bool = False, threads: int = 0) -> dict:
     """Builds the show of `exhibition` (a path or an Exhibition) into `out`; returns the
     build's record (build.json). `bake(gallery, spec, pack, directory)`, when given, bakes
-    the light into `directory` and returns its figures."""
+    the light into `directory` and returns its figures. `iiif_base`, when given, is the URL
+    at which the show's iiif/ folder will be served: its paintings are exported there as IIIF
+    Image API tiles with a Presentation 3.0 manifest (gigascroll.iiif_exhibition)."""
     from ..gallery import Gallery
     from ..pack import TilePack, build_pack
     t0 = time.perf_counter()
@@ -127,6 +130,12 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
     out = Path(out)
     owned = owned_by(COMMAND)
     check_output(out, force=True, directory=True, owned=owned, what="a show of exhibit build")
+    if iiif_base is not None:  # before any packing
+        from ..iiif_presentation import check_http_uri
+        try:
+            iiif_base = check_http_uri(iiif_base, "the show's IIIF base URL")
+        except ValueError as e:
+            raise ExhibitionError(f"{ex.path}: IIIF: {e}") from None
     given_pack = _one_pack(ex)
     # The room (and whether everything fits) before any packing, where it needs no pack.
     spec = None if "file" in ex.room else build_room(ex)
@@ -165,6 +174,15 @@ def build_show(exhibition, out, *, bake=None, progress: bool = False, threads: i
         if bake is not None:
             (tmp / "bake").mkdir()
             record["bake"] = bake(gallery, spec, pack, tmp / "bake")
+        if iiif_base is not None:
+            from ..iiif_exhibition import write_exhibition_iiif
+            pack_dir = tmp / PACK_NAME if given_pack is None else given_pack
+            try:
+                write_exhibition_iiif(pack_dir, ex.paintings, tmp / IIIF_NAME, iiif_base,
+                                      label=ex.title, threads=threads)
+            except ValueError as e:
+                raise ExhibitionError(f"{ex.path}: IIIF: {e}") from None
+            record["iiif"] = f"{IIIF_NAME}/manifest.json"
         record["seconds"] = time.perf_counter() - t0
         record["paintings"] = len(ex.paintings)
         write_text(tmp / "build.json", json.dumps(record, indent=1) + "\n")
