@@ -401,11 +401,12 @@ def test_a_resumed_build_never_copies_an_edited_colour_record(failed_build):
     record = json.loads(rec.read_text())
     record["colour"]["mode"] = "maybe"
     rec.write_text(json.dumps(record))
-    old_tiles = os.stat(shards / "tiles-00000.bin").st_ino
-    inputs[1].write_bytes(full)  # painting 1 readable now
-    pack = build_pack(inputs, out, tile_size=16, border=2, workers=1, executor="processes",
-                      resume=True)
-    assert os.stat(out / "tiles-00000.bin").st_ino != old_tiles  # rebuilt, not reused
+    # Held open, the old tile file keeps its inode number: a new file cannot reuse it.
+    with open(shards / "tiles-00000.bin", "rb") as old:
+        inputs[1].write_bytes(full)  # painting 1 readable now
+        pack = build_pack(inputs, out, tile_size=16, border=2, workers=1, executor="processes",
+                          resume=True)
+        assert os.stat(out / "tiles-00000.bin").st_ino != os.fstat(old.fileno()).st_ino  # rebuilt
     single = build_pack(inputs, out.parent / "single.pack", tile_size=16, border=2)
     assert [p.colour for p in pack.paintings] == [p.colour for p in single.paintings]
     with PurePack(out) as pure:
