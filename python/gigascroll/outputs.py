@@ -203,11 +203,16 @@ def _process_gone(pid: int) -> bool:
     return False
 
 
-def remove_stale_temps(out, command: str, hidden: bool = False, **details) -> list[Path]:
+def remove_stale_temps(out, command: str | None, hidden: bool = False,
+                       belongs: Callable[[Path], bool] | None = None, **details) -> list[Path]:
     """Removes the temporaries of `out` (temp_dir's names, and replace_dir's `-old`) that a
     run of `command` killed outright left: its process is gone and the directory holds its
-    mark. Anything else with such a name stays. Returns what was removed."""
+    mark (or, with `belongs`, `belongs(directory)` says it is that command's: a pack build
+    tells its own by its files). Anything else with such a name stays. Returns what was
+    removed."""
     out = Path(out)
+    if belongs is None:
+        belongs = lambda p: has_mark(p, command, **details)  # noqa: E731
     pattern = re.compile(("\\." if hidden else "") + re.escape(out.name)
                          + r"\.tmp-([0-9]{1,10})(-[0-9]{1,3}|-old)?")
     removed = []
@@ -218,7 +223,7 @@ def remove_stale_temps(out, command: str, hidden: bool = False, **details) -> li
     for p in siblings:
         m = pattern.fullmatch(p.name)
         if (m and int(m.group(1)) != os.getpid() and _process_gone(int(m.group(1)))
-                and p.is_dir() and not p.is_symlink() and has_mark(p, command, **details)):
+                and p.is_dir() and not p.is_symlink() and belongs(p)):
             shutil.rmtree(p, ignore_errors=True)
             removed.append(p)
     return removed

@@ -25,7 +25,8 @@ from .._core import TilePack, painting_geometry
 from .cluster import check_timeout, scheduler_location
 from .colour import plan_colour
 from .images import ImageSource, open_image, require_utf8_path
-from ..outputs import Interrupted, check_output, replace_dir, signals_interrupt, temp_dir
+from ..outputs import (Interrupted, check_output, remove_stale_temps, replace_dir,
+                       signals_interrupt, temp_dir)
 from .shards import build_sharded, feed
 
 __all__ = ["build_pack", "plan_layout", "MANIFEST", "BuildInterrupted"]
@@ -78,18 +79,6 @@ BuildInterrupted = Interrupted
 _signals_interrupt = signals_interrupt
 
 
-def _process_gone(pid: int) -> bool:
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except OSError:  # exists, owned by someone else
-        return False
-    return False
-
-
 def _only_pack_files(path: Path) -> bool:
     """Whether a directory holds nothing but what a build writes (a pack's files, finished
     or not): a leftover that provably is a build's."""
@@ -103,12 +92,7 @@ def _remove_stale_tmp(out: Path) -> list[Path]:
     """Removes `OUT.tmp-<pid>` siblings of `out` left by builds whose process is gone
     (SIGKILL, power loss) and holding only pack files; a live process' build directory is
     left alone. Returns them."""
-    pattern = re.compile(re.escape(out.name) + r"\.tmp-([0-9]{1,10})(-old)?")
-    removed = []
-    try:
-        siblings = list(out.parent.iterdir())
-    except OSError:
-        return removed
+    return remove_stale_temps(out, None, belongs=_only_pack_files)
     for p in siblings:
         m = pattern.fullmatch(p.name)
         if (m and int(m.group(1)) != os.getpid() and _process_gone(int(m.group(1)))
