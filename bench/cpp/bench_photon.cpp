@@ -1,5 +1,5 @@
 // Radius search over the same photons: our adaptive grid (adaptive_grid.h, the renders'
-// default), seed 001's hash grid (§3.1), nanoflann's kd-tree (a maintained peer) and our
+// default), VR-photon-mapping's hash grid (§3.1), nanoflann's kd-tree (a maintained peer) and our
 // Jensen kd-tree. Photons: the Cornell box and the office traced with 128^2, 256^2 and 512^2
 // photons; queries: the camera's first hits at 128 x 128 pixels; radii 0.02-0.2 times the
 // scene's scale (Cornell 1, office 4, as `gigascroll bench photon`). Each query sums the power

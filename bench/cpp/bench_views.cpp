@@ -1,4 +1,4 @@
-// Request processing cost of the four methods (seed 000 Fig. 11 / Table 5 "request
+// Request processing cost of the four methods (VT-mobile-VR Fig. 11 / Table 5 "request
 // computation"): the same feedback buffers (the scroll seen from 40 cm by both eyes at 1/8
 // resolution plus the 512 x 512 magnifier) processed while the exhibition holds 8..40
 // paintings (Table 4 sizes, 5 copies) or one painting of 4096..20480 tiles. The flag array
@@ -40,7 +40,7 @@ PaintingGeometry painting_with_tiles(std::uint64_t tiles) {
     return PaintingGeometry(w, 6083);
 }
 
-// The views of seed 000 §5.3 on the scroll's wall (texel (0, 0) at (0, 1.75, 0), facing -z):
+// The views of VT-mobile-VR §5.3 on the scroll's wall (texel (0, 0) at (0, 1.75, 0), facing -z):
 // an eye (1800 x 1920, the views.py field of view) 40 cm away and the magnifier (2.5 cm of
 // painting on 512 x 512 from 20 cm), centred on x.
 const double kEyeTanHalf = 900 * (12.0 / 152089) / 0.072;
