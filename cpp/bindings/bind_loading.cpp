@@ -109,7 +109,7 @@ void bind_loading(nb::module_& m) {
             return d; });
 
     nb::class_<DirectLoading>(m, "DirectLoading",
-                              "Seed 000: load missing requested tiles, at most per_frame a frame.")
+                              "VT-mobile-VR: load missing requested tiles, at most per_frame a frame.")
         .def(nb::init<std::size_t>(), "per_frame"_a = 16)
         .def("set_commands", [](DirectLoading& d, nb::handle keys) {
             HeldBuffer b = as_buffer(keys, "commands");

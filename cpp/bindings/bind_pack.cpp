@@ -230,7 +230,7 @@ void bind_pack(nb::module_& m) {
             "(x, y) offset of its page table in the merged table")
         .def_prop_ro("uv_scale", [](const PaintingInfo& p) {
             return std::make_pair(p.geometry.uv_scale_u(), p.geometry.uv_scale_v()); },
-            "(W / (Mp P), H / (Np P)): seed 000 eqs (3, 4)")
+            "(W / (Mp P), H / (Np P)): VT-mobile-VR eqs (3, 4)")
         .def_prop_ro("tile_count", [](const PaintingInfo& p) { return p.geometry.total_tiles(); })
         .def_prop_ro("instance_of", [](const PaintingInfo& p) -> nb::object {
             if (p.instance_of < 0) return nb::none();

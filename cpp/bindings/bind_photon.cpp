@@ -171,7 +171,7 @@ void bind_photon(nb::module_& m) {
     }, "scene"_a, "count"_a, "seed"_a = 0, "threads"_a = 0, "max_stored"_a = kDefaultStoredPhotonBudget);
 
     nb::class_<PhotonMap>(m, "PhotonMap",
-                          "A photon map over positions (N, 3) float32: grid='adaptive' (density-sized cells culled against the sphere), 'hash' (seed 001) or 'kdtree' (Jensen).")
+                          "A photon map over positions (N, 3) float32: grid='adaptive' (density-sized cells culled against the sphere), 'hash' (VR-photon-mapping) or 'kdtree' (Jensen).")
         .def("__init__", [](PhotonMap* pm, const FloatArray& positions, float radius, const std::string& grid,
                             const std::string& mode) {
             std::vector<Photon> ph = photons_from(positions);

@@ -96,7 +96,7 @@ void bind_views(nb::module_& m) {
             int x, y;
             if (!c.project(Vec3f(p[0], p[1], p[2]), x, y)) return nb::none();
             return nb::make_tuple(x, y);
-        }, "point"_a, "Pixel (x, y) that sees point (seed 001 eqs. 3-5), or None off the film.")
+        }, "point"_a, "Pixel (x, y) that sees point (VR-photon-mapping eqs. 3-5), or None off the film.")
         .def("direction", [](const Camera& c, double px, double py) {
             return arr3(normalize(c.direction(px, py)));
         }, "px"_a, "py"_a, "Unit direction through film position (px, py) in pixels.");
@@ -212,7 +212,7 @@ void bind_views(nb::module_& m) {
         .def("process", &process_frame<FlagArrayProcessor>, "buffers"_a, "lookup"_a, "frame"_a = 0);
 
     nb::class_<HashProcessor>(m, "HashProcessor",
-                              "Seed 000: fixed-size result table, slot a (B F) mod m, finer level wins.")
+                              "VT-mobile-VR: fixed-size result table, slot a (B F) mod m, finer level wins.")
         .def(nb::init<unsigned, unsigned>(), "table_bits"_a = 16, "threads"_a = 0)
         .def_prop_ro("table_size", &HashProcessor::table_size)
         .def_static("frame_salt", &HashProcessor::frame_salt, "frame"_a)
@@ -249,7 +249,7 @@ void bind_views(nb::module_& m) {
         .def_prop_ro("pending", &AsyncProcessor::pending);
 
     nb::class_<VisibilityLists>(m, "VisibilityLists",
-                                "Seed 002: alive and remove lists against the previous frame.")
+                                "Vulkan-SVT: alive and remove lists against the previous frame.")
         .def(nb::init<std::vector<PaintingGeometry>, unsigned>(), "paintings"_a, "threads"_a = 0)
         .def("process", [](VisibilityLists& v, nb::handle buffers) {
             auto held = as_buffers(buffers);
