@@ -1,7 +1,7 @@
-// The mip-mapped page table (seed 000 §4.3, seed 004 §3.3). Entry (painting p, level l,
+// The mip-mapped page table (VT-mobile-VR §4.3, Mayer-VT §3.3). Entry (painting p, level l,
 // tile x, y) names the finest resident tile covering that tile: its level and physical slot.
 // When the exact tile is missing the entry is a fallback to a resident ancestor, so the
-// sampler's "try LOD, LOD+1, ..." (seed 002) is one read.
+// sampler's "try LOD, LOD+1, ..." (Vulkan-SVT) is one read.
 //
 // Storage follows the pack's merged layout: level l of the merged table is (Mc >> l) x
 // (Nc >> l) entries and painting p owns the (Mp >> l) x (Np >> l) block at (off >> l), for

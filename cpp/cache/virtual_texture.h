@@ -1,4 +1,4 @@
-// The physical cache and its page table (seed 000 §4.3): a texture of slots_x x slots_y tile
+// The physical cache and its page table (VT-mobile-VR §4.3): a texture of slots_x x slots_y tile
 // slots, LRU replacement, and every tile of a painting's tail levels (see page_table.h),
 // including its single coarsest tile, pinned so every lookup resolves. Sampling through it
 // is sampling/sampler.h.
