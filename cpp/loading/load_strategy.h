@@ -1,5 +1,5 @@
-// Which tiles to load this frame, from the frame's load-command set (seed 000 §4.2.2).
-//   DirectLoading (seed 000): load the missing requested tiles themselves, at most N per
+// Which tiles to load this frame, from the frame's load-command set (VT-mobile-VR §4.2.2).
+//   DirectLoading (VT-mobile-VR): load the missing requested tiles themselves, at most N per
 //     frame; the rest are issued on the following frames until a new command set replaces
 //     them.
 //   MipByMipLoading (van Waveren): for each miss load the coarsest missing ancestor first,

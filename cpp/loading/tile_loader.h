@@ -1,4 +1,4 @@
-// Asynchronous tile loading (seed 000 §4.2). The main thread submits load commands and, once
+// Asynchronous tile loading (VT-mobile-VR §4.2). The main thread submits load commands and, once
 // per frame, polls the finished tiles; loader threads read, decompress and verify tiles from
 // the pack into buffers of a preallocated pool.
 //
