@@ -1,4 +1,4 @@
-// BC1 (DXT1) tiles (seed 003's DXT, seed 000's compressed tiles): a tile of T x T texels is
+// BC1 (DXT1) tiles (LOD-texture's DXT, VT-mobile-VR's compressed tiles): a tile of T x T texels is
 // (T/4)^2 blocks of 8 bytes, row-major over blocks, 4 bits per texel against RGB8's 24, so the
 // physical cache holds exactly 6x the tiles in the same memory. Encoding is libsquish's cluster
 // or cluster fit; decoding is ours, inline, so the sampler decodes the texels a footprint needs on the fly.

@@ -5,10 +5,10 @@
 //   [tx P - border, tx P + P + border) x [ty P - border, ...), clamped to the real extent;
 //   levels stop at the first one where the whole painting fits in one tile.
 //   The painting's page table is the power-of-two grid Mp x Np >= its level-0 tile grid;
-//   uv_scale = (W / (Mp P), H / (Np P)) hides the padding (seed 000 eqs 3, 4).
+//   uv_scale = (W / (Mp P), H / (Np P)) hides the padding (VT-mobile-VR eqs 3, 4).
 // In a pack each painting's page table sits at an offset in the merged Mc x Nc table (a
 // multiple of its own Mp, Np) and its tiles' index entries start at first_entry; a tile's
-// entry is first_entry + tile_index(l, tx, ty), the one tile index formula (seed 002's page
+// entry is first_entry + tile_index(l, tx, ty), the one tile index formula (Vulkan-SVT's page
 // index: levels 0..l-1 first, row-major inside a level).
 #pragma once
 #include <cstdint>

@@ -1,4 +1,4 @@
-// Merged page-table layout (seed 000 §3.2): the paintings' level-0 page tables, each a
+// Merged page-table layout (VT-mobile-VR §3.2): the paintings' level-0 page tables, each a
 // power-of-two Mp x Np grid, are packed into one power-of-two Mc x Nc table. Every table sits
 // at an offset that is a multiple of its own size, so at page-table level l <= log2(min(Mp, Np))
 // its region is exactly (Mp >> l) x (Np >> l) entries at (x >> l, y >> l) and regions never

@@ -1,13 +1,13 @@
 // One tile of the virtual texture (painting p, mip level l, tile x, y), TileKey, and its two
 // 64-bit encodings, on purpose:
-//   request key: p << 37 | l << 32 | morton(x, y); seed 000's B widened, hashed by the
+//   request key: p << 37 | l << 32 | morton(x, y); VT-mobile-VR's B widened, hashed by the
 //     feedback and processing stages (Morton order keeps neighbouring tiles in nearby keys);
 //   TileKey::packed: p << 48 | l << 40 | y << 20 | x; the runtime's total order for the
 //     loader, cache and page table.
 // The request key's 16-bit tile coordinates are the joint limit.
 //
 // The request key:
-// Seed 000 packs B = p 2^28 + l 2^24 + morton(x, y) into 32 bits, which overflows past
+// VT-mobile-VR packs B = p 2^28 + l 2^24 + morton(x, y) into 32 bits, which overflows past
 // 16 paintings, 16 levels or 4096 tiles per axis. We widen every field:
 //
 //   bit 63 ............ 37 | 36 .. 32 | 31 ............. 0
