@@ -1,7 +1,7 @@
 // A photon grid whose cells are sized from the photon density and culled against the query
 // sphere, with the photons in cell order as structure of arrays.
 //
-// Seed 001's grid (hash_grid.h) uses cells as wide as the radius and visits 3x3x3 of them: a
+// VR-photon-mapping's grid (hash_grid.h) uses cells as wide as the radius and visits 3x3x3 of them: a
 // query tests 27 / (4/3 pi) = 6.4 times the photons inside its sphere (about 3x for photons on
 // a plane). Here the cell edge is r / k with k chosen from the expected number of photons per
 // query (k = 1/4 when a query finds a handful and the cell lookups dominate, up to 3 when it

@@ -1,8 +1,8 @@
-// Density estimation over a photon map (seed 001 eq. 1):
+// Density estimation over a photon map (VR-photon-mapping eq. 1):
 //   L_r(x, w) ~ f_r / (pi r^2) * sum_p w_p Phi_p,   f_r = albedo / pi for Lambertian surfaces.
 // The functions here return the flux density E = sum_p w_p Phi_p / (norm * pi r^2); the
 // renderer multiplies by albedo / pi.
-//  - radius gather: every photon within r, no heap (seed 001's fast path);
+//  - radius gather: every photon within r, no heap (VR-photon-mapping's fast path);
 //  - k-nearest gather: a max-heap of the k closest photons within r, and the radius shrinks
 //    to the k-th distance once the heap is full (Jensen).
 // Kernels: box (w = 1) and cone (w = 1 - d / r, norm = 1 - 2/3, Jensen's k = 1 filter).

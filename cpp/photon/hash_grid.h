@@ -1,4 +1,4 @@
-// The photon hash grid of seed 001 §3.1. Cells have edge r (the gather radius); the origin is
+// The photon hash grid of VR-photon-mapping §3.1. Cells have edge r (the gather radius); the origin is
 // just below the smallest photon and one empty layer pads each side. A photon's cell (x, y, z)
 // has the linear hash z*gx*gy + y*gx + x (eq. 2); photons are counting-sorted by hash and
 // start[h] is the prefix sum, so the photons of cells x-1..x+1 of one row are one contiguous

@@ -1,5 +1,5 @@
 // A photon map: the stored photons behind one of the search structures (the adaptive grid,
-// the renders' default; seed 001's hash grid; Jensen's kd-tree), with the gathers of gather.h
+// the renders' default; VR-photon-mapping's hash grid; Jensen's kd-tree), with the gathers of gather.h
 // dispatched on the settings.
 #pragma once
 #include <memory>

@@ -1,4 +1,4 @@
-// Photon tracing (seed 001 pass 1): photons leave the emitters, bounce diffusely with
+// Photon tracing (VR-photon-mapping pass 1): photons leave the emitters, bounce diffusely with
 // Russian roulette and are stored at diffuse hits after their first bounce (the first hit is
 // direct light, which the renderer computes by light sampling instead).
 #pragma once

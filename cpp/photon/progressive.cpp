@@ -131,7 +131,7 @@ std::vector<float> render_progressive(const Scene& scene, const Camera& cam, con
             for (const PixelState& s : px)
                 if (s.has_point) r_max = std::max(r_max, s.r);
             // One gather pass over either grid; the adaptive grid culls its cells against each
-            // pixel's own (shrinking) radius, seed 001's grid visits the cells of r_max.
+            // pixel's own (shrinking) radius, VR-photon-mapping's grid visits the cells of r_max.
             auto gather_pass = [&](const auto& grid) {
                 stats.render.build_seconds += seconds_since(t0);
                 t0 = Clock::now();

@@ -14,7 +14,7 @@
 namespace gigascroll {
 
 namespace {
-// Hit points per cooperative block (seed 001 Algorithm 1 uses a thread group).
+// Hit points per cooperative block (VR-photon-mapping Algorithm 1 uses a thread group).
 constexpr std::size_t kCoopBlock = 64;
 // Roberts' R2 sequence (the plastic number's additive recurrence): frac(shift + i alpha) is
 // well spread in the unit square for any count of points.
@@ -236,7 +236,7 @@ struct CoopBlock {
     float r[kCoopBlock], g[kCoopBlock], b[kCoopBlock];
 };
 
-// Seed 001 Algorithm 1 on a CPU: each photon of the cell's 27-cell neighbourhood is read once
+// VR-photon-mapping Algorithm 1 on a CPU: each photon of the cell's 27-cell neighbourhood is read once
 // and streamed through all hit points of the block. The inner loop is branch-free over the
 // block's arrays so the compiler vectorises it (the box kernel; the cone needs a sqrt).
 template <bool Cone>

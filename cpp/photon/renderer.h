@@ -1,11 +1,11 @@
 // The photon-mapping renderer: direct light by sampling the emitters with shadow rays,
-// indirect light from the photon map at the first diffuse hit (seed 001's pass 2).
+// indirect light from the photon map at the first diffuse hit (VR-photon-mapping's pass 2).
 //
-// Pipelines (seed 001 Table 3 on a CPU):
+// Pipelines (VR-photon-mapping Table 3 on a CPU):
 //  - Fused: each pixel traces its ray, shades and gathers in one loop.
 //  - TwoPass: all primary hits (with their direct light) first, then the gathers over the hit
 //    points ordered by grid cell, so neighbouring gathers read the same photons.
-// Cooperative gather (seed 001 Algorithm 1 on a CPU, TwoPass + hash grid + radius gather): a
+// Cooperative gather (VR-photon-mapping Algorithm 1 on a CPU, TwoPass + hash grid + radius gather): a
 // block of hit points in the same cell streams each photon of the 27 neighbouring cells once
 // through all of them, instead of each hit point reading those photons itself.
 //
@@ -33,7 +33,7 @@ Pipeline parse_pipeline(const std::string& name);
 
 struct RenderSettings {
     std::uint64_t photons = 1 << 18;
-    GridKind grid = GridKind::Adaptive;  // the fastest gather; Hash is seed 001's grid
+    GridKind grid = GridKind::Adaptive;  // the fastest gather; Hash is VR-photon-mapping's grid
     HashGrid::Mode hash_mode = HashGrid::Mode::Auto;
     GatherSettings gather;
     // Camera samples per pixel (box filter). One: jittered per pixel. More: the points of a

@@ -2,7 +2,7 @@
 //  - cornell: the geometry, materials, light and camera of Mitsuba 3's mitsuba.cornell_box(),
 //    so Mitsuba's path tracer is a reference;
 //  - office: a procedurally built office of about 710k triangles (desks, chairs, monitors,
-//    keyboards, shelves of books, ceiling panels and a coloured lamp), like seed 001's;
+//    keyboards, shelves of books, ceiling panels and a coloured lamp), like VR-photon-mapping's;
 //  - furnace: a closed sphere, uniform albedo rho and emission Le everywhere, so the radiance
 //    is Le / (1 - rho) in every direction.
 #pragma once

@@ -1,4 +1,4 @@
-// Stereo reuse (seed 001 §3.3). While the left eye renders, each hit point that the right eye
+// Stereo reuse (VR-photon-mapping §3.3). While the left eye renders, each hit point that the right eye
 // can see (an occlusion ray toward it, and the same side of the surface) is projected into the
 // right image with eqs. (3)-(5); the first left sample to claim a right pixel writes its colour
 // there, claimed by an atomic compare-and-swap. The right eye then computes only the pixels
@@ -18,7 +18,7 @@ struct StereoImages {
     std::vector<Hit> sources;         // per right pixel: the reused left hit (t = 0: none)
 };
 
-// reuse = false renders the two eyes independently (the baseline of seed 001 Table 5).
+// reuse = false renders the two eyes independently (the baseline of VR-photon-mapping Table 5).
 StereoImages render_stereo(const Renderer& renderer, const StereoCamera& eyes, bool reuse,
                            bool keep_sources = false);
 
