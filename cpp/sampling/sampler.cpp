@@ -237,7 +237,7 @@ inline void bilerp_rgb8_run(const std::uint8_t* const* texel, std::size_t row, c
     for (; k < n; ++k) bilerp_rgb8(texel[k], row, 3, 1, fx[k], fy[k], out + 3 * k);
 }
 
-// Seed 000 eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
+// VT-mobile-VR eqs (3)-(10), in the form that stays exact. Eq (3,4) scale the painting's uv into
 // its padded page table and eq (5,6) normalise by the merged table; we instead keep the
 // level-0 texel position x0 = u W in double, derive the level-l position x0 2^-l exactly, and
 // index the table by the integer tile column floor(x / P) (+ the painting's offset >> l,

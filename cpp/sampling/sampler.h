@@ -1,4 +1,4 @@
-// Software virtual-texture sampling (seed 000 eqs 3-10, seed 002's fallback): reads a
+// Software virtual-texture sampling (VT-mobile-VR eqs 3-10, Vulkan-SVT's fallback): reads a
 // VirtualTexture's page table and physical texture under its read lock. Bilinear uses the
 // nearest level, trilinear blends floor(lod) and floor(lod) + 1; clamp-to-edge.
 #pragma once
