@@ -42,7 +42,7 @@ struct Camera {
     // unit direction through film position (px, py).
     Vec3f ray_origin() const { return Vec3f(position); }
     Vec3f ray_direction(float px, float py) const;
-    // Seed 001 eqs. (3)-(5): r_dir = M_rotate (p - eye), r_clip = M_proj r_dir,
+    // VR-photon-mapping eqs. (3)-(5): r_dir = M_rotate (p - eye), r_clip = M_proj r_dir,
     // index = floor((r_clip + 1) / 2 * size). False when p is behind the eye or off the film.
     bool project(Vec3f p, int& px, int& py) const;
     // Vertical field of view in degrees.
@@ -51,7 +51,7 @@ struct Camera {
     Camera moved(Vec3d offset) const;
 };
 
-// Two parallel eyes ipd apart along the centre camera's right vector (seed 001 §3.3, and
+// Two parallel eyes ipd apart along the centre camera's right vector (VR-photon-mapping §3.3, and
 // the headset's eyes).
 struct StereoCamera {
     StereoCamera(const Camera& centre, double ipd);

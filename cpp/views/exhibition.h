@@ -55,7 +55,7 @@ public:
                              Vec3d u_axis, Vec3d v_axis, double width_m, double height_m);
     // An axis-aligned occluder (walls, plinths, the seed's "simple cuboids").
     void add_box(Vec3d lo, Vec3d hi);
-    // A table: a 4 cm top whose upper face is at `height` (0.70 m in seed 000) and four legs;
+    // A table: a 4 cm top whose upper face is at `height` (0.70 m in VT-mobile-VR) and four legs;
     // centred at (x, z) on the floor y = 0, `length` along x and `depth` along z.
     void add_table(double x, double z, double length, double depth, double height = 0.70);
 

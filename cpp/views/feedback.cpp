@@ -324,7 +324,7 @@ void render_view(const PaintingSceneView& scene, const Camera& world_camera,
                         for (std::uint32_t d = d0; d < d1; ++d)
                             out_lod[d] = float(lambda[d * ds - i0]);
                 }
-                if (biased) {  // the level from lambda + bias instead (tests; seed 002's bias)
+                if (biased) {  // the level from lambda + bias instead (tests; Vulkan-SVT's bias)
                     for (std::uint32_t k = 0; k < n; ++k)
                         out[i0 + k] = f.tile_key(x0[k], y0[k], mip_level(lambda[k], f.levels));
                 }

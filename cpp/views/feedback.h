@@ -27,7 +27,7 @@ double texel_footprint(const PaintingPlacement& painting, const Camera& camera, 
 double texel_footprint_at_pixel(const PaintingPlacement& painting, const Camera& camera,
                                 double px, double py);
 
-// The level textureQueryLod(...).y truncated to an integer, as seed 002's shader does:
+// The level textureQueryLod(...).y truncated to an integer, as Vulkan-SVT's shader does:
 // clamp(floor(lambda + bias), 0, levels - 1).
 std::uint32_t mip_level(double lambda, std::uint32_t levels);
 

@@ -5,7 +5,7 @@
 namespace gigascroll {
 
 namespace {
-// Seed 000's collision rule: the finer level wins; equal levels keep the smaller key so the
+// VT-mobile-VR's collision rule: the finer level wins; equal levels keep the smaller key so the
 // result does not depend on insertion order.
 bool wins(std::uint64_t key, std::uint64_t held) {
     const std::uint32_t lk = request_level(key), lh = request_level(held);

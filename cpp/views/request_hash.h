@@ -1,4 +1,4 @@
-// Seed 000's result table: requests are inserted in parallel into a table of fixed size,
+// VT-mobile-VR's result table: requests are inserted in parallel into a table of fixed size,
 // slot h = a (B F) mod m (eq. 1) with B the request key (pack/tile_key.h, 64-bit eq. 2) and F the
 // frame salt; on a collision the request with the smaller mip level is kept (ties: the
 // smaller key), the other is lost for this frame. Its cost does not depend on how many tiles

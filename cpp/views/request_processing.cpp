@@ -164,7 +164,7 @@ VisibilityLists::VisibilityLists(std::vector<PaintingGeometry> paintings, unsign
 VisibilityLists::Lists VisibilityLists::process(std::span<const FeedbackBuffer> buffers) {
     const std::scoped_lock lock(mutex_);
     mark_flags(index_, current_, buffers, threads_);
-    // Seed 002's ProcessVisibility: alive if visible now, else remove if visible before;
+    // Vulkan-SVT's ProcessVisibility: alive if visible now, else remove if visible before;
     // then previous = current, current = 0. Per-chunk lists replace its atomic counters.
     const std::size_t chunks = (current_.size() + kFlagChunk - 1) / kFlagChunk;
     std::vector<Lists> parts(chunks);

@@ -4,7 +4,7 @@
 //   AsyncProcessor      (Unreal SVT)   a worker thread deduplicates in the background;
 //   FlagArrayProcessor  (Hollemeersch) parallel marking into one flag per tile, then a
 //                                      parallel compaction scan over all flags;
-//   HashProcessor       (seed 000)     request_hash.h.
+//   HashProcessor       (VT-mobile-VR)     request_hash.h.
 // The response of a request is looked up once per distinct request, after deduplication;
 // a GPU does it per pixel, with the same result.
 #pragma once
@@ -162,7 +162,7 @@ private:
     std::thread worker_;
 };
 
-// Seed 002: alive and remove lists from this frame's and the previous frame's visibility,
+// Vulkan-SVT: alive and remove lists from this frame's and the previous frame's visibility,
 // over a flag array of every tile (alive = visible now; remove = visible last frame only).
 class VisibilityLists {
 public:

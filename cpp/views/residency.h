@@ -37,7 +37,7 @@ private:
     std::vector<PaintingGeometry> paintings_;
 };
 
-// A set of resident tiles; the coarsest tile of every painting is always resident (seed 000).
+// A set of resident tiles; the coarsest tile of every painting is always resident (VT-mobile-VR).
 class ResidentSet : public ResidencyLookup, public PaintingSet {
 public:
     explicit ResidentSet(std::vector<PaintingGeometry> paintings);
@@ -51,7 +51,7 @@ private:
     std::unordered_set<std::uint64_t> keys_;
 };
 
-// Flat tile numbering over several paintings (seed 002's page index, painting after painting):
+// Flat tile numbering over several paintings (Vulkan-SVT's page index, painting after painting):
 // index = first index of painting p + tiles of levels 0..l-1 + y * tiles_x(l) + x.
 class TileIndex : public PaintingSet {
 public:
