@@ -1,4 +1,4 @@
-// Loading strategies (seed 000 §4.2.2): capped direct loading and mip-by-mip loading,
+// Loading strategies (VT-mobile-VR §4.2.2): capped direct loading and mip-by-mip loading,
 // against hand-worked expectations on a small residency set.
 #include <gtest/gtest.h>
 

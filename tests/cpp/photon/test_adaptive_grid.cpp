@@ -1,4 +1,4 @@
-// The adaptive grid against brute force, nanoflann and seed 001's grid: the same photons found
+// The adaptive grid against brute force, nanoflann and VR-photon-mapping's grid: the same photons found
 // for random and camera-hit queries at every cell size, flux sums in storage order
 // bit-identical to brute force, far-from-origin scenes and bad input.
 #include <gtest/gtest.h>

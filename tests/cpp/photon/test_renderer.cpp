@@ -21,7 +21,7 @@ TEST(Renderer, ImageIndependentOfThreadCountAndPipeline) {
     EXPECT_EQ(one, two);
     s.pipeline = Pipeline::TwoPass;
     const auto tp = Renderer(scene, s).render(cam, st);
-    s.grid = GridKind::Hash;  // the cooperative gather is seed 001's, on its grid
+    s.grid = GridKind::Hash;  // the cooperative gather is VR-photon-mapping's, on its grid
     s.cooperative = true;
     const auto coop = Renderer(scene, s).render(cam, st);
     for (std::size_t i = 0; i < one.size(); ++i) {

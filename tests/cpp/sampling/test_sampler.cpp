@@ -1,7 +1,7 @@
 // Sampling the virtual texture against independent references: a test-built mip chain
 // sampled without indirection (all tiles resident, and fallbacks to ancestors), batched
 // against per-sample arithmetic, interleaved and NaN inputs, and closed-form texel values at
-// the far end of the widest painting of seed 000 Table 4.
+// the far end of the widest painting of VT-mobile-VR Table 4.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -396,7 +396,7 @@ TEST(VirtualTexture, InterleavedUvScalarLodAndNanInputs) {
 }
 
 TEST(VirtualTexture, ExactToA256thTexelAtTheFarEndOfTheWidestPainting) {
-    // 196301 x 5197 (seed 000 Table 4). Level 0 alternates 0 / 255 between columns, so a
+    // 196301 x 5197 (VT-mobile-VR Table 4). Level 0 alternates 0 / 255 between columns, so a
     // bilinear sample between two texels reads the fraction directly: value = 255 f or 255 (1-f).
     const std::uint32_t W = 196301, H = 5197, T = 128, E = 4, P = T - 2 * E;
     const PackGeometry layout = PackGeometry::make(T, E, {{W, H}});
