@@ -869,6 +869,31 @@ void filter_indirect(const Vec3f* G, const std::uint8_t* mask, std::uint32_t n, 
 }
 }  // namespace
 
+Vec3f Gallery::final_gather(Vec3f p, Vec3f n, int rays, const std::vector<Vec3f>& front,
+                            const std::vector<Vec3f>& back, const std::vector<std::uint32_t>& segments,
+                            const std::vector<std::uint64_t>& offset) const {
+    Rng rng(lighting_.seed, stream_id(StreamKind::Light, 0, 2), scene_.position_key(p));
+    const Vec3f a = std::abs(n.x) > 0.5f ? Vec3f(0, 1, 0) : Vec3f(1, 0, 0);
+    const Vec3f t = normalize(cross(n, a)), b = cross(n, t);
+    const int m = int(std::lround(std::sqrt(double(rays))));
+    const bool grid = m * m == rays;
+    const Vec3f o = p + n * scene_.epsilon();
+    Vec3f E{0, 0, 0};
+    for (int k = 0; k < rays; ++k) {
+        const double u1 = grid ? (double(k % m) + rng.uniform()) / m : rng.uniform();
+        const double u2 = grid ? (double(k / m) + rng.uniform()) / m : rng.uniform();
+        const float r = float(std::sqrt(u1)), phi = float(2 * M_PI * u2);
+        const Vec3f d = t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * float(std::sqrt(1 - u1));
+        Hit h;
+        if (!scene_.intersect(o, d, h)) continue;
+        const Vec3f bc = barycentric(h.tri, h.p);
+        const Vec3f E1 = lattice_lerp((h.front ? front : back).data() + offset[h.tri], segments[h.tri], bc.x, bc.y);
+        // Cosine sampling: E = pi x mean radiance = mean(albedo x E1).
+        E += scene_.albedo_at(h.tri, h.p) * E1;
+    }
+    return E * (1.0f / float(rays));
+}
+
 void Gallery::bake(const BakeSettings& s) {
     require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
     require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
@@ -876,6 +901,7 @@ void Gallery::bake(const BakeSettings& s) {
     require(s.shadow_probes >= 0 && s.shadow_probes <= 1 << 16, "Gallery.bake: shadow_probes must be in [0, 65536]");
     require(std::isfinite(s.indirect_filter) && s.indirect_filter >= 0 && s.indirect_filter <= 16,
             "Gallery.bake: indirect_filter must be in [0, 16] gather radii");
+    require(s.final_gather >= 0 && s.final_gather <= 4096, "Gallery.bake: final_gather must be in [0, 4096] rays");
     const auto t0 = Clock::now();
     std::unique_lock lock(mutex_);
     require_lit();
@@ -946,7 +972,9 @@ void Gallery::bake(const BakeSettings& s) {
     std::vector<std::uint8_t> covered_front(s.fill_covered ? total : 0), covered_back(s.fill_covered ? total : 0);
     // BakeSettings::indirect_filter: the gathers kept apart from the direct light until filtered.
     const bool filter = s.indirect_filter > 0 && map_ && gather_.radius > 0;
-    std::vector<Vec3f> indirect_front(filter ? total : 0), indirect_back(filter ? total : 0);
+    const bool fg = s.final_gather > 0 && map_;
+    const bool separate = filter || fg;  // the gathers apart from the direct light until the end
+    std::vector<Vec3f> indirect_front(separate ? total : 0), indirect_back(separate ? total : 0);
     parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
@@ -981,7 +1009,7 @@ void Gallery::bake(const BakeSettings& s) {
                     }
                     Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c, s.analytic_direct ? s.shadow_probes : -1)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (stride == 1 && filter) (h.front ? indirect_front : indirect_back)[k] = indirect(h.p, h.n, heap, detail);
+                    if (stride == 1 && separate) (h.front ? indirect_front : indirect_back)[k] = indirect(h.p, h.n, heap, detail);
                     else if (stride == 1) E += indirect(h.p, h.n, heap, detail);
                     else if (i % stride == 0 && j % stride == 0)
                         (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
@@ -1017,13 +1045,17 @@ void Gallery::bake(const BakeSettings& s) {
                             g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
                                 G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
                         }
-                        if (filter) (side == 0 ? indirect_front : indirect_back)[offset[t] + lattice_index(i, j, nt)] = g;
+                        if (separate) (side == 0 ? indirect_front : indirect_back)[offset[t] + lattice_index(i, j, nt)] = g;
                         else E[lattice_index(i, j, nt)] += g;
                     }
                 }
             }
             bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
         }, s.threads ? s.threads : lighting_.threads);
+    std::vector<Vec3f> direct_front, direct_back;
+    if (fg) direct_front = front, direct_back = back;
+    if (separate && !filter)
+        for (std::uint64_t k = 0; k < total; ++k) front[k] += indirect_front[k], back[k] += indirect_back[k];
     if (filter)
         parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
             std::vector<Vec3f> smooth;
@@ -1044,14 +1076,46 @@ void Gallery::bake(const BakeSettings& s) {
             }
         }, s.threads ? s.threads : lighting_.threads);
     std::uint64_t covered = 0;
-    if (s.fill_covered) {
+    if (s.fill_covered)
         for (std::uint64_t k = 0; k < total; ++k) covered += covered_front[k] + covered_back[k];
+    std::vector<std::uint8_t> mask_front, mask_back;  // fill_covered_points clears its masks
+    if (s.fill_covered && fg) mask_front = covered_front, mask_back = covered_back;
+    auto fill = [&](std::vector<std::uint8_t>& cf, std::vector<std::uint8_t>& cb) {
         parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
             for (std::size_t t = tb; t < te; ++t) {
-                fill_covered_points(front.data() + offset[t], covered_front.data() + offset[t], n[t]);
-                fill_covered_points(back.data() + offset[t], covered_back.data() + offset[t], n[t]);
+                fill_covered_points(front.data() + offset[t], cf.data() + offset[t], n[t]);
+                fill_covered_points(back.data() + offset[t], cb.data() + offset[t], n[t]);
             }
         }, s.threads ? s.threads : lighting_.threads);
+    };
+    if (s.fill_covered) fill(covered_front, covered_back);
+    if (fg) {
+        // The final gather over the first pass (front, back), into the direct light's arrays.
+        parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
+            for (std::size_t r = rb; r < re; ++r) {
+                const auto [t, i] = rows[r];
+                const std::uint32_t nt = n[t];
+                if (!(max_component(scene_.albedo(t)) > 0)) continue;
+                const Vec3f N = scene_.normal(t);
+                for (std::uint32_t j = 0; i + j <= nt; ++j) {
+                    const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
+                    Vec3f p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
+                    if (s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
+                        const Vec3f c = tri_v0_[t] + (tri_e1_[t] + tri_e2_[t]) * (1.0f / 3.0f);
+                        const float dc = length(c - p);
+                        if (dc > 0) p += (c - p) * std::min(0.5f, inset[t] / dc);
+                    }
+                    for (int side = 0; side < 2; ++side) {
+                        if (!(reachable[t] >> side & 1)) continue;
+                        if (s.fill_covered && (side == 0 ? mask_front : mask_back)[k]) continue;
+                        (side == 0 ? direct_front : direct_back)[k] +=
+                            final_gather(p, side == 0 ? N : -N, s.final_gather, front, back, n, offset);
+                    }
+                }
+            }
+        }, s.threads ? s.threads : lighting_.threads);
+        front = std::move(direct_front), back = std::move(direct_back);
+        if (s.fill_covered) fill(mask_front, mask_back);
     }
     stats_.bake_points_covered = covered;
     bake_n_ = std::move(n);

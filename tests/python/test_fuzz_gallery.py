@@ -145,10 +145,11 @@ def test_hostile_render_arguments(lit, pack):
        analytic_direct=st.one_of(st.booleans(), st.none(), st.integers(-1, 2)),
        shadow_probes=st.one_of(st.integers(-2, 40), st.sampled_from([65537, 1 << 40]), floats, st.booleans()),
        fill_covered=st.one_of(st.booleans(), st.none(), st.integers(-1, 2)),
-       indirect_filter=st.one_of(floats, st.integers(-2, 20), st.booleans(), st.none()))
+       indirect_filter=st.one_of(floats, st.integers(-2, 20), st.booleans(), st.none()),
+       final_gather=st.one_of(st.integers(-2, 20), st.sampled_from([4097, 1 << 40]), floats, st.booleans()))
 def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, gather_stride, stratified,
                                                   skip_unlit, inset_edges, coarse_disc, disc, analytic_direct,
-                                                  shadow_probes, fill_covered, indirect_filter):
+                                                  shadow_probes, fill_covered, indirect_filter, final_gather):
     gal = Gallery.from_room(box_room(), pack)
     vt = g.VirtualTexture(pack)
     gal.light(vt, photons=2000, disc=disc)
@@ -158,7 +159,7 @@ def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, 
         gal.bake(spacing=spacing, light_samples=light_samples, gather_stride=gather_stride,
                  stratified=stratified, skip_unlit=skip_unlit, inset_edges=inset_edges, coarse_disc=coarse_disc,
                  analytic_direct=analytic_direct, shadow_probes=shadow_probes, fill_covered=fill_covered,
-                 indirect_filter=indirect_filter)
+                 indirect_filter=indirect_filter, final_gather=final_gather)
     except ValueError:
         assert not gal.baked
         return
@@ -166,6 +167,7 @@ def test_bake_options_refuse_or_bake_finite_light(pack, spacing, light_samples, 
     assert isinstance(inset_edges, bool) and isinstance(coarse_disc, bool) and isinstance(analytic_direct, bool)
     assert isinstance(shadow_probes, int) and not isinstance(shadow_probes, bool) and 0 <= shadow_probes <= 1 << 16
     assert isinstance(fill_covered, bool) and not isinstance(indirect_filter, bool) and 0 <= indirect_filter <= 16
+    assert isinstance(final_gather, int) and not isinstance(final_gather, bool) and 0 <= final_gather <= 4096
     img = gal.render_display(gal.camera((6, 4)), vt, lighting="baked")
     assert np.isfinite(img).all() and (img >= 0).all() and img.max() > 0
 

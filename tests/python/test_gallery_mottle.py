@@ -181,7 +181,9 @@ def test_table_beside_the_paintings_lying_on_it_is_not_darkened(hall_table):
 
 @pytest.mark.parametrize("options", [{"indirect_filter": -1.0}, {"indirect_filter": float("nan")},
                                      {"indirect_filter": 17.0}, {"indirect_filter": True},
-                                     {"indirect_filter": "1"}, {"fill_covered": "yes"}, {"fill_covered": 1}])
+                                     {"indirect_filter": "1"}, {"fill_covered": "yes"}, {"fill_covered": 1},
+                                     {"final_gather": -1}, {"final_gather": 4097}, {"final_gather": 2.0},
+                                     {"final_gather": True}])
 def test_bake_refuses_bad_fill_and_filter_options(floor_room, options):
     gal, vt = floor_room
     if not gal.lit:
@@ -190,10 +192,13 @@ def test_bake_refuses_bad_fill_and_filter_options(floor_room, options):
         gal.bake(spacing=0.5, **options)
 
 
-def test_indirect_filter_smooths_the_gather_on_a_flat_floor(floor_room):
-    """bake(indirect_filter=2): the photon gather's part of the floor's lattice, far from the
-    walls and the painting, deviates less from its own smooth (quadratic) fit than unfiltered;
-    the direct part is untouched (indirect=False: the same bake either way)."""
+@pytest.mark.parametrize("smoothing", [{"indirect_filter": 2.0, "final_gather": 0}, {"final_gather": 16}])
+def test_filter_and_final_gather_smooth_the_light_on_a_flat_floor(floor_room, smoothing):
+    """bake(indirect_filter=2) and bake(final_gather=16) (the default): the baked light on the
+    floor, far from the walls and the painting, deviates less from its own smooth (quadratic)
+    fit, in 10 cm squares, than the photon density estimate at each point (both off); the
+    direct part is
+    untouched (indirect=False: the same bake either way)."""
     gal, vt = floor_room
     cam = g.Camera([0, 2.5, 1.2], [0, 0, 1.2], [0, 0, -1], 40, resolution=(64, 64))
     gal.light(vt, photons=50_000)
@@ -206,14 +211,19 @@ def test_indirect_filter_smooths_the_gather_on_a_flat_floor(floor_room):
         x, z, e = p[keep, 0], p[keep, 2] - 1.2, e[keep]
         basis = np.stack([np.ones_like(x), x, z, x * x, x * z, z * z], 1)
         fit = basis @ np.linalg.lstsq(basis, e, rcond=None)[0]
-        return float(np.sqrt(np.mean((e / fit - 1) ** 2))), e
+        # the residual's mean per 10 cm square of floor: mottle at the scale the eye sees,
+        # not the final gather's per-point noise at the lattice's 5 cm
+        cells = np.floor(x / 0.1).astype(int) * 1000 + np.floor(z / 0.1).astype(int)
+        _, inverse, counts = np.unique(cells, return_inverse=True, return_counts=True)
+        means = np.bincount(inverse, weights=e / fit - 1) / counts
+        return float(np.sqrt(np.mean(means[counts >= 4] ** 2))), e
 
-    raw, _ = deviation(indirect_filter=0.0)
-    smooth, _ = deviation(indirect_filter=2.0)
+    raw, _ = deviation(indirect_filter=0.0, final_gather=0)
+    smooth, _ = deviation(**smoothing)
     assert smooth < 0.6 * raw, (raw, smooth)
     gal.light(vt, photons=50_000, indirect=False)
-    _, direct_raw = deviation(indirect_filter=0.0)
-    _, direct_filtered = deviation(indirect_filter=2.0)
+    _, direct_raw = deviation(indirect_filter=0.0, final_gather=0)
+    _, direct_filtered = deviation(**smoothing)
     assert np.array_equal(direct_raw, direct_filtered)
 
 

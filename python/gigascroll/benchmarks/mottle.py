@@ -52,6 +52,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--gather-strides", default="1", help="bake gather strides (default 1)")
     parser.add_argument("--indirect-filters", default="0",
                         help="bake(indirect_filter=...) values, comma-separated (default 0: the default)")
+    parser.add_argument("--final-gathers", default="16",
+                        help="bake(final_gather=...) rays per point, comma-separated (default 16: the default)")
     parser.add_argument("--fill-covered", default="1",
                         help="bake(fill_covered=...): 1 and/or 0, comma-separated (default 1)")
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
@@ -145,7 +147,8 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
         st = gal.light(vt, photons=1 << photons, radius=radius, disc=cf["disc"])
         t1 = time.perf_counter()
         bst = gal.bake(spacing=diag / n, light_samples=samples, gather_stride=cf["gather_stride"],
-                       fill_covered=cf["fill_covered"], indirect_filter=cf["indirect_filter"])
+                       fill_covered=cf["fill_covered"], indirect_filter=cf["indirect_filter"],
+                       final_gather=cf["final_gather"])
         t2 = time.perf_counter()
         img, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
         if segments is None:
@@ -155,7 +158,7 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
         img = img.reshape(args.height, k, args.width, k, 3).mean(axis=(1, 3))
         c = {"photons_log2": photons, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": samples,
              "radius_factor": cf["radius_factor"], "disc": cf["disc"], "gather_stride": cf["gather_stride"],
-             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "points_covered": bst["bake_points_covered"],
+             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "final_gather": cf["final_gather"], "points_covered": bst["bake_points_covered"],
              "radius_m": st["radius"], "light_seconds": t1 - t0, "bake_seconds": t2 - t1,
              "bake_points": bst["bake_points"],
              "light_and_bake_over_mitsuba": (t2 - t0) / mitsuba_seconds,
@@ -172,30 +175,29 @@ def _pixel_size(position: np.ndarray, cam, k: int) -> float:
 
 
 def plot(results: dict, path: Path) -> None:
-    """RMS mottle against light + bake time (over Mitsuba's timing run), one line per room and
-    surface kind through the configurations that differ in photons only (the others at the
-    bench's first value of each option)."""
+    """RMS mottle against light + bake time (over Mitsuba's timing run): colour per room,
+    marker per surface kind, one line per photon count through its other settings (in the
+    order run, e.g. final gathers of 0, 16 and 64 rays)."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = plt.subplots(figsize=(7.5, 5))
     for room_index, (name, r) in enumerate(results["rooms"].items()):
         colour = f"C{room_index}"
-        first = r["configs"][0]
-        same = [c for c in r["configs"] if all(c[k] == first[k] for k in (
-            "diagonal_over", "bake_samples", "radius_factor", "disc", "gather_stride", "fill_covered",
-            "indirect_filter"))]
-        for cl, marker in (("walls", "o"), ("floor", "s"), ("paintings", "^"), ("other", "x")):
-            pts = [(c["light_and_bake_over_mitsuba"], c["mottle"][cl]["rms"]) for c in same
-                   if c["mottle"].get(cl)]
-            if pts:
-                x, y = zip(*sorted(pts))
-                ax.plot(x, np.array(y) * 100, marker=marker, color=colour, label=f"{name} {cl}")
+        for photons in sorted({c["photons_log2"] for c in r["configs"]}):
+            same = [c for c in r["configs"] if c["photons_log2"] == photons]
+            for cl, marker in (("walls", "o"), ("floor", "s"), ("paintings", "^"), ("other", "x")):
+                pts = [(c["light_and_bake_over_mitsuba"], c["mottle"][cl]["rms"]) for c in same if c["mottle"].get(cl)]
+                if pts:
+                    x, y = zip(*pts)
+                    ax.plot(x, np.array(y) * 100, marker=marker, color=colour, lw=0.8,
+                            ls="-" if photons == max(c["photons_log2"] for c in r["configs"]) else ":",
+                            label=f"{name} {cl}, 2^{photons}")
     ax.axhline(1.0, color="grey", ls="--", lw=0.8)
     ax.axhline(0.5, color="grey", ls=":", lw=0.8)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel(f"light + bake time / Mitsuba {results['settings']['timing_spp']} spp (same run)")
     ax.set_ylabel("RMS relative error after blur (%)")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=5.5, ncol=3)
     save_figure(fig, path)
 
 
@@ -229,14 +231,21 @@ def run(args) -> int:
         raise UserError(f"--indirect-filters are numbers, got {args.indirect_filters!r}") from None
     if not filters or not all(0 <= f <= 16 for f in filters):
         raise UserError(f"--indirect-filters are in [0, 16], got {args.indirect_filters!r}")
+    try:
+        gathers = [int(x) for x in args.final_gathers.split(",") if x]
+    except ValueError:
+        raise UserError(f"--final-gathers are integers, got {args.final_gathers!r}") from None
+    if not gathers or min(gathers) < 0 or max(gathers) > 4096:
+        raise UserError(f"--final-gathers are rays in [0, 4096], got {args.final_gathers!r}")
     strides = _ints(args.gather_strides, "--gather-strides")
     if not set(strides) <= {1, 2, 4, 8}:
         raise UserError("--gather-strides takes 1, 2, 4, 8")
     configs = [dict(photons=p, diagonal_over=n, bake_samples=s, radius_factor=f, disc=d, gather_stride=st,
-                    fill_covered=fc, indirect_filter=fi)
+                    fill_covered=fc, indirect_filter=fi, final_gather=fg)
                for p in photons for n in _ints(args.spacings, "--spacings")
                for s in _ints(args.bake_samples, "--bake-samples") for f in factors for d in flags["disc"]
-               for st in strides for fc in flags["fill_covered"] for fi in filters]
+               for st in strides for fc in flags["fill_covered"] for fi in filters
+               for fg in gathers]
     try:
         import mitsuba as mi
     except ImportError:
@@ -246,7 +255,7 @@ def run(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     results = {"settings": {k: getattr(args, k) for k in (
         "width", "height", "supersample", "sigma", "photons", "spacings", "bake_samples", "radius_factors", "disc",
-        "gather_strides", "fill_covered", "indirect_filters", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
+        "gather_strides", "fill_covered", "indirect_filters", "final_gathers", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
     with tempfile.TemporaryDirectory(prefix="gigascroll-bench-mottle-") as scratch:
         for name in rooms:
             results["rooms"][name] = measure_room(mi, name, args, Path(scratch), configs)
@@ -264,6 +273,6 @@ def _print_room(name: str, r: dict) -> None:
                  if c["mottle"].get(cl)]
         print(f"{name}: 2^{c['photons_log2']} photons, r x {c['radius_factor']:g}{' disc' if c['disc'] else ''}, "
               f"diag/{c['diagonal_over']}, {c['bake_samples']} samples, stride {c['gather_stride']}, "
-              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}: "
+              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}, final gather {c['final_gather']}: "
               f"{', '.join(parts)}; light+bake {c['light_seconds'] + c['bake_seconds']:.2f} s "
               f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)")
