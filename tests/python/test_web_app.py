@@ -265,6 +265,17 @@ def test_xr_eyes_disparity_and_magnifier(browser, server):  # noqa: F811
         eye = changed[:, k * EYE_W:(k + 1) * EYE_W]
         assert eye[EYE_H // 2:, EYE_W // 2:].mean() > 0.3 and eye[:EYE_H // 3, :EYE_W // 3].mean() == 0
     assert np.array_equal(again, plain)
+    # The inset sits at INSET_DISTANCE (0.5 m) in stereo: its dark rim's left edge is further
+    # right in the left eye by the IPD's projection at that distance.
+    rims = [inset_left_edge(lens[:, k * EYE_W:(k + 1) * EYE_W]) for k in range(2)]
+    assert abs((rims[0] - rims[1]) - IPD / 0.5 * (EYE_W / 2) / tan_half_x) <= 1.0, rims
+
+
+def inset_left_edge(eye: np.ndarray) -> int:
+    """The column of the magnifier inset's left rim (blit shader: grey 0.08, code 20): the
+    first column holding a long vertical run of it."""
+    rim = np.all(eye == 20, axis=2)
+    return int(np.flatnonzero(rim.sum(axis=0) > eye.shape[0] // 4)[0])
 
 
 def painting_rows(eye: np.ndarray) -> slice:

@@ -8,6 +8,9 @@ import { BLIT_FS, BLIT_VS, HEADER } from './display.glsl.js';
 import { makeProgram, makeTarget } from './gl_util.js';
 
 export const MAGNIFIER_VIEW = 2;   // the feedback view index of the magnifier
+// The inset is seen this far away in stereo: each eye's copy is shifted by the disparity of
+// that distance, so it does not float at infinity in front of nearer walls.
+export const INSET_DISTANCE = 0.5;
 
 export class Magnifier {
   // size: the offscreen image's side in pixels (the paper's magnifier feedback is 512^2);
@@ -42,8 +45,10 @@ export class Magnifier {
     room.drawView(view);
   }
 
-  // The inset in the lower right of a view of the bound framebuffer, square in pixels.
-  composite(view) {
+  // The inset in the lower right of a view of the bound framebuffer, square in pixels;
+  // eyeOffset: the eye's distance (m) along the head's right vector from the head's centre
+  // (0 for one eye), which shifts the inset by the disparity of INSET_DISTANCE.
+  composite(view, eyeOffset = 0) {
     const gl = this.gl, [x, y, w, h] = view.viewport;
     const side = Math.max(8, Math.round(this.inset * Math.min(w, h)));
     const margin = Math.round(0.04 * Math.min(w, h));
@@ -54,7 +59,9 @@ export class Magnifier {
     gl.bindTexture(gl.TEXTURE_2D, this.target.texture);
     gl.uniform1i(this.blit.uniforms.uImage, 0);
     gl.uniform1f(this.blit.uniforms.uRim, 1.5 / side);
-    const x1 = 1 - (2 * margin) / w, y0 = -1 + (2 * margin) / h;
+    const shift = (-eyeOffset * view.proj[0]) / INSET_DISTANCE;   // NDC: x_eye / (z tan_half_x)
+    // Both eyes' copies stay inside their views: the one shifted right touches the margin.
+    const x1 = 1 - (2 * margin) / w - Math.abs(shift) + shift, y0 = -1 + (2 * margin) / h;
     gl.uniform4f(this.blit.uniforms.uRect, x1 - (2 * side) / w, y0, x1, y0 + (2 * side) / h);
     gl.drawArrays(gl.TRIANGLE_STRIP, 0, 4);
   }

@@ -8,7 +8,7 @@
 // canvas size in pixels (tests). Keys: WASD/QE walk, drag to look, M magnifier, V stereo,
 // I stats panel. window.gigascroll is the test hook (see expose()).
 
-import { DEFAULT_FOV, lookAt, anglesOf, parseCameraParam } from './camera.js';
+import { DEFAULT_FOV, lookAt, anglesOf, parseCameraParam, vec3 } from './camera.js';
 import { parseRoom } from './glb.js';
 import { RoomRenderer } from './room_draw.js';
 import { Magnifier, MAGNIFIER_VIEW } from './magnifier.js';
@@ -19,6 +19,7 @@ import { DEFAULT_IPD, desktopViews } from './desktop_views.js';
 import { VirtualTexture } from './vt/virtual_texture.js';
 
 const FEEDBACK_REDUCTION = 8;   // eyes' feedback at 1/8 resolution, the magnifier's at full
+const { dot, sub } = vec3;
 
 async function fetchOk(url, kind) {
   const r = await fetch(url);
@@ -65,7 +66,8 @@ class App {
     const { gl, vt, room, magnifier } = this;
     vt.beginFrame(this.frame);
     views.forEach((v, i) => this.#feedback(i, v, FEEDBACK_REDUCTION));
-    const lens = magnifier.on ? magnifier.view(centreFrame(views), views[0].tanHalfY) : null;
+    const centre = centreFrame(views);
+    const lens = magnifier.on ? magnifier.view(centre, views[0].tanHalfY) : null;
     if (lens) {
       this.#feedback(MAGNIFIER_VIEW, lens, 1);
       magnifier.render(room, lens);
@@ -73,7 +75,7 @@ class App {
     gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
     for (const v of views) {
       room.drawView(v);
-      if (lens) magnifier.composite(v);
+      if (lens) magnifier.composite(v, dot(sub(v.position, centre.position), centre.right));
     }
     const feedbackViews = [...views.keys(), ...(lens ? [MAGNIFIER_VIEW] : [])];
     this.stats.update(this.frame, now, lens ? [...views, lens] : views, feedbackViews, vt.stats());
