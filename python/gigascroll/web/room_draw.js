@@ -27,7 +27,32 @@ function upload(gl, mesh) {
     count = mesh.indices.length;
   }
   gl.bindVertexArray(null);
-  return { vao, indexType, count, albedo: mesh.albedo, emission: mesh.emission, painting: mesh.painting, lines };
+  return { vao, indexType, count, albedo: mesh.albedo, emission: mesh.emission, painting: mesh.painting, lines,
+           corners: boxCorners(mesh.positions) };
+}
+
+// The 8 corners of a position array's bounding box.
+function boxCorners(p) {
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < p.length; i += 3)
+    for (let k = 0; k < 3; k++) {
+      lo[k] = Math.min(lo[k], p[i + k]);
+      hi[k] = Math.max(hi[k], p[i + k]);
+    }
+  return [0, 1, 2, 3, 4, 5, 6, 7].map((b) => [b & 1 ? hi[0] : lo[0], b & 2 ? hi[1] : lo[1], b & 4 ? hi[2] : lo[2]]);
+}
+
+// Whether a box lies wholly outside one plane of the view's frustum (clip space: outside
+// x = +-w, y = +-w, z = +-w); conservative, so nothing visible is ever skipped.
+export function outsideFrustum(viewProj, corners) {
+  const m = viewProj, out = [0, 0, 0, 0, 0, 0];
+  for (const [x, y, z] of corners) {
+    const c = [0, 1, 2, 3].map((r) => m[r] * x + m[4 + r] * y + m[8 + r] * z + m[12 + r]);
+    const w = c[3];
+    out[0] += c[0] < -w; out[1] += c[0] > w; out[2] += c[1] < -w;
+    out[3] += c[1] > w; out[4] += c[2] < -w; out[5] += c[2] > w;
+  }
+  return out.some((n) => n === corners.length);
 }
 
 function attribute(gl, location, data, size) {
@@ -74,6 +99,7 @@ export class RoomRenderer {
     const gl = this.gl;
     this.#begin(view);
     const viewProj = multiply(view.proj, view.view);
+    this.drawn = 0;
     for (const [prog, paintings] of [[this.room, false], [this.painting, true]]) {
       gl.useProgram(prog.program);
       if (paintings) this.vt.bind(prog.program);
@@ -81,14 +107,15 @@ export class RoomRenderer {
       gl.uniform1f(prog.uniforms.uExposure, this.exposure);
       gl.uniform3fv(prog.uniforms.uEye, view.position);
       for (const m of this.meshes) {
-        if ((m.painting >= 0) !== paintings) continue;
+        if ((m.painting >= 0) !== paintings || outsideFrustum(viewProj, m.corners)) continue;
+        ++this.drawn;
         if (paintings) gl.uniform1i(prog.uniforms.uPainting, m.painting);
         else gl.uniform3fv(prog.uniforms.uAlbedo, m.albedo);
         gl.uniform3fv(prog.uniforms.uEmission, m.emission);
         this.#draw(m);
       }
     }
-    this.#fillCracks();
+    this.#fillCracks(viewProj);
     gl.bindVertexArray(null);
   }
 
@@ -101,8 +128,10 @@ export class RoomRenderer {
     gl.disable(gl.CULL_FACE);
     gl.useProgram(prog.program);
     this.vt.bind(prog.program);
-    gl.uniformMatrix4fv(prog.uniforms.uViewProj, false, multiply(view.proj, view.view));
+    const viewProj = multiply(view.proj, view.view);
+    gl.uniformMatrix4fv(prog.uniforms.uViewProj, false, viewProj);
     for (const m of this.meshes) {
+      if (outsideFrustum(viewProj, m.corners)) continue;
       gl.colorMask(m.painting >= 0, m.painting >= 0, m.painting >= 0, m.painting >= 0);
       gl.uniform1i(prog.uniforms.uPainting, Math.max(0, m.painting));
       this.#draw(m);
@@ -113,12 +142,12 @@ export class RoomRenderer {
 
   // The room surfaces' open edges as lines, after every triangle: they land only where the
   // depth test finds nothing nearer, i.e. in the cracks (crack_fill.js).
-  #fillCracks() {
+  #fillCracks(viewProj) {
     const gl = this.gl, prog = this.room;
     gl.useProgram(prog.program);
     gl.uniform1i(prog.uniforms.uLines, 1);
     for (const m of this.meshes) {
-      if (!m.lines) continue;
+      if (!m.lines || outsideFrustum(viewProj, m.corners)) continue;
       gl.uniform3fv(prog.uniforms.uAlbedo, m.albedo);
       gl.uniform3fv(prog.uniforms.uEmission, m.emission);
       gl.bindVertexArray(m.lines.vao);
