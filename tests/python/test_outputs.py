@@ -274,3 +274,32 @@ def test_next_run_removes_only_provable_leftovers_of_dead_runs(tmp_path):
     left = sorted(p.name for p in tmp_path.iterdir())
     assert left == sorted([unmarked.name, other_kind.name, live.name, mine.name])
     assert (unmarked / "keep.txt").read_text() == "keep"
+
+
+ROOM_PAST_LIMIT = textwrap.dedent("""
+    import resource, sys
+    from gigascroll import outputs
+    from gigascroll.gallery import builtin_room
+    from gigascroll.gallery.room_files import save_room
+    from gigascroll.gallery.sizes import PaintingSize
+    outputs.ignore_sigxfsz()
+    spec = builtin_room("scroll", [PaintingSize("p", 6000, 400)])
+    resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000))  # every format is larger
+    for ext in ("glb", "gltf", "obj", "ply"):
+        try:
+            save_room(spec, f"{sys.argv[1]}/room.{ext}")
+            print(ext, "written")
+        except OSError as e:
+            print(ext, "OSError", e.errno == 27)
+""")
+
+
+def test_a_room_file_past_the_size_limit_leaves_nothing(tmp_path):
+    """save_room writes through outputs: past RLIMIT_FSIZE each format is an OSError (EFBIG)
+    and no file or temporary is left (it once left ROOM.part)."""
+    r = subprocess.run([sys.executable, "-c", ROOM_PAST_LIMIT, str(tmp_path)],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["glb", "OSError", "True", "gltf", "OSError", "True",
+                                "obj", "OSError", "True", "ply", "OSError", "True"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

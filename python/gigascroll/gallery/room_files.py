@@ -59,6 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..outputs import write_bytes
 from .lights import light_from_extras, light_surface
 from .room import PaintingSlot, RoomSpec, Surface
 from .room_assets import (MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES,  # noqa: F401
@@ -775,10 +776,9 @@ def write_gltf(nodes: list[dict], path, roots: list[int] | None = None,
 
 
 def _write_whole(path: Path, data: bytes):
-    """Write to a temporary name and rename, so a half-written file never looks complete."""
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_bytes(data)
-    tmp.replace(path)
+    """Write to a temporary name and rename (outputs.write_bytes): a half-written file never
+    looks complete, and a failed write leaves no temporary behind."""
+    write_bytes(path, data)
 
 
 def _surfaces_and_placeholders(spec: RoomSpec):
@@ -813,7 +813,11 @@ def _write_obj(spec: RoomSpec, path: Path):
         obj += [f"f {a + base} {b + base} {c + base}" for a, b, c in np.asarray(t)]
         base += len(v)
     _write_whole(mtl_path, ("\n".join(mtl) + "\n").encode("utf-8"))
-    _write_whole(path, ("\n".join(obj) + "\n").encode("utf-8"))
+    try:
+        _write_whole(path, ("\n".join(obj) + "\n").encode("utf-8"))
+    except OSError:
+        mtl_path.unlink(missing_ok=True)  # no half a room: the .mtl goes with its .obj
+        raise
 
 
 def _write_ply(spec: RoomSpec, path: Path):
