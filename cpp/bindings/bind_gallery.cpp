@@ -12,7 +12,7 @@
 #include "gallery/display_lighting.h"
 #include "gallery/gallery.h"
 #include "pack/reader.h"
-#include "sampling/stereo_display.h"
+#include "display/display_pass.h"
 #include "views/feedback.h"
 
 namespace nb = nanobind;
@@ -244,7 +244,7 @@ void bind_gallery(nb::module_& m) {
     // A bake's lattice points at most (BakeSettings::max_points): a room's triangle budget.
     m.attr("BAKE_MAX_POINTS") = BakeSettings{}.max_points;
 
-    // The full-resolution display pass (sampling/stereo_display.h) on the gallery's scene and
+    // The full-resolution display pass (display/display_pass.h) on the gallery's scene and
     // light, one eye or a stereo pair with the right eye reusing the left eye's hits.
     // out / out_left, out_right: arrays the caller keeps between frames (None: fresh ones).
     m.def("_gallery_display", [](DisplayPass& d, const Gallery& g, const VirtualTexture& vt,

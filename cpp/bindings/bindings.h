@@ -17,7 +17,8 @@ void bind_pack(nanobind::module_& m);      // tile pack reader and builder, geom
 void bind_views(nanobind::module_& m);     // cameras, exhibition scene, feedback, request processing
 void bind_loading(nanobind::module_& m);   // tile loader, loading strategies
 void bind_cache(nanobind::module_& m);     // physical cache and page table, lookup, drain
-void bind_sampling(nanobind::module_& m);  // VT sampling, mip texture, display pass
+void bind_sampling(nanobind::module_& m);  // VT sampling, mip texture, sparse display
+void bind_display(nanobind::module_& m);   // the full-resolution display pass
 void bind_photon(nanobind::module_& m);    // photon scene, photon maps, renderer
 void bind_gallery(nanobind::module_& m);   // the gallery: room, paintings, lighting, display
 }  // namespace gigascroll::bindings

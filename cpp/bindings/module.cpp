@@ -9,6 +9,7 @@ NB_MODULE(_core, m) {
     bind_loading(m);
     bind_cache(m);
     bind_sampling(m);
+    bind_display(m);
     bind_photon(m);
     bind_gallery(m);
 }

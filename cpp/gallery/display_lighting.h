@@ -1,4 +1,4 @@
-// The Gallery's light as the full-resolution display pass asks it (sampling/stereo_display.h):
+// The Gallery's light as the full-resolution display pass asks it (display/display_pass.h):
 // per hit, the room surface's albedo and emission and the irradiance there, baked or full,
 // as Gallery::render_display computes them (baked: at Embree's barycentrics rather than the
 // ones solved from the point, equal to float rounding). Holds the gallery's read lock while it
@@ -7,7 +7,7 @@
 #include <shared_mutex>
 
 #include "gallery/gallery.h"
-#include "sampling/stereo_display.h"
+#include "display/display_pass.h"
 
 namespace gigascroll {
 

@@ -16,30 +16,11 @@
 #include "photon/rng.h"
 #include "pack/tile_key.h"
 #include "sampling/sampler.h"
-#include "sampling/stereo_display.h"
-#include "gallery/display_lighting.h"
 #include "views/feedback.h"
 
 namespace gigascroll {
 
 namespace {
-
-// srgb_to_linear(c / 255) of a sampled component c in [0, 255], from a table: exact at whole
-// 8-bit values (a uniform painting), linear between them otherwise (within 6e-6: the curve's
-// second derivative is below 3). pow per texel was a quarter of a small light() call.
-float linear_of(float c) {
-    static const auto table = [] {
-        std::array<float, 257> t{};
-        for (int k = 0; k < 256; ++k) t[k] = srgb_to_linear(float(k) / 255.0f);
-        t[256] = t[255];
-        return t;
-    }();
-    if (!(c >= 0)) return 0;
-    if (!(c < 255)) return table[255];
-    const auto k = std::size_t(c);
-    const float f = c - float(k);
-    return table[k] + (table[k + 1] - table[k]) * f;
-}
 
 // A painting's albedo where photons bounce off it, read once per lighting through the virtual
 // texture at the painting's finest pinned level: the pinned tail (cache/page_table.h) is
@@ -111,7 +92,7 @@ public:
             sample_serial(vt, r);
             im.texels.resize(n);
             for (std::size_t i = 0; i < n; ++i)
-                im.texels[i] = Vec3f(linear_of(rgb[3 * i]), linear_of(rgb[3 * i + 1]), linear_of(rgb[3 * i + 2])) *
+                im.texels[i] = Vec3f(srgb_code_table(rgb[3 * i]), srgb_code_table(rgb[3 * i + 1]), srgb_code_table(rgb[3 * i + 2])) *
                                kPaintingReflectance;
             images_.push_back(std::move(im));
         }
@@ -712,31 +693,6 @@ void lattice_cells(std::size_t m, const std::uint32_t* __restrict segments,
 }
 }  // namespace
 
-namespace {
-// Gallery::barycentric's double arithmetic after its dot products, for m <= 16 points, with
-// selects in SIMD lanes (the same operations, so the same values): b1, b2 from the Gram
-// terms and the point's dot products, clamped onto the triangle. No trapping math, as in
-// lattice_cells, so that GCC evaluates both sides of the selects.
-[[gnu::optimize("no-trapping-math"), gnu::noinline]]
-void barycentric_solve(std::size_t m, const double* __restrict d00, const double* __restrict d01,
-                       const double* __restrict d11, const double* __restrict denom,
-                       const double* __restrict d20, const double* __restrict d21, float* __restrict b1_out,
-                       float* __restrict b2_out) {
-    for (std::size_t k = 0; k < m; ++k) {
-        const bool solvable = denom[k] > 0;
-        const double q1 = (d11[k] * d20[k] - d01[k] * d21[k]) / denom[k];
-        const double q2 = (d00[k] * d21[k] - d01[k] * d20[k]) / denom[k];
-        double b1 = solvable ? q1 : 0.0, b2 = solvable ? q2 : 0.0;
-        b1 = b1 < 0.0 ? 0.0 : (1.0 < b1 ? 1.0 : b1);  // std::clamp
-        b2 = b2 < 0.0 ? 0.0 : (1.0 < b2 ? 1.0 : b2);
-        const double s = b1 + b2;
-        const bool over = s > 1;
-        const double r1 = b1 / s, r2 = b2 / s;
-        b1_out[k] = float(over ? r1 : b1), b2_out[k] = float(over ? r2 : b2);
-    }
-}
-}  // namespace
-
 void Gallery::irradiance_baked_batch(const std::uint32_t* tri, const bool* front, const float* b1,
                                      const float* b2, std::size_t count, Vec3f* out) const {
     const Vec3f* front_E = bake_front_.data();
@@ -1126,187 +1082,6 @@ void Gallery::bake(const BakeSettings& s) {
     stats_.bake_points = total;
     stats_.bake_sides_skipped = skipped;
     stats_.spacing = spacing;
-}
-
-void Gallery::render_display(const Camera& world_camera, const VirtualTexture& vt, Lighting lighting,
-                             float* rgb, const DisplayHits& hits, unsigned threads, bool reference) const {
-    require(committed(), "Gallery: commit() before rendering");
-    require(rgb != nullptr, "Gallery.render_display: no output");
-    check_texture(vt);
-    const bool any_hits = hits.position || hits.slot || hits.uv || hits.lod || hits.irradiance;
-    if (lighting == Lighting::Baked && !reference && !any_hits) {
-        // Before this function's own read lock: GalleryLighting takes it (a second shared
-        // lock on the same thread could wait behind a queued light() forever).
-        const GalleryLighting light(*this, lighting);
-        DisplayPass pass;
-        pass.render(feedback_view(), light, vt, world_camera, GalleryLighting::options(threads), rgb);
-        return;
-    }
-    std::shared_lock lock(mutex_);
-    if (lighting != Lighting::Unlit) require_lit();
-    require(lighting != Lighting::Baked || !bake_offset_.empty(), "Gallery: call bake() before lighting 'baked'");
-    const Camera camera = world_camera.moved(-origin_);  // into the room's coordinates
-    const std::uint32_t W = camera.width, H = camera.height;
-    constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-    const Vec3f origin(camera.position);
-    parallel_for(H, 4, [&](std::size_t row_begin, std::size_t row_end) {
-        // Painting pixels of a row wait for one VT call per run of the same painting.
-        struct Pending {
-            std::uint32_t x;
-            int slot;
-            Vec3f scale, add;  // radiance = albedo * scale + add
-        };
-        RTCRayHit16 packet;
-        for (std::uint32_t k = 0; k < 16; ++k) {
-            packet.ray.org_x[k] = origin.x, packet.ray.org_y[k] = origin.y, packet.ray.org_z[k] = origin.z;
-            packet.ray.tnear[k] = 0.f;
-            packet.ray.time[k] = 0.f;
-            packet.ray.mask[k] = ~0u;
-            packet.ray.id[k] = k;
-            packet.ray.flags[k] = 0;
-            packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-        }
-        std::vector<Pending> pending;
-        std::vector<double> uv;
-        std::vector<float> lods, texels;
-        for (std::size_t y = row_begin; y < row_end; ++y) {
-            pending.clear(), uv.clear(), lods.clear();
-            float* out_row = rgb + y * std::size_t(W) * 3;
-            // Primary rays in Embree packets of 16 pixels of the row (coherent), as the
-            // feedback pass casts them; the hit then as Scene::intersect reports it.
-            for (std::uint32_t x0 = 0; x0 < W; x0 += 16) {
-                const std::uint32_t n16 = std::min<std::uint32_t>(16, W - x0);
-                alignas(64) int valid[16];
-                Vec3d dd16[16];  // the unnormalised directions, for the painting coordinates
-                for (std::uint32_t k = 0; k < 16; ++k) {
-                    valid[k] = k < n16 ? -1 : 0;
-                    dd16[k] = camera.direction(x0 + std::min(k, n16 - 1) + 0.5, y + 0.5);
-                    const Vec3f d(normalize(dd16[k]));
-                    packet.ray.dir_x[k] = d.x, packet.ray.dir_y[k] = d.y, packet.ray.dir_z[k] = d.z;
-                    packet.ray.tfar[k] = std::numeric_limits<float>::infinity();
-                    packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-                }
-                RTCIntersectContext context;
-                rtcInitIntersectContext(&context);
-                context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-                rtcIntersect16(valid, scene_.handle(), &context, &packet);
-                Hit hit16[16];
-                for (std::uint32_t k = 0; k < n16; ++k) {
-                    Hit& hit = hit16[k];
-                    if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-                    const Vec3f d(packet.ray.dir_x[k], packet.ray.dir_y[k], packet.ray.dir_z[k]);
-                    hit.t = packet.ray.tfar[k];
-                    hit.tri = geom_first_tri_[packet.hit.geomID[k]] + packet.hit.primID[k];
-                    hit.p = origin + d * hit.t;
-                    const Vec3f nn = scene_.normal(hit.tri);
-                    hit.front = dot(nn, d) < 0;
-                    hit.n = hit.front ? nn : -nn;
-                }
-                // Baked: the packet's hits through irradiance_baked_batch (lattice_lerp's
-                // operations at the same barycentrics: irradiance_baked's values, without a
-                // call and its mispredicted branches per pixel).
-                alignas(64) std::uint32_t batch_tri[16];
-                alignas(64) float batch_b1[16], batch_b2[16];
-                bool batch_front[16];
-                Vec3f batch_E[16];
-                if (lighting == Lighting::Baked) {
-                    alignas(64) double g00[16], g01[16], g11[16], det[16], d20[16], d21[16];
-                    std::size_t m = 0;
-                    for (std::uint32_t k = 0; k < n16; ++k) {
-                        if (packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-                        const std::uint32_t t = hit16[k].tri;
-                        const Vec3f d = hit16[k].p - tri_v0_[t];
-                        const BarycentricTerms& b = tri_terms_[t];
-                        g00[m] = b.d00, g01[m] = b.d01, g11[m] = b.d11, det[m] = b.denom;
-                        d20[m] = dot(d, tri_e1_[t]), d21[m] = dot(d, tri_e2_[t]);
-                        batch_tri[m] = t, batch_front[m] = hit16[k].front;
-                        ++m;
-                    }
-                    barycentric_solve(m, g00, g01, g11, det, d20, d21, batch_b1, batch_b2);
-                    irradiance_baked_batch(batch_tri, batch_front, batch_b1, batch_b2, m, batch_E);
-                }
-                std::size_t batch_next = 0;
-                for (std::uint32_t k = 0; k < n16; ++k) {
-                    const std::uint32_t x = x0 + k;
-                    const std::size_t px = y * std::size_t(W) + x;
-                    const Vec3d dd = dd16[k];
-                    const Hit& hit = hit16[k];
-                    const bool found = packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
-                    int slot = found ? tri_slot_[hit.tri] : -1;
-                    if (hits.position) {
-                        const Vec3f p = found ? Vec3f(Vec3d(hit.p) + origin_) : Vec3f(kNaN, kNaN, kNaN);
-                        hits.position[3 * px] = p.x, hits.position[3 * px + 1] = p.y,
-                        hits.position[3 * px + 2] = p.z;
-                    }
-                    if (hits.slot) hits.slot[px] = slot;
-                    if (!found) {
-                        out_row[3 * x] = out_row[3 * x + 1] = out_row[3 * x + 2] = 0;
-                        if (hits.irradiance)
-                            hits.irradiance[3 * px] = hits.irradiance[3 * px + 1] = hits.irradiance[3 * px + 2] = 0;
-                        if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
-                        if (hits.lod) hits.lod[px] = kNaN;
-                        continue;
-                    }
-                    Vec3f E;
-                    switch (lighting) {
-                        case Lighting::Unlit: E = Vec3f(float(M_PI), float(M_PI), float(M_PI)); break;
-                        case Lighting::Baked: E = batch_E[batch_next++]; break;
-                        case Lighting::Full: E = irradiance_full(hit); break;
-                    }
-                    const Vec3f Le = hit.front ? scene_.emission(hit.tri) : Vec3f(0, 0, 0);
-                    if (hits.irradiance)
-                        hits.irradiance[3 * px] = E.x, hits.irradiance[3 * px + 1] = E.y,
-                        hits.irradiance[3 * px + 2] = E.z;
-                    if (slot < 0) {
-                        const Vec3f L = scene_.albedo(hit.tri) * E * kInvPi + Le;
-                        out_row[3 * x] = L.x, out_row[3 * x + 1] = L.y, out_row[3 * x + 2] = L.z;
-                        if (hits.uv) hits.uv[2 * px] = hits.uv[2 * px + 1] = kNaN;
-                        if (hits.lod) hits.lod[px] = kNaN;
-                        continue;
-                    }
-                    // The painting coordinates in double from the plane (a 12 m scroll of 150k
-                    // texels needs more than float), the level from the ray differentials as in
-                    // the feedback pass.
-                    const PaintingPlacement& pl = placements_[slot];
-                    const Vec3d n = pl.normal();
-                    const double t = dot(pl.origin - camera.position, n) / dot(dd, n);
-                    const Vec3d rel = camera.position + t * dd - pl.origin;
-                    const double u = std::clamp(dot(rel, pl.u_axis) / pl.width_m, 0.0, 1.0);
-                    const double v = std::clamp(dot(rel, pl.v_axis) / pl.height_m, 0.0, 1.0);
-                    double lambda = std::log2(texel_footprint(pl, camera, dd, t));
-                    if (!std::isfinite(lambda)) lambda = 0;
-                    uv.push_back(u), uv.push_back(v);
-                    lods.push_back(float(lambda));
-                    pending.push_back({x, slot, E * kInvPi, Le});
-                    if (hits.uv) hits.uv[2 * px] = u, hits.uv[2 * px + 1] = v;
-                    if (hits.lod) hits.lod[px] = float(lambda);
-                }
-            }
-            texels.resize(3 * pending.size());
-            for (std::size_t k0 = 0; k0 < pending.size();) {
-                std::size_t k1 = k0 + 1;
-                while (k1 < pending.size() && pending[k1].slot == pending[k0].slot) ++k1;
-                SampleRequest r;
-                r.painting = placements_[pending[k0].slot].painting;
-                r.u = uv.data() + 2 * k0, r.v = r.u + 1, r.uv_stride = 2;
-                r.lod = lods.data() + k0;
-                r.count = k1 - k0;
-                r.filter = Filter::Trilinear;
-                r.out = texels.data() + 3 * k0;
-                sample_serial(vt, r);
-                k0 = k1;
-            }
-            for (std::size_t k = 0; k < pending.size(); ++k) {
-                const Pending& q = pending[k];
-                const Vec3f albedo = Vec3f(srgb_to_linear(texels[3 * k] / 255.0f),
-                                           srgb_to_linear(texels[3 * k + 1] / 255.0f),
-                                           srgb_to_linear(texels[3 * k + 2] / 255.0f)) *
-                                     kPaintingReflectance;
-                const Vec3f L = albedo * q.scale + q.add;
-                out_row[3 * q.x] = L.x, out_row[3 * q.x + 1] = L.y, out_row[3 * q.x + 2] = L.z;
-            }
-        }
-    }, threads ? threads : lighting_.threads);
 }
 
 }  // namespace gigascroll

@@ -47,6 +47,8 @@
 #include <vector>
 
 #include "cache/virtual_texture.h"
+#include "display/baked_lattice.h"
+#include "display/srgb.h"
 #include "pack/geometry.h"
 #include "photon/renderer.h"
 #include "photon/scene.h"
@@ -65,11 +67,6 @@ Lighting parse_lighting(const std::string& name);
 // A painting reflects this fraction of its linearised sRGB colour: varnished paint and gesso
 // reflect at most about 90%, and an albedo below 1 keeps the light transport finite.
 constexpr float kPaintingReflectance = 0.9f;
-
-// The linear value of an sRGB-encoded component in [0, 1] (IEC 61966-2-1).
-inline float srgb_to_linear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
 
 struct LightingSettings {
     std::uint64_t photons = 1u << 19;  // emitted photons

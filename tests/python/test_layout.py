@@ -15,7 +15,7 @@ CPP = ROOT / "cpp"
 # cpp/'s folders in data-flow order; a folder may include its own headers, common's,
 # concurrency's and those of the folders before it. bindings may include anything.
 CPP_FOLDERS = ("common", "concurrency", "pack", "views", "loading", "cache", "sampling",
-               "photon", "gallery", "bindings")
+               "photon", "display", "gallery", "bindings")
 CPP_ALWAYS = ("common", "concurrency")
 
 

@@ -4,7 +4,7 @@ Each room triangle's bake lattice of n segments becomes n^2 sub-triangles whose 
 the lattice points, carrying the baked irradiance of both sides as `_IRRADIANCE_FRONT` and
 `_IRRADIANCE_BACK`: interpolating them linearly across a sub-triangle is exactly the core's
 `lattice_lerp` (the lower cell (i, j), (i+1, j), (i, j+1) and the upper one (i+1, j+1),
-(i, j+1), (i+1, j) of cpp/sampling/stereo_display.h's `lattice_cell`). One mesh per room
+(i, j+1), (i+1, j) of cpp/display/baked_lattice.h's `lattice_cell`). One mesh per room
 surface and per painting slot (an Embree geometry of the gallery), in room coordinates.
 Everything is built with numpy per lattice size, never per point."""
 

@@ -1,12 +1,39 @@
-// The sRGB decoding of the display pass's filtered painting texels (sampling/stereo_display).
+// sRGB decoding (IEC 61966-2-1), the one place for it: srgb_to_linear is the curve itself
+// (the definition, the per-pixel reference's and the bake's), SrgbCurve its fast form for the
+// display pass's filtered texels (scalar and 16 lanes, the same floats) and srgb_code_table its
+// tabulated form for a sampled 8-bit code (the photon map's painting albedo).
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #if defined(__AVX512F__)
 #include <immintrin.h>
 #endif
 
 namespace gigascroll {
+
+// The linear value of an sRGB-encoded component in [0, 1] (IEC 61966-2-1).
+inline float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+// srgb_to_linear(c / 255) of a sampled component c in [0, 255], from a table: exact at whole
+// 8-bit values (a uniform painting), linear between them otherwise (within 6e-6: the curve's
+// second derivative is below 3). pow per texel was a quarter of a small light() call.
+inline float srgb_code_table(float c) {
+    static const auto table = [] {
+        std::array<float, 257> t{};
+        for (int k = 0; k < 256; ++k) t[k] = srgb_to_linear(float(k) / 255.0f);
+        t[256] = t[255];
+        return t;
+    }();
+    if (!(c >= 0)) return 0;
+    if (!(c < 255)) return table[255];
+    const auto k = std::size_t(c);
+    const float f = c - float(k);
+    return table[k] + (table[k + 1] - table[k]) * f;
+}
 
 // sRGB-encoded 0..255 to linear [0, 1] (IEC 61966-2-1) of a filtered (fractional) code: the
 // linear segment below code 10.31475 (0.04045 x 255) exactly, above it a quartic per 16 codes

@@ -11,7 +11,7 @@
 
 #include "cache/virtual_texture.h"
 #include "pack/geometry.h"
-#include "sampling/stereo_display.h"
+#include "display/display_pass.h"
 #include "views/camera.h"
 #include "views/exhibition.h"
 

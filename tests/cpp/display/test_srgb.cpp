@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "sampling/srgb_curve.h"
+#include "display/srgb.h"
 
 using namespace gigascroll;
 
