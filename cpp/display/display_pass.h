@@ -78,13 +78,14 @@ public:
 
 private:
     using GBuffer = display::GBuffer;
-    // The fused pass over one eye: per row, 16-ray packets traced, their hits lit in one
-    // lighting call and mapped to painting coordinates while they are in cache, then the
-    // row's painting pixels sampled in runs and shaded. With claim_into (the left eye of a
-    // stereo pair with reuse), each packet's hits claim the right eye's pixels they project
-    // to, and the painting pixels keep their light. While reusing_ (the right eye), each row's
-    // claims are released on depth edges just before the row is rendered; claimed pixels are
-    // not traced: they take the left hit and light, and their texel at this eye's level.
+    // One eye's pass (display/eye_pass.cpp, in named steps: trace, defer, light, map, sample,
+    // shade, reuse): per row, 16-ray packets traced, their hits lit and mapped to painting
+    // coordinates while they are in cache, then the row's painting pixels sampled and shaded.
+    // With claim_into (the left eye of a stereo pair with reuse), each packet's hits claim the
+    // right eye's pixels they project to, and the painting pixels keep their light. While
+    // reusing_ (the right eye), each row's claims are released on depth edges just before the
+    // row is rendered; claimed pixels are not traced: they take the left hit and light, and
+    // their texel at this eye's level.
     // How render_eye runs its rows: body(rb, re) on chunks of chunk_rows rows. Without one, a
     // parallel_for over the eye's rows; render_stereo's pair with reuse runs both eyes' chunks
     // in one wavefront (see render_stereo).

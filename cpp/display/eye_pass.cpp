@@ -192,15 +192,16 @@ public:
 
 private:
     // Per packet: deferred whole, or through the lane by lane steps at once.
-    [[gnu::always_inline]] void take_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
+    [[gnu::always_inline]] inline void take_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
                                             const RTCRayHit16& h);
-    void start_row(std::size_t row);
-    const PlaneMap::Row& plane(int pl);
-    void lap(std::uint64_t& acc);
+    [[gnu::always_inline]] inline void start_row(std::size_t row);
+    [[gnu::always_inline]] inline const PlaneMap::Row& plane(int pl);
+    [[gnu::always_inline]] inline void lap(std::uint64_t& acc);
     // hits: the side each hit sees, their points and eye-facing normals.
     static void back_sides(const RTCRayHit16& h, std::int32_t* back);
-    void hit_points(const RTCRayHit16& h, const std::int32_t* back, bool with_normals, float* hx, float* hy,
-                    float* hz, float* nx, float* ny, float* nz) const;
+    [[gnu::always_inline]] inline void hit_points(const RTCRayHit16& h, const std::int32_t* back, bool with_normals,
+                                                  float* hx, float* hy, float* hz, float* nx, float* ny,
+                                                  float* nz) const;
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
     // defer: a whole packet's hits kept (and claims made), the rest waiting for run_batch.
     void defer(std::size_t row, std::uint32_t i0, std::uint32_t n, const RTCRayHit16& h, unsigned g0);
