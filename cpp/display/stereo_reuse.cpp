@@ -1,6 +1,9 @@
 #include "display/stereo_reuse.h"
 
 #include <limits>
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 namespace gigascroll {
 namespace display {

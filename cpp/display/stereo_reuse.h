@@ -8,11 +8,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#if defined(__AVX__)
-#include <immintrin.h>
-#endif
 
 #include "common/vec3.h"
+#include "display/lanes.h"
 #include "views/camera.h"
 
 namespace gigascroll {
@@ -50,110 +48,43 @@ struct ClaimProjection {
     void project16(const float* px, const float* py, const float* pz, const float* nx,
                    const float* ny, const float* nz, const int* hit, std::uint32_t* target,
                    float* depth) const {
-#if defined(__AVX512F__)
-        // All 16 lanes in one vector: the same operations in the same order as the loop below
-        // (GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics, bug 105593, muted).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-        {
-            const __m512 ex_ = _mm512_set1_ps(eye.x), ey_ = _mm512_set1_ps(eye.y), ez_ = _mm512_set1_ps(eye.z);
-            const __m512 zero = _mm512_setzero_ps();
-            auto dot3 = [](__m512 ax, __m512 ay, __m512 az, __m512 bx, __m512 by, __m512 bz) {
-                return _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(ax, bx), _mm512_mul_ps(ay, by)),
-                                     _mm512_mul_ps(az, bz));
-            };
-            const __m512 x = _mm512_load_ps(px), y = _mm512_load_ps(py), z = _mm512_load_ps(pz);
-            const __m512 facing = dot3(_mm512_sub_ps(ex_, x), _mm512_sub_ps(ey_, y), _mm512_sub_ps(ez_, z),
-                                       _mm512_load_ps(nx), _mm512_load_ps(ny), _mm512_load_ps(nz));
-            const __m512 ex = _mm512_sub_ps(x, ex_), ey = _mm512_sub_ps(y, ey_), ez = _mm512_sub_ps(z, ez_);
-            const __m512 dx = dot3(ex, ey, ez, _mm512_set1_ps(rgt.x), _mm512_set1_ps(rgt.y), _mm512_set1_ps(rgt.z));
-            const __m512 dy = dot3(ex, ey, ez, _mm512_set1_ps(up.x), _mm512_set1_ps(up.y), _mm512_set1_ps(up.z));
-            const __m512 dz = dot3(ex, ey, ez, _mm512_set1_ps(fwd.x), _mm512_set1_ps(fwd.y), _mm512_set1_ps(fwd.z));
-            const __m512 inv_z = _mm512_div_ps(_mm512_set1_ps(1.0f), dz);
-            const __m512 fx = _mm512_roundscale_ps(
-                _mm512_add_ps(_mm512_set1_ps(0.5f * fw), _mm512_mul_ps(_mm512_mul_ps(dx, inv_z), _mm512_set1_ps(sx))),
-                _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            const __m512 fy = _mm512_roundscale_ps(
-                _mm512_sub_ps(_mm512_set1_ps(0.5f * fh), _mm512_mul_ps(_mm512_mul_ps(dy, inv_z), _mm512_set1_ps(sy))),
-                _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            const __m512i hits = _mm512_load_si512(hit);
-            __mmask16 ok = _mm512_test_epi32_mask(hits, hits) & _mm512_cmp_ps_mask(facing, zero, _CMP_NLE_UQ);
-            ok &= _mm512_cmp_ps_mask(dz, zero, _CMP_GT_OQ);
-            ok &= _mm512_cmp_ps_mask(fx, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(fx, _mm512_set1_ps(fw), _CMP_LT_OQ);
-            ok &= _mm512_cmp_ps_mask(fy, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(fy, _mm512_set1_ps(fh), _CMP_LT_OQ);
-            // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
-            const __m512i t = _mm512_add_epi32(_mm512_mullo_epi32(_mm512_cvttps_epi32(fy), _mm512_set1_epi32(int(rw))),
-                                               _mm512_cvttps_epi32(fx));
-            _mm512_store_si512(target, _mm512_mask_blend_epi32(ok, _mm512_set1_epi32(int(kNoTarget)), t));
-            _mm512_store_ps(depth, dz);
-        }
-#pragma GCC diagnostic pop
-#elif defined(__AVX2__)
-        // 8 lanes at once: the same operations in the same order as the loop below (GCC 12
-        // keeps that loop scalar: "control flow in loop").
-        const __m256 ex_ = _mm256_set1_ps(eye.x), ey_ = _mm256_set1_ps(eye.y),
-                     ez_ = _mm256_set1_ps(eye.z), zero = _mm256_setzero_ps();
-        const __m256 half_w = _mm256_set1_ps(0.5f * fw), half_h = _mm256_set1_ps(0.5f * fh);
-        const __m256 vfw = _mm256_set1_ps(fw), vfh = _mm256_set1_ps(fh);
-        const __m256 vsx = _mm256_set1_ps(sx), vsy = _mm256_set1_ps(sy);
-        const __m256i vrw = _mm256_set1_epi32(int(rw));
-        auto dot3 = [](__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz) {
-            return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
-                                 _mm256_mul_ps(az, bz));
-        };
-        for (int k = 0; k < 16; k += 8) {
-            const __m256 x = _mm256_load_ps(px + k), y = _mm256_load_ps(py + k),
-                         z = _mm256_load_ps(pz + k);
-            const __m256 facing =
-                dot3(_mm256_sub_ps(ex_, x), _mm256_sub_ps(ey_, y), _mm256_sub_ps(ez_, z),
-                     _mm256_load_ps(nx + k), _mm256_load_ps(ny + k), _mm256_load_ps(nz + k));
-            const __m256 ex = _mm256_sub_ps(x, ex_), ey = _mm256_sub_ps(y, ey_),
-                         ez = _mm256_sub_ps(z, ez_);
-            const __m256 dx = dot3(ex, ey, ez, _mm256_set1_ps(rgt.x), _mm256_set1_ps(rgt.y),
-                                   _mm256_set1_ps(rgt.z));
-            const __m256 dy = dot3(ex, ey, ez, _mm256_set1_ps(up.x), _mm256_set1_ps(up.y),
-                                   _mm256_set1_ps(up.z));
-            const __m256 dz = dot3(ex, ey, ez, _mm256_set1_ps(fwd.x), _mm256_set1_ps(fwd.y),
-                                   _mm256_set1_ps(fwd.z));
-            const __m256 inv_z = _mm256_div_ps(_mm256_set1_ps(1.0f), dz);
-            const __m256 fx = _mm256_floor_ps(
-                _mm256_add_ps(half_w, _mm256_mul_ps(_mm256_mul_ps(dx, inv_z), vsx)));
-            const __m256 fy = _mm256_floor_ps(
-                _mm256_sub_ps(half_h, _mm256_mul_ps(_mm256_mul_ps(dy, inv_z), vsy)));
-            __m256 ok = _mm256_and_ps(
-                _mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(hit + k))),
-                _mm256_cmp_ps(facing, zero, _CMP_NLE_UQ));
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(dz, zero, _CMP_GT_OQ));
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, zero, _CMP_GE_OQ));
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fx, vfw, _CMP_LT_OQ));
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, zero, _CMP_GE_OQ));
-            ok = _mm256_and_ps(ok, _mm256_cmp_ps(fy, vfh, _CMP_LT_OQ));
-            // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
-            const __m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(fy), vrw),
-                                               _mm256_cvttps_epi32(fx));
-            const __m256i tk = _mm256_blendv_epi8(_mm256_set1_epi32(int(kNoTarget)), t,
-                                                  _mm256_castps_si256(ok));
-            _mm256_store_si256(reinterpret_cast<__m256i*>(target + k), tk);
-            _mm256_store_ps(depth + k, dz);
-        }
-#else
-        for (int k = 0; k < 16; ++k) {
-            const Vec3f p{px[k], py[k], pz[k]}, to_eye = eye - p;
-            const float facing = dot(to_eye, Vec3f{nx[k], ny[k], nz[k]});  // <= 0: the other side
-            const Vec3f d = p - eye;
-            const float dx = dot(d, rgt), dy = dot(d, up), dz = dot(d, fwd);
-            const float inv_z = 1.0f / dz;
-            const float fx = std::floor(0.5f * fw + dx * inv_z * sx);
-            const float fy = std::floor(0.5f * fh - dy * inv_z * sy);
-            const bool ok = hit[k] && !(facing <= 0.0f) && dz > 0.0f && fx >= 0.0f && fx < fw &&
-                            fy >= 0.0f && fy < fh;
-            target[k] = ok ? std::uint32_t(fy) * rw + std::uint32_t(fx) : kNoTarget;
-            depth[k] = dz;  // dot(p - eye, fwd): the depth along the right eye's axis
-        }
-#endif
+        project<kWidest>(px, py, pz, nx, ny, nz, hit, target, depth);
         for (std::uint32_t k = 0; k < 16; ++k)
             if (target[k] != kNoTarget) __builtin_prefetch(claims + target[k], 1);
     }
+
+    // The projection of 16 lanes, W at a time (display/lanes.h: the same floats at every
+    // width). A facing test that is NaN does not refuse the claim (!(facing <= 0)).
+// GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics (bug 105593), muted.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+    template <int W>
+    void project(const float* px, const float* py, const float* pz, const float* nx, const float* ny,
+                 const float* nz, const int* hit, std::uint32_t* target, float* depth) const {
+        using L = Lanes<W>;
+        using F = typename L::F;
+        using I = typename L::I;
+        const F ex_(eye.x), ey_(eye.y), ez_(eye.z), zero(0.0f);
+        auto dot3 = [](F ax, F ay, F az, F bx, F by, F bz) { return ax * bx + ay * by + az * bz; };
+        for (int k = 0; k < 16; k += W) {
+            const F x = F::load(px + k), y = F::load(py + k), z = F::load(pz + k);
+            const F facing = dot3(ex_ - x, ey_ - y, ez_ - z, F::load(nx + k), F::load(ny + k), F::load(nz + k));
+            const F ex = x - ex_, ey = y - ey_, ez = z - ez_;
+            const F dx = dot3(ex, ey, ez, F(rgt.x), F(rgt.y), F(rgt.z));
+            const F dy = dot3(ex, ey, ez, F(up.x), F(up.y), F(up.z));
+            const F dz = dot3(ex, ey, ez, F(fwd.x), F(fwd.y), F(fwd.z));  // depth along the right eye's axis
+            const F inv_z = F(1.0f) / dz;
+            const F fx = floor(F(0.5f * fw) + dx * inv_z * F(sx));
+            const F fy = floor(F(0.5f * fh) - dy * inv_z * F(sy));
+            const auto ok = nonzero(I::load(hit + k)) & !(facing <= zero) & (dz > zero) & (fx >= zero) &
+                            (fx < F(fw)) & (fy >= zero) & (fy < F(fh));
+            // Where ok, fx and fy are integers in [0, 2^31): the conversion is exact.
+            L::select(ok, to_int(fy) * I(std::int32_t(rw)) + to_int(fx), I(std::int32_t(kNoTarget)))
+                .store(target + k);
+            dz.store(depth + k);
+        }
+    }
+#pragma GCC diagnostic pop
 
     // The right pixels a thread may claim without a compare-and-swap. With rows_aligned (the
     // right eye is the left one moved along their common right axis, so a point projects
