@@ -218,11 +218,11 @@ private:
     // Lane by lane: every packet but the deferred ones.
     [[gnu::noinline]] void other_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
                                         const RTCRayHit16& h);
-    void gather_lanes(std::size_t row_start, std::uint32_t n, const int* valid, const RTCRayHit16& h);
-    void light_lanes(const RTCRayHit16& h);
-    void map_lanes(std::uint32_t i0);
-    void shade_room_lanes(std::size_t row_start);
-    void queue_painting_lanes(std::size_t row_start, std::uint32_t i0);
+    void gather_lanes(PacketLanes& pk, std::size_t row_start, std::uint32_t n, const int* valid, const RTCRayHit16& h);
+    void light_lanes(PacketLanes& pk, const RTCRayHit16& h);
+    void map_lanes(PacketLanes& pk, std::uint32_t i0);
+    void shade_room_lanes(const PacketLanes& pk, std::size_t row_start);
+    void queue_painting_lanes(const PacketLanes& pk, std::size_t row_start, std::uint32_t i0);
     // reuse: the right eye's edge release and its claimed pixels.
     void release_row(std::size_t row);
     void reuse_row(std::size_t row);
@@ -252,7 +252,6 @@ private:
     std::array<SurfaceLight, 16> lights;
     LaneLight lane_light;
     LatticeLanes lattice;
-    PacketLanes pk;
     std::size_t batch_count = 0;  // deferred packets waiting in sc.packets
     alignas(64) int all_hits[16];
 };
@@ -527,11 +526,12 @@ void EyeChunk::shade_batch(std::size_t count) {
 // deferral sit in cast_rows' loop without this body's register saves.
 void EyeChunk::other_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, const int* valid,
                             const RTCRayHit16& h) {
+    PacketLanes pk;  // on this call's stack: no store through the chunk's pointers can reach it
     back_sides(h, pk.back);
     if (keep_hits || claim || !baked)
         hit_points(h, pk.back, claim || !baked, pk.hx, pk.hy, pk.hz, pk.nx, pk.ny, pk.nz);
     const std::size_t row_start = row * w + i0;
-    gather_lanes(row_start, n, valid, h);
+    gather_lanes(pk, row_start, n, valid, h);
     // The right eye's claims, projected while the hits are in registers and made after the
     // lighting call (their cache lines fetched meanwhile).
     for (std::uint32_t k = 0; k < 16; ++k) pk.hit[k] = k < n && valid[k] && h.hit.geomID[k] != kNoHit ? -1 : 0;
@@ -540,14 +540,14 @@ void EyeChunk::other_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, 
         claim->project16(pk.hx, pk.hy, pk.hz, pk.nx, pk.ny, pk.nz, pk.hit, pk.claim_target, pk.claim_depth);
         lap(t_reuse);
     }
-    light_lanes(h);
+    light_lanes(pk, h);
     lap(t_shade);
     if (claim && pk.m) {
         claim->claim16(pk.claim_target, pk.claim_depth, std::uint32_t(row_start),
                        claim->claim_rows(rows_aligned, row, rb, re));
         lap(t_reuse);
     }
-    map_lanes(i0);
+    map_lanes(pk, i0);
     if (pk.m && lanes16) {
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
         lattice.blend16(*baked, lane_light);
@@ -555,8 +555,8 @@ void EyeChunk::other_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, 
     } else if (pk.m && baked) {
         lattice.blend(*baked, lane_light);
     }
-    shade_room_lanes(row_start);
-    queue_painting_lanes(row_start, i0);
+    shade_room_lanes(pk, row_start);
+    queue_painting_lanes(pk, row_start, i0);
     lap(t_vt);
 }
 
@@ -564,7 +564,7 @@ void EyeChunk::other_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, 
 // needs no compaction, and on a painting no gathering of the painting lanes; otherwise the
 // hit lanes in order, misses shaded black, and for a lighting that is not a baked lattice
 // its queries.
-void EyeChunk::gather_lanes(std::size_t row_start, std::uint32_t n, const int* valid, const RTCRayHit16& h) {
+void EyeChunk::gather_lanes(PacketLanes& pk, std::size_t row_start, std::uint32_t n, const int* valid, const RTCRayHit16& h) {
     // The buffers and the counts in restrict locals: through the members, every store forced
     // their reload (it might alias them).
     unsigned* __restrict const geom_out = g.geom.data();
@@ -626,7 +626,7 @@ void EyeChunk::gather_lanes(std::size_t row_start, std::uint32_t n, const int* v
 // light: the hits' light per lane: the baked lattice read in lanes (its points fetched now,
 // blended after the plane map), else the lighting's batch call, its records spread onto
 // their lanes.
-void EyeChunk::light_lanes(const RTCRayHit16& h) {
+void EyeChunk::light_lanes(PacketLanes& pk, const RTCRayHit16& h) {
     LaneLight& ll = lane_light;
     const std::uint32_t m = pk.m;
     if (m && lanes16) {
@@ -649,7 +649,7 @@ void EyeChunk::light_lanes(const RTCRayHit16& h) {
 
 // map: the painting lanes mapped to uv and level from their columns' screen x in runs of one
 // painting, in SIMD lanes (PlaneMap::map_columns).
-void EyeChunk::map_lanes(std::uint32_t i0) {
+void EyeChunk::map_lanes(PacketLanes& pk, std::uint32_t i0) {
     std::uint32_t np = 0;
     const bool dense_painting = pk.dense && pk.lane_pl[0] >= 0;
     if (dense_painting) {
@@ -678,7 +678,7 @@ void EyeChunk::map_lanes(std::uint32_t i0) {
 }
 
 // shade: the room lanes' radiance, albedo x irradiance / pi + emission.
-void EyeChunk::shade_room_lanes(std::size_t row_start) {
+void EyeChunk::shade_room_lanes(const PacketLanes& pk, std::size_t row_start) {
     const LaneLight& ll = lane_light;
     float* __restrict const lod_out = g.lod.data();
     float* __restrict const rgb_out = rgb;
@@ -704,7 +704,7 @@ void EyeChunk::shade_room_lanes(std::size_t row_start) {
 
 // The painting lanes' levels (with the bias; a non-finite level samples level 0) stored,
 // their texels queued, and their light kept for the right eye.
-void EyeChunk::queue_painting_lanes(std::size_t row_start, std::uint32_t i0) {
+void EyeChunk::queue_painting_lanes(const PacketLanes& pk, std::size_t row_start, std::uint32_t i0) {
     const LaneLight& ll = lane_light;
     float* __restrict const lod_out = g.lod.data();
     Vec3f* __restrict const scale_out = keep_light ? g.scale.data() : nullptr;
