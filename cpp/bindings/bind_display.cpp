@@ -54,7 +54,7 @@ void bind_display_pass(nb::module_& m) {
     nb::class_<DisplayPass>(m, "DisplayPass",
         "The full-resolution display pass: primary rays, trilinear VT albedo at the pixel's\n"
         "level of detail, times the lighting; render_stereo reuses the left eye's hits in the\n"
-        "right eye (seed 001 3.3). Keeps its buffers between frames; not reentrant.")
+        "right eye (VR-photon-mapping §3.3). Keeps its buffers between frames; not reentrant.")
         .def(nb::init<>())
         .def("render", [](DisplayPass& d, const ExhibitionScene& scene, const DisplayLighting& lighting,
                           const VirtualTexture& vt, const Camera& eye, bool srgb_albedo,

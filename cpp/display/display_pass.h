@@ -3,7 +3,7 @@
 // the pixel's level of detail (trilinear), times the irradiance the scene supplies (baked or
 // constant), plus emission; room surfaces the same with their own albedo.
 //
-// Stereo reuse (seed 001 §3.3, applied to display): every left-eye hit that faces the right
+// Stereo reuse (VR-photon-mapping §3.3, applied to display): every left-eye hit that faces the right
 // eye is projected into the right image (Camera::project, eqs. 3-5) and claims that pixel with
 // an atomic compare-and-swap on (depth, left pixel); the nearest claim wins. Claimed pixels
 // on a depth edge of the claimed buffer are released again (a far sample must not show through

@@ -22,7 +22,7 @@ constexpr std::uint64_t kUnclaimed = ~std::uint64_t(0);
 constexpr std::size_t kReleaseChunkRows = 16;
 
 // The left eye's hits projected into the right eye, 16 lanes (one packet) at a time, and
-// their claims on the right pixels. The projection is Camera::project (seed 001 eqs. 3-5)
+// their claims on the right pixels. The projection is Camera::project (VR-photon-mapping eqs. 3-5)
 // with its constants hoisted and one division per point: pixel = floor((x / (z tan_x) + 1)
 // w / 2), floor((1 - y / (z tan_y)) h / 2); a hit claims that pixel if it faces the right eye
 // and projects into its image. The nearest claim per right pixel wins: depth along the right

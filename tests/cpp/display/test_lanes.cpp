@@ -62,7 +62,7 @@ TEST(Lanes, ClaimProjectionIsTheSameAtEveryWidth) {
         alignas(64) float depth[16];
         c.project<1>(p.px, p.py, p.pz, p.nx, p.ny, p.nz, p.hit, target, depth);
         for (int k = 0; k < 16; ++k) (target[k] == ClaimProjection::kNoTarget ? refused : claimed) += 1;
-        // Against Camera::project (seed 001 eqs. 3-5) for a claimed lane.
+        // Against Camera::project (VR-photon-mapping eqs. 3-5) for a claimed lane.
         for (int k = 0; k < 16; ++k) {
             if (target[k] == ClaimProjection::kNoTarget) continue;
             const Vec3d q = Vec3d(p.px[k], p.py[k], p.pz[k]) - right.position;
