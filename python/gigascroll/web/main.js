@@ -5,7 +5,8 @@
 //
 // URL parameters: camera=x,y,z,tx,ty,tz[,fov] fixes the view (`gigascroll render --camera`'s
 // convention); stereo=1 side-by-side; magnifier=1; stats=1; ipd=metres; size=WxH a fixed
-// canvas size in pixels (tests). Keys: WASD/QE walk, drag to look, M magnifier, V stereo,
+// canvas size in pixels (tests); multiview=0 draws a pass per eye even where OVR_multiview2
+// exists (multiview.js). Keys: WASD/QE walk, drag to look, M magnifier, V stereo,
 // I stats panel. window.gigascroll is the test hook (see expose()).
 
 import { DEFAULT_FOV, lookAt, anglesOf, parseCameraParam, vec3 } from './camera.js';
@@ -17,6 +18,8 @@ import { Controls } from './controls.js';
 import { XrPresenter, xrAvailable } from './xr.js';
 import { DEFAULT_IPD, desktopViews } from './desktop_views.js';
 import { VirtualTexture } from './vt/virtual_texture.js';
+import { MultiviewTarget, multiviewViews } from './multiview.js';
+import { GpuTimer } from './gpu_timer.js';
 
 const FEEDBACK_REDUCTION = 8;   // eyes' feedback at 1/8 resolution, the magnifier's at full
 const { dot, sub } = vec3;
@@ -33,8 +36,9 @@ function options(search) {
   if (q.get('size') && !size) throw new Error(`?size wants WxH, got "${q.get('size')}"`);
   const ipd = q.get('ipd') === null ? DEFAULT_IPD : Number(q.get('ipd'));
   if (!(ipd >= 0 && ipd < 1)) throw new Error(`?ipd wants metres in [0, 1), got "${q.get('ipd')}"`);
+  if (![null, '0', '1'].includes(q.get('multiview'))) throw new Error(`?multiview wants 0 or 1, got "${q.get('multiview')}"`);
   return { camera: parseCameraParam(search), stereo: q.get('stereo') === '1', magnifier: q.get('magnifier') === '1',
-           stats: q.get('stats') === '1', ipd, size: size ? [Number(size[1]), Number(size[2])] : null };
+           stats: q.get('stats') === '1', ipd, multiview: q.get('multiview') !== '0', size: size ? [Number(size[1]), Number(size[2])] : null };
 }
 
 class App {
@@ -47,6 +51,8 @@ class App {
     if (opts.stats) this.stats.toggle();
     this.stats.track(vt);
     this.stereo = opts.stereo;
+    this.multiview = opts.multiview ? makeMultiview(gl, this.room) : null;
+    this.timer = new GpuTimer(gl);
     this.frame = 0;
     this.afterFrame = null;   // test hook: fn({frame, gl, canvas, views}) after each frame
     this.captures = [];       // capture()'s waiting promises
@@ -64,6 +70,9 @@ class App {
   // One frame of any mode: views (camera.js view records) into framebuffer (null: canvas).
   drawFrame(views, framebuffer, now) {
     const { gl, vt, room, magnifier } = this;
+    const both = this.multiview !== null && multiviewViews(views);
+    this.timer.poll();
+    this.timer.begin(!both);   // a multiview pass cannot be timed (gpu_timer.js)
     vt.beginFrame(this.frame);
     views.forEach((v, i) => this.#feedback(i, v, FEEDBACK_REDUCTION));
     const centre = centreFrame(views);
@@ -72,11 +81,18 @@ class App {
       this.#feedback(MAGNIFIER_VIEW, lens, 1);
       magnifier.render(room, lens);
     }
+    if (both) {
+      this.multiview.bind(views[0].viewport[2], views[0].viewport[3]);
+      room.drawViews(views);
+      this.multiview.blit(views, framebuffer);
+    }
     gl.bindFramebuffer(gl.FRAMEBUFFER, framebuffer);
     for (const v of views) {
-      room.drawView(v);
+      if (!both) room.drawView(v);
       if (lens) magnifier.composite(v, dot(sub(v.position, centre.position), centre.right));
     }
+    this.timer.end();
+    this.stats.gpu = { multiview: both, gpuMs: this.timer.ms };
     const feedbackViews = [...views.keys(), ...(lens ? [MAGNIFIER_VIEW] : [])];
     this.stats.update(this.frame, now, lens ? [...views, lens] : views, feedbackViews, vt.stats());
     this.afterFrame?.({ frame: this.frame, gl, canvas: this.canvas, views });
@@ -127,6 +143,20 @@ class App {
     const w = size ? size[0] : Math.max(1, Math.round(c.clientWidth * devicePixelRatio));
     const h = size ? size[1] : Math.max(1, Math.round(c.clientHeight * devicePixelRatio));
     if (c.width !== w || c.height !== h) Object.assign(c, { width: w, height: h });
+  }
+}
+
+// The two-view target where the browser has OVR_multiview2 and the room's two-view programs
+// compile, else null (the pass per eye).
+function makeMultiview(gl, room) {
+  const ext = gl.getExtension('OVR_multiview2');
+  if (!ext) return null;
+  try {
+    room.enableMultiview();
+    return new MultiviewTarget(gl, ext);
+  } catch (e) {
+    console.warn(`OVR_multiview2: ${e.message}; drawing a pass per eye`);
+    return null;
   }
 }
 

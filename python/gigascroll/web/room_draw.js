@@ -7,6 +7,7 @@ import { ATTRIBUTES, HEADER, PAINTING_FS, ROOM_FS, ROOM_VS, displayMapping } fro
 import { makeProgram } from './gl_util.js';
 import { FEEDBACK_FS } from './feedback.glsl.js';
 import { openEdges } from './crack_fill.js';
+import { multiviewSource } from './multiview.js';
 
 function upload(gl, mesh) {
   const vao = gl.createVertexArray();
@@ -91,6 +92,17 @@ export class RoomRenderer {
     // Room surfaces first: in the feedback pass they lay the depth that hides paintings.
     this.meshes = meshes.map((m) => upload(gl, m)).sort((a, b) => (a.painting >= 0) - (b.painting >= 0));
     this.triangles = this.meshes.reduce((n, m) => n + m.count / 3, 0);
+    this.sources = { vs, room: HEADER + map + ROOM_FS, painting: HEADER + vt.glsl + map + PAINTING_FS };
+    this.multiview = null;   // the two-view programs once enableMultiview() made them
+  }
+
+  // Builds the display programs for OVR_multiview2 (multiview.js); throws if the browser
+  // cannot compile them (the caller then keeps the pass per eye).
+  enableMultiview() {
+    const { gl, sources: s } = this;
+    const vs = multiviewSource(s.vs, HEADER, true), fs = (src) => multiviewSource(src, HEADER, false);
+    this.multiview = { room: makeProgram(gl, vs, fs(s.room), 'multiview room'),
+                       painting: makeProgram(gl, vs, fs(s.painting), 'multiview painting') };
   }
 
   // The display pass of one view into the bound framebuffer: clears its viewport, draws the
@@ -99,15 +111,39 @@ export class RoomRenderer {
     const gl = this.gl;
     this.#begin(view);
     const viewProj = multiply(view.proj, view.view);
+    this.#drawMeshes(this, (u) => {
+      gl.uniformMatrix4fv(u.uViewProj, false, viewProj);
+      gl.uniform3fv(u.uEye, view.position);
+    }, (m) => outsideFrustum(viewProj, m.corners));
+  }
+
+  // Both views (of one size) in one OVR_multiview2 pass into the bound two-layer target
+  // (multiview.js, after enableMultiview()): gl_ViewID_OVR picks each view's matrices and eye;
+  // a mesh is skipped only when it lies outside both views' frusta.
+  drawViews(views) {
+    const gl = this.gl, viewProjs = views.map((v) => multiply(v.proj, v.view));
+    this.#begin({ viewport: [0, 0, views[0].viewport[2], views[0].viewport[3]] });
+    const matrices = new Float32Array(32), eyes = new Float32Array(6);
+    viewProjs.forEach((m, k) => matrices.set(m, 16 * k));
+    views.forEach((v, k) => eyes.set(v.position, 3 * k));
+    this.#drawMeshes(this.multiview, (u) => {
+      gl.uniformMatrix4fv(u.uViewProjs, false, matrices);
+      gl.uniform3fv(u.uEyes, eyes);
+    }, (m) => viewProjs.every((vp) => outsideFrustum(vp, m.corners)));
+  }
+
+  // The room surfaces, the paintings and the crack-fill lines with programs {room, painting};
+  // setView(uniforms) sets a program's view uniforms; hidden(mesh) culls.
+  #drawMeshes(programs, setView, hidden) {
+    const gl = this.gl;
     this.drawn = 0;
-    for (const [prog, paintings] of [[this.room, false], [this.painting, true]]) {
+    for (const [prog, paintings] of [[programs.room, false], [programs.painting, true]]) {
       gl.useProgram(prog.program);
       if (paintings) this.vt.bind(prog.program);
-      gl.uniformMatrix4fv(prog.uniforms.uViewProj, false, viewProj);
+      setView(prog.uniforms);
       gl.uniform1f(prog.uniforms.uExposure, this.exposure);
-      gl.uniform3fv(prog.uniforms.uEye, view.position);
       for (const m of this.meshes) {
-        if ((m.painting >= 0) !== paintings || outsideFrustum(viewProj, m.corners)) continue;
+        if ((m.painting >= 0) !== paintings || hidden(m)) continue;
         ++this.drawn;
         if (paintings) gl.uniform1i(prog.uniforms.uPainting, m.painting);
         else gl.uniform3fv(prog.uniforms.uAlbedo, m.albedo);
@@ -115,7 +151,7 @@ export class RoomRenderer {
         this.#draw(m);
       }
     }
-    this.#fillCracks(viewProj);
+    this.#fillCracks(programs.room, hidden);
     gl.bindVertexArray(null);
   }
 
@@ -142,12 +178,12 @@ export class RoomRenderer {
 
   // The room surfaces' open edges as lines, after every triangle: they land only where the
   // depth test finds nothing nearer, i.e. in the cracks (crack_fill.js).
-  #fillCracks(viewProj) {
-    const gl = this.gl, prog = this.room;
+  #fillCracks(prog, hidden) {
+    const gl = this.gl;
     gl.useProgram(prog.program);
     gl.uniform1i(prog.uniforms.uLines, 1);
     for (const m of this.meshes) {
-      if (!m.lines || outsideFrustum(viewProj, m.corners)) continue;
+      if (!m.lines || hidden(m)) continue;
       gl.uniform3fv(prog.uniforms.uAlbedo, m.albedo);
       gl.uniform3fv(prog.uniforms.uEmission, m.emission);
       gl.bindVertexArray(m.lines.vao);

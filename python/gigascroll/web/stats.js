@@ -29,6 +29,9 @@ export class Stats {
     this.uploadsTotal = 0;
     this.readbackFrames = new Map();  // feedback view -> frame of its newest processed readback
     this.numbers = {};
+    // Set by the app before update(): whether the frame went through one multiview pass and
+    // the GPU's median frame time in ms (gpu_timer.js; null without a timer query).
+    this.gpu = { multiview: false, gpuMs: null };
   }
 
   // Wraps vt.feedback.poll to learn which frame each processed readback was drawn in.
@@ -82,6 +85,8 @@ export class Stats {
       lastUploadFrame: this.lastUploadFrame,
       framesStopToExact: this.lastStopToExact,
       framesStopToConfirmed: this.lastStopToConfirmed ?? null,
+      multiview: this.gpu.multiview,
+      gpuMs: this.gpu.gpuMs,
     };
     if (this.panel && !this.panel.hidden) this.panel.textContent = this.text();
   }
@@ -91,6 +96,7 @@ export class Stats {
     return [
       `fps            ${f(n.fps)}`,
       `feedback ms    ${f(n.feedbackMs, 2)}`,
+      `gpu ms         ${f(n.gpuMs, 2)}${n.multiview ? ' (multiview)' : ''}`,
       `requests       ${n.requests}`,
       `in flight      ${n.inFlight}`,
       `uploads/frame  ${n.uploads}`,

@@ -1,7 +1,8 @@
 // WebXR: an `immersive-vr` session behind the "Enter VR" button. Each XR frame's views (one
 // per eye: its pose, projection matrix and viewport in the base layer's framebuffer) become
 // the same view records the desktop draws (camera.js makeView's shape), drawn by the same
-// per-view function, one pass per eye (OVR_multiview2 would save draw calls; the room has few).
+// per-view function: both eyes in one OVR_multiview2 pass where the browser has it
+// (multiview.js), else one pass per eye.
 //
 // The room's coordinates are placed on the headset's: the reference space's origin (the
 // floor under the visitor with 'local-floor', the head with 'local') is put at the room's
