@@ -41,6 +41,8 @@ def test_short_walk_in_chromium():
     assert f["bytes_per_frame"] * (f["frames"] - 1) % TILE_BYTES == 0
     assert 0 < f["hit_rate"] <= 1 and f["tiles_uploaded_per_frame_max"] <= 16
     assert "tiles uploaded a frame" in walk_text(f)
+    assert f["gpu_ms_emulated"] is None or f["gpu_ms_emulated"] > 0
+    assert "GPU time (timer query) / still frame time" in walk_text(f)
 
 
 def test_walk_option_refused(tmp_path, gigascroll_cli):
