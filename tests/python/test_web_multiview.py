@@ -136,3 +136,30 @@ def test_bad_multiview_parameter(browser, server, value):  # noqa: F811
         assert "?multiview wants 0 or 1" in error and "\n" not in error
     finally:
         page.close()
+
+
+def test_multiview_only_for_two_equal_views(browser, server):  # noqa: F811
+    """multiview.js's choice: one pass only for two views of one size (an odd canvas width's
+    side-by-side halves differ by a pixel: a pass per eye); a shader not written after the
+    one-view HEADER is refused rather than mangled."""
+    page = browser.new_page()
+    try:
+        page.goto(f"{server}/client/index.html?size=32x32")
+        got = page.evaluate("""async () => {
+          const { multiviewViews, multiviewSource } = await import('/client/multiview.js');
+          const v = (x, w, h) => ({ viewport: [x, 0, w, h] });
+          let refused = null;
+          try { multiviewSource('void main() {}', '#version 300 es\\n', true); } catch (e) { refused = e.message; }
+          const vs = multiviewSource('H\\nuniform mat4 uViewProj;\\nuniform vec3 uEye;\\n', 'H\\n', true);
+          return { equal: multiviewViews([v(0, 160, 120), v(160, 160, 120)]),
+                   odd: multiviewViews([v(0, 160, 120), v(160, 161, 120)]),
+                   one: multiviewViews([v(0, 160, 120)]),
+                   three: multiviewViews([v(0, 10, 10), v(10, 10, 10), v(20, 10, 10)]), refused, vs };
+        }""")
+    finally:
+        page.close()
+    assert got["equal"] is True and got["odd"] is False and got["one"] is False and got["three"] is False
+    assert got["refused"] and "HEADER" in got["refused"]
+    vs = got["vs"]
+    assert "#extension GL_OVR_multiview2 : require" in vs and "layout(num_views = 2) in;" in vs
+    assert "uniform mat4 uViewProjs[2];" in vs and "uniform vec3 uEyes[2];" in vs and "uniform mat4 uViewProj;" not in vs
