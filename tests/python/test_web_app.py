@@ -231,8 +231,12 @@ def test_xr_eyes_disparity_and_magnifier(browser, server):  # noqa: F811
         page.wait_for_function("window.fakeXr.framesServed > 2 && window.gigascroll.app.xr.frames > 2")
         wait_exact(page)
         counts = page.evaluate("""async () => {
+          // Three XR frames (however slow the emulation), then both counts at one instant.
           const app = window.gigascroll.app, f0 = app.frame, x0 = app.xr.frames;
-          await new Promise((r) => setTimeout(r, 1000));
+          const t0 = performance.now();
+          while (app.xr.frames - x0 < 3 && performance.now() - t0 < 25000) {
+            await new Promise((r) => setTimeout(r, 20));
+          }
           return [app.frame - f0, app.xr.frames - x0];
         }""")
         plain = decode(page.evaluate("window.gigascroll.capture()"))
