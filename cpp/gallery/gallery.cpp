@@ -430,7 +430,7 @@ void Gallery::light(const VirtualTexture& vt, const LightingSettings& s) {
     // The adaptive grid (the renders' default): its queries walk only the cell rows their
     // sphere touches, over structure-of-arrays copies, and both passes of the surface disc's
     // gather are vectorised on it (the bake's disc gathers were most of the fine end's time
-    // on seed 001's 27 cells). Its build sorts on both cores (the same grid as a serial
+    // on VR-photon-mapping's 27 cells). Its build sorts on both cores (the same grid as a serial
     // build), beside the photon groups for the bake's skip_unlit. Below a few thousand
     // photons both take microseconds, less than handing one to the helper and waiting for it
     // (2^8 photons: 27 against 39 us), so they run in turn.

@@ -1,5 +1,5 @@
 // The gallery: one room in which the paintings of a pack, streamed through the virtual
-// texture, are lit by the room's light (seed 000's paintings and streaming, seed 001's light).
+// texture, are lit by the room's light (VT-mobile-VR's paintings and streaming, VR-photon-mapping's light).
 //
 // One scene, one BVH. Room surfaces (Lambertian triangle meshes with albedo and emission) and
 // painting rectangles are all triangles of one photon `Scene` (photon/scene.h), whose Embree
@@ -13,7 +13,7 @@
 // Light on the paintings (issue 13 §2):
 //  - light(): the photon pass (photon/photon_tracer.h, through Scene::albedo_at) over the
 //    whole room into a PhotonMap (photon/photon_map.h) on the project's adaptive grid
-//    (photon/adaptive_grid.h: seed 001's hash grid with cells sized from the photon density,
+//    (photon/adaptive_grid.h: VR-photon-mapping's hash grid with cells sized from the photon density,
 //    queries walking only the cell rows their sphere or disc touches). A painting's albedo at a
 //    photon's bounce comes from the virtual texture at the painting's finest pinned level, or
 //    a coarser one for wide gathers (see PaintingAlbedo in gallery.cpp), so a red painting
@@ -25,7 +25,7 @@
 //    unoccluded irradiance of the emitters times the visible fraction of its samples).
 //  - Display radiance = albedo x E / pi + emission. A painting's albedo is the VT's trilinear
 //    sample at the pixel's level of detail (kPaintingReflectance x the linearised sRGB texel);
-//    E is direct light (emitter sampling, shadow rays) plus the photon gather (seed 001 eq. 1).
+//    E is direct light (emitter sampling, shadow rays) plus the photon gather (VR-photon-mapping eq. 1).
 //  - bake(): E does not depend on the eye, so it is computed once per lighting on a lattice per
 //    triangle and side (spacing in metres: a triangle whose longest edge is l gets
 //    n = ceil(l / spacing) segments per edge, (n + 1)(n + 2) / 2 points) and interpolated
