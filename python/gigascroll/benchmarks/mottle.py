@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import UserError
 from ..experiments import pyplot, save_figure, write_json
+from .gallery import _ints
 
 ROOMS = ("scroll", "hall", "hall_table", "example")
 # The flat paintings' colour (sRGB8): a light warm grey, albedo about 0.5.
@@ -102,16 +103,6 @@ def camera(gal, name: str, resolution):
     corner = o + 0.8 * s.width_m * u + s.height_m * v
     eye = corner + np.array([0.0, 0.6, 0.5])
     return gal.camera(resolution, fov=35.0, eye=tuple(eye), target=tuple(corner))
-
-
-def _ints(text: str, what: str) -> list[int]:
-    try:
-        values = [int(x) for x in text.split(",") if x]
-    except ValueError:
-        raise UserError(f"{what} is a comma-separated list of integers, got {text!r}") from None
-    if not values or min(values) < 1:
-        raise UserError(f"{what} needs positive integers, got {text!r}")
-    return values
 
 
 def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> dict:

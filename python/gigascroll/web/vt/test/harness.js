@@ -137,13 +137,16 @@ export function viewProjection(camera, w, h) {
   return m;
 }
 
-let feedbackProgram = null, quads = null;
-function drawFeedback(views, placements) {
-  feedbackProgram ||= compile(HEADER + `
+// The vertex shader of both test passes: a painting's quad with its uv.
+const QUAD_VERTEX = HEADER + `
 in vec3 aPosition; in vec2 aUv;
 uniform mat4 uViewProj;
 out vec2 vUv;
-void main() { vUv = aUv; gl_Position = uViewProj * vec4(aPosition, 1.0); }`,
+void main() { vUv = aUv; gl_Position = uViewProj * vec4(aPosition, 1.0); }`;
+
+let feedbackProgram = null, quads = null;
+function drawFeedback(views, placements) {
+  feedbackProgram ||= compile(QUAD_VERTEX,
     HEADER + vt.glsl + `
 uniform int uPainting;
 in vec2 vUv;
@@ -165,11 +168,7 @@ const tick = () => new Promise((r) => requestAnimationFrame(() => r()));
 // rows bottom up (a test's synchronous readback, not the frame path).
 let displayProgram = null;
 function render(view, placements) {
-  displayProgram ||= compile(HEADER + `
-in vec3 aPosition; in vec2 aUv;
-uniform mat4 uViewProj;
-out vec2 vUv;
-void main() { vUv = aUv; gl_Position = uViewProj * vec4(aPosition, 1.0); }`,
+  displayProgram ||= compile(QUAD_VERTEX,
     HEADER + vt.glsl + `
 uniform int uPainting;
 in vec2 vUv;
