@@ -88,3 +88,45 @@ def test_no_iiif_and_a_bad_base_url(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "IIIF" in err[0]
     assert not (tmp_path / "b").exists()
+
+
+COPIES = SHOW + """
+[[paintings]]
+title = "Red study, second copy"
+image = "red.png"
+width_cm = 80
+height_cm = 60
+hang = { wall = 2, along_m = 2.0 }
+"""
+
+
+def _pack_files(pack_dir):
+    return {p.name: p.read_bytes() for p in sorted(pack_dir.iterdir()) if p.is_file()}
+
+
+def test_copies_are_instances_and_workers_build_the_same_pack(tmp_path):
+    """Two paintings of one image file: the second is an instance (stored once, the same
+    samples); `--workers 1` (Dask) builds the pack byte for byte as the in-process build."""
+    from gigascroll import TilePack
+
+    write_images(tmp_path)
+    (tmp_path / "show.toml").write_text(COPIES)
+    assert main(["exhibit", "build", str(tmp_path / "show.toml"), "-o", str(tmp_path / "a"),
+                 "--no-bake", "--no-iiif"]) == 0
+    pack = TilePack(tmp_path / "a" / "paintings.pack")
+    byname = {p.name: p for p in pack.paintings}
+    original, copy = byname["red-study"], byname["red-study-second-copy"]
+    manifest = json.loads((tmp_path / "a" / "paintings.pack" / "manifest.json").read_text())
+    entries = {e["name"]: e for e in manifest["paintings"]}
+    assert entries["red-study-second-copy"].get("instance_of") in ("red-study", 0)
+    assert "instance_of" not in entries["red-study"]
+    assert (copy.width, copy.height) == (original.width, original.height)
+    for level in range(original.levels):
+        nx, ny = original.level_tiles[level]
+        for ty in range(ny):
+            for tx in range(nx):
+                assert (pack.read_tile(copy, level, tx, ty)
+                        == pack.read_tile(original, level, tx, ty)).all()
+    assert main(["exhibit", "build", str(tmp_path / "show.toml"), "-o", str(tmp_path / "b"),
+                 "--no-bake", "--no-iiif", "--workers", "1"]) == 0
+    assert _pack_files(tmp_path / "b" / "paintings.pack") == _pack_files(tmp_path / "a" / "paintings.pack")

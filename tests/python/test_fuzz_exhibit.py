@@ -177,3 +177,13 @@ def test_random_iiif_base_urls(fork_worker, show_files, base):
         assert not out.exists()
     else:
         assert json.loads((out / "iiif" / "manifest.json").read_text())["id"].endswith("/manifest.json")
+
+
+@pytest.mark.parametrize("workers", ["-1", "1025", "x", "1e3", "nan", ""])
+def test_bad_workers_values(fork_worker, show_files, workers):
+    out = show_files / f"workers{next(_counter)}"
+    argv = ["exhibit", "build", str(show_files / "show.toml"), "-o", str(out), "--no-bake",
+            "--no-iiif", f"--workers={workers}"]
+    o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=120)
+    assert cli_message_ok(o) is None, o.describe()
+    assert o.code == 2 and not out.exists()

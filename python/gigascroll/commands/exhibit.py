@@ -34,6 +34,9 @@ def register(sub) -> None:
     b.add_argument("--no-iiif", action="store_true",
                    help="skip the IIIF export (Image API tiles and Presentation 3.0 manifest)")
     b.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    b.add_argument("--workers", type=int, default=0,
+                   help="pack on this many Dask workers (a local cluster, as pack --workers; "
+                        "default 0: in this process)")
     b.set_defaults(func=run)
 
 
@@ -57,10 +60,12 @@ def run(args) -> int:
     from ..outputs import signals_interrupt
     if not 0 <= args.threads <= 4096:
         raise UserError("--threads must be in [0, 4096]")
+    if not 0 <= args.workers <= 1024:
+        raise UserError("--workers must be in [0, 1024]")
     try:
         with signals_interrupt():
             record = build_show(args.exhibition, args.output, progress=True,
-                                threads=args.threads,
+                                threads=args.threads, workers=args.workers,
                                 bake=None if args.no_bake else _bake(args.threads),
                                 iiif_base=None if args.no_iiif else args.base_url)
     except ExhibitionError as e:

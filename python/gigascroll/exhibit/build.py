@@ -39,10 +39,17 @@ IIIF_NAME = "iiif"  # the IIIF Image API tiles and the Presentation 3.0 manifest
 PACK_SETTINGS = {"tile_size": 128, "border": 4, "codec": "raw", "format": 1}
 
 
-def pack_inputs(ex: Exhibition) -> tuple[list, list[str]]:
-    """The show's pack inputs (image paths, label arrays) and their names, in pack order."""
-    inputs, names = [], []
+def pack_inputs(ex: Exhibition) -> tuple[list, list[str], list[tuple[str, str]]]:
+    """The show's pack inputs (image paths, label arrays), their names, in pack order, and the
+    instances: a painting whose image file another painting already shows is stored once, as
+    an instance of that painting (its own name and place, the same tiles)."""
+    inputs, names, instances, first = [], [], [], {}
     for p in ex.paintings:
+        key = os.path.realpath(p.image)
+        if key in first:
+            instances.append((p.name, first[key]))
+            continue
+        first[key] = p.name
         inputs.append(p.image)
         names.append(p.name)
     if ex.labels and "walls" in ex.room:
@@ -50,13 +57,16 @@ def pack_inputs(ex: Exhibition) -> tuple[list, list[str]]:
             if p.hang is not None and p.hang.wall is not None:
                 inputs.append(label_image(p))
                 names.append(f"label-{p.name}")
-    return inputs, names
+    return inputs, names, instances
 
 
-def content_hash(inputs, names) -> str:
-    """32 hex digits over the inputs' bytes (files streamed), the names and PACK_SETTINGS."""
+def content_hash(inputs, names, instances=()) -> str:
+    """32 hex digits over the inputs' bytes (files streamed), the names, the instances and
+    PACK_SETTINGS."""
     h = hashlib.blake2b(digest_size=16, person=b"gigascroll-show")
-    h.update(json.dumps({"names": names, "settings": PACK_SETTINGS}).encode())
+    h.update(json.dumps({"names": names, "settings": PACK_SETTINGS,
+                         **({"instances": [list(i) for i in instances]} if instances else {})
+                         }).encode())
     for x in inputs:
         if isinstance(x, str):
             with open(x, "rb") as f:
@@ -117,12 +127,13 @@ def _tour(ex: Exhibition, spec):
     return tour
 
 def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
-               progress: bool = False, threads: int = 0) -> dict:
+               progress: bool = False, threads: int = 0, workers: int = 0) -> dict:
     """Builds the show of `exhibition` (a path or an Exhibition) into `out`; returns the
     build's record (build.json). `bake(gallery, spec, pack, directory)`, when given, bakes
     the light into `directory` and returns its figures. `iiif_base`, when given, is the URL
     at which the show's iiif/ folder will be served: its paintings are exported there as IIIF
-    Image API tiles with a Presentation 3.0 manifest (gigascroll.iiif_exhibition)."""
+    Image API tiles with a Presentation 3.0 manifest (gigascroll.iiif_exhibition).
+    `workers` > 0 packs on that many Dask workers (a LocalCluster), as `pack --workers`."""
     from ..gallery import Gallery
     from ..pack import TilePack, build_pack
     t0 = time.perf_counter()
@@ -146,15 +157,16 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
     try:
         record = {"exhibition": ex.path, "packed": False, "reused_pack": False}
         if given_pack is None:
-            inputs, names = pack_inputs(ex)
-            digest = content_hash(inputs, names)
+            inputs, names, instances = pack_inputs(ex)
+            digest = content_hash(inputs, names, instances)
             if previous and previous.get("pack_hash") == digest \
                     and (out / PACK_NAME / "manifest.json").is_file():
                 _link_tree(out / PACK_NAME, tmp / PACK_NAME)
                 record["reused_pack"] = True
             else:
                 build_pack(inputs, tmp / PACK_NAME, names=names, progress=progress,
-                           threads=threads, tile_size=PACK_SETTINGS["tile_size"],
+                           threads=threads, workers=workers, instances=instances or None,
+                           tile_size=PACK_SETTINGS["tile_size"],
                            border=PACK_SETTINGS["border"], codec=PACK_SETTINGS["codec"])
                 record["packed"] = True
             pack_path = PACK_NAME
