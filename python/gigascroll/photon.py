@@ -309,23 +309,13 @@ def render(scene: Scene, camera: Camera, photons: int = 1 << 18, radius: float |
     coarsely (8 sectors, up to 32 rays): a pass weighs 1 / passes in the image, so their larger
     edge bias fades while the first passes, at the largest radii, get cheap.
     """
-    from .gallery import Gallery
-
-    if isinstance(scene, Gallery):  # a gallery still (Gallery.still)
-        lacks = {"progressive": progressive, "snapshots": bool(snapshots), "final_gather": final_gather,
-                 "grid": grid != "adaptive", "gather": gather != "radius", "kernel": kernel != "box",
-                 "pipeline": pipeline != "fused", "cooperative": cooperative, "direct": not direct}
-        given = [name for name, on in lacks.items() if on]
-        if given:
-            raise ValueError(f"{', '.join(given)}: a Gallery's still does not have "
-                             f"{'this option' if len(given) == 1 else 'these options'} (the "
-                             "gallery's gather is a box radius gather on the adaptive grid, "
-                             "one pass, direct light always)")
-        options = {"radius": radius, "disc": disc, "light_samples": light_samples}
-        image = scene.still(camera, lighting=lighting, spp=spp, photons=photons, seed=seed,
-                            threads=threads, indirect=indirect,
-                            **{k: v for k, v in options.items() if v is not None})
-        return (image, dict(scene.stats)) if return_stats else image
+    if isinstance(scene, _core._Gallery):  # a gigascroll.Gallery: its still (the gallery's rules)
+        return scene.render_still(
+            camera, lighting=lighting, return_stats=return_stats, photons=photons, radius=radius,
+            grid=grid, gather=gather, spp=spp, seed=seed, kernel=kernel,
+            light_samples=light_samples, pipeline=pipeline, cooperative=cooperative, direct=direct,
+            indirect=indirect, threads=threads, progressive=progressive, snapshots=snapshots,
+            final_gather=final_gather, disc=disc)
     if light_samples is None:
         light_samples = 1
     if disc is None:  # where the options allow it; otherwise their own error message comes first

@@ -110,6 +110,21 @@ def test_nothing_below_the_frame_loop_imports_it():
     assert offenders == []
 
 
+def test_the_layers_below_the_gallery_do_not_import_it():
+    # The flow's lower layers (prepare, determine, load, cache, sample, the photon renderer and
+    # the shared modules) reach nothing above them: not the gallery, the exhibition, the
+    # server, the commands, the benchmarks or the scenarios. gigascroll.render takes a Gallery
+    # through the core type it derives from, not by importing gigascroll.gallery.
+    lower = [m for m in MODULES if m.startswith(("gigascroll.views", "gigascroll.pack"))
+             or m in ("gigascroll.runtime", "gigascroll.photon", "gigascroll.frame_loop",
+                      "gigascroll.errors", "gigascroll.outputs", "gigascroll.display_mapping")]
+    assert "gigascroll.photon" in lower and len(lower) > 10
+    upper = ("gigascroll.gallery", "gigascroll.exhibit", "gigascroll.serve", "gigascroll.commands",
+             "gigascroll.benchmarks", "gigascroll.scenarios", "gigascroll.cli")
+    bad = [f"{a} -> {b}" for a in lower for b in sorted(reachable(a)) if b.startswith(upper)]
+    assert bad == []
+
+
 def test_scenarios_and_benchmarks_do_not_import_each_other():
     scenarios = [m for m in MODULES if m.startswith("gigascroll.scenarios")]
     benchmarks = [m for m in MODULES if m.startswith("gigascroll.benchmarks")]

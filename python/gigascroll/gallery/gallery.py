@@ -352,6 +352,33 @@ class Gallery(_core._Gallery):
             self.bake(progress=progress, **({} if samples is None else {"light_samples": samples}))
         return self.render_display(camera, vt, lighting=lighting)
 
+    def render_still(self, camera: Camera, lighting: str = "baked", return_stats: bool = False, *,
+                     photons: int = 1 << 18, radius=None, grid: str = "adaptive",
+                     gather: str = "radius", spp: int = 1, seed: int = 0, kernel: str = "box",
+                     light_samples=None, pipeline: str = "fused", cooperative: bool = False,
+                     direct: bool = True, indirect: bool = True, threads: int = 0,
+                     progressive: bool = False, snapshots=(), final_gather: bool = False,
+                     disc=None):
+        """`gigascroll.render(gallery, camera, ...)`: the still (`still`) with the photon
+        renderer's options that a gallery has (photons, radius, seed, threads, indirect, disc
+        and light_samples for its photon pass and bake; spp, a square k^2, supersamples);
+        the options it does not have (progressive, another grid, gather, kernel or pipeline,
+        direct=False) raise ValueError rather than being ignored."""
+        lacks = {"progressive": progressive, "snapshots": bool(snapshots), "final_gather": final_gather,
+                 "grid": grid != "adaptive", "gather": gather != "radius", "kernel": kernel != "box",
+                 "pipeline": pipeline != "fused", "cooperative": cooperative, "direct": not direct}
+        given = [name for name, on in lacks.items() if on]
+        if given:
+            raise ValueError(f"{', '.join(given)}: a Gallery's still does not have "
+                             f"{'this option' if len(given) == 1 else 'these options'} (the "
+                             "gallery's gather is a box radius gather on the adaptive grid, "
+                             "one pass, direct light always)")
+        options = {"radius": radius, "disc": disc, "light_samples": light_samples}
+        image = self.still(camera, lighting=lighting, spp=spp, photons=photons, seed=seed,
+                           threads=threads, indirect=indirect,
+                           **{k: v for k, v in options.items() if v is not None})
+        return (image, dict(self.stats)) if return_stats else image
+
     def camera(self, resolution=(256, 256), fov: float = 60.0, eye=None, target=None) -> Camera:
         """A camera at the room's suggested eye and target (or the given ones), y up."""
         spec = self.spec
