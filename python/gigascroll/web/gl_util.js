@@ -60,5 +60,5 @@ export function makeTarget(gl, width, height) {
   const status = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
   gl.bindFramebuffer(gl.FRAMEBUFFER, null);
   if (status !== gl.FRAMEBUFFER_COMPLETE) throw new Error(`offscreen target incomplete (0x${status.toString(16)})`);
-  return { framebuffer, texture, width, height };
+  return { framebuffer, texture, depth, width, height };
 }

@@ -18,6 +18,7 @@
 // A view is {view, camera: [ex, ey, ez, tx, ty, tz, fov], display: [w, h], reduction}; the
 // camera is `gigascroll render --camera`'s convention (vertical fov in degrees, y up). A
 // placement is scene.json's slot: {painting, origin, u_axis, v_axis, width_m, height_m}.
+import { makeTarget } from "../../gl_util.js";
 import { VirtualTexture } from "../virtual_texture.js";
 
 const canvas = document.getElementById("canvas");
@@ -176,16 +177,8 @@ out vec4 outColor;
 void main() { outColor = vtSample(uPainting, vUv, vtLod(uPainting, vUv)); }`);
   quads = null;
   const [w, h] = view.display;
-  const target = gl.createTexture();
-  gl.bindTexture(gl.TEXTURE_2D, target);
-  gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA8, w, h);
-  const depth = gl.createRenderbuffer();
-  gl.bindRenderbuffer(gl.RENDERBUFFER, depth);
-  gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, w, h);
-  const fb = gl.createFramebuffer();
-  gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
-  gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, target, 0);
-  gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depth);
+  const target = makeTarget(gl, w, h);  // the app's offscreen target (gl_util.js)
+  gl.bindFramebuffer(gl.FRAMEBUFFER, target.framebuffer);
   gl.viewport(0, 0, w, h);
   gl.clearColor(0, 0, 0, 0);
   gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
@@ -193,9 +186,9 @@ void main() { outColor = vtSample(uPainting, vUv, vtLod(uPainting, vUv)); }`);
   const out = new Uint8Array(w * h * 4);
   gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, out);
   gl.bindFramebuffer(gl.FRAMEBUFFER, null);
-  gl.deleteFramebuffer(fb);
-  gl.deleteTexture(target);
-  gl.deleteRenderbuffer(depth);
+  gl.deleteFramebuffer(target.framebuffer);
+  gl.deleteTexture(target.texture);
+  gl.deleteRenderbuffer(target.depth);
   return base64(out);
 }
 
