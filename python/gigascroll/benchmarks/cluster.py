@@ -47,6 +47,7 @@ def run(args) -> int:
     try:
         from dask.distributed import Client
 
+        from ..pack.cluster import quiet_dask
         from ..pack.shards import local_cluster
     except ImportError as e:
         raise UserError(f"dask.distributed is needed ({e}): pip install 'gigascroll[cluster]'")
@@ -76,29 +77,32 @@ def run(args) -> int:
     results: dict[str, list[float]] = {}
     ref = work / "single.pack"
     clusters, startup = {}, {}
-    try:
-        for n in args.workers:  # all started first, so the runs below can interleave
-            t = time.perf_counter()
-            clusters[n] = local_cluster(n)
-            with Client(clusters[n]) as client:  # workers import the package, as a cluster would
-                client.run(_warm)
-            startup[n] = time.perf_counter() - t
-        # Configurations interleaved in each repeat: the machine's load drifts.
-        for r in range(args.repeat):
-            configs = [("single process", ref, {})]
-            for n in args.workers:
-                configs.append((f"process pool {n}", work / f"pool-{n}.pack",
-                                {"workers": n, "executor": "processes"}))
-                configs.append((f"dask {n}", work / f"dask-{n}.pack",
-                                {"scheduler": clusters[n].scheduler_address}))
-            for label, out, kw in configs:
-                results.setdefault(label, []).append(timed(label, out, **kw))
-                if out != ref:
-                    assert _dir_equal(ref, out), f"the {label} pack differs from the single one"
-                print(f"[{r + 1}] {label}: {results[label][-1]:.2f} s", flush=True)
-    finally:
-        for c in clusters.values():
-            c.close()
+    # distributed logs its own shutdown races (a closed stream) as tracebacks: silenced.
+    with quiet_dask():
+        try:
+            for n in args.workers:  # all started first, so the runs below can interleave
+                t = time.perf_counter()
+                clusters[n] = local_cluster(n)
+                # The workers import the package, as a cluster's would.
+                with Client(clusters[n]) as client:
+                    client.run(_warm)
+                startup[n] = time.perf_counter() - t
+            # Configurations interleaved in each repeat: the machine's load drifts.
+            for r in range(args.repeat):
+                configs = [("single process", ref, {})]
+                for n in args.workers:
+                    configs.append((f"process pool {n}", work / f"pool-{n}.pack",
+                                    {"workers": n, "executor": "processes"}))
+                    configs.append((f"dask {n}", work / f"dask-{n}.pack",
+                                    {"scheduler": clusters[n].scheduler_address}))
+                for label, out, kw in configs:
+                    results.setdefault(label, []).append(timed(label, out, **kw))
+                    if out != ref:
+                        assert _dir_equal(ref, out), f"the {label} pack differs from the single one"
+                    print(f"[{r + 1}] {label}: {results[label][-1]:.2f} s", flush=True)
+        finally:
+            for c in clusters.values():
+                c.close()
     print("dask LocalCluster start-up (incl. imports): " +
           ", ".join(f"{n} workers {t:.1f} s" for n, t in startup.items()))
 

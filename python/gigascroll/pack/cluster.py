@@ -166,7 +166,7 @@ def _connect(scheduler: str, timeout: float):
 
 
 @contextlib.contextmanager
-def _quiet_dask():
+def quiet_dask():
     """distributed's loggers silenced in this process while a build uses the cluster."""
     logger = logging.getLogger("distributed")
     old = logger.level
@@ -225,7 +225,7 @@ def run_on_dask(build_shard: Callable, tasks, workers: int, scheduler: str | Non
     connect_s = timeout or CONNECT_TIMEOUT
     workers_s = timeout or WORKER_TIMEOUT
     cluster = None
-    with _quiet_dask():
+    with quiet_dask():
         if scheduler is not None:
             client, where = _connect(scheduler, connect_s), f"the Dask scheduler at {scheduler}"
         else:
