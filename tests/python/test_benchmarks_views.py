@@ -30,6 +30,8 @@ def test_bench_views_quick_pace(tmp_path, capsys):
                                         "display"))
     assert abs(stages - p["stage_ms_sum"]) < 1e-6 * max(1.0, stages)
     assert p["wall_ms"] >= 0.9 * p["stage_ms_sum"]
-    assert 0 < p["hit_rate"] <= 1 and p["frames"] == 19
+    # The hit rate depends on how far the loader threads got in 19 flat-out frames (0 on a
+    # loaded host is legal); that tiles were requested does not.
+    assert 0 <= p["hit_rate"] <= 1 and p["frames"] == 19 and p["requests_per_frame"] > 0
     assert "Frame loop flat out" in capsys.readouterr().out
     assert (tmp_path / "views_pace.png").stat().st_size > 0
