@@ -1,6 +1,6 @@
 """`gigascroll exhibit build show.toml -o show/`: an exhibition file (docs/exhibitions.md) to
-a show directory: the paintings packed (or a given pack used as is; unchanged images are not
-packed again), the room built, the light baked (the glb `serve --exhibition` shows) and the
+a show directory: the paintings packed (a given pack used as is, or given packs' paintings
+merged in without re-encoding; an unchanged pack is not made again), the room built, the light baked (the glb `serve --exhibition` shows) and the
 tour written. `render`, `gallery`, `view` and `serve` then take `--exhibition show/`."""
 
 from __future__ import annotations
@@ -72,6 +72,8 @@ def run(args) -> int:
         raise UserError(str(e)) from None
     pack = ("reused (unchanged)" if record["reused_pack"] else
             "packed" if record["packed"] else "used as given")
+    if record.get("merged_packs") and not record["reused_pack"]:
+        pack += f" with {len(record['merged_packs'])} given pack(s) merged in"
     print(f"{record['paintings']} paintings, pack {pack}"
           + (f", light baked ({record['bake']['bake_points']} points)" if "bake" in record else "")
           + f", {record['seconds']:.1f} s")

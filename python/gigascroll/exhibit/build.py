@@ -2,13 +2,21 @@
 
 show/ holds exhibition.json (the loaded exhibition: paintings with metadata and sizes, the
 room, lights; `open_show` reads it back), paintings.pack (the images and wall labels packed
-once; a painting given as a pack is not copied: exhibition.json names that pack, used as is),
-tour.json (the file's tour or the default one), bake/ (the baked light, written by the
+once), tour.json (the file's tour or the default one), bake/ (the baked light, written by the
 command's `bake` hook) and build.json (what this build did: packed or reused, seconds).
 
+Paintings given as packs: when every painting comes from one pack (each of its paintings
+at most once), that pack is shown as is (exhibition.json names it; no labels: they would
+need a pack of the show's own). Otherwise (images and packs mixed, several packs, a pack
+painting shown twice) the images are packed with the given packs' tile size, border and
+codec and every given pack's painting is merged in (pack.merge: its tiles copied as stored,
+hard-linked where possible, never re-encoded), under the painting's own name; a painting
+shown twice is stored once and the others are instances of it.
+
 Reuse: the pack's content hash (blake2b over every image file's bytes, every label's pixels,
-the painting names and the pack settings) is kept in exhibition.json; a later build whose
-hash is the same hard-links (or copies) the previous show's pack instead of packing again.
+the painting names, the pack settings and the given packs' manifests and indexes) is kept
+in exhibition.json; a later build whose hash is the same hard-links (or copies) the previous
+show's pack instead of packing again.
 The directory is built under a temporary name beside `out` and swapped in
 (outputs.replace_dir), its mark (outputs.MARK, command "exhibit build") written again last;
 only a directory with that mark, or an empty one, is replaced. Temporaries of runs killed
@@ -16,6 +24,7 @@ outright are removed by the next run (outputs.remove_stale_temps)."""
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -40,11 +49,14 @@ PACK_SETTINGS = {"tile_size": 128, "border": 4, "codec": "raw", "format": 1}
 
 
 def pack_inputs(ex: Exhibition) -> tuple[list, list[str], list[tuple[str, str]]]:
-    """The show's pack inputs (image paths, label arrays), their names, in pack order, and the
-    instances: a painting whose image file another painting already shows is stored once, as
-    an instance of that painting (its own name and place, the same tiles)."""
+    """The show's pack inputs of its image paintings (image paths, label arrays), their names,
+    in pack order, and the instances: a painting whose image file another painting already
+    shows is stored once, as an instance of that painting (its own name and place, the same
+    tiles). Paintings given as packs are not inputs (merged in by _merge)."""
     inputs, names, instances, first = [], [], [], {}
     for p in ex.paintings:
+        if not p.image:
+            continue
         key = os.path.realpath(p.image)
         if key in first:
             instances.append((p.name, first[key]))
@@ -60,14 +72,18 @@ def pack_inputs(ex: Exhibition) -> tuple[list, list[str], list[tuple[str, str]]]
     return inputs, names, instances
 
 
-def content_hash(inputs, names, instances=()) -> str:
-    """32 hex digits over the inputs' bytes (files streamed), the names, the instances and
-    PACK_SETTINGS."""
+def content_hash(inputs, names, instances=(), packs=(), settings=None) -> str:
+    """32 hex digits over the inputs' bytes (files streamed), the names, the instances, the
+    pack settings and, for paintings given as packs, (name, pack, painting) and each such
+    pack's manifest.json and index.bin (whose checksums name every tile's bytes)."""
     h = hashlib.blake2b(digest_size=16, person=b"gigascroll-show")
-    h.update(json.dumps({"names": names, "settings": PACK_SETTINGS,
-                         **({"instances": [list(i) for i in instances]} if instances else {})
+    h.update(json.dumps({"names": names, "settings": settings or PACK_SETTINGS,
+                         **({"instances": [list(i) for i in instances]} if instances else {}),
+                         **({"packs": [list(i) for i in packs]} if packs else {})
                          }).encode())
-    for x in inputs:
+    files = list(inputs) + [os.path.join(d, f) for d in sorted({p for _, p, _ in packs})
+                            for f in ("manifest.json", "index.bin")]
+    for x in files:
         if isinstance(x, str):
             with open(x, "rb") as f:
                 while chunk := f.read(1 << 20):
@@ -79,21 +95,72 @@ def content_hash(inputs, names, instances=()) -> str:
     return h.hexdigest()
 
 
-def _one_pack(ex: Exhibition) -> str | None:
-    """The pack every painting comes from, or None when they are images; ExhibitionError for
-    a mix or several packs (the gallery shows one pack)."""
-    packs = {p.pack for p in ex.paintings if p.pack}
-    if not packs:
+def _as_is_pack(ex: Exhibition) -> str | None:
+    """The pack the show shows as is: the one every painting comes from, each of its
+    paintings at most once; None when the show packs images or merges packs."""
+    packs = {os.path.realpath(p.pack) if p.pack else None for p in ex.paintings}
+    if len(packs) != 1 or None in packs:
         return None
-    first = next(p for p in ex.paintings if p.pack)
+    shown = [str(p.pack_painting) for p in ex.paintings]
+    return ex.paintings[0].pack if len(set(shown)) == len(shown) else None
+
+
+def _pack_settings(ex: Exhibition) -> dict:
+    """The show pack's tile size, border and codec: PACK_SETTINGS, or the given packs' own
+    (their tiles are copied as stored); ExhibitionError naming both keys when two given
+    packs differ."""
+    from ..pack import TilePack
+    first = None
     for p in ex.paintings:
-        if p.image:
-            raise ExhibitionError(f"{ex.path}: {p.key}.image: expected a pack as "
-                                  f"{first.key}'s: a show takes images or one pack, not both")
-        if p.pack != first.pack:
-            raise ExhibitionError(f"{ex.path}: {p.key}.pack: expected {first.key}'s pack "
-                                  f"{first.pack} (a show takes one pack)")
-    return first.pack
+        if not p.pack:
+            continue
+        pack = TilePack(p.pack)
+        s = {"tile_size": pack.tile_size, "border": pack.border, "codec": pack.codec}
+        if first is None:
+            first = (p, s)
+        elif s != first[1]:
+            raise ExhibitionError(
+                f"{ex.path}: {p.key}.pack: expected a pack with {first[0].key}'s pack's tile "
+                f"size, border and codec ({_shown(first[1])}; tiles are copied as stored, "
+                f"never re-encoded), got {_shown(s)} in {p.pack}")
+    return PACK_SETTINGS if first is None else {**PACK_SETTINGS, **first[1]}
+
+
+def _shown(s: dict) -> str:
+    return f"tile {s['tile_size']}, border {s['border']}, codec {s['codec']}"
+
+
+def _merge_items(ex: Exhibition, images_pack, label_names) -> list[tuple[str, str, str]]:
+    """(name in the show's pack, pack, painting) of every painting and label."""
+    items = [(p.name, p.pack, str(p.pack_painting)) if p.pack else (p.name, images_pack, p.name)
+             for p in ex.paintings]
+    return items + [(n, images_pack, n) for n in label_names]
+
+
+def _pack_show(ex: Exhibition, dst: Path, settings: dict, *, progress, threads,
+               workers) -> None:
+    """Packs the show's images into `dst` and merges in the paintings given as packs."""
+    from ..pack import build_pack
+    from ..pack.merge import merge_packs
+    inputs, names, instances = pack_inputs(ex)
+    options = dict(progress=progress, threads=threads, workers=workers,
+                   instances=instances or None, tile_size=settings["tile_size"],
+                   border=settings["border"], codec=settings["codec"])
+    if not any(p.pack for p in ex.paintings):
+        build_pack(inputs, dst, names=names, **options)
+        return
+    images = dst.parent / f"{dst.name}.images"
+    try:
+        if inputs:
+            build_pack(inputs, images, names=names, **options)
+        labels = [n for n in names if n.startswith("label-")]
+        try:
+            merge_packs(_merge_items(ex, str(images), labels), dst)
+        except (OSError, ValueError) as e:
+            raise ExhibitionError(f"{ex.path}: paintings: cannot merge the given packs into "
+                                  f"the show's: {e}") from None
+    finally:
+        shutil.rmtree(images, ignore_errors=True)
 
 
 def _previous(out: Path) -> dict | None:
@@ -135,7 +202,7 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
     Image API tiles with a Presentation 3.0 manifest (gigascroll.iiif_exhibition).
     `workers` > 0 packs on that many Dask workers (a LocalCluster), as `pack --workers`."""
     from ..gallery import Gallery
-    from ..pack import TilePack, build_pack
+    from ..pack import TilePack
     t0 = time.perf_counter()
     ex = exhibition if isinstance(exhibition, Exhibition) else load_exhibition(exhibition)
     out = Path(out)
@@ -147,7 +214,13 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
             iiif_base = check_http_uri(iiif_base, "the show's IIIF base URL")
         except ValueError as e:
             raise ExhibitionError(f"{ex.path}: IIIF: {e}") from None
-    given_pack = _one_pack(ex)
+    given_pack = _as_is_pack(ex)
+    if given_pack is not None:  # labels need the show's own pack
+        ex = dataclasses.replace(ex, labels=False)
+    elif any(p.pack for p in ex.paintings):  # copied into the show's pack under their names
+        ex = dataclasses.replace(ex, paintings=[dataclasses.replace(p, merged=bool(p.pack))
+                                                for p in ex.paintings])
+    settings = PACK_SETTINGS if given_pack is not None else _pack_settings(ex)
     # The room (and whether everything fits) before any packing, where it needs no pack.
     spec = None if "file" in ex.room else build_room(ex)
     tour = None if spec is None else _tour(ex, spec)
@@ -158,17 +231,19 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
         record = {"exhibition": ex.path, "packed": False, "reused_pack": False}
         if given_pack is None:
             inputs, names, instances = pack_inputs(ex)
-            digest = content_hash(inputs, names, instances)
+            packs = [(p.name, os.path.realpath(p.pack), str(p.pack_painting))
+                     for p in ex.paintings if p.pack]
+            digest = content_hash(inputs, names, instances, packs, settings)
             if previous and previous.get("pack_hash") == digest \
                     and (out / PACK_NAME / "manifest.json").is_file():
                 _link_tree(out / PACK_NAME, tmp / PACK_NAME)
                 record["reused_pack"] = True
             else:
-                build_pack(inputs, tmp / PACK_NAME, names=names, progress=progress,
-                           threads=threads, workers=workers, instances=instances or None,
-                           tile_size=PACK_SETTINGS["tile_size"],
-                           border=PACK_SETTINGS["border"], codec=PACK_SETTINGS["codec"])
+                _pack_show(ex, tmp / PACK_NAME, settings, progress=progress, threads=threads,
+                           workers=workers)
                 record["packed"] = True
+            if packs:
+                record["merged_packs"] = sorted({p for _, p, _ in packs})
             pack_path = PACK_NAME
             pack = TilePack(tmp / PACK_NAME)
         else:
