@@ -332,9 +332,11 @@ void EyeChunk::take_packet(std::size_t row, std::uint32_t i0, std::uint32_t n, c
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
     if (lanes16) {  // (a short last packet casts all 16 lanes: whole_tail)
         const unsigned g0 = h.hit.geomID[0];
-        const __m512i valid16 = _mm512_load_si512(valid);
-        if (g0 != kNoHit && _mm512_test_epi32_mask(valid16, valid16) == 0xFFFF &&
-            _mm512_cmpeq_epi32_mask(_mm512_loadu_si512(h.hit.geomID), _mm512_set1_epi32(int(g0))) == 0xFFFF) {
+        using I = Lanes<kWidest>::I;
+        bool one_geometry = g0 != kNoHit;  // every lane cast, all on lane 0's geometry
+        for (int k = 0; k < 16 && one_geometry; k += kWidest)
+            one_geometry = all<kWidest>(nonzero(I::load(valid + k)) & (I::load(h.hit.geomID + k) == I(std::int32_t(g0))));
+        if (one_geometry) {
             defer(row, i0, n, h, g0);
             return;
         }
@@ -504,10 +506,8 @@ void EyeChunk::shade_batch(std::size_t count) {
         const DeferredPacket& d = sc.packets[q];
         if (!d.sampled) continue;
         shade_packet(d.tex, d.light.E, d.light.M, o, srgb_decode, rgb_row + 3 * std::size_t(d.x0), d.n);
-        if (d.n == 16)  // a whole packet (nearly all): one store
-            _mm512_storeu_ps(lod_row + d.x0, _mm512_load_ps(d.uv.lod));
-        else
-            std::copy_n(d.uv.lod, d.n, lod_row + d.x0);
+        for (int k = 0; k < 16; k += kWidest)
+            store_first(Lanes<kWidest>::F::load(d.uv.lod + k), lod_row + d.x0 + k, lanes_of(d.n, k));
         if (keep_light)
             for (std::uint32_t k = 0; k < d.n; ++k) {
                 Vec3f& sc_k = scale_row[d.x0 + k];

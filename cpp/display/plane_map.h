@@ -6,10 +6,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
 
+#include "common/lanes.h"
 #include "common/vec3.h"
 #include "sampling/sampler.h"
 #include "views/camera.h"
@@ -83,10 +81,6 @@ struct PlaneMap {
         });
     }
 
-#if defined(__AVX512F__)
-// GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics (bug 105593), muted.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
     // A packet of 16 columns from screen x s0 (ds[k]: column k's screen x less s0) as
     // TrilinearLanes takes it: lane 0's uv in double, not clamped (the sampler declines a
     // packet that reaches the painting's edge), the lanes' offsets from it in float, and each
@@ -94,62 +88,64 @@ struct PlaneMap {
     // du = (s - s0) h (qu rn - ru qn) / (width D.n(s) D.n(s0)) (the same for v): the
     // difference of two uv's without their cancellation, to float's relative precision. The
     // level is footprint2's of t, 1 / (D . n), D . u and D . v in float, as map_columns'.
-    // False (out half written) where a footprint is not a normal float: the caller then
-    // takes map_columns, which patches it in double.
+    // False (out part written) where a footprint is not a normal float: the caller then
+    // takes map_columns, which patches it in double. W lanes at a time (common/lanes.h).
+    template <int W = kWidest>
     bool map_packet(const Row& r, double s0, const float* ds, float bias, PacketUv& out) const {
+        using F = typename Lanes<W>::F;
         const double dn0 = r.rn + s0 * r.qn, du0 = r.ru + s0 * r.qu, dv0 = r.rv + s0 * r.qv;
         const double kk0 = 1.0 / dn0, t0 = h * kk0;
         out.u0 = (cu + t0 * du0) * inv_width, out.v0 = (cv + t0 * dv0) * inv_height;
-        const __m512 S = _mm512_loadu_ps(ds);
-        const __m512 dn = _mm512_fmadd_ps(S, _mm512_set1_ps(float(r.qn)), _mm512_set1_ps(float(dn0)));
-        const __m512 kk = _mm512_div_ps(_mm512_set1_ps(1.0f), dn);
-        const __m512 S_kk = _mm512_mul_ps(S, kk);
-        _mm512_store_ps(out.du, _mm512_mul_ps(S_kk, _mm512_set1_ps(float(h * inv_width * (r.qu * r.rn - r.ru * r.qn) * kk0))));
-        _mm512_store_ps(out.dv, _mm512_mul_ps(S_kk, _mm512_set1_ps(float(h * inv_height * (r.qv * r.rn - r.rv * r.qn) * kk0))));
-        // footprint2 in lanes.
-        const __m512 t = _mm512_mul_ps(_mm512_set1_ps(float(h)), kk);
-        const __m512 Du = _mm512_fmadd_ps(S, _mm512_set1_ps(float(r.qu)), _mm512_set1_ps(float(du0)));
-        const __m512 Dv = _mm512_fmadd_ps(S, _mm512_set1_ps(float(r.qv)), _mm512_set1_ps(float(dv0)));
-        const __m512 kDu = _mm512_mul_ps(kk, Du), kDv = _mm512_mul_ps(kk, Dv);
-        const __m512 tu = _mm512_mul_ps(t, _mm512_set1_ps(fsu)), tv = _mm512_mul_ps(t, _mm512_set1_ps(fsv));
-        auto term = [](__m512 scale, float a, float b, __m512 kd) {  // scale (a - b kd)
-            return _mm512_mul_ps(scale, _mm512_fnmadd_ps(_mm512_set1_ps(b), kd, _mm512_set1_ps(a)));
-        };
-        const __m512 ax = term(tu, fxu, fxn, kDu), bx = term(tv, fxv, fxn, kDv);
-        const __m512 ay = term(tu, fyu, fyn, kDu), by = term(tv, fyv, fyn, kDv);
-        const __m512 fp2 = _mm512_max_ps(_mm512_fmadd_ps(ax, ax, _mm512_mul_ps(bx, bx)),
-                                         _mm512_fmadd_ps(ay, ay, _mm512_mul_ps(by, by)));
-        // fast_log2f in lanes; zero, subnormal, infinite, NaN or negative: refused.
-        constexpr int kNotNormal = 0x01 | 0x02 | 0x04 | 0x08 | 0x10 | 0x20 | 0x40 | 0x80;
-        if (_mm512_fpclass_ps_mask(fp2, kNotNormal)) return false;
-        const __m512i bits = _mm512_castps_si512(fp2);
-        const __m512i field = _mm512_and_si512(bits, _mm512_set1_epi32(0x7fffff));
-        const __mmask16 high = _mm512_cmpgt_epi32_mask(field, _mm512_set1_epi32(0x3504f3));
-        const __m512 m = _mm512_castsi512_ps(_mm512_mask_sub_epi32(_mm512_or_si512(field, _mm512_set1_epi32(0x3f800000)), high,
-                                                                   _mm512_or_si512(field, _mm512_set1_epi32(0x3f800000)),
-                                                                   _mm512_set1_epi32(1 << 23)));
-        const __m512i biased = _mm512_srli_epi32(bits, 23);
-        const __m512 e = _mm512_cvtepi32_ps(_mm512_mask_add_epi32(_mm512_sub_epi32(biased, _mm512_set1_epi32(127)), high,
-                                                                  _mm512_sub_epi32(biased, _mm512_set1_epi32(127)),
-                                                                  _mm512_set1_epi32(1)));
-        const __m512 one = _mm512_set1_ps(1.0f);
-        // s = (m - 1) / (m + 1) with the reciprocal's estimate and one Newton step (2^-28).
-        const __m512 m1 = _mm512_add_ps(m, one), r14 = _mm512_rcp14_ps(m1);
-        const __m512 inv_m1 = _mm512_fmadd_ps(r14, _mm512_fnmadd_ps(m1, r14, one), r14);
-        const __m512 sr = _mm512_mul_ps(_mm512_sub_ps(m, one), inv_m1), s2 = _mm512_mul_ps(sr, sr);
-        __m512 series = _mm512_fmadd_ps(s2, _mm512_set1_ps(1.0f / 9), _mm512_set1_ps(1.0f / 7));
-        series = _mm512_fmadd_ps(s2, series, _mm512_set1_ps(1.0f / 5));
-        series = _mm512_fmadd_ps(s2, series, _mm512_set1_ps(1.0f / 3));
-        series = _mm512_fmadd_ps(s2, series, one);
-        const __m512 log2_fp2 = _mm512_fmadd_ps(_mm512_mul_ps(sr, series), _mm512_set1_ps(2.88539008f), e);
-        // lod = log2(footprint) + bias, 0 where that is not finite (sampled_lod).
-        const __m512 lod = _mm512_add_ps(_mm512_mul_ps(log2_fp2, _mm512_set1_ps(0.5f)), _mm512_set1_ps(bias));
-        _mm512_store_ps(out.lod, _mm512_mask_blend_ps(_mm512_fpclass_ps_mask(lod, 0x01 | 0x08 | 0x10 | 0x80), lod,
-                                                      _mm512_setzero_ps()));
+        const F du_scale(float(h * inv_width * (r.qu * r.rn - r.ru * r.qn) * kk0));
+        const F dv_scale(float(h * inv_height * (r.qv * r.rn - r.rv * r.qn) * kk0));
+        for (int k = 0; k < 16; k += W) {
+            const F S = F::load(ds + k);
+            const F dn = fma(S, F(float(r.qn)), F(float(dn0)));
+            const F kk = F(1.0f) / dn;
+            const F S_kk = S * kk;
+            (S_kk * du_scale).store(out.du + k);
+            (S_kk * dv_scale).store(out.dv + k);
+            // footprint2 in lanes.
+            const F t = F(float(h)) * kk;
+            const F Du = fma(S, F(float(r.qu)), F(float(du0)));
+            const F Dv = fma(S, F(float(r.qv)), F(float(dv0)));
+            const F kDu = kk * Du, kDv = kk * Dv;
+            const F tu = t * F(fsu), tv = t * F(fsv);
+            auto term = [](F scale, float a, float b, F kd) { return scale * fnma(F(b), kd, F(a)); };  // scale (a - b kd)
+            const F ax = term(tu, fxu, fxn, kDu), bx = term(tv, fxv, fxn, kDv);
+            const F ay = term(tu, fyu, fyn, kDu), by = term(tv, fyv, fyn, kDv);
+            const F fp2 = max(fma(ax, ax, bx * bx), fma(ay, ay, by * by));
+            // zero, subnormal, infinite, NaN or negative: refused.
+            if (any<W>(not_positive_normal(fp2))) return false;
+            // lod = log2(footprint) + bias, 0 where that is not finite (sampled_lod).
+            const F lod = log2_lanes<W>(fp2) * F(0.5f) + F(bias);
+            Lanes<W>::select(not_finite(lod), F(0.0f), lod).store(out.lod + k);
+        }
         return true;
     }
-#pragma GCC diagnostic pop
-#endif
+
+    // fast_log2f in lanes, of positive normal floats: the same steps but for s = (m - 1) /
+    // (m + 1), taken with the reciprocal's estimate and one Newton step (2^-28).
+    template <int W>
+    static typename Lanes<W>::F log2_lanes(typename Lanes<W>::F x) {
+        using L = Lanes<W>;
+        using F = typename L::F;
+        using I = typename L::I;
+        const I b = bits(x);
+        const I field = b & I(0x7fffff);
+        const auto high = field > I(0x3504f3);
+        const I mantissa = field | I(0x3f800000);
+        const F m = L::from_bits(L::select(high, mantissa - I(1 << 23), mantissa));
+        const I exponent = srl(b, 23) - I(127);
+        const F e = L::to_float(L::select(high, exponent + I(1), exponent));
+        const F one(1.0f);
+        const F sr = (m - one) * reciprocal(m + one), s2 = sr * sr;
+        F series = fma(s2, F(1.0f / 9), F(1.0f / 7));
+        series = fma(s2, series, F(1.0f / 5));
+        series = fma(s2, series, F(1.0f / 3));
+        series = fma(s2, series, one);
+        return fma(sr * series, F(2.88539008f), e);
+    }
 
     // The loop of both: dots(k, dn, du, dv) gives pixel k's D . n, D . u and D . v.
     template <bool kUv, typename Dots>

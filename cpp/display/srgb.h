@@ -7,9 +7,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
-#if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
+
+#include "common/lanes.h"
 
 namespace gigascroll {
 
@@ -38,8 +37,8 @@ inline float srgb_code_table(float c) {
 // sRGB-encoded 0..255 to linear [0, 1] (IEC 61966-2-1) of a filtered (fractional) code: the
 // linear segment below code 10.31475 (0.04045 x 255) exactly, above it a quartic per 16 codes
 // (Chebyshev interpolation of the exact curve, float coefficients, Horner with fused
-// multiply-adds), to 6e-8 absolute and 1.2e-6 relative. The same arithmetic in lanes
-// (decode16) takes five in-register permutes where a table took two gathers per channel (a
+// multiply-adds), to 6e-8 absolute and 1.2e-6 relative. One text for every width (decode):
+// the coefficients by five in-register lookups where a table took two gathers per channel (a
 // 16-lane gather costs as much as 16 loads on the cores this runs on); pow() per pixel was a
 // third of the shading.
 struct SrgbCurve {
@@ -76,31 +75,22 @@ struct SrgbCurve {
             for (int k = 0; k <= kDegree; ++k) coef[k][s] = float(poly[k]);
         }
     }
-    static int segment(float code) { return std::min(int(code * (1.0f / 16.0f)), kSegments - 1); }
-    float operator()(float code) const {
-        const float c = std::clamp(code, 0.0f, 255.0f);
-        const int s = segment(c);
-        const float t = c - float(16 * s + 8);
-        float p = coef[4][s];
-        for (int k = 3; k >= 0; --k) p = std::fma(p, t, coef[k][s]);
-        return c <= kLinearEnd ? c * kLinearScale : p;
+    // The decode of W codes: the segment s = floor(c / 16) needs no clamp (c <= 255), and
+    // t = (c - 8) - 16 s in one fused step is exact, as c - (16 s + 8) is, wherever the
+    // polynomial is taken (c > 10.3: c - 8 is a multiple of c's last place). A NaN code
+    // decodes to 0.
+    template <int W>
+    typename Lanes<W>::F decode(typename Lanes<W>::F code) const {
+        using F = typename Lanes<W>::F;
+        const F c = min(max(code, F(0.0f)), F(255.0f));
+        const F s_f = floor(c * F(1.0f / 16.0f));
+        const auto s = to_int(s_f);
+        const F t = fnma(s_f, F(16.0f), c - F(8.0f));
+        F p = lookup16(coef[4], s);
+        for (int k = 3; k >= 0; --k) p = fma(p, t, lookup16(coef[k], s));
+        return Lanes<W>::select(c <= F(kLinearEnd), c * F(kLinearScale), p);
     }
-#if defined(__AVX512F__)
-    // operator() in 16 lanes, the same floats: the segment s = floor(c / 16) needs no clamp
-    // (c <= 255), and t = (c - 8) - 16 s in one fused step is exact, as c - (16 s + 8) is,
-    // wherever the polynomial is taken (c > 10.3: c - 8 is a multiple of c's last place).
-    __m512 decode16(__m512 code) const {
-        const __m512 c = _mm512_min_ps(_mm512_max_ps(code, _mm512_setzero_ps()), _mm512_set1_ps(255.0f));
-        const __m512 s_f = _mm512_roundscale_ps(_mm512_mul_ps(c, _mm512_set1_ps(1.0f / 16.0f)),
-                                                _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-        const __m512i s = _mm512_cvttps_epi32(s_f);
-        const __m512 t = _mm512_fnmadd_ps(s_f, _mm512_set1_ps(16.0f), _mm512_sub_ps(c, _mm512_set1_ps(8.0f)));
-        __m512 p = _mm512_permutexvar_ps(s, _mm512_load_ps(coef[4]));
-        for (int k = 3; k >= 0; --k) p = _mm512_fmadd_ps(p, t, _mm512_permutexvar_ps(s, _mm512_load_ps(coef[k])));
-        const __mmask16 linear = _mm512_cmp_ps_mask(c, _mm512_set1_ps(kLinearEnd), _CMP_LE_OQ);
-        return _mm512_mask_mul_ps(p, linear, c, _mm512_set1_ps(kLinearScale));
-    }
-#endif
+    float operator()(float code) const { return decode<1>(Lanes<1>::F(code)).v; }
 };
 // The one curve of the process (made on first use).
 inline const SrgbCurve& srgb_curve() {

@@ -10,7 +10,7 @@
 #include <cstdint>
 
 #include "common/vec3.h"
-#include "display/lanes.h"
+#include "common/lanes.h"
 #include "views/camera.h"
 
 namespace gigascroll {
@@ -53,7 +53,7 @@ struct ClaimProjection {
             if (target[k] != kNoTarget) __builtin_prefetch(claims + target[k], 1);
     }
 
-    // The projection of 16 lanes, W at a time (display/lanes.h: the same floats at every
+    // The projection of 16 lanes, W at a time (common/lanes.h: the same floats at every
     // width). A facing test that is NaN does not refuse the claim (!(facing <= 0)).
 // GCC 12's false -Wmaybe-uninitialized in its AVX-512 intrinsics (bug 105593), muted.
 #pragma GCC diagnostic push

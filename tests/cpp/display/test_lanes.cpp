@@ -1,4 +1,4 @@
-// The display pass's lane type (display/lanes.h) at every width this build has: a step written
+// The lane type (common/lanes.h) at every width this build has: a step written
 // once on Lanes<W> must give the plain C++ width's bits at 8 (AVX2) and 16 (AVX-512) lanes.
 // The right eye's claim projection (ClaimProjection::project) is the step: random hits around a
 // stereo pair, with misses, hits behind the eye, outside the image, facing away and NaN normals.
@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "display/lanes.h"
+#include "common/lanes.h"
 #include "display/stereo_reuse.h"
 #include "views/camera.h"
 

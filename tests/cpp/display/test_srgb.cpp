@@ -1,5 +1,5 @@
 // The display's sRGB decode against the exact IEC 61966-2-1 curve in double (pow), over every
-// 1/64 of a code, and its 16-lane form against the scalar one bit for bit.
+// 1/64 of a code, and its lanes at every width the host has against the scalar form bit for bit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -37,17 +37,32 @@ TEST(SrgbCurve, FollowsTheExactCurveToAMillionth) {
     EXPECT_NEAR(curve(10.3147f), curve(10.3148f), 1e-7);
 }
 
-#if defined(__AVX512F__)
-TEST(SrgbCurve, LanesEqualTheScalarDecode) {
+namespace {
+// decode<W> at W lanes against the plain C++ width, bit for bit, over every 1/16 of a code
+// (and below 0, above 255, and NaN).
+template <int W>
+void expect_decode_equals_scalar() {
     const SrgbCurve& curve = srgb_curve();
     alignas(64) float in[16], out[16];
     for (int base = -32; base < 255 * 16 + 64; base += 16) {
         for (int k = 0; k < 16; ++k) in[k] = float(base + k) / 16.0f + 0.013f * float(k);
-        _mm512_store_ps(out, curve.decode16(_mm512_load_ps(in)));
+        if (base == 0) in[3] = std::nanf("");
+        for (int k = 0; k < 16; k += W) curve.decode<W>(Lanes<W>::F::load(in + k)).store(out + k);
         for (int k = 0; k < 16; ++k) {
-            const float want = curve(in[k]);
-            ASSERT_EQ(std::memcmp(&out[k], &want, sizeof want), 0) << "code " << in[k];
+            const float want = curve.decode<1>(Lanes<1>::F(in[k])).v;
+            ASSERT_EQ(std::memcmp(&out[k], &want, sizeof want), 0) << "width " << W << " code " << in[k];
         }
     }
 }
+}  // namespace
+
+TEST(SrgbCurve, EveryWidthEqualsTheScalarDecode) {
+#if defined(__AVX2__)
+    expect_decode_equals_scalar<8>();
 #endif
+#if defined(__AVX512F__)
+    expect_decode_equals_scalar<16>();
+#endif
+    // A NaN code decodes to 0 (as the lanes' clamp makes it).
+    EXPECT_EQ(srgb_curve()(std::nanf("")), 0.0f);
+}
