@@ -1,12 +1,26 @@
 """How much light a museum object may receive: the responsivity categories of CIE 157:2004.
 
 Source: CIE 157:2004, "Control of damage to museum objects by optical radiation" (Commission
-Internationale de l'Eclairage, Vienna, 2004), its table of limiting illuminance and limiting
-annual exposure for the four responsivity categories. The categories are defined by the ISO
-blue wool lightfastness standards (ISO 105-B): high responsivity is blue wool 1-3, medium 4-6,
-low 7-8 and above; irresponsive objects are made wholly of materials light does not change.
-Ink and colours on silk and paper (the scrolls this project shows) are in the high or medium
-category; conservators light such works at about 50 lux and count their yearly dose.
+Internationale de l'Eclairage, Vienna, 2004; ISBN 3 901 906 27 4), section 3.1.1 "Four
+categories of responsivity" and the limits of section 3.2.1 "To minimise exposure of museum
+objects": limiting illuminance and limiting annual exposure per category. The categories
+are defined by the ISO blue wool lightfastness standards (ISO 105-B): high responsivity is
+blue wool 1-3, medium 4-6, low 7-8 and above; irresponsive objects are made wholly of
+materials light does not change (no limit; their illuminance is set by seeing alone).
+
+The figures were checked against published readings of that table (the standard itself is
+sold, not public): the four category names and section numbers from the report's table of
+contents; the blue-wool definitions of the categories in S. Michalski, "Agent of
+deterioration: light, ultraviolet and infrared" (Canadian Conservation Institute), which
+states that CIE 2004 adopted them; 50 lx for the medium and high categories and no limit
+for irresponsive objects, citing CIE 157:2004, in R. Schwen and R. Berns, "Design of LED
+clusters for optimal museum lighting" (Rochester Institute of Technology, 2011), which
+gives 150-200 lx for the low category (200 lx is CIE 157's limit, 150 lx CIBSE's advice);
+and the annual exposures 600 000, 150 000 and 15 000 lx h for the low, medium and high
+categories in the National Gallery London's Lux Allowance Calculator (J. Padfield, after
+Thomson, "The Museum Environment", 1986, and Saunders, "Museum Lighting", Getty, 2020).
+Ink and colours on silk and paper (the scrolls this project shows) are in the high or
+medium category; conservators light such works at about 50 lux and count their yearly dose.
 
 `LIMITS[category]`: its limiting illuminance in lux and limiting annual exposure in lux hours
 per year; None is "no limit" (CIE 157's irresponsive category).
@@ -21,7 +35,7 @@ __all__ = ["SOURCE", "CATEGORIES", "LIMITS", "CategoryLimits", "limits_of", "ann
            "check_exposure"]
 
 SOURCE = ('CIE 157:2004, "Control of damage to museum objects by optical radiation", '
-          "Commission Internationale de l'Eclairage, Vienna")
+          "Commission Internationale de l'Eclairage, Vienna, sections 3.1.1 and 3.2.1")
 
 
 @dataclass(frozen=True)
