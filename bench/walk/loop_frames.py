@@ -26,7 +26,7 @@ def main():
         load_core(a.core)
     from gigascroll import views as v
     from gigascroll.benchmarks import walk as W
-    from gigascroll.gallery.walk import GalleryWalk
+    from gigascroll.walk.gallery_walk import GalleryWalk
     pack, room, src, path = W.lit_scroll_walk(argparse.Namespace(pack=None, photons=1 << 17, threads=0))
     n = max(2, min(a.frames, len(path.position)))
     short = v.CameraPath(path.position[:n], path.forward[:n], path.up[:n], path.magnifier_target[:n],

@@ -24,7 +24,7 @@ def pose(w, h, frame=None):
     from gigascroll import runtime, views as v
     from gigascroll._core import DisplayPass
     from gigascroll.benchmarks import walk as W
-    from gigascroll.gallery.walk import parent_keys
+    from gigascroll.walk.gallery_walk import parent_keys
     from gigascroll.views.exhibition import Headset
     args = argparse.Namespace(pack=None, photons=1 << 17, threads=0)
     pack, room, src, path = W.lit_scroll_walk(args)

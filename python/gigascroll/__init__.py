@@ -24,7 +24,7 @@ from .views import (HEADSET, MAGNIFIER, NO_REQUEST, PROCESSING_METHODS, SCROLL, 
                     render_view, run_processor, scroll_path, single_scroll, texel_footprint,
                     unpack_requests)
 # the frame loop over views and runtime
-from .frame_loop import LOADING_STRATEGIES, FrameLoop
+from .walk.frame_loop import LOADING_STRATEGIES, FrameLoop
 # photon-mapping renderer
 from .photon import (BUILTIN_SCENES, ROOMS, PhotonMap, RoomScene, Scene, StereoCamera,
                      builtin_scene, default_radius, relmse, render, render_stereo, room_scene,

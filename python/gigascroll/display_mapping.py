@@ -9,7 +9,7 @@ Exposure: a factor on radiance (W / m^2 / sr per channel), given three ways:
 - EV100, the photographer's exposure value at ISO 100: the factor is 1 / L_max with
   L_max = 1.2 x 2^EV100 cd / m^2 the luminance that saturates the sensor (saturation-based
   sensitivity, ISO 12232; as in "Moving Frostbite to PBR", Lagarde and de Rousiers 2014),
-  luminance being radiance x 683 lm / W (the rooms' lux-equivalent convention, gallery/rooms.py);
+  luminance being radiance x 683 lm / W (the rooms' lux-equivalent convention, room/builtin.py);
 - `white=200lux`: a white painting (texel 255: albedo PAINTING_WHITE) lit by 200 lux is exposed
   to PAPER_WHITE = 0.8, the top of the range the neutral curve reproduces exactly, so every
   colour of a painting at that illuminance keeps its value on screen (less the curve's 0.04
@@ -42,7 +42,7 @@ __all__ = ["TONES", "PAPER_WHITE", "PAINTING_WHITE", "LUMENS_PER_WATT", "Display
 TONES = ("neutral", "clip")
 PAPER_WHITE = 0.8          # exposed value of a white painting at the reference illuminance
 PAINTING_WHITE = 0.9       # albedo of a painting's white texel (gallery.PAINTING_REFLECTANCE)
-LUMENS_PER_WATT = 683.0    # lux equivalent per W / m^2 per channel (gallery.rooms)
+LUMENS_PER_WATT = 683.0    # lux equivalent per W / m^2 per channel (room.builtin)
 SATURATION_K = 1.2         # L_max = 1.2 x 2^EV100 cd / m^2 (78 / (100 x 0.65))
 
 # Khronos PBR Neutral's constants (the reference pbrNeutral.glsl).

@@ -17,7 +17,7 @@ from gigascroll.display_mapping import (PAINTING_WHITE, PAPER_WHITE, Display, Ex
                                         to_srgb8)
 from gigascroll.gallery import Gallery, builtin_room
 from gigascroll.gallery.exposure import auto_lux, painting_lux, room_display
-from gigascroll.gallery.rooms import LUMENS_PER_WATT, direct_irradiance
+from gigascroll.room.builtin import LUMENS_PER_WATT, direct_irradiance
 
 # ----------------------------------------------------------------------------- the curve
 
@@ -174,7 +174,7 @@ def test_render_and_a_gallery_frame_show_the_same_pixels(packs, tmp_path):
     tiles resident): equal 8-bit values, at most one code apart (float order)."""
     from PIL import Image
 
-    from gigascroll.gallery.walk import GallerySource, GalleryWalk, compose_frame, walk_path
+    from gigascroll.walk.gallery_walk import GallerySource, GalleryWalk, compose_frame, walk_path
 
     pack = g.TilePack(str(packs[1]))
     room = builtin_room("scroll", pack)
@@ -228,7 +228,7 @@ def test_the_default_walk_clips_no_painting_pixel(packs):
     at which the neutral curve would round to 255. The clip curve at the same exposure clips
     the paper under the spots: the curve is what keeps it."""
     from gigascroll import views as v
-    from gigascroll.gallery.walk import walk_path
+    from gigascroll.walk.gallery_walk import walk_path
     from gigascroll.views.exhibition import Headset
 
     pack = g.TilePack(str(packs[1]))

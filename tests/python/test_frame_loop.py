@@ -1,11 +1,11 @@
-"""The frame loop (gigascroll.frame_loop) on a small synthetic pack: real loader threads, the
+"""The frame loop (gigascroll.walk.frame_loop) on a small synthetic pack: real loader threads, the
 runtime's virtual texture as the page table, and the display latency of direct vs
 mip-by-mip loading."""
 
 import pytest
 
 from gigascroll import views as v
-from gigascroll.frame_loop import STAGES, FrameLoop
+from gigascroll.walk.frame_loop import STAGES, FrameLoop
 
 
 @pytest.fixture(scope="module")

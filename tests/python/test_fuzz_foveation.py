@@ -16,7 +16,7 @@ from gigascroll import _core
 from gigascroll import views as v
 from gigascroll.commands.gallery import parse_foveation
 from gigascroll.errors import UserError
-from gigascroll.gallery.foveation import Foveation
+from gigascroll.walk.foveation import Foveation
 
 anything = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10, 400),
                      st.none(), st.text(max_size=4), st.booleans())

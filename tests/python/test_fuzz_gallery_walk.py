@@ -13,7 +13,7 @@ from gigascroll import views as v
 from gigascroll.commands.gallery import parse_eye
 from gigascroll.errors import UserError
 from gigascroll.gallery import builtin_room
-from gigascroll.gallery.walk import ExhibitionSource, GalleryWalk, compose_frame, parent_keys, walk_path
+from gigascroll.walk.gallery_walk import ExhibitionSource, GalleryWalk, compose_frame, parent_keys, walk_path
 from gigascroll.runtime import VirtualTexture
 
 FIXTURES = [HealthCheck.function_scoped_fixture]

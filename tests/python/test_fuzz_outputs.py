@@ -368,7 +368,7 @@ def test_mitsuba_level_names_its_range(inputs):
 def test_walk_refuses_a_source_of_another_pack(inputs):
     from gigascroll import TilePack
     from gigascroll.gallery import builtin_room
-    from gigascroll.gallery.walk import ExhibitionSource, GalleryWalk, walk_path
+    from gigascroll.walk.gallery_walk import ExhibitionSource, GalleryWalk, walk_path
     pack, other = TilePack(inputs["pack"]), TilePack(inputs["other"])
     room = builtin_room("scroll", pack)
     source = ExhibitionSource(room, pack)
@@ -438,7 +438,7 @@ def test_float32_options_of_the_api(inputs, value):
 _VIDEO_CHILD = textwrap.dedent("""
     import resource, sys, numpy as np
     from gigascroll.outputs import ignore_sigxfsz
-    from gigascroll.gallery.video import VideoWriter
+    from gigascroll.walk.video import VideoWriter
     ignore_sigxfsz()
     if sys.argv[2] != "none":
         resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[2]), int(sys.argv[2])))

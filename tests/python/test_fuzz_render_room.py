@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 
 import gigascroll as g
 from gigascroll.gallery import Gallery
-from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
+from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
 
 from gallery_checks import box_room, gradient_pack
 
@@ -145,7 +145,7 @@ def cli_exr(fork_worker, room_files, name, *options):
 
 
 def api_still(room_files, **options):
-    from gigascroll.gallery.room_files import load_room
+    from gigascroll.room.files import load_room
 
     pack = g.TilePack(room_files / "ex.pack")
     gallery = Gallery.from_room(load_room(room_files / "room.glb", pack), pack)

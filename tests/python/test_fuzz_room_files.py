@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
-from gigascroll.gallery.room import RoomSpec
-from gigascroll.gallery.room_files import load_room, write_gltf
-from gigascroll.gallery.sizes import painting_sizes
+from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
+from gigascroll.room.spec import RoomSpec
+from gigascroll.room.files import load_room, write_gltf
+from gigascroll.room.sizes import painting_sizes
 
 # GIGASCROLL_FUZZ_EXAMPLES raises the number of cases for a longer run (default 40 each).
 SETTINGS = settings(max_examples=int(os.environ.get("GIGASCROLL_FUZZ_EXAMPLES", 40)),

@@ -29,9 +29,10 @@ from hypothesis import strategies as st
 
 from gallery_checks import uniform_pack
 from gigascroll import _core
-from gigascroll.gallery import room_assets, room_gltf
-from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
-from gigascroll.gallery.room_files import _glb_bytes, load_room, write_gltf
+from gigascroll.room import assets as room_assets, gltf as room_gltf
+from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
+from gigascroll.room.files import load_room, write_gltf
+from gigascroll.room.gltf_nodes import glb_bytes as _glb_bytes
 
 MEMORY = 3 << 30  # the child's address space (the forked worker already maps ~1 GiB)
 
@@ -125,7 +126,7 @@ def test_fifo_swapped_in_after_the_check_does_not_block(fork_worker, tmp_path):
     fifo = tmp_path / "swap.bin"
     os.mkfifo(fifo)
     code = (
-        "from gigascroll.gallery import room_assets\n"
+        "from gigascroll.room import assets as room_assets\n"
         "room_assets.check_regular = lambda *a, **k: None  # the check passed, then a swap\n"
         "try:\n"
         f"    room_assets.read_regular({str(fifo)!r}, 'buffer', 1 << 20)\n"
@@ -210,7 +211,7 @@ def test_unused_bytes_are_not_read(fork_worker, tmp_path, what):
         with open(tmp_path / "room.bin", "r+b") as f:
             f.write(blob)
     path.write_text(json.dumps(header))
-    code = (f"from gigascroll.gallery.room_files import load_room\n"
+    code = (f"from gigascroll.room.files import load_room\n"
             f"spec = load_room({str(path)!r}, {EXAMPLE_PAINTINGS!r})\n"
             f"assert len(spec.paintings) == 2 and len(spec.surfaces) == 3, spec\n")
     o = fork_worker.run({"kind": "python", "code": code, "memory": MEMORY}, timeout=60)
@@ -371,7 +372,7 @@ def test_spec_violations_are_errors(tmp_path, name, change, message):
 
 
 def _matrix_of_trs(n):
-    from gigascroll.gallery.room_files import _local_matrix
+    from gigascroll.room.gltf_nodes import _local_matrix
 
     return [float(x) for x in _local_matrix(n).T.ravel()]
 
@@ -503,7 +504,7 @@ def test_fuzz_spec_rules(fork_worker, tmp_path_factory, target, value, instances
     h["nodes"] += [{"mesh": mesh, "translation": [0, 0.01 * i, 0]} for i in range(instances)]
     h["scenes"][0]["nodes"] += list(range(len(header["nodes"]), len(h["nodes"])))
     path.write_text(json.dumps(h))
-    code = (f"from gigascroll.gallery.room_files import load_room\n"
+    code = (f"from gigascroll.room.files import load_room\n"
             f"try:\n    load_room({str(path)!r}, {EXAMPLE_PAINTINGS!r})\n"
             f"except (ValueError, OSError) as e:\n    assert str(e)\n")
     o = fork_worker.run({"kind": "python", "code": code, "memory": MEMORY}, timeout=60)

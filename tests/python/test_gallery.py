@@ -246,7 +246,7 @@ def test_stream_makes_the_views_tiles_resident(tmp_path):
 
 
 def test_render_cli_renders_the_example_room_file(tmp_path, gigascroll_cli):
-    from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
+    from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
 
     images = [np.full((h // 10, w // 10, 3), c, np.uint8)
               for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]

@@ -1,4 +1,4 @@
-"""Fixed foveation of the gallery walk (gigascroll.gallery.foveation): the fovea's crop camera
+"""Fixed foveation of the gallery walk (gigascroll.walk.foveation): the fovea's crop camera
 traces the eye's own rays, so the foveated frame equals the unfoveated one there; the
 periphery is an upsampled image of a camera at twice the pitch, requested one level coarser;
 the rays saved are the analytic count; bad input fails in one line."""
@@ -11,8 +11,8 @@ import pytest
 from gigascroll import runtime
 from gigascroll import views as v
 from gigascroll.gallery import builtin_room
-from gigascroll.gallery.foveation import FoveatedDisplay, Foveation, crop_camera
-from gigascroll.gallery.walk import ExhibitionSource, GalleryWalk, parent_keys, walk_path
+from gigascroll.walk.foveation import FoveatedDisplay, Foveation, crop_camera
+from gigascroll.walk.gallery_walk import ExhibitionSource, GalleryWalk, parent_keys, walk_path
 from gigascroll.views.exhibition import Headset
 
 W, H = 96, 104

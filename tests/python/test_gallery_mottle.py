@@ -132,7 +132,7 @@ def test_surface_classes_follow_the_geometry(floor_room):
 @pytest.fixture(scope="module")
 def hall_table(tmp_path_factory):
     """The hall with two flat grey paintings of 0.5 m x 0.25 m lying on its table."""
-    from gigascroll.gallery.rooms import hall_room
+    from gigascroll.room.builtin import hall_room
 
     pack = uniform_pack(tmp_path_factory.mktemp("hall") / "p.pack", {"a": (200, 200, 200), "b": (180, 180, 180)})
     gal = Gallery.from_room(hall_room(pack, texel_m=0.002), pack)

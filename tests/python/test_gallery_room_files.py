@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from gigascroll import Camera
-from gigascroll.gallery.example_room import EXAMPLE_PAINTINGS, main, write_example_room
-from gigascroll.gallery.room_files import load_room, save_room, write_gltf
-from gigascroll.gallery.rooms import ROOM_NAMES, builtin_room
+from gigascroll.room.example import EXAMPLE_PAINTINGS, main, write_example_room
+from gigascroll.room.files import load_room, save_room, write_gltf
+from gigascroll.room.builtin import ROOM_NAMES, builtin_room
 from gigascroll.views.exhibition import SCROLL, TABLE4_PAINTINGS
 
 # ---- an independent glTF reader (numpy only) -------------------------------------------------

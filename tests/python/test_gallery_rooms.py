@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from gigascroll.gallery import rooms
-from gigascroll.gallery.room import RoomSpec
-from gigascroll.gallery.rooms import ROOM_NAMES, builtin_room
+from gigascroll.room import builtin as rooms
+from gigascroll.room.spec import RoomSpec
+from gigascroll.room.builtin import ROOM_NAMES, builtin_room
 from gigascroll.views.exhibition import SCROLL, TABLE4_PAINTINGS, multi_exhibition, single_scroll
 
 SHELL = ("floor", "ceiling", "walls")

@@ -1,4 +1,4 @@
-"""The gallery walk (gigascroll.gallery.walk, gigascroll gallery): streamed frames converge
+"""The gallery walk (gigascroll.walk.gallery_walk, gigascroll gallery): streamed frames converge
 to their all-resident oracle, stops sharpen within the seed's latency, the outputs are whole
 (PNG, MP4 decoded back by ffmpeg, report, JSON), and bad input fails in one line."""
 
@@ -10,7 +10,7 @@ import pytest
 
 from gigascroll import views as v
 from gigascroll.gallery import builtin_room
-from gigascroll.gallery.walk import (ExhibitionSource, GallerySource, GalleryWalk, compose_frame,
+from gigascroll.walk.gallery_walk import (ExhibitionSource, GallerySource, GalleryWalk, compose_frame,
                                      lens_in_view, parent_keys, stops_of, tone_map, walk_path)
 
 
@@ -161,7 +161,7 @@ def test_gallery_command_bad_files(gigascroll_cli, tmp_path, small_scroll_pack, 
     assert r.returncode == 2 and "NaN" in r.stderr, r.stderr
     assert not (tmp_path / "o1").exists() and not list(tmp_path.glob(".o1.tmp-*"))
     # A room whose painting the pack lacks.
-    from gigascroll.gallery.room_files import save_room
+    from gigascroll.room.files import save_room
     missing = dataclasses.replace(room, paintings=[dataclasses.replace(
         room.paintings[0], painting="absent", name="painting:absent")])
     save_room(missing, tmp_path / "room.glb")

@@ -12,7 +12,7 @@ import pytest
 
 import gigascroll
 from gigascroll.gallery import builtin_room
-from gigascroll.gallery.sizes import PaintingSize
+from gigascroll.room.sizes import PaintingSize
 
 # Quadrant colours: top-left, top-right, bottom-left, bottom-right (sRGB 8-bit).
 QUADRANTS = {"tl": (255, 0, 0), "tr": (0, 255, 0), "bl": (0, 0, 255), "br": (255, 255, 0)}

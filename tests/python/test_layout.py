@@ -75,7 +75,7 @@ def reachable(start: str) -> set[str]:
 
 
 def test_the_package_is_read():
-    assert {"gigascroll", "gigascroll.frame_loop", "gigascroll.experiments",
+    assert {"gigascroll", "gigascroll.walk.frame_loop", "gigascroll.experiments",
             "gigascroll.views.processing", "gigascroll.pack.build"} <= set(MODULES)
     assert "gigascroll.views.exhibition" in GRAPH["gigascroll.views.processing"]
     # function-level imports count: the CLI's bench command imports its benchmarks there
@@ -106,7 +106,7 @@ def test_nothing_below_the_frame_loop_imports_it():
     below = [m for m in MODULES if m.startswith(("gigascroll.views", "gigascroll.pack"))
              or m in ("gigascroll.runtime", "gigascroll.photon")]
     assert len(below) > 8
-    offenders = [m for m in below if "gigascroll.frame_loop" in reachable(m) | {m}]
+    offenders = [m for m in below if "gigascroll.walk.frame_loop" in reachable(m) | {m}]
     assert offenders == []
 
 
@@ -116,7 +116,7 @@ def test_the_layers_below_the_gallery_do_not_import_it():
     # server, the commands, the benchmarks or the scenarios. gigascroll.render takes a Gallery
     # through the core type it derives from, not by importing gigascroll.gallery.
     lower = [m for m in MODULES if m.startswith(("gigascroll.views", "gigascroll.pack"))
-             or m in ("gigascroll.runtime", "gigascroll.photon", "gigascroll.frame_loop",
+             or m in ("gigascroll.runtime", "gigascroll.photon", "gigascroll.walk.frame_loop",
                       "gigascroll.errors", "gigascroll.outputs", "gigascroll.display_mapping")]
     assert "gigascroll.photon" in lower and len(lower) > 10
     upper = ("gigascroll.gallery", "gigascroll.exhibit", "gigascroll.serve", "gigascroll.commands",

@@ -1,4 +1,4 @@
-"""A light's colour temperature as linear sRGB (gallery/light_colour.py) against colour-science:
+"""A light's colour temperature as linear sRGB (room/light_colour.py) against colour-science:
 the blackbody's spectrum (colour.sd_blackbody) integrated against the CIE 1931 2-degree
 observer that colour-science ships, XYZ to linear sRGB through its sRGB colourspace, both
 scaled to unit luminance."""
@@ -6,7 +6,7 @@ scaled to unit luminance."""
 import numpy as np
 import pytest
 
-from gigascroll.gallery.light_colour import KELVIN_RANGE, kelvin_to_rgb, luminance
+from gigascroll.room.light_colour import KELVIN_RANGE, kelvin_to_rgb, luminance
 
 colour = pytest.importorskip("colour")
 

@@ -1,4 +1,4 @@
-"""The light's figures as conservators use them (gigascroll light, gallery/lights.py,
+"""The light's figures as conservators use them (gigascroll light, room/lights.py,
 gallery/illuminance.py) against analytic answers.
 
 A room made here: a black box (albedo 0 everywhere, the light panel's diffuser too), so only
@@ -20,11 +20,11 @@ from gigascroll import cli
 from gigascroll.gallery import Gallery, PaintingSlot
 from gigascroll.gallery.conservation import LIMITS, check_exposure
 from gigascroll.gallery.illuminance import lux_stats, painting_lux
-from gigascroll.gallery.lights import LightSpec, light_surface, rectangle
-from gigascroll.gallery.polygon import unit_irradiance
-from gigascroll.gallery.room_files import save_room
-from gigascroll.gallery.rooms import builtin_room
-from gigascroll.gallery.slot_grid import slot_front, slot_points
+from gigascroll.room.lights import LightSpec, light_surface, rectangle
+from gigascroll.room.polygon import unit_irradiance
+from gigascroll.room.files import save_room
+from gigascroll.room.builtin import builtin_room
+from gigascroll.room.slot_grid import slot_front, slot_points
 
 from gallery_checks import box_room, uniform_pack
 

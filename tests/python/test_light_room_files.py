@@ -1,15 +1,15 @@
 """Light specs in room files: a glTF node whose extras hold {"light": {...}} becomes a
 LightSpec, its emission solved for the lux it should give a painting (checked with Lambert's
-formula, gallery/polygon.py) or for its lumens (flux = 683 x pi x area x luminance)."""
+formula, room/polygon.py) or for its lumens (flux = 683 x pi x area x luminance)."""
 
 import math
 
 import numpy as np
 import pytest
 
-from gigascroll.gallery.polygon import unit_irradiance
-from gigascroll.gallery.room_files import load_room, save_room, write_gltf
-from gigascroll.gallery.slot_grid import slot_front, slot_points
+from gigascroll.room.polygon import unit_irradiance
+from gigascroll.room.files import load_room, save_room, write_gltf
+from gigascroll.room.slot_grid import slot_front, slot_points
 
 from test_light_figures import black_room
 

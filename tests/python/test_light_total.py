@@ -12,10 +12,10 @@ import pytest
 
 from gigascroll import cli
 from gigascroll.gallery import PaintingSlot
-from gigascroll.gallery.polygon import unit_irradiance
-from gigascroll.gallery.lights import rectangle
-from gigascroll.gallery.room_files import save_room
-from gigascroll.gallery.slot_grid import slot_front, slot_points
+from gigascroll.room.polygon import unit_irradiance
+from gigascroll.room.lights import rectangle
+from gigascroll.room.files import save_room
+from gigascroll.room.slot_grid import slot_front, slot_points
 
 from gallery_checks import box_room, uniform_pack
 

@@ -15,7 +15,7 @@ import pytest
 from gigascroll import cli
 from gigascroll.commands import gallery as gallery_cmd
 from gigascroll.commands.view import default_screenshot, screenshot_pattern
-from gigascroll.gallery.frame_rates import FPS_MEANING
+from gigascroll.walk.frame_rates import FPS_MEANING
 from gigascroll.outputs import beside
 
 

@@ -280,8 +280,8 @@ ROOM_PAST_LIMIT = textwrap.dedent("""
     import resource, sys
     from gigascroll import outputs
     from gigascroll.gallery import builtin_room
-    from gigascroll.gallery.room_files import save_room
-    from gigascroll.gallery.sizes import PaintingSize
+    from gigascroll.room.files import save_room
+    from gigascroll.room.sizes import PaintingSize
     outputs.ignore_sigxfsz()
     spec = builtin_room("scroll", [PaintingSize("p", 6000, 400)])
     resource.setrlimit(resource.RLIMIT_FSIZE, (2000, 2000))  # every format is larger

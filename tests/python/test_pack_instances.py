@@ -17,7 +17,7 @@ import pytest
 
 from gigascroll import TilePack, VirtualTexture, _core, build_pack
 from gigascroll import views as v
-from gigascroll.frame_loop import FrameLoop
+from gigascroll.walk.frame_loop import FrameLoop
 from gigascroll.pack.reader import PurePack, parse_manifest_text
 
 SIZES = [(150, 90), (70, 120), (96, 40)]          # (width, height): three distinct scans

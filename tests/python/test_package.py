@@ -26,7 +26,7 @@ def test_subsystems_export_distinct_names():
 
 
 def test_exports_reach_package():
-    from gigascroll import frame_loop
+    from gigascroll.walk import frame_loop
     assert gigascroll.HashProcessor is v.HashProcessor
     assert "multi_exhibition" in gigascroll.__all__
     assert gigascroll.FrameLoop is frame_loop.FrameLoop

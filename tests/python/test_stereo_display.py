@@ -185,7 +185,7 @@ def test_display_bad_input(setup):
 @pytest.fixture(scope="module")
 def lit_gallery(small_scroll_pack):
     from gigascroll.gallery import builtin_room
-    from gigascroll.gallery.walk import GallerySource
+    from gigascroll.walk.gallery_walk import GallerySource
     room = builtin_room("scroll", small_scroll_pack)
     return GallerySource(room, small_scroll_pack, "baked", photons=20_000, spacing=0.25,
                          bake_samples=4), room

@@ -143,7 +143,7 @@ def test_window_toggles_the_foveation(display, tmp_path, small_scroll_pack):
     image) while the periphery, traced at 1/4 density and requested two levels coarser,
     differs; the rays traced per frame drop to the layout's count."""
     from gigascroll import views as v
-    from gigascroll.gallery.foveation import Foveation
+    from gigascroll.walk.foveation import Foveation
     from gigascroll.views.exhibition import Headset
 
     def toggle(key, shot):

@@ -136,7 +136,7 @@ def run_sampling(cache: Path, args) -> dict:
 def run_hits(cache: Path, args) -> dict:
     from .. import views as v
     from ..experiments import cached_pack
-    from ..frame_loop import FrameLoop
+    from ..walk.frame_loop import FrameLoop
     from ..pack import render_ink_landscape
     w, h = (int(x) for x in args.hit_size.lower().split("x"))
     raw, bc1 = _packs(cache, f"ink-{w}x{h}-s0", lambda: render_ink_landscape(w, h, 0, h, 0),

@@ -204,7 +204,7 @@ def _loop_figures(summary: dict, records: list) -> dict:
 def multi(args, pack, specs) -> list[dict]:
     """Fig. 11 / Table 5 at this scale: the 40-painting route, per method."""
     from .. import views as v
-    from ..frame_loop import FrameLoop
+    from ..walk.frame_loop import FrameLoop
     n = COPIES * len(specs)
     ex = v.multi_exhibition(n, specs)
     path = v.multi_route(n, duration=args.seconds, specs=specs)
@@ -221,8 +221,8 @@ def multi(args, pack, specs) -> list[dict]:
 def hall(args, pack, specs, scale: Fraction) -> dict:
     """The hall room with the 40 paintings (slot k shows pack painting k: the scans and their
     instances), walked along its first painting (the gallery walk's default path)."""
-    from ..gallery.rooms import TEXEL_M, hall_room
-    from ..gallery.walk import ExhibitionSource, GalleryWalk, walk_path
+    from ..room.builtin import TEXEL_M, hall_room
+    from ..walk.gallery_walk import ExhibitionSource, GalleryWalk, walk_path
     n = COPIES * len(specs)
     room = hall_room(specs, n, texel_m=TEXEL_M * scale.denominator)
     room = dataclasses.replace(room, paintings=[dataclasses.replace(s, painting=k)

@@ -61,9 +61,9 @@ def _distinct(buffers) -> np.ndarray:
 def region_errors(reference: np.ndarray, test: np.ndarray, masks: dict, exposure: float,
                   ppd: float | None = None) -> dict:
     """Per region (mask name): mean absolute difference and PSNR (dB) of the display values
-    (gallery.walk.tone_map / 255), and the mean FLIP when ppd is given and flip-evaluator is
+    (walk.gallery_walk.tone_map / 255), and the mean FLIP when ppd is given and flip-evaluator is
     installed."""
-    from ..gallery.walk import tone_map
+    from ..walk.gallery_walk import tone_map
     a = tone_map(reference, exposure).astype(np.float32) / 255
     b = tone_map(test, exposure).astype(np.float32) / 255
     flip_map = None
@@ -101,8 +101,8 @@ def run(args) -> int:
     from .. import _core, runtime
     from .. import views as v
     from ..errors import UserError
-    from ..gallery.foveation import FoveatedDisplay, Foveation
-    from ..gallery.walk import parent_keys
+    from ..walk.foveation import FoveatedDisplay, Foveation
+    from ..walk.gallery_walk import parent_keys
     from ..views.exhibition import Headset
 
     if not 32 <= args.width <= 8192:
@@ -219,7 +219,7 @@ def _figure(path: Path, plain, foveated, flip_map, lay, exposure: float, size: s
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
-    from ..gallery.walk import tone_map
+    from ..walk.gallery_walk import tone_map
     a, b = tone_map(plain, exposure), tone_map(foveated, exposure)
     diff = np.abs(a.astype(np.float32) - b.astype(np.float32)).max(axis=2) / 255
     fig, ax = plt.subplots(2, 3, figsize=(15, 10.5))

@@ -1,6 +1,6 @@
 """`gigascroll bench mottle`: the mottle of the baked light against Mitsuba 3 (issue 40).
 
-For each room (`scroll`, `hall`, and the example glTF room of gallery.example_room) with
+For each room (`scroll`, `hall`, and the example glTF room of room.example) with
 paintings of one flat colour (so that relative radiance error is relative irradiance error):
 a high-spp Mitsuba 3 reference (cached, keyed as `bench gallery`'s), then our baked still at
 each configuration (photons x bake spacing x bake light samples x gather radius x sphere or
@@ -78,8 +78,8 @@ def room_and_pack(name: str, scratch: Path):
     """The room's spec and its flat pack: the bench gallery's painting sizes for scroll and
     hall, the example room's own for the glTF room."""
     from ..gallery import builtin_room
-    from ..gallery.example_room import EXAMPLE_PAINTINGS, write_example_room
-    from ..gallery.room_files import load_room
+    from ..room.example import EXAMPLE_PAINTINGS, write_example_room
+    from ..room.files import load_room
 
     if name == "example":
         pack = flat_pack(scratch / "example", EXAMPLE_PAINTINGS)

@@ -21,7 +21,7 @@ from ..experiments import (painting_sweep, pattern_image, pyplot, save_figure, s
                            time_processing, width_for_tiles, write_json)
 from .._core import hardware_threads
 from ..errors import UserError
-from ..frame_loop import STAGES, FrameLoop
+from ..walk.frame_loop import STAGES, FrameLoop
 from ..pack import build_pack
 
 PAINTING_COUNTS = (8, 16, 24, 32, 40)

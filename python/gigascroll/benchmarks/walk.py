@@ -84,7 +84,7 @@ def lit_scroll_walk(args):
     """(pack, room, source, path): the --pack (or demo) painting in the built-in scroll room,
     lit and baked with --photons, and its 4 s default walk; the walk benchmarks' common scene."""
     from ..gallery import builtin_room
-    from ..gallery.walk import GallerySource, walk_path
+    from ..walk.gallery_walk import GallerySource, walk_path
     pack = _pack(args.pack)
     room = builtin_room("scroll", pack)
     t0 = time.perf_counter()
@@ -97,7 +97,7 @@ def run(args) -> int:
     from .. import runtime
     from .. import views as v
     from .._core import DisplayPass
-    from ..gallery.walk import parent_keys
+    from ..walk.gallery_walk import parent_keys
     from ..views.exhibition import Headset
 
     parts = {x.strip() for x in args.parts.split(",") if x.strip()}
@@ -234,7 +234,7 @@ def _right_vs_left(src, vt, poses, eyes, thr, args, results) -> None:
 def _loop(src, pack, path, thr, args, results) -> None:
     """3. the whole loop's frame rate per eye size, with the magnifier and without (oracle off)."""
     from .. import views as v
-    from ..gallery.walk import GalleryWalk
+    from ..walk.gallery_walk import GalleryWalk
     sizes = [(1800, 1920), (900, 960), (450, 480), (225, 240), (112, 120), (56, 60)]
     short = v.CameraPath(path.position[:args.frames], path.forward[:args.frames],
                          path.up[:args.frames], path.magnifier_target[:args.frames],
@@ -262,7 +262,7 @@ def _loop(src, pack, path, thr, args, results) -> None:
 def _stops(src, pack, room, thr, results) -> None:
     """4. display latency after stops and convergence to the oracle (the loads of each frame
     drained when they arrive: a real loop, not waiting)."""
-    from ..gallery.walk import GalleryWalk, walk_path
+    from ..walk.gallery_walk import GalleryWalk, walk_path
     walk = GalleryWalk(src, pack, walk_path(room, seconds=2.0), eye=(225, 240), threads=thr)
     s = walk.run()
     results["stops"] = s["stops"]

@@ -61,8 +61,8 @@ def gallery_walk(pack, out: Path, eye: str, seconds: float, args=None) -> None:
     """The main job: the walk along the painting in the lit `scroll` room, both eyes streamed
     through the virtual texture with the magnifier, written as video, frames and report."""
     from ..gallery import builtin_room
-    from ..gallery.record import record_walk
-    from ..gallery.walk import GallerySource, GalleryWalk, walk_path
+    from ..walk.record import record_walk
+    from ..walk.gallery_walk import GallerySource, GalleryWalk, walk_path
     from .gallery import parse_eye
 
     w, h = parse_eye(eye)
@@ -80,7 +80,7 @@ def gallery_walk(pack, out: Path, eye: str, seconds: float, args=None) -> None:
     res = record_walk(walk, out, settings={"room": "scroll", "eye": f"{w}x{h}",
                                            "seconds": seconds, "lighting": "baked"})
     s = res["summary"]
-    from ..gallery.frame_rates import fps_text
+    from ..walk.frame_rates import fps_text
     print(f"gallery walk: {s['frames']} frames at {w}x{h} per eye, {fps_text(s)} on this "
           f"machine, right eye reusing {100 * s['reused_share']:.0f} % of its pixels, hit rate "
           f"{s['hit_rate']:.3f}, error vs oracle {s['error_mean']:.2g} mean / "

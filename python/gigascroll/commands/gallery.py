@@ -85,7 +85,7 @@ def parse_foveation(degrees, factor, eye=(1800, 1920)):
     """--fovea DEG and --fovea-factor K as a Foveation (None when --fovea is not given),
     checked against the headset's field of view at the per-eye resolution `eye`."""
     from .. import views as v
-    from ..gallery.foveation import Foveation
+    from ..walk.foveation import Foveation
     from ..views.exhibition import Headset
     if degrees is None:
         return None
@@ -107,13 +107,13 @@ def load_room(room: str, pack):
     if not path.is_file():
         raise UserError(f"--room must be {', '.join(ROOM_NAMES)} or a room file; {room!r} is "
                         "neither")
-    from ..gallery.room_files import load_room as load_file
+    from ..room.files import load_room as load_file
     return load_file(path, pack)
 
 
 def load_path(path: str, room, seconds: float):
     from .. import views as v
-    from ..gallery.walk import walk_path
+    from ..walk.gallery_walk import walk_path
     if path == "walk":
         return walk_path(room, seconds)
     p = Path(path)
@@ -184,7 +184,7 @@ def builtin_pack(work: Path | None = None):
 
 
 def run(args) -> int:
-    from ..gallery.record import prepare_output
+    from ..walk.record import prepare_output
     from ..outputs import signals_interrupt
 
     eye = parse_eye(args.eye)
@@ -205,7 +205,7 @@ def run(args) -> int:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
     s = results["summary"]
-    from ..gallery.frame_rates import fps_text
+    from ..walk.frame_rates import fps_text
     print(f"{s['frames']} frames at {eye[0]}x{eye[1]} per eye: {fps_text(s)}; display "
           f"{s['display_ms']:.1f} ms/frame (left {s['left_display_ms']:.1f}, right "
           f"{s['right_display_ms']:.1f} reusing {100 * s['reused_share']:.0f} %); hit rate "
@@ -228,9 +228,9 @@ def default_out(args) -> Path:
 
 def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     """Opens the pack, room and path, lights the room and records the walk into `tmp`."""
-    from ..gallery.record import record_walk
-    from ..gallery.video import check_fps
-    from ..gallery.walk import GallerySource, GalleryWalk
+    from ..walk.record import record_walk
+    from ..walk.video import check_fps
+    from ..walk.gallery_walk import GallerySource, GalleryWalk
     from ..pack import TilePack
 
     from .exhibition_options import open_exhibition

@@ -85,8 +85,8 @@ def _check_args(args) -> None:
 
 def _room(args, pack):
     """The room spec, its lights replaced by --lights when given."""
-    from ..gallery.lights import light_surface, load_lights
-    from ..gallery.rooms import ROOM_NAMES, builtin_room
+    from ..room.lights import light_surface, load_lights
+    from ..room.builtin import ROOM_NAMES, builtin_room
     from .gallery import load_room
     lights = load_lights(args.lights) if args.lights else None
     if args.room in ROOM_NAMES:

@@ -142,7 +142,7 @@ def _room_still_options(args) -> dict:
 def run_room(args, out: Path) -> int:
     from .. import TilePack
     from ..gallery import Gallery, builtin_room
-    from ..gallery.rooms import ROOM_NAMES
+    from ..room.builtin import ROOM_NAMES
 
     if args.scene:
         raise UserError("give either a built-in SCENE or --room, not both")
@@ -163,7 +163,7 @@ def run_room(args, out: Path) -> int:
         if args.room in ROOM_NAMES:
             spec = builtin_room(args.room, pack)
         else:
-            from ..gallery.room_files import load_room
+            from ..room.files import load_room
 
             spec = load_room(args.room, pack)
         gallery = Gallery.from_room(spec, pack)

@@ -168,8 +168,8 @@ class Viewer:
 
         from .. import runtime
         from .. import views as v
-        from ..gallery.foveation import Foveation
-        from ..gallery.walk import GallerySource, GalleryWalk, walk_path
+        from ..walk.foveation import Foveation
+        from ..walk.gallery_walk import GallerySource, GalleryWalk, walk_path
         from .display_options import display_of
         self.np, self.v, self.window, self.args = np, v, window, args
         self.source = GallerySource(room, pack, args.lighting, photons=args.photons,
@@ -354,7 +354,7 @@ class Viewer:
         rec, (left, right, mag, lenses) = self.walk.step(self.frame, self.state,
                                                          views=self.views(), moving=moved,
                                                          foveate=self.foveate)
-        from ..gallery.walk import compose_frame
+        from ..walk.gallery_walk import compose_frame
         rgb = self.source.response.srgb8(compose_frame(left, right, mag, lenses))
         frame_s = time.perf_counter() - t0
         self.fps = 0.8 * self.fps + 0.2 / max(frame_s, 1e-6) if self.frame else 1 / frame_s

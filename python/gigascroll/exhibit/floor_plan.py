@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..gallery.lights import LightSpec, light_surface, lights_from_json, rectangle
-from ..gallery.room import PaintingSlot, RoomSpec
-from ..gallery.rooms import (CEILING_ALBEDO, FLOOR_ALBEDO, GALLERY_LUX, TABLE_ALBEDO,
+from ..room.lights import LightSpec, light_surface, lights_from_json, rectangle
+from ..room.spec import PaintingSlot, RoomSpec
+from ..room.builtin import (CEILING_ALBEDO, FLOOR_ALBEDO, GALLERY_LUX, TABLE_ALBEDO,
                              WALL_ALBEDO, _box_quads, _quad, _surface)
 from .labels import LABEL_GAP_M, LABEL_H_M, LABEL_W_M
 from .model import Exhibition
@@ -92,8 +92,8 @@ def build_room(ex: Exhibition, pack=None) -> RoomSpec:
     labels: `label-NAME`). `pack` (a TilePack) is needed for a room file only."""
     lights = _lights(ex)
     if "builtin" in ex.room:
-        from ..gallery.rooms import builtin_room
-        from ..gallery.sizes import PaintingSize
+        from ..room.builtin import builtin_room
+        from ..room.sizes import PaintingSize
         sizes = [PaintingSize(p.name, p.pixels[0], p.pixels[1], p.width_m, p.height_m)
                  for p in ex.paintings]
         try:
@@ -121,7 +121,7 @@ def _lights(ex: Exhibition):
 
 
 def _file_room(ex: Exhibition, pack, lights) -> RoomSpec:
-    from ..gallery.room_files import load_room
+    from ..room.files import load_room
     try:
         spec = load_room(ex.room["file"], pack)
     except (OSError, ValueError) as e:

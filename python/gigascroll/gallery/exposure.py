@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from ..display_mapping import LUMENS_PER_WATT, Display, ExposureSetting
-from .polygon import unit_irradiance
-from .room import RoomSpec
+from ..room.polygon import unit_irradiance
+from ..room.spec import RoomSpec
 
 __all__ = ["painting_lux", "auto_lux", "room_display", "FALLBACK_LUX"]
 

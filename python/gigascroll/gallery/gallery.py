@@ -26,7 +26,7 @@ import numpy as np
 from .. import _core
 from .._core import Camera, TilePack
 from ..errors import positive_float32
-from .room import PaintingSlot, RoomSpec, Surface
+from ..room.spec import PaintingSlot, RoomSpec, Surface
 
 __all__ = ["Gallery", "LIGHTING_MODES", "PAINTING_REFLECTANCE", "painting_albedo"]
 

@@ -10,8 +10,8 @@ perpendicular to a plane maps its pixel grid onto a uniform grid there). A point
 does not see on the painting (something within 1 cm in front of it) is NaN.
 
 Lux: irradiance E (W / m^2 per linear sRGB channel) -> 683 lm / W x (0.2126 E_r + 0.7152 E_g +
-0.0722 E_b), the photometric weighting of linear sRGB (gallery/light_colour.py); for white
-light this is the project's "lux equivalent" (gallery/rooms.py).
+0.0722 E_b), the photometric weighting of linear sRGB (room/light_colour.py); for white
+light this is the project's "lux equivalent" (room/builtin.py).
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ import numpy as np
 
 from .._core import Camera
 from .conservation import CategoryLimits, annual_exposure, check_exposure
-from .light_colour import luminance
-from .lights import LUMENS_PER_WATT, light_colour, panels_irradiance
-from .slot_grid import grid_shape, slot_front, slot_points
+from ..room.light_colour import luminance
+from ..room.lights import LUMENS_PER_WATT, light_colour, panels_irradiance
+from ..room.slot_grid import grid_shape, slot_front, slot_points
 
 __all__ = ["CAMERA_DISTANCE_M", "painting_lux", "direct_lux", "lux_stats", "painting_figures"]
 

@@ -2,7 +2,7 @@
 `--targets total`).
 
 A light spec's lux target is solved on the direct illuminance (Lambert's formula, exact and
-free: gallery/lights.py). A pale room adds tens of percent to it, and a conservator who asks
+free: room/lights.py). A pale room adds tens of percent to it, and a conservator who asks
 for 50 lx means 50 lx measured. The total illuminance is still linear in the lights'
 radiances (light transport is linear in the emission, the albedos fixed), so with the k
 lights that have a painting target measured one at a time (each alone, at its direct-solved
@@ -17,7 +17,7 @@ import copy
 
 import numpy as np
 
-from .room import RoomSpec
+from ..room.spec import RoomSpec
 
 __all__ = ["solve_total_targets", "total_target_lights"]
 

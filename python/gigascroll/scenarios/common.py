@@ -15,7 +15,7 @@ import numpy as np
 from .. import views as v
 from ..experiments import (cached_pack, pattern_image, pyplot, save_figure, scroll_pack, spec_of,
                            write_json)
-from ..frame_loop import STAGES, FrameLoop
+from ..walk.frame_loop import STAGES, FrameLoop
 from ..outputs import write_bytes, write_text
 from ..pack import TilePack
 from ..views.baselines import LodMapping

@@ -21,10 +21,10 @@ import numpy as np
 from .. import runtime
 from ..gallery import Gallery, builtin_room
 from ..gallery.gallery import PAINTING_REFLECTANCE
-from ..gallery.rooms import ROOM_NAMES
+from ..room.builtin import ROOM_NAMES
 from .._core import TilePack
 from ..errors import expect_type
-from ..gallery.room import RoomSpec
+from ..room.spec import RoomSpec
 from ..outputs import write_bytes
 from .room_glb import room_glb
 
@@ -62,7 +62,7 @@ def load_room_spec(room: str, pack):
     """The RoomSpec of a built-in room name or a room file (ValueError / OSError if bad)."""
     if room in ROOM_NAMES:
         return builtin_room(room, pack)
-    from ..gallery.room_files import load_room
+    from ..room.files import load_room
 
     return load_room(room, pack)
 

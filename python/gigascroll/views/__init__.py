@@ -8,7 +8,7 @@ without a feedback pass.
 - :mod:`.processing`: feedback, request processing, loading strategies, the display pass
 - :mod:`.baselines`: Ma VT and LOD-texture's LOD mapping
 
-The frame loop that runs all of it (gigascroll.frame_loop) builds on this package; nothing
+The frame loop that runs all of it (gigascroll.walk.frame_loop) builds on this package; nothing
 here imports it.
 """
 

@@ -21,12 +21,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import runtime
-from . import views as v
-from ._core import TilePack, VirtualTextureLookup
-from .errors import expect_type
-from .pack.reader import PurePack
-from .views.baselines import BASELINES, make_baseline
+from .. import runtime
+from .. import views as v
+from .._core import TilePack, VirtualTextureLookup
+from ..errors import expect_type
+from ..pack.reader import PurePack
+from ..views.baselines import BASELINES, make_baseline
 
 __all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS", "load_stages",
            "request_hit_rate", "progress_bar", "end_frame", "frame_summary"]

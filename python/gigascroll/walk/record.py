@@ -20,7 +20,7 @@ from ..outputs import (check_output, has_mark, remove_stale_temps, replace_dir,
                        signals_interrupt, temp_dir, write_image, write_mark, write_text)
 from .frame_rates import fps_text
 from .video import VideoWriter, check_fps
-from .walk import DISPLAY_PARTS, WALK_STAGES, GalleryWalk, compose_frame
+from .gallery_walk import DISPLAY_PARTS, WALK_STAGES, GalleryWalk, compose_frame
 
 __all__ = ["record_walk", "prepare_output", "is_gallery_output", "MARKER"]
 

@@ -27,11 +27,11 @@ from .. import _core
 from .. import runtime
 from ..display_mapping import Display, exposure_for_white, to_srgb8
 from .. import views as v
-from ..frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
+from .frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
 from ..views.exhibition import Headset
 from .frame_rates import FPS_MEANING
-from .room import RoomSpec
-from .tile_keys import parent_keys
+from ..room.spec import RoomSpec
+from ..gallery.tile_keys import parent_keys
 
 __all__ = ["FrameSource", "ExhibitionSource", "GallerySource", "walk_path", "stops_of", "GalleryWalk", "WALK_STAGES", "DISPLAY_PARTS",
            "compose_frame", "tone_map", "lens_in_view", "parent_keys"]
@@ -137,8 +137,8 @@ class GallerySource(FrameSource):
     def __init__(self, room: RoomSpec, pack, lighting: str = "baked", photons: int = 1 << 18,
                  spacing: float | None = None, bake_samples: int = 32, threads: int = 0,
                  exposure: float | None = None, response=None):
-        from .exposure import room_display
-        from .gallery import Gallery
+        from ..gallery.exposure import room_display
+        from ..gallery.gallery import Gallery
         if lighting not in ("baked", "full", "unlit"):
             raise ValueError(f"lighting must be baked, full or unlit, got {lighting!r}")
         check_room_paintings(room, pack)
@@ -209,7 +209,7 @@ def lit_exposure() -> float:
     """The exposure factor of `white=GALLERY_LUX` (display_mapping): a white painting under
     the gallery's target illuminance is exposed to paper white. Rooms expose automatically
     (gallery/exposure.py); this is the fixed figure for callers without a room."""
-    from .rooms import GALLERY_LUX
+    from ..room.builtin import GALLERY_LUX
 
     return exposure_for_white(GALLERY_LUX)
 
@@ -294,7 +294,7 @@ class GalleryWalk:
     on_frame(frame, record, images): called with the frame's record and its display images
     (left, right, magnifier or None, lenses) before the next frame starts (the next frame
     renders into the same arrays: copy what you keep).
-    foveation: a gallery.foveation.Foveation (None: off): each eye's fovea traced at full
+    foveation: a walk.foveation.Foveation (None: off): each eye's fovea traced at full
     density, its periphery at a lower one, and both requested by their own cameras."""
     source: FrameSource
     pack: object

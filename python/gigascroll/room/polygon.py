@@ -1,6 +1,6 @@
 """Lambert's formula for the irradiance a planar polygon of uniform radiance gives a point:
 the exact direct light of the gallery's rectangular lights, which the built-in rooms and the
-light specs (gallery/lights.py) solve their emission with, and the tests' analytic reference."""
+light specs (room/lights.py) solve their emission with, and the tests' analytic reference."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The points at which a painting's illuminance is computed: a grid of cell centres over its
-slot, the same for the light specs' target solve (gallery/lights.py) and the `light` command's
+slot, the same for the light specs' target solve (room/lights.py) and the `light` command's
 maps, so that a light solved for a mean illuminance measures that mean."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .room import PaintingSlot
+from .spec import PaintingSlot
 
 __all__ = ["grid_shape", "slot_points", "slot_front"]
 

@@ -13,7 +13,7 @@ Why a shipped table and numpy rather than colour-science at run time: the comput
 weighted sum over 471 wavelengths, and colour-science (a large package whose import takes a
 second and warns without SciPy) stays a test-only dependency, the tests' independent reference.
 
-Lux: the project's "lux equivalent" (gallery/rooms.py) is 683 lm / W times irradiance. For a
+Lux: the project's "lux equivalent" (room/builtin.py) is 683 lm / W times irradiance. For a
 coloured light the photometric quantity is the luminance-weighted sum of the linear sRGB
 channels, Y = 0.2126 R + 0.7152 G + 0.0722 B (the Y row of sRGB's RGB -> XYZ, IEC 61966-2-1),
 times 683 lm / W; for a white light (equal channels) it is the channel value times 683, as

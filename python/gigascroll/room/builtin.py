@@ -7,7 +7,7 @@ in W / m^2 per channel times 683 lm / W (the lumen's definition at 555 nm), so a
 200 lux is 200 / 683 = 0.293 W / m^2 per channel. The light radiances are solved so that the
 *direct* illuminance on the paintings (from the lights alone, computed exactly with Lambert's
 polygon formula) meets the target; interreflections add to it (tens of percent in these rooms),
-as they would in a real gallery. Each room's lights are `LightSpec`s (gallery/lights.py: panels,
+as they would in a real gallery. Each room's lights are `LightSpec`s (room/lights.py: panels,
 colour temperature, lumens or a lux target) that a caller may replace. A display of these
 rooms needs an exposure: a painting of
 albedo 0.5 under 200 lux eq. has radiance 0.5 * 0.293 / pi = 0.047.
@@ -37,7 +37,7 @@ from ..views.exhibition import TEXEL_M
 from .lights import LightSpec, light_surface
 from .lights import LIGHT_ALBEDO  # noqa: F401  (a room's light panels, as before)
 from .polygon import polygon_irradiance, unit_irradiance
-from .room import PaintingSlot, RoomSpec, Surface
+from .spec import PaintingSlot, RoomSpec, Surface
 from .sizes import PaintingSize, painting_sizes
 
 __all__ = ["ROOM_NAMES", "builtin_room", "scroll_room", "hall_room", "LUMENS_PER_WATT",

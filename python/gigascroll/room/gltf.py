@@ -16,7 +16,7 @@ The checks, in order, all on the JSON (and the sizes it declares):
   - the budget: the triangles and vertices of every mesh instance the scene draws, counted
     from the accessors' counts times the instances in the node graph, within what the
     gallery can bake, before any instance is expanded;
-  - every file the room names is a regular file (room_assets).
+  - every file the room names is a regular file (room/assets.py).
 
 Then only the buffers that the drawn meshes' POSITION and indices accessors read are read
 (safely, and only the bytes they declare); images, textures, skins, animations and other
@@ -29,7 +29,7 @@ import json
 import struct
 from pathlib import Path
 
-from .room_assets import (MAX_FILE_BYTES, MAX_VERTICES, check_regular, check_triangles,
+from .assets import (MAX_FILE_BYTES, MAX_VERTICES, check_regular, check_triangles,
                           read_regular)
 
 __all__ = ["read_gltf", "check_gltf", "trimesh_input", "list_of_dicts", "NODE_TAG",
@@ -341,7 +341,7 @@ def _mesh_size(header: dict, mesh: dict) -> tuple[int, int]:
 
 def _check_budget(header: dict, drawn: list[int], path: Path):
     """The drawn instances' triangles and vertices, before any of them is expanded: within
-    what the gallery can bake (room_assets.MAX_TRIANGLES)."""
+    what the gallery can bake (assets.MAX_TRIANGLES)."""
     meshes, nodes = header.get("meshes", []), header.get("nodes", [])
     sizes = [_mesh_size(header, m) for m in meshes]
     instances = [nodes[i]["mesh"] for i in drawn if "mesh" in nodes[i]]

@@ -9,7 +9,7 @@ white). Its intensity is either
   flux = 683 lm/W x pi x area x L for a Lambertian panel of radiance L at unit luminance; or
 - a target illuminance in lux: the mean *direct* illuminance over a painting slot (its
   slot_grid points) or over given points, for which the radiance is solved exactly. The direct
-  illuminance is linear in the radiance, and Lambert's polygon formula (gallery/polygon.py)
+  illuminance is linear in the radiance, and Lambert's polygon formula (room/polygon.py)
   gives it for unit radiance with nothing in between. Interreflections add to it (tens of
   percent in a pale room; nothing with black walls), as they would in a real gallery; the
   `light` command measures the total.
@@ -31,14 +31,14 @@ import numpy as np
 
 from .light_colour import LUMINANCE_WEIGHTS, kelvin_to_rgb
 from .polygon import unit_irradiance
-from .room import PaintingSlot, Surface
+from .spec import PaintingSlot, Surface
 from .slot_grid import slot_front, slot_points
 
 __all__ = ["LightSpec", "LIGHT_ALBEDO", "SOLVE_SAMPLES", "rectangle", "light_surface",
            "light_colour", "solve_radiance", "panels_irradiance", "lights_from_json",
            "light_from_extras", "load_lights"]
 
-LUMENS_PER_WATT = 683.0   # as gallery/rooms.py: lux equivalent per W / m^2
+LUMENS_PER_WATT = 683.0   # as room/builtin.py: lux equivalent per W / m^2
 LIGHT_ALBEDO = (0.70, 0.70, 0.70)  # a light panel's diffuser
 SOLVE_SAMPLES = 64        # slot_grid cells along a painting's longer side for a target solve
 MAX_EXTENT_M = 10_000.0

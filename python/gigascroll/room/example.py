@@ -3,7 +3,7 @@ room with a plinth, a ceiling light and two painting placeholders, in a node hie
 translations, rotations, a non-uniform scale and a mirroring scale (so readers must apply the
 transforms and the glTF winding rule).
 
-    python -m gigascroll.gallery.example_room OUT.glb      # or .gltf, .obj, .ply
+    python -m gigascroll.room.example OUT.glb      # or .gltf, .obj, .ply
 
 Nodes (parents first):
   gallery           root: translation (2, 0, -1), rotation 20 degrees about +y
@@ -90,7 +90,7 @@ def example_nodes(paintings=None) -> list[dict]:
 def write_example_room(path, paintings=None) -> Path:
     """Write the example room as .glb or .gltf (the node hierarchy as above), or as .obj / .ply
     (the same room with the transforms applied, as those formats have none)."""
-    from .room_files import load_room, save_room, write_gltf
+    from .files import load_room, save_room, write_gltf
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -111,7 +111,7 @@ def write_example_room(path, paintings=None) -> Path:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m gigascroll.gallery.example_room OUT.glb|.gltf|.obj|.ply",
+        print("usage: python -m gigascroll.room.example OUT.glb|.gltf|.obj|.ply",
               file=sys.stderr)
         return 2
     try:

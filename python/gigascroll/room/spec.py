@@ -46,7 +46,7 @@ class PaintingSlot:
 @dataclass
 class RoomSpec:
     """A room: its surfaces, its painting slots, a suggested first camera, and the light specs
-    (gallery/lights.py `LightSpec`) its emitting surfaces were made from, where known."""
+    (room/lights.py `LightSpec`) its emitting surfaces were made from, where known."""
 
     name: str
     surfaces: list[Surface] = field(default_factory=list)
