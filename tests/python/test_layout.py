@@ -1,6 +1,6 @@
-"""The code's layout: the Python package's imports form no circle and respect its layers,
-and the C++ core's includes follow the data flow between its folders. Both read the sources
-as text (ast, #include lines); nothing is imported or compiled."""
+"""The code's layout: the Python package's imports form no circle and follow the data flow
+between its layers (PY_LAYERS), and the C++ core's includes follow it between its folders.
+Both read the sources as text (ast, #include lines); nothing is imported or compiled."""
 
 import ast
 import re
@@ -102,27 +102,86 @@ def test_python_imports_have_no_circle():
     assert circles == []
 
 
-def test_nothing_below_the_frame_loop_imports_it():
-    below = [m for m in MODULES if m.startswith(("gigascroll.views", "gigascroll.pack"))
-             or m in ("gigascroll.runtime", "gigascroll.photon")]
-    assert len(below) > 8
-    offenders = [m for m in below if "gigascroll.walk.frame_loop" in reachable(m) | {m}]
-    assert offenders == []
+# The package's modules and packages in data-flow order, as CPP_FOLDERS is for cpp/: a module
+# may import its own layer's modules and those of the layers before it, never a later layer's.
+# A name stands for the module or package of that name and everything under it; the package
+# itself (gigascroll/__init__.py, which re-exports the public names) only for itself.
+PY_LAYERS = (
+    ("shared", ("gigascroll._core", "gigascroll.errors", "gigascroll.outputs",
+                "gigascroll.display_mapping")),
+    ("prepare", ("gigascroll.pack",)),
+    ("determine", ("gigascroll.views",)),
+    ("load, cache, sample", ("gigascroll.runtime",)),
+    ("render", ("gigascroll.photon",)),
+    ("room", ("gigascroll.room",)),
+    ("light", ("gigascroll.gallery",)),
+    ("publish", ("gigascroll.iiif_presentation", "gigascroll.export", "gigascroll.iiif_exhibition",
+                 "gigascroll.exhibit")),
+    ("experiments", ("gigascroll.experiments",)),
+    ("walk", ("gigascroll.walk",)),
+    ("top", ("gigascroll.scenarios", "gigascroll.benchmarks", "gigascroll.serve",
+             "gigascroll.commands", "gigascroll.cli", "gigascroll.__main__", "gigascroll")),
+)
 
 
-def test_the_layers_below_the_gallery_do_not_import_it():
-    # The flow's lower layers (prepare, determine, load, cache, sample, the photon renderer and
-    # the shared modules) reach nothing above them: not the gallery, the exhibition, the
-    # server, the commands, the benchmarks or the scenarios. gigascroll.render takes a Gallery
-    # through the core type it derives from, not by importing gigascroll.gallery.
-    lower = [m for m in MODULES if m.startswith(("gigascroll.views", "gigascroll.pack"))
-             or m in ("gigascroll.runtime", "gigascroll.photon", "gigascroll.walk.frame_loop",
-                      "gigascroll.errors", "gigascroll.outputs", "gigascroll.display_mapping")]
-    assert "gigascroll.photon" in lower and len(lower) > 10
-    upper = ("gigascroll.gallery", "gigascroll.exhibit", "gigascroll.serve", "gigascroll.commands",
-             "gigascroll.benchmarks", "gigascroll.scenarios", "gigascroll.cli")
-    bad = [f"{a} -> {b}" for a in lower for b in sorted(reachable(a)) if b.startswith(upper)]
-    assert bad == []
+def layer_of(module: str, layers=PY_LAYERS) -> int | None:
+    """The index of the layer that holds `module` (its longest listed prefix), or None."""
+    best, index = "", None
+    for i, (_, names) in enumerate(layers):
+        for name in names:
+            under = "." in name and module.startswith(name + ".")
+            if (module == name or under) and len(name) > len(best):
+                best, index = name, i
+    return index
+
+
+def layer_violations(graph: dict, layers=PY_LAYERS) -> list[str]:
+    """Each module of `graph` ({module: modules it imports}) that no layer holds, and each
+    import that points up the flow (to a later layer)."""
+    bad = []
+    for a in sorted(graph):
+        la = layer_of(a, layers)
+        if la is None:
+            bad.append(f"{a}: in no layer of the data flow")
+            continue
+        for b in sorted(graph[a]):
+            lb = layer_of(b, layers)
+            if lb is not None and lb > la:
+                bad.append(f"{a} -> {b} points up the flow ({layers[la][0]} comes before "
+                           f"{layers[lb][0]})")
+    return bad
+
+
+def test_python_imports_follow_the_data_flow():
+    assert layer_violations(GRAPH) == []
+
+
+def test_the_layer_check_catches_an_import_up_the_flow():
+    # A package whose cache imports the walk (up the flow) and whose walk imports the cache
+    # (down it), plus a module no layer holds: the first and the last are reported.
+    graph = {"gigascroll.runtime": {"gigascroll.walk.frame_loop", "gigascroll.errors"},
+             "gigascroll.walk.frame_loop": {"gigascroll.runtime"},
+             "gigascroll.errors": set(),
+             "gigascroll.stray": set()}
+    bad = layer_violations(graph)
+    assert bad == ["gigascroll.runtime -> gigascroll.walk.frame_loop points up the flow "
+                   "(load, cache, sample comes before walk)",
+                   "gigascroll.stray: in no layer of the data flow"]
+
+
+def test_the_layers_hold_the_package():
+    # Every layer names something that exists, and the lower layers reach nothing above them:
+    # photon.render takes a Gallery through the core type it derives from, not by importing
+    # gigascroll.gallery; the room model is read without the gallery that lights it.
+    for _, names in PY_LAYERS:
+        for name in names:
+            assert name in MODULES or name in EXTENSIONS or any(
+                m.startswith(name + ".") for m in MODULES), name
+    assert layer_of("gigascroll.room.files") < layer_of("gigascroll.gallery.gallery") \
+        < layer_of("gigascroll.walk.gallery_walk") < layer_of("gigascroll.cli")
+    assert layer_of("gigascroll.gallery") == layer_of("gigascroll.gallery.lights_anything")
+    assert "gigascroll.gallery.gallery" not in reachable("gigascroll.photon")
+    assert not any(m.startswith("gigascroll.gallery") for m in reachable("gigascroll.room.files"))
 
 
 def test_scenarios_and_benchmarks_do_not_import_each_other():
