@@ -28,8 +28,9 @@ class Show:
 
     @property
     def titles(self) -> dict:
-        """title -> the pack painting's name (a slot's painting), for --look-at."""
-        return {p.title: p.name for p in self.exhibition.paintings}
+        """title -> the painting's name in the show's pack (a slot's painting), for
+        --look-at: a given pack shown as is keeps its own names."""
+        return {p.title: p.pack_name for p in self.exhibition.paintings}
 
 
 def exhibition_from_json(d: dict) -> Exhibition:

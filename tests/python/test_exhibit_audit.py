@@ -1,0 +1,51 @@
+"""Exhibition defects found using the commands as a new user would, each with the case that
+showed it.
+
+References: the stills against the painting's own colour at the view's centre (`--look-at`
+centres the painting it names) and the tour's frame count against its keyframes' times."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from gigascroll.cli import main
+
+from test_exhibit import SHOW, write_images
+
+
+def _centre(path) -> np.ndarray:
+    a = np.asarray(Image.open(path).convert("RGB"), np.float64)
+    h, w = a.shape[:2]
+    return a[h // 2 - 1:h // 2 + 2, w // 2 - 1:w // 2 + 2].reshape(-1, 3).mean(axis=0)
+
+
+@pytest.fixture(scope="module")
+def as_is_show(tmp_path_factory):
+    """The two-study show with both paintings from one pack, shown as is (the pack's own
+    names, "r" and "b", differ from the show's)."""
+    from gigascroll.pack import build_pack
+    d = tmp_path_factory.mktemp("as-is")
+    write_images(d)
+    red = np.asarray(Image.open(d / "red.png"))
+    blue = np.asarray(Image.open(d / "blue.png"))
+    build_pack([red, blue], d / "mine.pack", names=["r", "b"])
+    text = SHOW.replace('image = "red.png"', 'pack = "mine.pack"\npainting = "r"')
+    (d / "show.toml").write_text(text.replace('image = "blue.png"',
+                                              'pack = "mine.pack"\npainting = 1'))
+    assert main(["exhibit", "build", str(d / "show.toml"), "-o", str(d / "show"), "--no-bake",
+                 "--no-iiif"]) == 0
+    return d
+
+
+@pytest.mark.parametrize("which, channel", [("Red study", 0), ("Blue study", 2), ("0", 0),
+                                            ("1", 2)])
+def test_look_at_in_a_show_of_a_pack_used_as_is(as_is_show, which, channel):
+    # Was: "no painting titled 'Red study'" (the titles mapped to the show's names, the
+    # slots to the pack's).
+    out = as_is_show / f"look-{which}.png"
+    assert main(["render", "--exhibition", str(as_is_show / "show"), "--look-at", which,
+                 "--lighting", "unlit", "--width", "64", "--height", "48", "-o", str(out)]) == 0
+    c = _centre(out)
+    assert c[channel] > 150 and all(c[k] < 60 for k in range(3) if k != channel), c
