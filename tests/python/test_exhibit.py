@@ -287,11 +287,10 @@ def test_a_pack_is_used_as_is(show_dir):
     show = open_show(show_dir / "show")
     assert Path(show.pack.path).resolve() == (show_dir / "mine.pack").resolve()
     assert [s.painting for s in show.room.paintings] == ["r", "b"]  # no labels: not our pack
-    # Mixing images with a pack is refused, naming the key.
+    # Mixing images with a pack merges them into the show's pack (test_exhibit_merge.py).
     (show_dir / "show.toml").write_text(SHOW.replace('image = "red.png"',
                                                      'pack = "mine.pack"'))
-    with pytest.raises(ExhibitionError, match=r"paintings\[1\].image: expected a pack"):
-        build_show(show_dir / "show.toml", show_dir / "show2")
+    assert build_show(show_dir / "show.toml", show_dir / "show2")["packed"]
 
 
 def test_a_room_file_with_the_physical_sizes(tmp_path):

@@ -72,6 +72,7 @@ class Painting:
     image: str | None = None        # an image file (absolute)
     pack: str | None = None         # or a pack directory (absolute), used as is
     pack_painting: str | int = 0    # the pack's painting
+    merged: bool = False            # its tiles copied into the show's pack under `name`
     pixels: tuple[int, int] = (0, 0)  # width, height in pixels
     hang: Hang | None = None
     frame: Frame | None = None
@@ -87,8 +88,8 @@ class Painting:
     @property
     def pack_name(self) -> str:
         """The painting's name in the pack the show shows: its own (`name`), or its name
-        in the given pack."""
-        return str(self.pack_painting) if self.pack else self.name
+        in the given pack when that pack is shown as is (not merged into the show's)."""
+        return str(self.pack_painting) if self.pack and not self.merged else self.name
 
     @property
     def key(self) -> str:
@@ -195,10 +196,9 @@ def exhibition_from_dict(data: dict, where: str, base: Path) -> Exhibition:
         paintings.append(p)
     if walls is not None:
         room.setdefault("height_m", DEFAULT_WALL_HEIGHT_M)
-    uses_pack = any(p.pack for p in paintings)
     return Exhibition(where, data.get("title", Path(where).stem), room, paintings,
                       list(data.get("lights", [])), data.get("tour"),
-                      bool(data.get("labels", True)) and not uses_pack,
+                      bool(data.get("labels", True)),
                       float(data.get("aspect_tolerance", DEFAULT_ASPECT_TOLERANCE)))
 
 
