@@ -49,3 +49,38 @@ def test_look_at_in_a_show_of_a_pack_used_as_is(as_is_show, which, channel):
                  "--lighting", "unlit", "--width", "64", "--height", "48", "-o", str(out)]) == 0
     c = _centre(out)
     assert c[channel] > 150 and all(c[k] < 60 for k in range(3) if k != channel), c
+
+
+@pytest.fixture(scope="module")
+def image_show(tmp_path_factory):
+    d = tmp_path_factory.mktemp("walk-seconds")
+    write_images(d)
+    (d / "show.toml").write_text(SHOW)
+    assert main(["exhibit", "build", str(d / "show.toml"), "-o", str(d / "show"), "--no-bake",
+                 "--no-iiif"]) == 0
+    return d
+
+
+def _walk(d, name, *extra) -> dict:
+    import json
+    out = d / name
+    assert main(["gallery", "--exhibition", str(d / "show"), "--eye", "32x32", "--no-video",
+                 "--no-oracle", "--photons", "2000", "--out", str(out), *extra]) == 0
+    return json.loads((out / "results.json").read_text())["settings"]
+
+
+def test_seconds_cuts_a_tour_and_a_camera_path(image_show):
+    # Was: --seconds silently ignored with a tour (a 1 s walk of a show ran its whole tour).
+    from gigascroll.exhibit.show import open_show
+    from gigascroll.exhibit.tours import tour_path
+    whole = len(tour_path(open_show(image_show / "show").tour))
+    assert whole > 30
+    assert _walk(image_show, "all")["frames"] == whole
+    cut = _walk(image_show, "cut", "--seconds", "0.5")
+    assert (cut["frames"], cut["seconds"]) == (15, 0.5)  # the views' 30 Hz
+    # A camera path JSON: the same rule.
+    path = tour_path(open_show(image_show / "show").tour)
+    path.save(image_show / "path.json")
+    short = _walk(image_show, "path", "--path", str(image_show / "path.json"), "--seconds",
+                  "0.2")
+    assert short["frames"] == 6

@@ -11,6 +11,8 @@ from pathlib import Path
 
 from ..errors import UserError
 
+DEFAULT_SECONDS = 6.0  # the default walk's and --look-at's length
+
 BUILTIN_PAINTING = (30000, 1200)  # the built-in ink landscape used when no pack is given
 
 
@@ -42,7 +44,10 @@ def register(sub) -> None:
     p.add_argument("--no-magnifier", action="store_true", help="no magnifier")
     p.add_argument("--lighting", choices=["baked", "full"], default="baked",
                    help="baked irradiance (default) or direct light and gather per pixel")
-    p.add_argument("--seconds", type=float, default=6.0, help="length of the default walk")
+    p.add_argument("--seconds", type=float, default=None,
+                   help="length of the walk: of the default walk and of --look-at's stand "
+                        "(default 6); with a tour or a camera path, walk only its first "
+                        "SECONDS (default: all of it)")
     p.add_argument("--out", default=None,
                    help="output directory (default: next to the pack, PACK-walk; without a "
                         "pack, gallery-walk in the working directory)")
@@ -135,14 +140,34 @@ def walk_camera_path(args, room, show, eye):
     pose = look_at_pose(args, room, show, *headset_view(eye))
     try:
         if pose is not None:
-            return standing_path(pose, args.seconds)
+            return standing_path(pose, _seconds(args))
         if args.tour is not None:
-            return tour_path(load_tour(args.tour))
+            return first_seconds(tour_path(load_tour(args.tour)), args.seconds)
         if args.path is None and show is not None:
-            return tour_path(show.tour)
+            return first_seconds(tour_path(show.tour), args.seconds)
     except (ExhibitionError, ValueError) as e:
         raise UserError(f"--tour: {e}" if args.tour else str(e)) from None
-    return load_path(args.path or "walk", room, args.seconds)
+    if args.path not in (None, "walk"):
+        return first_seconds(load_path(args.path, room, 0.0), args.seconds)
+    return load_path("walk", room, _seconds(args))
+
+
+def _seconds(args) -> float:
+    return DEFAULT_SECONDS if args.seconds is None else args.seconds
+
+
+def first_seconds(path, seconds: float | None):
+    """The first `seconds` of a CameraPath (all of it when None or longer)."""
+    import numpy as np
+
+    from .. import views as v
+    n = len(path) if seconds is None else min(len(path), max(1, int(round(seconds * path.fps))))
+    if n == len(path):
+        return path
+    cut = (lambda a: None if a is None else np.asarray(a)[:n])
+    return v.CameraPath(path.position[:n], path.forward[:n], path.up[:n],
+                        cut(path.magnifier_target), cut(path.magnifier_normal), path.fps,
+                        path.name)
 
 
 def standing_path(pose, seconds: float):
@@ -189,7 +214,7 @@ def run(args) -> int:
 
     eye = parse_eye(args.eye)
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
-    if not (args.seconds > 0 and args.seconds <= 3600):
+    if args.seconds is not None and not (args.seconds > 0 and args.seconds <= 3600):
         raise UserError(f"--seconds must be in (0, 3600], got {args.seconds}")
     if args.png_every is not None and args.png_every < 1:
         raise UserError("--png-every must be >= 1")
@@ -265,7 +290,7 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     settings = {"room": room.name if show is not None else args.room, "path": path.name,
                 "exhibition": args.exhibition, "eye": f"{eye[0]}x{eye[1]}",
                 "magnifier": not args.no_magnifier, "lighting": args.lighting,
-                "seconds": args.seconds, "reuse": not args.no_reuse,
+                "seconds": round(len(path) / path.fps, 3), "reuse": not args.no_reuse,
                 "photons": args.photons, "frames": len(path),
                 "exposure": display.how if args.exposure.mode == "auto" else
                 f"{args.exposure.mode} {args.exposure.value:g}", "tone": args.tone}
