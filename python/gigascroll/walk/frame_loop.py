@@ -1,6 +1,7 @@
-"""The frame loop (VT-mobile-VR §4, issue 4 §4, first version): per frame the feedback pass,
-request processing, command issue, loader drain, physical-cache and page-table update, and a
-display pass that samples the views through the virtual texture; the loader runs in its own
+"""The views' experiment in the frame loop (VT-mobile-VR §4, issue 4 §4): `FrameLoop`'s steps,
+run by loop.run_frames. Per frame the feedback pass, request processing, command issue,
+loader drain, physical-cache and page-table update, and a display that samples the views
+through the virtual texture at the feedback's resolution; the loader runs in its own
 threads. Per frame it records each stage's time, the hit rate (share of this frame's
 requests answered at the level asked), the request-processing latency in frames, and after
 the camera stops the display latency (frames until every visible tile is resident at its
@@ -27,9 +28,9 @@ from .._core import TilePack, VirtualTextureLookup
 from ..errors import expect_type
 from ..pack.reader import PurePack
 from ..views.baselines import BASELINES, make_baseline
+from .loop import frame_summary, load_stages, request_hit_rate, run_frames
 
-__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS", "load_stages",
-           "request_hit_rate", "progress_bar", "end_frame", "frame_summary"]
+__all__ = ["FrameLoop", "LOADING_STRATEGIES", "STAGES", "METHODS"]
 
 METHODS = v.PROCESSING_METHODS + BASELINES
 
@@ -100,95 +101,98 @@ class FrameLoop:
                                  f"(tile {t.tile_size}, border {t.border})")
 
     def run(self, progress: bool = False) -> dict:
+        """Runs the path through the one frame loop (loop.run_frames); the summary."""
+        run_frames(self, progress)
+        return self.summary()
+
+    def loader_options(self) -> dict:
+        return {"mode": self.loader_mode, "threads": self.loader_threads}
+
+    def progress_label(self) -> str:
+        return f"{self.method}/{self.strategy}"
+
+    def open_state(self, loader) -> "_ExperimentState":
+        """The run's state around a started TileLoader: the virtual texture, the method's
+        processor (or the baseline and the page-table lookup of its requests), the loading
+        strategy, and what carries from frame to frame (the last commands, the latency)."""
         vt = runtime.VirtualTexture(self.pack, self.slots)
-        lookup = VirtualTextureLookup(vt)
         baseline = None
         if self.method in BASELINES:
             baseline = make_baseline(self.method, self.exhibition)
             proc = v.BasicProcessor()  # looks the baseline's requests up in the page table
         else:
             proc = v.make_processor(self.method, self.exhibition.tiles, self.threads)
-        is_async = isinstance(proc, v.AsyncProcessor)
         direct = v.DirectLoading(self.per_frame) if self.strategy == "direct" else None
         mip = v.MipByMipLoading(self.per_frame) if self.strategy == "mip-by-mip" else None
-        loading = direct if direct is not None else mip
-        commands = np.zeros(0, np.uint64)
-        truth = v.BasicProcessor()  # the exact request set, for the hit rate
-        latency = 0
-        period = 1.0 / self.path.fps
-        self.records = []
-        bar = progress_bar(progress, len(self.path), f"{self.method}/{self.strategy}")
-        with runtime.TileLoader(self.pack, mode=self.loader_mode,
-                                threads=self.loader_threads) as loader:
-            start = time.perf_counter()
-            for frame in range(len(self.path)):
-                t = {}
-                t0 = time.perf_counter()
-                last = frame == len(self.path) - 1
-                views = [v.render_view(self.exhibition.scene, cam, w, h, threads=self.threads,
-                                       display_step=self._display_step(i, last))
-                         for i, (cam, w, h) in enumerate(v.frame_cameras(
-                             self.path, frame,
-                             magnifier=v.MAGNIFIER if self.magnifier else None))]
-                buffers = [d["keys"] for d in views]
-                processed = buffers if self.magnifier_requests else buffers[:2]
-                t["feedback"] = time.perf_counter() - t0
+        return _ExperimentState(vt=vt, lookup=VirtualTextureLookup(vt), loader=loader,
+                                baseline=baseline, proc=proc,
+                                is_async=isinstance(proc, v.AsyncProcessor), direct=direct,
+                                mip=mip, truth=v.BasicProcessor())
 
-                t0 = time.perf_counter()
-                new_set = None
-                if baseline is not None:
-                    own = baseline.requests(self.path, frame)
-                    new_set = proc.process(own, lookup, frame)
-                    # The rays above only feed the display pass for a baseline.
-                    t["display_rays"] = t.pop("feedback")
-                    t["feedback"] = 0.0
-                elif is_async:
-                    proc.submit(processed, frame)
-                    results = proc.poll(lookup)
-                    if results:
-                        new_set = results[-1]
-                        latency = frame - new_set["frame"]
-                else:
-                    new_set = proc.process(processed, lookup, frame)
-                    latency = 0
-                t["processing"] = time.perf_counter() - t0
+    def step(self, frame: int, state: "_ExperimentState") -> tuple[dict, list]:
+        """One frame: the feedback pass over every view, the method's request processing,
+        the load stages and the display at the feedback's resolution; (record, images)."""
+        s, t = state, {}
+        t0 = time.perf_counter()
+        last = frame == len(self.path) - 1
+        views = [v.render_view(self.exhibition.scene, cam, w, h, threads=self.threads,
+                               display_step=self._display_step(i, last))
+                 for i, (cam, w, h) in enumerate(v.frame_cameras(
+                     self.path, frame, magnifier=v.MAGNIFIER if self.magnifier else None))]
+        buffers = [d["keys"] for d in views]
+        t["feedback"] = time.perf_counter() - t0
 
-                if new_set is not None:
-                    commands = new_set["commands"]
+        t0 = time.perf_counter()
+        new_set = self._process(frame, s, buffers if self.magnifier_requests else buffers[:2])
+        if s.baseline is not None:  # the rays above only feed the display pass for a baseline
+            t["display_rays"], t["feedback"] = t["feedback"], 0.0
+        t["processing"] = time.perf_counter() - t0
+        if new_set is not None:
+            s.commands = new_set["commands"]
 
-                def issue_tiles():
-                    if direct is None:
-                        return mip.issue(commands, lookup)
-                    if new_set is not None:
-                        direct.set_commands(commands)
-                    return direct.issue(lookup)
-                issue, arrived = load_stages(
-                    t, issue_tiles, vt, loader, loading,
-                    None if new_set is None else new_set["responses"], self.wait_loads)
+        def issue_tiles():
+            if s.direct is None:
+                return s.mip.issue(s.commands, s.lookup)
+            if new_set is not None:
+                s.direct.set_commands(s.commands)
+            return s.direct.issue(s.lookup)
+        issue, arrived = load_stages(
+            t, issue_tiles, s.vt, s.loader, s.direct if s.direct is not None else s.mip,
+            None if new_set is None else new_set["responses"], self.wait_loads)
 
-                t0 = time.perf_counter()
-                images = [self._display(vt, d) for d in views]
-                t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
+        t0 = time.perf_counter()
+        images = [self._display(s.vt, d) for d in views]
+        t["display"] = time.perf_counter() - t0 + t.pop("display_rays", 0.0)
 
-                # Hit rate after this frame's updates: what the display showed. A request
-                # hits when its response (finest resident tile answering it) is itself.
-                hit_rate = request_hit_rate(truth, buffers, lookup, frame)
-                view_hits = ([request_hit_rate(truth, [b], lookup, frame)[0] for b in buffers]
-                             if frame == len(self.path) - 1 else None)
-                self.last_images = images
-                self.records.append({
-                    "view_hit_rates": view_hits,
-                    "frame": frame, **{f"{s}_ms": 1e3 * t[s] for s in STAGES},
-                    "total_ms": 1e3 * sum(t.values()), "requests": hit_rate[1],
-                    "hit_rate": hit_rate[0], "issued": int(issue.size),
-                    "loaded": int(arrived.size), "latency_frames": latency,
-                    "moving": frame + 1 < len(self.path) and not np.array_equal(
-                        self.path.position[frame], self.path.position[frame + 1]),
-                    "time_s": time.perf_counter() - start})
-                end_frame(bar, self.pace, start, frame, period)
-        if bar is not None:
-            bar.close()
-        return self.summary()
+        # Hit rate after this frame's updates: what the display showed. A request hits when
+        # its response (finest resident tile answering it) is itself.
+        hit_rate = request_hit_rate(s.truth, buffers, s.lookup, frame)
+        view_hits = ([request_hit_rate(s.truth, [b], s.lookup, frame)[0] for b in buffers]
+                     if last else None)
+        self.last_images = images
+        return {
+            "view_hit_rates": view_hits,
+            "frame": frame, **{f"{st}_ms": 1e3 * t[st] for st in STAGES},
+            "total_ms": 1e3 * sum(t.values()), "requests": hit_rate[1],
+            "hit_rate": hit_rate[0], "issued": int(issue.size),
+            "loaded": int(arrived.size), "latency_frames": s.latency,
+            "moving": frame + 1 < len(self.path) and not np.array_equal(
+                self.path.position[frame], self.path.position[frame + 1])}, images
+
+    def _process(self, frame: int, s: "_ExperimentState", buffers: list):
+        """This frame's request set from the method (None: an asynchronous processor has
+        none ready); sets the state's latency in frames."""
+        if s.baseline is not None:
+            return s.proc.process(s.baseline.requests(self.path, frame), s.lookup, frame)
+        if s.is_async:
+            s.proc.submit(buffers, frame)
+            results = s.proc.poll(s.lookup)
+            if not results:
+                return None
+            s.latency = frame - results[-1]["frame"]
+            return results[-1]
+        s.latency = 0
+        return s.proc.process(buffers, s.lookup, frame)
 
     def _display_step(self, view: int, last: bool) -> int:
         """The eyes are displayed at their feedback resolution, the magnifier at every
@@ -221,79 +225,16 @@ class FrameLoop:
         }
 
 
-def frame_summary(records: list, stages) -> dict:
-    """What every run's summary holds: frames, the frame rate (over the wall clock and
-    from the mean frame time), the frame time's spread, each stage's mean time, the mean
-    hit rate and requests per frame. records: non-empty, with time_s, total_ms,
-    <stage>_ms, hit_rate and requests."""
-    frame_ms = [x["total_ms"] for x in records]
-    times = [x["time_s"] for x in records]
-    n = len(records)
-    return {
-        "frames": n, "fps": (n - 1) / (times[-1] - times[0]) if n > 1 else float("nan"),
-        "fps_from_frame_time": 1e3 / statistics.mean(frame_ms),
-        "frame_ms_std": statistics.pstdev(frame_ms),
-        **{f"{s}_ms": statistics.mean(x[f"{s}_ms"] for x in records) for s in stages},
-        "hit_rate": statistics.mean(x["hit_rate"] for x in records),
-        "requests_per_frame": statistics.mean(x["requests"] for x in records),
-    }
-
-
-def progress_bar(progress: bool, frames: int, desc: str):
-    """A tqdm bar over a run's frames (None without `progress`)."""
-    if not progress:
-        return None
-    from tqdm import tqdm
-    return tqdm(total=frames, unit="frame", desc=desc)
-
-
-def end_frame(bar, pace: bool, start: float, frame: int, period: float) -> None:
-    """After a frame: the bar's step and, with `pace`, a sleep to the frame's end (frame
-    boundaries every `period` seconds from `start`)."""
-    if bar is not None:
-        bar.update(1)
-    if pace:
-        delay = start + (frame + 1) * period - time.perf_counter()
-        if delay > 0:
-            time.sleep(delay)
-
-
-def load_stages(t: dict, issue_tiles, vt, loader, loading, responses, wait_loads: bool,
-                wait_timeout: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """The issue, drain and update stages of one frame, each timed into `t`; returns
-    (issued, arrived) tile keys. issue: issue_tiles() gives the tiles the loading strategy
-    loads this frame, submitted to the loader. drain: the loader's finished tiles go into
-    the physical cache and the page table in one C++ call (a tile that failed to load comes
-    back without being inserted); with `wait_loads`, until every issued tile arrived (or
-    `wait_timeout` seconds passed). update: the strategy learns what arrived, and the tiles
-    the display samples (`responses`, or None) become most recently used, so the LRU evicts
-    what the views left, not what they still show."""
-    t0 = time.perf_counter()
-    issue = issue_tiles()
-    if issue.size:
-        loader.submit(issue)
-    t["issue"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    arrived, _ = vt.drain(loader)
-    if wait_loads:
-        deadline = None if wait_timeout is None else time.perf_counter() + wait_timeout
-        while arrived.size < issue.size and (deadline is None or time.perf_counter() < deadline):
-            time.sleep(0.0002)
-            arrived = np.concatenate([arrived, vt.drain(loader)[0]])
-    t["drain"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    if arrived.size:
-        loading.loaded(arrived)
-    if responses is not None and responses.size:
-        vt.request(responses)
-    t["update"] = time.perf_counter() - t0
-    return issue, arrived
-
-
-def request_hit_rate(truth, buffers, lookup, frame) -> tuple[float, int]:
-    """(share of the distinct requests in `buffers` answered at their own level, count)."""
-    s = truth.process(buffers, lookup, frame)
-    n = int(s["requests"].size)
-    return (float(np.mean(s["responses"] == s["requests"])) if n else 1.0), n
+@dataclass
+class _ExperimentState:
+    vt: object
+    lookup: object
+    loader: object
+    baseline: object
+    proc: object
+    is_async: bool
+    direct: object
+    mip: object
+    truth: object
+    commands: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint64))
+    latency: int = 0

@@ -25,13 +25,13 @@ import numpy as np
 
 from .. import _core
 from .. import runtime
-from ..display_mapping import Display, exposure_for_white, to_srgb8
 from .. import views as v
-from .frame_loop import end_frame, frame_summary, load_stages, progress_bar, request_hit_rate
+from ..display_mapping import Display, exposure_for_white, to_srgb8
+from ..gallery.tile_keys import parent_keys
+from ..room.spec import RoomSpec
 from ..views.exhibition import Headset
 from .frame_rates import FPS_MEANING
-from ..room.spec import RoomSpec
-from ..gallery.tile_keys import parent_keys
+from .loop import frame_summary, load_stages, request_hit_rate, run_frames
 
 __all__ = ["FrameSource", "ExhibitionSource", "GallerySource", "walk_path", "stops_of", "GalleryWalk", "WALK_STAGES", "DISPLAY_PARTS",
            "compose_frame", "tone_map", "lens_in_view", "parent_keys"]
@@ -359,25 +359,15 @@ class GalleryWalk:
             foveated=None if self.foveation is None else _foveated_displays(self.foveation))
 
     def run(self, progress: bool = False, on_frame=None) -> dict:
-        src = self.source
-        period = 1.0 / self.path.fps
-        self.records = []
-        bar = progress_bar(progress, len(self.path), f"walk {src.name}")
-        try:
-            with runtime.TileLoader(self.pack, mode="lockfree", threads=1) as loader:
-                state = self.open_state(loader)
-                start = time.perf_counter()
-                for frame in range(len(self.path)):
-                    rec, images = self.step(frame, state)
-                    rec["time_s"] = time.perf_counter() - start
-                    self.records.append(rec)
-                    if on_frame is not None:
-                        on_frame(frame, rec, images)
-                    end_frame(bar, self.pace, start, frame, period)
-        finally:
-            if bar is not None:
-                bar.close()
+        """Runs the path through the one frame loop (loop.run_frames); the summary."""
+        run_frames(self, progress, on_frame)
         return self.summary()
+
+    def loader_options(self) -> dict:
+        return {"mode": "lockfree", "threads": 1}
+
+    def progress_label(self) -> str:
+        return f"walk {self.source.name}"
 
     def step(self, frame: int, state: "_LoopState", views=None, moving: bool | None = None,
              foveate: bool = True):
