@@ -84,3 +84,46 @@ def test_seconds_cuts_a_tour_and_a_camera_path(image_show):
     short = _walk(image_show, "path", "--path", str(image_show / "path.json"), "--seconds",
                   "0.2")
     assert short["frames"] == 6
+
+
+LIGHT = """
+[[lights]]
+name = "spot"
+centre = [2.0, 2.9, 1.2]
+aim = [0.0, -1.45, -1.2]
+width = 0.3
+height = 0.3
+kelvin = 3000
+lux = 200
+painting = {painting}
+"""
+
+
+@pytest.mark.parametrize("painting, expected", [
+    ('"Nope"', "lights[0].painting: expected a painting's title ('Red study', 'Blue study') "
+               "or index (0..1), got 'Nope'"),
+    ("7", "lights[0].painting: expected a painting's title ('Red study', 'Blue study') or "
+          "index (0..1), got 7"),
+])
+def test_a_lights_unknown_painting_names_file_key_and_titles(tmp_path, capsys, painting,
+                                                               expected):
+    # Was: "light 'spot': no painting slot 'Nope' in the room (slots: red-study, ...)":
+    # neither the file nor the key, and slot names where the file speaks of titles.
+    write_images(tmp_path)
+    f = tmp_path / "show.toml"
+    f.write_text(SHOW + LIGHT.format(painting=painting))
+    capsys.readouterr()
+    assert main(["exhibit", "build", str(f), "-o", str(tmp_path / "show"), "--no-bake"]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert err == [f"gigascroll exhibit: error: {f}: {expected}"]
+    assert not (tmp_path / "show").exists()
+
+
+def test_a_light_on_a_title_or_index_builds(tmp_path):
+    from gigascroll.exhibit import load_exhibition
+    from gigascroll.exhibit.floor_plan import build_room
+    write_images(tmp_path)
+    for painting in ('"Blue study"', "1", '"blue-study"'):
+        (tmp_path / "show.toml").write_text(SHOW + LIGHT.format(painting=painting))
+        room = build_room(load_exhibition(tmp_path / "show.toml"))
+        assert room.lights[0].painting in ("blue-study", 1)

@@ -112,12 +112,25 @@ def _lights(ex: Exhibition):
     if not ex.lights:
         return None
     by_title = {p.title: p.name for p in ex.paintings}
-    data = [dict(x, painting=by_title.get(x["painting"], x["painting"])) if "painting" in x else x
-            for x in ex.lights]
+    names = {p.name for p in ex.paintings}
+    data = []
+    for i, x in enumerate(ex.lights):
+        which = x.get("painting")
+        if isinstance(which, str) and which not in by_title and which not in names or \
+                isinstance(which, int) and not 0 <= which < len(ex.paintings):
+            titles = ", ".join(repr(p.title) for p in ex.paintings[:10])
+            raise ExhibitionError(f"{ex.path}: lights[{i}].painting: expected a painting's "
+                                  f"title ({titles}) or index (0..{len(ex.paintings) - 1}), "
+                                  f"got {which!r}"[:400])
+        data.append(dict(x, painting=by_title.get(which, which)) if "painting" in x else x)
+        try:
+            lights_from_json(data[-1:])
+        except ValueError as e:
+            raise ExhibitionError(f"{ex.path}: lights[{i}]: {e}") from None
     try:
         return lights_from_json(data)
     except ValueError as e:
-        raise ExhibitionError(f"{ex.path}: {e}") from None
+        raise ExhibitionError(f"{ex.path}: lights: {e}") from None
 
 
 def _file_room(ex: Exhibition, pack, lights) -> RoomSpec:
