@@ -16,7 +16,9 @@
 #pragma once
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 #if defined(__AVX2__) || defined(__AVX512F__)
 #include <immintrin.h>
 #elif defined(__SSE__)
@@ -58,6 +60,7 @@ struct Lanes<1> {
         friend I srl(I a, int s) { return I(std::int32_t(std::uint32_t(a.v) >> s)); }
         friend I min(I a, I b) { return I(a.v < b.v ? a.v : b.v); }
         friend M operator==(I a, I b) { return {a.v == b.v}; }
+        friend M operator!=(I a, I b) { return {a.v != b.v}; }
         friend M operator>(I a, I b) { return {a.v > b.v}; }
         friend M operator<=(I a, I b) { return {a.v <= b.v}; }
         friend M nonzero(I a) { return {a.v != 0}; }
@@ -123,6 +126,7 @@ struct Lanes<8> {
         friend I srl(I a, int s) { return I(_mm256_srli_epi32(a.v, s)); }
         friend I min(I a, I b) { return I(_mm256_min_epi32(a.v, b.v)); }
         friend M operator==(I a, I b) { return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v))}; }
+        friend M operator!=(I a, I b) { return !(a == b); }
         friend M operator>(I a, I b) { return {_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v))}; }
         friend M operator<=(I a, I b) { return !(a > b); }
         friend M nonzero(I a) { return !(a == I(0)); }
@@ -188,6 +192,7 @@ struct Lanes<16> {
         friend I srl(I a, int s) { return I(_mm512_srli_epi32(a.v, unsigned(s))); }
         friend I min(I a, I b) { return I(_mm512_min_epi32(a.v, b.v)); }
         friend M operator==(I a, I b) { return {_mm512_cmpeq_epi32_mask(a.v, b.v)}; }
+        friend M operator!=(I a, I b) { return {_mm512_cmpneq_epi32_mask(a.v, b.v)}; }
         friend M operator>(I a, I b) { return {_mm512_cmpgt_epi32_mask(a.v, b.v)}; }
         friend M operator<=(I a, I b) { return {_mm512_cmple_epi32_mask(a.v, b.v)}; }
         friend M nonzero(I a) { return {_mm512_test_epi32_mask(a.v, a.v)}; }
@@ -359,6 +364,56 @@ inline void store_first(Lanes<16>::F x, float* p, unsigned n) {
         _mm512_storeu_ps(p, x.v);
     else
         _mm512_mask_storeu_ps(p, __mmask16((1u << n) - 1), x.v);
+}
+#endif
+
+// The mask whose lane k is bit k of bits.
+template <int W>
+typename Lanes<W>::M mask_of(unsigned bits);
+template <>
+inline Lanes<1>::M mask_of<1>(unsigned bits) { return {(bits & 1u) != 0}; }
+#if defined(__AVX2__)
+template <>
+inline Lanes<8>::M mask_of<8>(unsigned bits) {
+    using I = Lanes<8>::I;
+    return nonzero(I(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)) & I(std::int32_t(bits)));
+}
+#endif
+#if defined(__AVX512F__)
+template <>
+inline Lanes<16>::M mask_of<16>(unsigned bits) { return {__mmask16(bits)}; }
+#endif
+
+// Gathers: the 4-byte word at base + 4 index per lane where m is set, src's lane elsewhere
+// (the lanes not set read nothing). base is untyped: the lattice reads the low words of
+// 64-bit offsets and the floats of Vec3f arrays.
+inline Lanes<1>::F gather(Lanes<1>::F src, const void* base, Lanes<1>::I index, Lanes<1>::M m) {
+    if (!m.v) return src;
+    float x;
+    std::memcpy(&x, static_cast<const char*>(base) + 4 * std::ptrdiff_t(index.v), 4);
+    return Lanes<1>::F(x);
+}
+inline Lanes<1>::I gather(Lanes<1>::I src, const void* base, Lanes<1>::I index, Lanes<1>::M m) {
+    if (!m.v) return src;
+    std::int32_t x;
+    std::memcpy(&x, static_cast<const char*>(base) + 4 * std::ptrdiff_t(index.v), 4);
+    return Lanes<1>::I(x);
+}
+#if defined(__AVX2__)
+inline Lanes<8>::F gather(Lanes<8>::F src, const void* base, Lanes<8>::I index, Lanes<8>::M m) {
+    return Lanes<8>::F(_mm256_mask_i32gather_ps(src.v, static_cast<const float*>(base), index.v, m.v, 4));
+}
+inline Lanes<8>::I gather(Lanes<8>::I src, const void* base, Lanes<8>::I index, Lanes<8>::M m) {
+    return Lanes<8>::I(_mm256_mask_i32gather_epi32(src.v, static_cast<const int*>(base), index.v,
+                                                   _mm256_castps_si256(m.v), 4));
+}
+#endif
+#if defined(__AVX512F__)
+inline Lanes<16>::F gather(Lanes<16>::F src, const void* base, Lanes<16>::I index, Lanes<16>::M m) {
+    return Lanes<16>::F(_mm512_mask_i32gather_ps(src.v, m.v, index.v, base, 4));
+}
+inline Lanes<16>::I gather(Lanes<16>::I src, const void* base, Lanes<16>::I index, Lanes<16>::M m) {
+    return Lanes<16>::I(_mm512_mask_i32gather_epi32(src.v, m.v, index.v, base, 4));
 }
 #endif
 

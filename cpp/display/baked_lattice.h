@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 
+#include "common/lanes.h"
 #include "common/vec3.h"
 
 namespace gigascroll {
@@ -35,32 +36,58 @@ struct BakedLattice {
 // lower one, so it is scaled back onto the edge. Selects only, no branches: which sub-triangle
 // a pixel falls in is a coin toss (a branch on it mispredicted half the time), and loops over
 // it vectorise. The one definition of the arithmetic for the Gallery's lookups and the
-// display pass (whose AVX2 and AVX-512 lanes do the same operations).
+// display pass's lanes at every width (lattice_cell_lanes; lattice_cell is its W = 1).
+template <int W>
+struct LatticeCellLanes {
+    typename Lanes<W>::I i, j;
+    typename Lanes<W>::M upper;
+    typename Lanes<W>::F w0, w1, w2;
+};
+// W lanes' cells (common/lanes.h). The rare steps (a point past the far edge) are taken only
+// when a lane needs them at W > 1; at W = 1 they are selects, as above.
+template <int W>
+[[gnu::always_inline]] inline LatticeCellLanes<W> lattice_cell_lanes(typename Lanes<W>::I n,
+                                                                     typename Lanes<W>::F b1,
+                                                                     typename Lanes<W>::F b2) {
+    using L = Lanes<W>;
+    using F = typename L::F;
+    using I = typename L::I;
+    const F zero(0.0f), one(1.0f);
+    b1 = L::select(b1 < zero, zero, L::select(one < b1, one, b1));  // std::clamp
+    b2 = L::select(b2 < zero, zero, L::select(one < b2, one, b2));
+    const F s = b1 + b2;
+    const auto over = s > one;
+    if (W == 1 || any<W>(over)) b1 = L::select(over, b1 / s, b1), b2 = L::select(over, b2 / s, b2);
+    const F nf = L::to_float(n);
+    const F x = b1 * nf, y = b2 * nf;  // x + y <= n
+    const I n1 = n - I(1);
+    LatticeCellLanes<W> c;
+    c.i = min(to_int(x), n1);
+    c.j = min(to_int(y), n1 - c.i);
+    const F ex = x - L::to_float(c.i), ey = y - L::to_float(c.j);
+    F fx = L::select(ex < zero, zero, ex), fy = L::select(ey < zero, zero, ey);
+    const F sum = fx + fy;
+    const auto past = sum > one;
+    c.upper = past & (c.i + c.j + I(2) <= n);
+    const auto rescale = past & !c.upper;
+    if (W == 1 || any<W>(rescale)) {
+        const F inv = one / sum;
+        fx = L::select(rescale, fx * inv, fx), fy = L::select(rescale, fy * inv, fy);
+    }
+    c.w0 = L::select(c.upper, fx + fy - one, one - fx - fy);
+    c.w1 = L::select(c.upper, one - fx, fx);
+    c.w2 = L::select(c.upper, one - fy, fy);
+    return c;
+}
+
 struct LatticeCell {
     std::int32_t i, j;
     bool upper;
     float w0, w1, w2;
 };
 [[gnu::always_inline]] inline LatticeCell lattice_cell(std::int32_t n, float b1, float b2) {
-    b1 = b1 < 0.0f ? 0.0f : (1.0f < b1 ? 1.0f : b1);  // std::clamp
-    b2 = b2 < 0.0f ? 0.0f : (1.0f < b2 ? 1.0f : b2);
-    const float s = b1 + b2;
-    const bool over = s > 1.0f;
-    const float q1 = b1 / s, q2 = b2 / s;
-    b1 = over ? q1 : b1, b2 = over ? q2 : b2;
-    const float x = b1 * float(n), y = b2 * float(n);  // x + y <= n
-    const std::int32_t xi = std::int32_t(x), yi = std::int32_t(y);
-    const std::int32_t i = xi < n - 1 ? xi : n - 1;
-    const std::int32_t j = yi < n - 1 - i ? yi : n - 1 - i;
-    const float ex = x - float(i), ey = y - float(j);
-    float fx = ex < 0.0f ? 0.0f : ex, fy = ey < 0.0f ? 0.0f : ey;
-    const float sum = fx + fy;
-    const bool upper = sum > 1.0f && i + j + 2 <= n;
-    const bool rescale = !upper && sum > 1.0f;
-    const float inv = 1.0f / sum;
-    const float sx = fx * inv, sy = fy * inv;
-    fx = rescale ? sx : fx, fy = rescale ? sy : fy;
-    return {i, j, upper, upper ? fx + fy - 1 : 1 - fx - fy, upper ? 1 - fx : fx, upper ? 1 - fy : fy};
+    const LatticeCellLanes<1> c = lattice_cell_lanes<1>(n, b1, b2);
+    return {c.i.v, c.j.v, c.upper.v, c.w0.v, c.w1.v, c.w2.v};
 }
 
 }  // namespace gigascroll

@@ -1,14 +1,13 @@
 // The "light" step of the display pass on a baked lattice (display/baked_lattice.h): a
-// packet's 16 lanes lit from the lattice points around each lane's hit.
+// packet's 16 lanes lit from the lattice points around each lane's hit, W lanes at a time
+// (common/lanes.h: one text for every width, the same floats at each).
 #pragma once
 #include <embree3/rtcore.h>
 
 #include <bit>
 #include <cstdint>
-#if defined(__AVX__)
-#include <immintrin.h>
-#endif
 
+#include "common/lanes.h"
 #include "common/vec3.h"
 #include "display/baked_lattice.h"
 
@@ -37,6 +36,7 @@ struct LatticeLanes {
     // and its weights) in straight loops over the lanes, lanes without a hit reading
     // triangle 0 (ignored). No trapping math, as Gallery's lattice_cells: with it GCC keeps
     // the selects as branches.
+    template <int W = kWidest>
     [[gnu::optimize("no-trapping-math"), gnu::noinline]]
     void locate(const BakedLattice& b, const RTCHit16& h, const int* __restrict hit,
                 const std::int32_t* __restrict back) {
@@ -57,57 +57,14 @@ struct LatticeLanes {
             front[k] = (w.x * h.Ng_x[k] + w.y * h.Ng_y[k] + w.z * h.Ng_z[k] > 0) != (back[k] != 0);
             b1[k] = hit[k] ? b1_in[k] : 0.0f, b2[k] = hit[k] ? b2_in[k] : 0.0f;
         }
-        int k0 = 0;
-#if defined(__AVX2__)
-        // 8 lanes at once, the same operations (GCC vectorises the loop below with masked
-        // stores, which are slow on AMD's cores). Selects are blends; min on int32 is
-        // vpminsd; a float to int32 conversion truncates as the casts do.
-        for (; k0 < 16; k0 += 8) {
-            const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
-            const __m256i n = _mm256_load_si256(reinterpret_cast<const __m256i*>(segments + k0));
-            const __m256i n1 = _mm256_sub_epi32(n, _mm256_set1_epi32(1));
-            __m256 c1 = _mm256_load_ps(b1 + k0), c2 = _mm256_load_ps(b2 + k0);
-            // c < 0 ? 0 : (1 < c ? 1 : c)
-            c1 = _mm256_blendv_ps(_mm256_blendv_ps(c1, one, _mm256_cmp_ps(one, c1, _CMP_LT_OQ)), zero,
-                                  _mm256_cmp_ps(c1, zero, _CMP_LT_OQ));
-            c2 = _mm256_blendv_ps(_mm256_blendv_ps(c2, one, _mm256_cmp_ps(one, c2, _CMP_LT_OQ)), zero,
-                                  _mm256_cmp_ps(c2, zero, _CMP_LT_OQ));
-            const __m256 s = _mm256_add_ps(c1, c2);
-            const __m256 over = _mm256_cmp_ps(s, one, _CMP_GT_OQ);
-            c1 = _mm256_blendv_ps(c1, _mm256_div_ps(c1, s), over);
-            c2 = _mm256_blendv_ps(c2, _mm256_div_ps(c2, s), over);
-            const __m256 nf = _mm256_cvtepi32_ps(n);
-            const __m256 x = _mm256_mul_ps(c1, nf), y = _mm256_mul_ps(c2, nf);
-            const __m256i i = _mm256_min_epi32(_mm256_cvttps_epi32(x), n1);
-            const __m256i j = _mm256_min_epi32(_mm256_cvttps_epi32(y), _mm256_sub_epi32(n1, i));
-            const __m256 ex = _mm256_sub_ps(x, _mm256_cvtepi32_ps(i)), ey = _mm256_sub_ps(y, _mm256_cvtepi32_ps(j));
-            __m256 fx = _mm256_blendv_ps(ex, zero, _mm256_cmp_ps(ex, zero, _CMP_LT_OQ));
-            __m256 fy = _mm256_blendv_ps(ey, zero, _mm256_cmp_ps(ey, zero, _CMP_LT_OQ));
-            const __m256 sum = _mm256_add_ps(fx, fy);
-            const __m256 past = _mm256_cmp_ps(sum, one, _CMP_GT_OQ);
-            // i + j + 2 <= n, i.e. not (i + j + 2 > n)
-            const __m256i room = _mm256_xor_si256(
-                _mm256_cmpgt_epi32(_mm256_add_epi32(_mm256_add_epi32(i, j), _mm256_set1_epi32(2)), n),
-                _mm256_set1_epi32(-1));
-            const __m256 upper = _mm256_and_ps(past, _mm256_castsi256_ps(room));
-            const __m256 rescale = _mm256_andnot_ps(upper, past);
-            const __m256 inv = _mm256_div_ps(one, sum);
-            fx = _mm256_blendv_ps(fx, _mm256_mul_ps(fx, inv), rescale);
-            fy = _mm256_blendv_ps(fy, _mm256_mul_ps(fy, inv), rescale);
-            _mm256_store_si256(reinterpret_cast<__m256i*>(cell_i + k0), i);
-            _mm256_store_si256(reinterpret_cast<__m256i*>(cell_j + k0), j);
-            _mm256_store_si256(reinterpret_cast<__m256i*>(upper_of + k0),
-                               _mm256_and_si256(_mm256_castps_si256(upper), _mm256_set1_epi32(1)));
-            _mm256_store_ps(weight[0] + k0, _mm256_blendv_ps(_mm256_sub_ps(_mm256_sub_ps(one, fx), fy),
-                                                            _mm256_sub_ps(_mm256_add_ps(fx, fy), one), upper));
-            _mm256_store_ps(weight[1] + k0, _mm256_blendv_ps(fx, _mm256_sub_ps(one, fx), upper));
-            _mm256_store_ps(weight[2] + k0, _mm256_blendv_ps(fy, _mm256_sub_ps(one, fy), upper));
-        }
-#endif
-        for (int k = k0; k < 16; ++k) {
-            const LatticeCell c = lattice_cell(segments[k], b1[k], b2[k]);
-            cell_i[k] = c.i, cell_j[k] = c.j, upper_of[k] = c.upper;
-            weight[0][k] = c.w0, weight[1][k] = c.w1, weight[2][k] = c.w2;
+        // The cells in lanes (lattice_cell_lanes: lattice_cell's operations).
+        using L = Lanes<W>;
+        for (int k0 = 0; k0 < 16; k0 += W) {
+            const LatticeCellLanes<W> c = lattice_cell_lanes<W>(L::I::load(segments + k0), L::F::load(b1 + k0),
+                                                                L::F::load(b2 + k0));
+            c.i.store(cell_i + k0), c.j.store(cell_j + k0);
+            L::select(c.upper, typename L::I(1), typename L::I(0)).store(upper_of + k0);
+            c.w0.store(weight[0] + k0), c.w1.store(weight[1] + k0), c.w2.store(weight[2] + k0);
         }
         for (int k = 0; k < 16; ++k) {
             const std::uint64_t n = std::uint64_t(segments[k]);
@@ -146,20 +103,19 @@ struct LatticeLanes {
         }
     }
 
-#if defined(__AVX512F__) && defined(__AVX512DQ__)
 // GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
 // used uninitialized (GCC bug 105593, fixed in GCC 13).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wuninitialized"
-    // locate() and blend() in 16 lanes of one vector each: the arrays gathered with 32-bit
-    // float indices (the caller checks lanes16(): 3 x the triangles and the points below
-    // 2^31), the cell arithmetic as locate's, the corners' indices in uint32 (n < 2^16, so
-    // i (n + 1) and a triangle's (n + 1)(n + 2) / 2 points fit). The same operations in the
-    // same order as the lane loops, hence the same floats; lanes without a hit are masked
-    // out of the gathers (their values are never read).
+    // locate() and blend() on vectors: the arrays gathered with 32-bit float indices (the
+    // caller checks lanes16(): 3 x the triangles and the points below 2^31), the cell
+    // arithmetic lattice_cell_lanes, the corners' indices in uint32 (n < 2^16, so i (n + 1)
+    // and a triangle's (n + 1)(n + 2) / 2 points fit). The same operations in the same order
+    // as locate's, hence the same floats; lanes without a hit are masked out of the gathers
+    // (their values are never read).
     alignas(64) std::int32_t point[3][16];  // float index of each corner in front or back
-    __mmask16 hit_lanes = 0, front_lanes = 0;
+    unsigned hit_lanes = 0, front_lanes = 0;  // lane k in bit k
     int first_lane = 0;  // the first hit lane
     bool one_triangle = false, one_cell = false;  // under every hit lane
 
@@ -169,123 +125,131 @@ struct LatticeLanes {
     }
 
     // lattice_cell's cell in lanes, of clamped barycentrics (c1, c2) on triangles of n
-    // segments a side: the cell (i, j), the position in it (x, y, before locate's clamp at
-    // 0), and room: whether the cell has an upper sub-triangle (i + j + 2 <= n).
-    struct Cells16 {
-        __m512i i, j;
-        __m512 x, y;
-        __mmask16 room;
+    // segments a side: the cell (i, j), the position in it (x, y, before the clamp at 0), and
+    // room: whether the cell has an upper sub-triangle (i + j + 2 <= n). light16_cells'
+    // part of lattice_cell_lanes (its barycentrics need no clamp).
+    template <int W>
+    struct Cells {
+        typename Lanes<W>::I i, j;
+        typename Lanes<W>::F x, y;
+        typename Lanes<W>::M room;
     };
-    static Cells16 cells16(__m512 c1, __m512 c2, __m512i n) {
-        const __m512i n1 = _mm512_sub_epi32(n, _mm512_set1_epi32(1));
-        const __m512 nf = _mm512_cvtepi32_ps(n);
-        const __m512 x = _mm512_mul_ps(c1, nf), y = _mm512_mul_ps(c2, nf);
-        Cells16 c;
-        c.i = _mm512_min_epi32(_mm512_cvttps_epi32(x), n1);
-        c.j = _mm512_min_epi32(_mm512_cvttps_epi32(y), _mm512_sub_epi32(n1, c.i));
-        c.x = _mm512_sub_ps(x, _mm512_cvtepi32_ps(c.i)), c.y = _mm512_sub_ps(y, _mm512_cvtepi32_ps(c.j));
-        c.room = _mm512_cmple_epi32_mask(_mm512_add_epi32(_mm512_add_epi32(c.i, c.j), _mm512_set1_epi32(2)), n);
+    template <int W>
+    static Cells<W> cells(typename Lanes<W>::F c1, typename Lanes<W>::F c2, typename Lanes<W>::I n) {
+        using L = Lanes<W>;
+        using I = typename L::I;
+        const I n1 = n - I(1);
+        const typename L::F nf = L::to_float(n);
+        const typename L::F x = c1 * nf, y = c2 * nf;
+        Cells<W> c;
+        c.i = min(to_int(x), n1);
+        c.j = min(to_int(y), n1 - c.i);
+        c.x = x - L::to_float(c.i), c.y = y - L::to_float(c.j);
+        c.room = c.i + c.j + I(2) <= n;
         return c;
     }
 
+    // The packet's triangle data in W lanes from k0: broadcast when one triangle lies under
+    // every hit lane (nearly every packet; on these cores a 16-lane gather costs about as
+    // much as 16 loads), else gathered.
+    template <int W>
+    struct TriangleLanes {
+        typename Lanes<W>::I t, n, first;
+        typename Lanes<W>::F wx, wy, wz;
+    };
+    template <int W>
+    TriangleLanes<W> triangle_lanes(const BakedLattice& b, const RTCHit16& h, typename Lanes<W>::M hm, int k0) const {
+        using L = Lanes<W>;
+        using I = typename L::I;
+        using F = typename L::F;
+        TriangleLanes<W> r;
+        if (one_triangle) {
+            const std::uint32_t t0 = tri[first_lane];
+            const Vec3f w = b.normal[t0];
+            r.t = I(std::int32_t(t0));
+            r.wx = F(w.x), r.wy = F(w.y), r.wz = F(w.z);
+            r.n = I(std::int32_t(b.segments[t0]));
+            r.first = I(std::int32_t(std::uint32_t(b.offset[t0])));
+            return r;
+        }
+        const auto all = mask_of<W>(~0u);
+        const I g = L::select(hm, I::load(h.geomID + k0), I(0)), p = L::select(hm, I::load(h.primID + k0), I(0));
+        r.t = gather(I(0), b.first_triangle, g, all) + p;
+        const I t3 = r.t * I(3);
+        r.wx = gather(F(0.0f), b.normal, t3, all);
+        r.wy = gather(F(0.0f), b.normal, t3 + I(1), all);
+        r.wz = gather(F(0.0f), b.normal, t3 + I(2), all);
+        r.n = gather(I(0), b.segments, r.t, all);
+        // The triangle's first point: the low word of offset[t] (below 2^31 / 3).
+        r.first = gather(I(0), b.offset, r.t + r.t, all);
+        return r;
+    }
+
+    // Whether one triangle lies under every hit lane (hit lanes in hm, the first k0).
+    template <int W>
+    static bool under_one_triangle(const RTCHit16& h, unsigned hm, int k0) {
+        using I = typename Lanes<W>::I;
+        const I g0(std::int32_t(h.geomID[k0])), p0(std::int32_t(h.primID[k0]));
+        bool one = true;
+        for (int k = 0; k < 16; k += W)
+            one = one && !any<W>(mask_of<W>(hm >> k) & ((I::load(h.geomID + k) != g0) | (I::load(h.primID + k) != p0)));
+        return one;
+    }
+
+    template <int W = kWidest>
     void locate16(const BakedLattice& b, const RTCHit16& h, const int* __restrict hit,
                   const std::int32_t* __restrict back) {
-        const unsigned* __restrict geom_in = h.geomID;
-        const unsigned* __restrict prim_in = h.primID;
-        const __m512i hits = _mm512_load_si512(hit);
-        const __mmask16 hm = _mm512_test_epi32_mask(hits, hits);
+        using L = Lanes<W>;
+        using I = typename L::I;
+        using F = typename L::F;
+        unsigned hm = 0;
+        for (int k = 0; k < 16; k += W) hm |= nonzero(I::load(hit + k)).bits() << k;
         hit_lanes = hm;
-        const __m512i g = _mm512_maskz_loadu_epi32(hm, geom_in), p = _mm512_maskz_loadu_epi32(hm, prim_in);
-        // Nearly every packet has one triangle under all its hit lanes (and one lattice cell:
-        // a cell spans many pixels). Its data are then read once and broadcast: on these
-        // cores a 16-lane gather costs about as much as 16 loads.
-        const int k0 = std::countr_zero(unsigned(hm));  // the caller has hits
+        const int k0 = std::countr_zero(hm);  // the caller has hits
         first_lane = k0;
-        const unsigned g0 = geom_in[k0], p0 = prim_in[k0];
-        one_triangle = (_mm512_mask_cmpeq_epi32_mask(hm, g, _mm512_set1_epi32(int(g0))) &
-                        _mm512_mask_cmpeq_epi32_mask(hm, p, _mm512_set1_epi32(int(p0)))) == hm;
-        __m512i t, n, first;
-        __m512 wx, wy, wz;
-        if (one_triangle) {
-            const std::uint32_t t0 = b.first_triangle[g0] + p0;
-            const Vec3f w = b.normal[t0];
-            t = _mm512_set1_epi32(int(t0));
-            wx = _mm512_set1_ps(w.x), wy = _mm512_set1_ps(w.y), wz = _mm512_set1_ps(w.z);
-            n = _mm512_set1_epi32(int(b.segments[t0]));
-            first = _mm512_set1_epi32(int(std::uint32_t(b.offset[t0])));
-        } else {
-            t = _mm512_add_epi32(_mm512_i32gather_epi32(g, b.first_triangle, 4), p);
-            const __m512i t3 = _mm512_mullo_epi32(t, _mm512_set1_epi32(3));
-            const float* normal = &b.normal->x;
-            wx = _mm512_i32gather_ps(t3, normal, 4);
-            wy = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(1)), normal, 4);
-            wz = _mm512_i32gather_ps(_mm512_add_epi32(t3, _mm512_set1_epi32(2)), normal, 4);
-            n = _mm512_i32gather_epi32(t, b.segments, 4);
-            // The triangle's first point: the low word of offset[t] (below 2^31 / 3).
-            first = _mm512_i32gather_epi32(_mm512_add_epi32(t, t), b.offset, 4);
+        one_triangle = under_one_triangle<W>(h, hm, k0);
+        if (one_triangle) tri[k0] = b.first_triangle[h.geomID[k0]] + h.primID[k0];
+        alignas(64) std::int32_t ci[16], cj[16];
+        unsigned upper_lanes = 0;
+        front_lanes = 0;
+        for (int k = 0; k < 16; k += W) {
+            const auto hmk = mask_of<W>(hm >> k);
+            const TriangleLanes<W> tl = triangle_lanes<W>(b, h, hmk, k);
+            tl.t.store(tri + k);
+            const F facing = tl.wx * F::load(h.Ng_x + k) + tl.wy * F::load(h.Ng_y + k) + tl.wz * F::load(h.Ng_z + k);
+            front_lanes |= ((facing > F(0.0f)) ^ nonzero(I::load(back + k))).bits() << k;
+            const F c1 = L::select(hmk, F::load(h.u + k), F(0.0f)), c2 = L::select(hmk, F::load(h.v + k), F(0.0f));
+            const LatticeCellLanes<W> c = lattice_cell_lanes<W>(tl.n, c1, c2);
+            c.w0.store(weight[0] + k), c.w1.store(weight[1] + k), c.w2.store(weight[2] + k);
+            c.i.store(ci + k), c.j.store(cj + k);
+            upper_lanes |= c.upper.bits() << k;
+            // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i (uint32).
+            const I np1 = tl.n + I(1);
+            const I row_i = c.i * np1 - srl(c.i * (c.i - I(1)), 1);
+            const I row_next = row_i + (np1 - c.i);
+            const I right = row_next + c.j, up = row_i + c.j + I(1);
+            const I e[3] = {L::select(c.upper, right + I(1), row_i + c.j), L::select(c.upper, up, right),
+                            L::select(c.upper, right, up)};
+            for (int q = 0; q < 3; ++q) ((tl.first + e[q]) * I(3)).store(point[q] + k);
         }
-        _mm512_store_si512(tri, t);
-        const __m512 facing = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(wx, _mm512_load_ps(h.Ng_x)),
-                                                          _mm512_mul_ps(wy, _mm512_load_ps(h.Ng_y))),
-                                            _mm512_mul_ps(wz, _mm512_load_ps(h.Ng_z)));
-        const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
-        const __m512i back_i = _mm512_load_si512(back);
-        front_lanes = _mm512_cmp_ps_mask(facing, zero, _CMP_GT_OQ) ^ _mm512_test_epi32_mask(back_i, back_i);
-        __m512 c1 = _mm512_maskz_loadu_ps(hm, h.u), c2 = _mm512_maskz_loadu_ps(hm, h.v);
-        // c < 0 ? 0 : (1 < c ? 1 : c)
-        c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c1, _CMP_LT_OQ), c1, one);
-        c1 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(c1, zero, _CMP_LT_OQ), c1, zero);
-        c2 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(one, c2, _CMP_LT_OQ), c2, one);
-        c2 = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(c2, zero, _CMP_LT_OQ), c2, zero);
-        const __m512 s = _mm512_add_ps(c1, c2);
-        // Barycentrics past the far edge (rare: Embree's rounding) scaled back onto it.
-        if (const __mmask16 over = _mm512_cmp_ps_mask(s, one, _CMP_GT_OQ)) {
-            c1 = _mm512_mask_div_ps(c1, over, c1, s);
-            c2 = _mm512_mask_div_ps(c2, over, c2, s);
-        }
-        const auto [i, j, ex, ey, room] = cells16(c1, c2, n);
-        __m512 fx = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(ex, zero, _CMP_LT_OQ), ex, zero);
-        __m512 fy = _mm512_mask_blend_ps(_mm512_cmp_ps_mask(ey, zero, _CMP_LT_OQ), ey, zero);
-        const __m512 sum = _mm512_add_ps(fx, fy);
-        const __mmask16 past = _mm512_cmp_ps_mask(sum, one, _CMP_GT_OQ);
-        const __mmask16 upper = past & room, rescale = past & ~upper;
-        if (rescale) {  // rare: only on the far edge's cells
-            const __m512 inv = _mm512_div_ps(one, sum);
-            fx = _mm512_mask_mul_ps(fx, rescale, fx, inv);
-            fy = _mm512_mask_mul_ps(fy, rescale, fy, inv);
-        }
-        _mm512_store_ps(weight[0], _mm512_mask_blend_ps(upper, _mm512_sub_ps(_mm512_sub_ps(one, fx), fy),
-                                                         _mm512_sub_ps(_mm512_add_ps(fx, fy), one)));
-        _mm512_store_ps(weight[1], _mm512_mask_blend_ps(upper, fx, _mm512_sub_ps(one, fx)));
-        _mm512_store_ps(weight[2], _mm512_mask_blend_ps(upper, fy, _mm512_sub_ps(one, fy)));
-        // Rows i and i + 1 of the lattice start at row_i and row_i + n + 1 - i (uint32).
-        const __m512i one_i = _mm512_set1_epi32(1);
-        const __m512i np1 = _mm512_add_epi32(n, one_i);
-        const __m512i tri_i = _mm512_srli_epi32(_mm512_mullo_epi32(i, _mm512_sub_epi32(i, one_i)), 1);
-        const __m512i row_i = _mm512_sub_epi32(_mm512_mullo_epi32(i, np1), tri_i);
-        const __m512i row_next = _mm512_add_epi32(row_i, _mm512_sub_epi32(np1, i));
-        const __m512i right = _mm512_add_epi32(row_next, j), up = _mm512_add_epi32(_mm512_add_epi32(row_i, j), one_i);
-        const __m512i e0 = _mm512_mask_blend_epi32(upper, _mm512_add_epi32(row_i, j), _mm512_add_epi32(right, one_i));
-        const __m512i e1 = _mm512_mask_blend_epi32(upper, right, up);
-        const __m512i e2 = _mm512_mask_blend_epi32(upper, up, right);
-        const __m512i three = _mm512_set1_epi32(3);
-        const __m512i e[3] = {e0, e1, e2};
-        for (int c = 0; c < 3; ++c)
-            _mm512_store_si512(point[c], _mm512_mullo_epi32(_mm512_add_epi32(first, e[c]), three));
         // One cell: one triangle, one side, and the same cell and sub-triangle in every lane.
-        const __m512i lane0 = _mm512_set1_epi32(k0);
-        auto uniform = [&](__m512i v) {
-            return _mm512_mask_cmpeq_epi32_mask(hm, v, _mm512_permutexvar_epi32(lane0, v)) == hm;
-        };
-        auto all_or_none = [&](__mmask16 m) { return (m & hm) == ((m >> k0 & 1) ? hm : 0); };
-        one_cell = one_triangle && uniform(i) && uniform(j) && all_or_none(upper) && all_or_none(front_lanes);
+        auto all_or_none = [&](unsigned m) { return (m & hm) == ((m >> k0 & 1) ? hm : 0u); };
+        one_cell = one_triangle && all_or_none(upper_lanes) && all_or_none(front_lanes);
+        for (int k = 0; k < 16 && one_cell; k += W)
+            one_cell = !any<W>(mask_of<W>(hm >> k) & ((I::load(ci + k) != I(ci[k0])) | (I::load(cj + k) != I(cj[k0]))));
+        prefetch_corners(b);
+    }
+
+    // The hit lanes' corners fetched (one cell: its three).
+    void prefetch_corners(const BakedLattice& b) const {
+        const int k0 = first_lane;
         if (one_cell) {
             const float* E = &((front_lanes >> k0 & 1) ? b.front : b.back)->x;
             for (int c = 0; c < 3; ++c) __builtin_prefetch(E + point[c][k0]);
             return;
         }
         for (int k = 0; k < 16; ++k)
-            if (hm >> k & 1) {
+            if (hit_lanes >> k & 1) {
                 const float* E = &((front_lanes >> k & 1) ? b.front : b.back)->x;
                 __builtin_prefetch(E + point[0][k]);
                 __builtin_prefetch(E + point[1][k]);
@@ -304,80 +268,76 @@ struct LatticeLanes {
     // rounding. The albedo only with_albedo (a painting's is its texture). Returns false,
     // having written nothing, for any other packet (the caller then takes locate16 and
     // blend16).
+    template <int W = kWidest>
     bool light16_cells(const BakedLattice& b, const RTCHit16& h, const std::int32_t* __restrict back,
                        bool with_albedo, LaneLight& __restrict out) {
+        using L = Lanes<W>;
+        using I = typename L::I;
+        using F = typename L::F;
+        constexpr int kChunks = 16 / W;
         const unsigned g0 = h.geomID[0], p0 = h.primID[0];
-        const __m512i prim = _mm512_loadu_si512(h.primID);
-        if (_mm512_cmpneq_epi32_mask(prim, _mm512_set1_epi32(int(p0)))) return false;
-        TriangleCache& c = triangle_cache_;
-        if (g0 != c.geom || p0 != c.prim) {  // another triangle: its data
-            c.geom = g0, c.prim = p0;
-            c.t = std::uint64_t(b.first_triangle[g0]) + p0;
-            c.w = b.normal[c.t];
-            c.n = std::int32_t(b.segments[c.t]);
-            c.front_points = b.front + b.offset[c.t], c.back_points = b.back + b.offset[c.t];
-            c.albedo = b.albedo[c.t], c.emission = b.emission[c.t];
-        }
+        for (int k = 0; k < 16; k += W)
+            if (any<W>(I::load(h.primID + k) != I(std::int32_t(p0)))) return false;
+        const TriangleCache& c = cached_triangle(b, g0, p0);
         // One triangle: Embree's normal is the same in every lane (lane 0's, w . Ng as locate16's).
         const bool normals_agree = c.w.x * h.Ng_x[0] + c.w.y * h.Ng_y[0] + c.w.z * h.Ng_z[0] > 0;
-        const __m512i back_i = _mm512_loadu_si512(back);
-        const __mmask16 front = __mmask16(normals_agree ? 0xFFFF : 0) ^ _mm512_test_epi32_mask(back_i, back_i);
+        unsigned back_lanes = 0;
+        for (int k = 0; k < 16; k += W) back_lanes |= nonzero(I::load(back + k)).bits() << k;
+        const unsigned front = (normals_agree ? 0xFFFFu : 0u) ^ back_lanes;
         if (front != 0 && front != 0xFFFF) return false;
-        const __m512 b1 = _mm512_loadu_ps(h.u), b2 = _mm512_loadu_ps(h.v);
-        const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.0f);
-        // Inside: b1, b2 >= 0 and b1 + b2 <= 1 (false for NaN), so lattice_cell's clamps and
-        // its scaling back onto the far edge change nothing.
-        const __mmask16 inside = _mm512_cmp_ps_mask(b1, zero, _CMP_GE_OQ) & _mm512_cmp_ps_mask(b2, zero, _CMP_GE_OQ) &
-                                 _mm512_cmp_ps_mask(_mm512_add_ps(b1, b2), one, _CMP_LE_OQ);
-        if (inside != 0xFFFF) return false;
-        // Inside, no lane's position in its cell is negative: locate16's clamp is not needed.
-        const auto [i, j, fx, fy, room] = cells16(b1, b2, _mm512_set1_epi32(c.n));
-        const __mmask16 past = _mm512_cmp_ps_mask(_mm512_add_ps(fx, fy), one, _CMP_GT_OQ);
-        const __mmask16 upper = past & room;
-        if (past & ~room) return false;  // on the far edge: lattice_cell scales back onto it
+        // Per lane its cell (ci, cj), sub-triangle (upper) and position in the cell (fx, fy).
+        alignas(64) std::int32_t ci[16], cj[16];
+        F fx[kChunks], fy[kChunks];
+        unsigned upper = 0;
+        for (int q = 0; q < kChunks; ++q) {
+            const F b1 = F::load(h.u + q * W), b2 = F::load(h.v + q * W);
+            // Inside: b1, b2 >= 0 and b1 + b2 <= 1 (false for NaN), so lattice_cell's clamps and
+            // its scaling back onto the far edge change nothing.
+            if (!all<W>((b1 >= F(0.0f)) & (b2 >= F(0.0f)) & (b1 + b2 <= F(1.0f)))) return false;
+            // Inside, no lane's position in its cell is negative: locate16's clamp is not needed.
+            const Cells<W> cl = cells<W>(b1, b2, I(c.n));
+            const auto past = cl.x + cl.y > F(1.0f);
+            if (any<W>(past & !cl.room)) return false;  // on the far edge: lattice_cell scales back onto it
+            upper |= (past & cl.room).bits() << (q * W);
+            cl.i.store(ci + q * W), cl.j.store(cj + q * W);
+            fx[q] = cl.x, fy[q] = cl.y;
+        }
         const bool seen_front = front != 0;
-        // The sub-triangle of a lane and the lanes on it.
-        auto sub_triangle = [&](int lane, __mmask16& lanes) -> const CellLight& {
-            const __m512i at = _mm512_set1_epi32(lane);
-            const std::int32_t ci = _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_permutexvar_epi32(at, i)));
-            const std::int32_t cj = _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_permutexvar_epi32(at, j)));
-            const bool up = (upper >> lane) & 1;
-            lanes = _mm512_cmpeq_epi32_mask(i, _mm512_set1_epi32(ci)) & _mm512_cmpeq_epi32_mask(j, _mm512_set1_epi32(cj)) &
-                    (up ? upper : __mmask16(~upper));
-            return cell_light(ci, cj, up, seen_front);
-        };
         // Lane 0's sub-triangle, then lane 15's, then the first lane left out's in turn (a
         // distant view's pixels lie far apart on the lattice), up to kMaxCells. Each costs a
-        // few vector operations; locate16 and blend16 cost 9 to 18 gathers.
+        // few vector operations; locate16 and blend16 cost 9 to 18 gathers. A straight row
+        // crosses each cell once, so a packet's cells are runs of lanes and lane 15's is the
+        // other of two. Its lookup does not wait for lane 0's lanes, as the loop's next lane
+        // would.
         constexpr int kMaxCells = 10;
-        __mmask16 covered;
-        const CellLight& first = sub_triangle(0, covered);
-        __m512 E[3];
-        for (int k = 0; k < 3; ++k) E[k] = first.light(k, fx, fy);
-        // The lanes not yet covered that lie on lane's sub-triangle, lit from it.
-        auto add_cell = [&](int lane) {
-            __mmask16 lanes;
-            const CellLight& cell = sub_triangle(lane, lanes);
-            lanes &= __mmask16(~covered);
-            for (int k = 0; k < 3; ++k) E[k] = _mm512_mask_blend_ps(lanes, E[k], cell.light(k, fx, fy));
-            covered |= lanes;
-        };
-        // A straight row crosses each cell once, so a packet's cells are runs of lanes and lane
-        // 15's is the other of two. Its lookup does not wait for lane 0's lanes, as the loop's
-        // next lane would.
-        if (covered != 0xFFFF) add_cell(15);
-        for (int cells = 2; covered != 0xFFFF; ++cells) {
-            if (cells == kMaxCells) return false;
-            add_cell(std::countr_zero(unsigned(__mmask16(~covered))));
+        F E[3][kChunks];
+        unsigned covered = 0;
+        for (int cells_lit = 0; covered != 0xFFFF; ++cells_lit) {
+            if (cells_lit == kMaxCells) return false;
+            const int lane = cells_lit == 0 ? 0 : (cells_lit == 1 ? 15 : std::countr_zero(~covered));
+            const std::int32_t li = ci[lane], lj = cj[lane];
+            const bool up = (upper >> lane) & 1;
+            const CellLight& cell = cell_light(li, lj, up, seen_front);
+            // The lanes not yet covered on lane's sub-triangle, lit from it.
+            for (int q = 0; q < kChunks; ++q) {
+                const auto on = (I::load(ci + q * W) == I(li)) & (I::load(cj + q * W) == I(lj)) &
+                                mask_of<W>((up ? upper : ~upper) >> (q * W)) & !mask_of<W>(covered >> (q * W));
+                for (int k = 0; k < 3; ++k) {
+                    const F lit = cell.template light<W>(k, fx[q], fy[q]);
+                    E[k][q] = cells_lit == 0 ? lit : L::select(on, lit, E[k][q]);
+                }
+                covered |= on.bits() << (q * W);
+            }
         }
-        for (int k = 0; k < 3; ++k) _mm512_store_ps(out.E[k], E[k]);
+        for (int k = 0; k < 3; ++k)
+            for (int q = 0; q < kChunks; ++q) E[k][q].store(out.E[k] + q * W);
         const Vec3f em = seen_front ? c.emission : Vec3f{0.0f, 0.0f, 0.0f};
-        if (with_albedo) {
-            _mm512_store_ps(out.a[0], _mm512_set1_ps(c.albedo.x)), _mm512_store_ps(out.a[1], _mm512_set1_ps(c.albedo.y));
-            _mm512_store_ps(out.a[2], _mm512_set1_ps(c.albedo.z));
+        for (int q = 0; q < kChunks; ++q) {
+            if (with_albedo)
+                F(c.albedo.x).store(out.a[0] + q * W), F(c.albedo.y).store(out.a[1] + q * W),
+                    F(c.albedo.z).store(out.a[2] + q * W);
+            F(em.x).store(out.M[0] + q * W), F(em.y).store(out.M[1] + q * W), F(em.z).store(out.M[2] + q * W);
         }
-        _mm512_store_ps(out.M[0], _mm512_set1_ps(em.x)), _mm512_store_ps(out.M[1], _mm512_set1_ps(em.y));
-        _mm512_store_ps(out.M[2], _mm512_set1_ps(em.z));
         return true;
     }
     // A sub-triangle's light as E = base + fx dx + fy dy, per channel (the coefficients as
@@ -393,9 +353,11 @@ struct LatticeLanes {
         }
         std::uint64_t key = kEmpty;
         float base[3], dx[3], dy[3];
-        // Channel k's light in 16 lanes at cell coordinates (fx, fy).
-        __m512 light(int k, __m512 fx, __m512 fy) const {
-            return _mm512_fmadd_ps(fy, _mm512_set1_ps(dy[k]), _mm512_fmadd_ps(fx, _mm512_set1_ps(dx[k]), _mm512_set1_ps(base[k])));
+        // Channel k's light in W lanes at cell coordinates (fx, fy).
+        template <int W>
+        typename Lanes<W>::F light(int k, typename Lanes<W>::F fx, typename Lanes<W>::F fy) const {
+            using F = typename Lanes<W>::F;
+            return fma(fy, F(dy[k]), fma(fx, F(dx[k]), F(base[k])));
         }
     };
     // The last packets' triangle (consecutive packets of a row nearly always share it).
@@ -407,6 +369,18 @@ struct LatticeLanes {
         const Vec3f *front_points = nullptr, *back_points = nullptr;
         Vec3f albedo, emission;
     } triangle_cache_;
+    const TriangleCache& cached_triangle(const BakedLattice& b, unsigned g0, unsigned p0) {
+        TriangleCache& c = triangle_cache_;
+        if (g0 != c.geom || p0 != c.prim) {  // another triangle: its data
+            c.geom = g0, c.prim = p0;
+            c.t = std::uint64_t(b.first_triangle[g0]) + p0;
+            c.w = b.normal[c.t];
+            c.n = std::int32_t(b.segments[c.t]);
+            c.front_points = b.front + b.offset[c.t], c.back_points = b.back + b.offset[c.t];
+            c.albedo = b.albedo[c.t], c.emission = b.emission[c.t];
+        }
+        return c;
+    }
     // The sub-triangles lit lately, direct-mapped by their cell's low bits (a chunk's rows
     // cross the same cells one after another; two entries missed about once a packet in a
     // distant view).
@@ -437,45 +411,48 @@ struct LatticeLanes {
         return cl;
     }
 
+    // blend() after locate16, on vectors: one cell's corners broadcast, else gathered from the
+    // front or the back points per lane; the albedo and the emission broadcast for one
+    // triangle, else gathered.
+    template <int W = kWidest>
     void blend16(const BakedLattice& b, LaneLight& __restrict out) const {
-        const __mmask16 on_front = hit_lanes & front_lanes, on_back = hit_lanes & ~front_lanes;
-        const float *F = &b.front->x, *B = &b.back->x;
+        using L = Lanes<W>;
+        using F = typename L::F;
+        using I = typename L::I;
         const int k0 = first_lane;
-        auto corner = [&](int c, int axis) {
-            if (one_cell)
-                return _mm512_set1_ps(((front_lanes >> k0 & 1) ? F : B)[point[c][k0] + axis]);
-            const __m512i at = _mm512_add_epi32(_mm512_load_si512(point[c]), _mm512_set1_epi32(axis));
-            __m512 v = _mm512_setzero_ps();
-            if (on_front) v = _mm512_mask_i32gather_ps(v, on_front, at, F, 4);
-            if (on_back) v = _mm512_mask_i32gather_ps(v, on_back, at, B, 4);
-            return v;
-        };
-        const __m512 w0 = _mm512_load_ps(weight[0]), w1 = _mm512_load_ps(weight[1]), w2 = _mm512_load_ps(weight[2]);
-        float* E[3] = {out.E[0], out.E[1], out.E[2]};
-        for (int axis = 0; axis < 3; ++axis)
-            _mm512_store_ps(E[axis], _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(corner(0, axis), w0),
-                                                                 _mm512_mul_ps(corner(1, axis), w1)),
-                                                   _mm512_mul_ps(corner(2, axis), w2)));
-        const float *albedo = &b.albedo->x, *emission = &b.emission->x;
-        float* A[3] = {out.a[0], out.a[1], out.a[2]};
-        float* M[3] = {out.M[0], out.M[1], out.M[2]};
-        if (one_triangle) {
-            const std::size_t t0 = 3 * std::size_t(tri[k0]);
-            for (int axis = 0; axis < 3; ++axis) {
-                _mm512_store_ps(A[axis], _mm512_set1_ps(albedo[t0 + axis]));
-                _mm512_store_ps(M[axis], _mm512_maskz_mov_ps(on_front, _mm512_set1_ps(emission[t0 + axis])));
+        const float* one_cell_points = &((front_lanes >> k0 & 1) ? b.front : b.back)->x;
+        for (int k = 0; k < 16; k += W) {
+            const auto hit = mask_of<W>(hit_lanes >> k), front = mask_of<W>(front_lanes >> k);
+            const auto on_front = hit & front, on_back = hit & !front;
+            auto corner = [&](int c, int axis) {
+                if (one_cell) return F(one_cell_points[point[c][k0] + axis]);
+                const I at = I::load(point[c] + k) + I(axis);
+                F v(0.0f);
+                if (any<W>(on_front)) v = gather(v, b.front, at, on_front);
+                if (any<W>(on_back)) v = gather(v, b.back, at, on_back);
+                return v;
+            };
+            const F w0 = F::load(weight[0] + k), w1 = F::load(weight[1] + k), w2 = F::load(weight[2] + k);
+            for (int axis = 0; axis < 3; ++axis)
+                (corner(0, axis) * w0 + corner(1, axis) * w1 + corner(2, axis) * w2).store(out.E[axis] + k);
+            const float *albedo = &b.albedo->x, *emission = &b.emission->x;
+            if (one_triangle) {
+                const std::size_t t0 = 3 * std::size_t(tri[k0]);
+                for (int axis = 0; axis < 3; ++axis) {
+                    F(albedo[t0 + axis]).store(out.a[axis] + k);
+                    L::select(on_front, F(emission[t0 + axis]), F(0.0f)).store(out.M[axis] + k);
+                }
+                continue;
             }
-            return;
-        }
-        const __m512i t3 = _mm512_mullo_epi32(_mm512_load_si512(tri), _mm512_set1_epi32(3));
-        for (int axis = 0; axis < 3; ++axis) {
-            const __m512i at = _mm512_add_epi32(t3, _mm512_set1_epi32(axis));
-            _mm512_store_ps(A[axis], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), hit_lanes, at, albedo, 4));
-            _mm512_store_ps(M[axis], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), on_front, at, emission, 4));
+            const I t3 = I::load(tri + k) * I(3);
+            for (int axis = 0; axis < 3; ++axis) {
+                const I at = t3 + I(axis);
+                gather(F(0.0f), b.albedo, at, hit).store(out.a[axis] + k);
+                gather(F(0.0f), b.emission, at, on_front).store(out.M[axis] + k);
+            }
         }
     }
 #pragma GCC diagnostic pop
-#endif
 };
 
 }  // namespace display
