@@ -1,9 +1,10 @@
 """`gigascroll light PACK --room scroll|hall|FILE [--lights FILE.json] [--category ...]
-[--hours-per-day H --days-per-year D] [-o DIR]`: the illuminance on every painting as
-conservators use it: false-colour maps in lux, min / mean / max and uniformity, the yearly dose
-in lux hours, and warnings against CIE 157:2004's limits for the chosen responsivity category;
-written as index.html, light.json and one PNG map per painting (default: next to the pack,
-PACK-light/)."""
+[--hours-per-day H --days-per-year D] [-o DIR]`, or `gigascroll light --exhibition SHOW`:
+the illuminance on every painting as conservators use it: false-colour maps in lux, min /
+mean / max and uniformity, the yearly dose in lux hours, and warnings against CIE 157:2004's
+limits for the chosen responsivity category; written as index.html, light.json and one PNG
+map per painting (default: next to the pack or show, PACK-light/ or SHOW-light/). A show's
+paintings are named by their titles; its wall labels are not measured."""
 
 from __future__ import annotations
 
@@ -25,7 +26,10 @@ def register(sub) -> None:
         "and warnings where CIE 157:2004's limits for the chosen responsivity category are "
         "exceeded. Lux = 683 lm/W x (0.2126 R + 0.7152 G + 0.0722 B) of the irradiance "
         "(linear sRGB, W/m^2 per channel). Writes index.html, light.json and the maps.")
-    p.add_argument("pack", metavar="PACK", help="the tile pack whose paintings the room shows")
+    p.add_argument("pack", metavar="PACK", nargs="?", default=None,
+                   help="the tile pack whose paintings the room shows")
+    from .exhibition_options import add_exhibition_option
+    add_exhibition_option(p)
     p.add_argument("--room", default="scroll", help="scroll, hall, or a room file (glTF/OBJ/PLY)")
     p.add_argument("--lights", default=None, metavar="FILE.json",
                    help="light specs in place of the room's lights: a JSON list of {name, "
@@ -135,16 +139,22 @@ def _lit(args, pack, room):
     return gallery, vt
 
 
-def _lux_grids(args, pack, room) -> tuple[list, dict]:
-    """Every painting's lux grid, and the lighting's stats."""
+def _measured(room, show) -> list[int]:
+    """The slots measured: all of a room's; a show's paintings, not its wall labels."""
+    labels = {f"label-{p.name}" for p in show.exhibition.paintings} if show else set()
+    return [i for i, s in enumerate(room.paintings) if s.name not in labels]
+
+
+def _lux_grids(args, pack, room, show=None) -> tuple[list, dict]:
+    """Every measured painting's lux grid, and the lighting's stats."""
     from ..gallery.illuminance import painting_lux
     gallery, vt = _lit(args, pack, room)
     grids = [painting_lux(gallery, vt, i, args.samples, args.lighting, args.threads)[0]
-             for i in range(len(room.paintings))]
+             for i in _measured(room, show)]
     return grids, {k: v for k, v in gallery.stats.items() if k != "albedo_levels"}
 
 
-def _solve_total(args, pack, room) -> dict:
+def _solve_total(args, pack, room, show=None) -> dict:
     """--targets total: the painting-targeted lights rescaled to meet their targets in total
     illuminance (gallery/light_solve.py)."""
     import numpy as np
@@ -152,13 +162,13 @@ def _solve_total(args, pack, room) -> dict:
     from ..gallery.light_solve import solve_total_targets
 
     def measure(r):
-        grids, _ = _lux_grids(args, pack, r)
+        grids, _ = _lux_grids(args, pack, r, show)
         return {i: float(np.nanmean(g)) if np.isfinite(g).any() else 0.0
-                for i, g in enumerate(grids)}
+                for i, g in zip(_measured(r, show), grids)}
     return solve_total_targets(room, measure)
 
 
-def _measure(args, pack, room) -> tuple[dict, dict]:
+def _measure(args, pack, room, show=None) -> tuple[dict, dict]:
     """Lights the room, computes every painting's lux and figures: (results, maps)."""
     import numpy as np
 
@@ -167,14 +177,16 @@ def _measure(args, pack, room) -> tuple[dict, dict]:
     from ..gallery.light_report import map_png
 
     limits = limits_of(args.category)
-    solve = _solve_total(args, pack, room) if args.targets == "total" else None
-    grids, stats = _lux_grids(args, pack, room)
+    solve = _solve_total(args, pack, room, show) if args.targets == "total" else None
+    grids, stats = _lux_grids(args, pack, room, show)
+    titles = {p.name: p.title for p in show.exhibition.paintings} if show else {}
     paintings = []
-    for i, (slot, lux) in enumerate(zip(room.paintings, grids)):
+    for i, lux in zip(_measured(room, show), grids):
+        slot = room.paintings[i]
         f = painting_figures(lux, limits, args.hours_per_day, args.days_per_year)
         direct = direct_lux(room, i, args.samples)
         f["direct_mean_lux_analytic"] = None if direct is None else float(direct.mean())
-        paintings.append({"slot": i, "name": slot.name or f"slot {i}",
+        paintings.append({"slot": i, "name": titles.get(slot.name, slot.name or f"slot {i}"),
                           "width_m": float(slot.width_m), "height_m": float(slot.height_m),
                           "grid": [int(lux.shape[1]), int(lux.shape[0])], **f,
                           "map": f"map{i:03d}.png"})
@@ -186,7 +198,9 @@ def _measure(args, pack, room) -> tuple[dict, dict]:
                  f"max {p['max_lux'] or 0:.1f} lx")
         maps[p["map"]] = map_png(lux, p["width_m"], p["height_m"], title, vmax, limits.lux)
     results = {
-        "room": room.name, "lighting": args.lighting, "pack": os.path.abspath(args.pack),
+        "room": room.name, "lighting": args.lighting,
+        "pack": os.path.abspath(show.pack_path if show else args.pack),
+        **({"exhibition": os.path.abspath(show.path)} if show else {}),
         "units": {"illuminance": "lx", "exposure": "lx h per year"},
         "lux_conversion": "683 lm/W x (0.2126 R + 0.7152 G + 0.0722 B) of the irradiance "
                           "(linear sRGB, W/m^2 per channel)",
@@ -209,9 +223,16 @@ def run(args) -> int:
                            temp_dir, write_mark)
     from ..pack import TilePack
 
+    from .exhibition_options import open_exhibition
     _check_args(args)
-    p = Path(args.pack)
-    if not (p / "manifest.json").is_file():
+    show = open_exhibition(args, room_default="scroll")
+    if show is not None and args.lights:
+        raise UserError("--exhibition brings its own lights (the exhibition file's [[lights]]): "
+                        "give --exhibition or --lights, not both")
+    if show is None and args.pack is None:
+        raise UserError("give a PACK (with --room) or --exhibition SHOW")
+    p = Path(args.exhibition if show is not None else args.pack)
+    if show is None and not (p / "manifest.json").is_file():
         raise UserError(f"{p} is not a tile pack (no manifest.json)")
     out = Path(args.out) if args.out is not None else beside(p, "light")
     try:
@@ -219,9 +240,9 @@ def run(args) -> int:
                      what="a light report")
     except OSError as e:
         raise UserError(f"--out {e}") from None
-    pack = TilePack(p)
-    room = _room(args, pack)
-    results, maps = _measure(args, pack, room)
+    pack = show.pack if show is not None else TilePack(p)
+    room = show.room if show is not None else _room(args, pack)
+    results, maps = _measure(args, pack, room, show)
     with signals_interrupt():
         tmp = temp_dir(out, hidden=True)
         try:
