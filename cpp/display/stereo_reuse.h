@@ -8,9 +8,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
-#include "common/vec3.h"
 #include "common/lanes.h"
+#include "common/vec3.h"
 #include "views/camera.h"
 
 namespace gigascroll {
@@ -145,6 +146,70 @@ void claimed_row_min(const std::uint64_t* __restrict claims, std::size_t w, floa
 std::uint64_t release_claims(std::uint64_t* __restrict claims, const float* up, const float* mid,
                              const float* down, std::size_t w, float ratio,
                              std::int32_t* __restrict source, bool reset);
+
+// W claims from claims[0] in lanes: their depths (high words), left pixels (low words) and
+// the unclaimed lanes, in pixel order. The words' deinterleave is a permute (two at 16
+// lanes, shuffles at 8), each width's own; W = 1 is the plain split.
+template <int W>
+struct ClaimLanes {
+    typename Lanes<W>::F depth;
+    typename Lanes<W>::I index;
+    typename Lanes<W>::M unclaimed;
+};
+inline ClaimLanes<1> load_claims(const std::uint64_t* claims, std::integral_constant<int, 1>) {
+    const std::uint64_t c = claims[0];
+    return {Lanes<1>::F(std::bit_cast<float>(std::uint32_t(c >> 32))), Lanes<1>::I(std::int32_t(c & 0xffffffffu)),
+            {c == kUnclaimed}};
+}
+#if defined(__AVX2__)
+inline ClaimLanes<8> load_claims(const std::uint64_t* claims, std::integral_constant<int, 8>) {
+    const __m256i c0 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(claims));
+    const __m256i c1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(claims + 4));
+    // Per 128-bit lane the odd (even) words of c0 and c1, then the 64-bit quarters reordered.
+    auto words = [](__m256i a, __m256i b, auto odd) {
+        constexpr int kPick = decltype(odd)::value ? _MM_SHUFFLE(3, 1, 3, 1) : _MM_SHUFFLE(2, 0, 2, 0);
+        return _mm256_castpd_si256(_mm256_permute4x64_pd(
+            _mm256_castps_pd(_mm256_shuffle_ps(_mm256_castsi256_ps(a), _mm256_castsi256_ps(b), kPick)),
+            _MM_SHUFFLE(3, 1, 2, 0)));
+    };
+    const __m256i ones = _mm256_set1_epi64x(-1);
+    const __m256i unclaimed = words(_mm256_cmpeq_epi64(c0, ones), _mm256_cmpeq_epi64(c1, ones), std::true_type{});
+    return {Lanes<8>::F(_mm256_castsi256_ps(words(c0, c1, std::true_type{}))),
+            Lanes<8>::I(words(c0, c1, std::false_type{})), {_mm256_castsi256_ps(unclaimed)}};
+}
+#endif
+#if defined(__AVX512F__)
+inline ClaimLanes<16> load_claims(const std::uint64_t* claims, std::integral_constant<int, 16>) {
+    const __m512i c0 = _mm512_loadu_si512(claims), c1 = _mm512_loadu_si512(claims + 8);
+    const __m512i odd = _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31);
+    const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    const __m512i ones = _mm512_set1_epi64(-1);
+    const __mmask16 unclaimed = __mmask16(unsigned(_mm512_cmpeq_epi64_mask(c0, ones)) |
+                                          unsigned(_mm512_cmpeq_epi64_mask(c1, ones)) << 8);
+    return {Lanes<16>::F(_mm512_castsi512_ps(_mm512_permutex2var_epi32(c0, odd, c1))),
+            Lanes<16>::I(_mm512_permutex2var_epi32(c0, even, c1)), {unclaimed}};
+}
+#endif
+
+// release_claims' test of whole groups of W claims from x = 0 (the count kept added to
+// kept); returns the first x not taken (w less its remainder mod W). std::min(a, b) is
+// b < a ? b : a, the lanes' min(b, a).
+template <int W>
+std::size_t release_claim_lanes(const std::uint64_t* __restrict claims, const float* up, const float* mid,
+                                const float* down, std::size_t w, float ratio, std::int32_t* __restrict source,
+                                std::uint64_t& kept) {
+    using L = Lanes<W>;
+    using F = typename L::F;
+    std::size_t x = 0;
+    for (; x + W <= w; x += W) {
+        const F nearest = min(F::load(down + x), min(F::load(mid + x), F::load(up + x)));
+        const ClaimLanes<W> c = load_claims(claims + x, std::integral_constant<int, W>{});
+        const auto drop = (c.depth > nearest * F(ratio)) | c.unclaimed;
+        L::select(drop, typename L::I(-1), c.index).store(source + x);
+        kept += std::uint64_t(W - std::popcount(drop.bits()));
+    }
+    return x;
+}
 
 }  // namespace display
 }  // namespace gigascroll

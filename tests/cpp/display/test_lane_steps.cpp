@@ -1,9 +1,12 @@
 // The display pass's lane steps at every width this build has (common/lanes.h: W = 1, 8, 16)
 // against the plain C++ width bit for bit, and the functions the lane type keeps apart (the
 // float classes, the hardware's estimates, the table lookup, the masked store) against their
-// W = 1 twins; the plane map's packet also against its per-pixel double form.
+// W = 1 twins; the plane map's packet also against its per-pixel double form, and the
+// stereo reuse's release of claims against its definition.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +18,7 @@
 #include "display/plane_map.h"
 #include "display/shade.h"
 #include "display/srgb.h"
+#include "display/stereo_reuse.h"
 #include "views/camera.h"
 
 using namespace gigascroll;
@@ -219,4 +223,60 @@ TEST(PlaneMapLanes, PacketsAtEveryWidthEqualTheScalarAndFollowThePixels) {
         }
     }
     EXPECT_GT(mapped, 1000);  // the comparison with the pixels ran
+}
+
+namespace {
+
+template <int W>
+void expect_release_equals_scalar(const std::vector<std::uint64_t>& claims, const std::vector<float>& up,
+                                  const std::vector<float>& mid, const std::vector<float>& down, float ratio) {
+    const std::size_t w = claims.size();
+    std::vector<std::int32_t> s1(w, 7), sw(w, 7);
+    std::uint64_t kept1 = 0, keptw = 0;
+    ASSERT_EQ(release_claim_lanes<1>(claims.data(), up.data(), mid.data(), down.data(), w, ratio, s1.data(), kept1), w);
+    const std::size_t x = release_claim_lanes<W>(claims.data(), up.data(), mid.data(), down.data(), w, ratio, sw.data(), keptw);
+    ASSERT_EQ(x, w - w % W);
+    std::uint64_t kept_head = 0;
+    for (std::size_t k = 0; k < x; ++k) {
+        ASSERT_EQ(s1[k], sw[k]) << "width " << W << " claim " << k;
+        kept_head += s1[k] >= 0;
+    }
+    ASSERT_EQ(keptw, kept_head);
+    for (std::size_t k = x; k < w; ++k) ASSERT_EQ(sw[k], 7);  // not taken
+}
+
+}  // namespace
+
+TEST(ReleaseLanes, EveryWidthEqualsTheScalarRelease) {
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> depth(0.5f, 8.0f), coin(0.0f, 1.0f);
+    const float inf = std::numeric_limits<float>::infinity();
+    for (std::size_t w : {1u, 7u, 16u, 37u, 100u}) {
+        std::vector<std::uint64_t> claims(w);
+        std::vector<float> up(w), mid(w), down(w);
+        for (std::size_t k = 0; k < w; ++k) {
+            const float d = depth(rng);
+            claims[k] = coin(rng) < 0.2f ? kUnclaimed
+                                         : (std::uint64_t(std::bit_cast<std::uint32_t>(d)) << 32 | std::uint64_t(k * 977));
+            up[k] = coin(rng) < 0.1f ? inf : depth(rng), mid[k] = depth(rng), down[k] = depth(rng);
+        }
+        // The scalar release against its definition (release_claims' comment).
+        std::vector<std::int32_t> source(w);
+        std::uint64_t kept = 0;
+        release_claim_lanes<1>(claims.data(), up.data(), mid.data(), down.data(), w, 1.05f, source.data(), kept);
+        std::uint64_t want_kept = 0;
+        for (std::size_t k = 0; k < w; ++k) {
+            const float nearest = std::min({up[k], mid[k], down[k]});
+            const bool keep = claims[k] != kUnclaimed && std::bit_cast<float>(std::uint32_t(claims[k] >> 32)) <= nearest * 1.05f;
+            ASSERT_EQ(source[k], keep ? std::int32_t(k * 977) : -1) << k;
+            want_kept += keep;
+        }
+        ASSERT_EQ(kept, want_kept);
+#if defined(__AVX2__)
+        expect_release_equals_scalar<8>(claims, up, mid, down, 1.05f);
+#endif
+#if defined(__AVX512F__)
+        expect_release_equals_scalar<16>(claims, up, mid, down, 1.05f);
+#endif
+    }
 }
