@@ -144,13 +144,24 @@ def cli_exr(fork_worker, room_files, name, *options):
     return data, o.stdout
 
 
-def api_still(room_files, **options):
+def api_still(room_files, lighting="baked", spp=None, **options):
+    """The still as the API makes it: the knob's default settings for the room
+    (gallery/quality.py), the options over them, photons=3000 as BASE."""
+    from gigascroll.gallery.quality import light_settings
     from gigascroll.room.files import load_room
 
     pack = g.TilePack(room_files / "ex.pack")
     gallery = Gallery.from_room(load_room(room_files / "room.glb", pack), pack)
     cam = gallery.camera((24, 18))
-    return gallery.still(cam, photons=3000, threads=1, seed=0, **options)
+    s = light_settings(gallery.spec)
+    if lighting != "unlit":
+        gallery.light(g.VirtualTexture(pack, (30, 30)),
+                      **{**s.light_options(), "photons": 3000, "threads": 1, "seed": 0, **options})
+        if lighting == "baked":
+            bake = {**s.bake_options(), **({"light_samples": options["light_samples"]}
+                                           if "light_samples" in options else {})}
+            gallery.bake(threads=1, **bake)
+    return gallery.still(cam, lighting=lighting, spp=spp or s.spp)
 
 
 @pytest.mark.parametrize("options, api", [

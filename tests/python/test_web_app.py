@@ -55,14 +55,17 @@ def server(room_pack, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def cpu_room(room_pack):
-    """The CPU gallery lit and baked as the server bakes (its ROOM_LIGHTING, bake defaults)."""
+    """The CPU gallery lit and baked as the server bakes (the knob's default level for the
+    room, ROOM_LIGHTING over it)."""
+    from gigascroll.gallery.quality import light_settings
     from gigascroll.serve.room_bake import ROOM_LIGHTING
 
     pack = g.TilePack(str(room_pack))
     gallery = Gallery.from_room(builtin_room("scroll", pack), pack)
     vt = g.VirtualTexture(pack, (40, 40))
-    gallery.light(vt, **ROOM_LIGHTING)
-    gallery.bake()
+    settings = light_settings(gallery.spec)
+    gallery.light(vt, **{**settings.light_options(), **ROOM_LIGHTING})
+    gallery.bake(**settings.bake_options())
     return gallery, vt
 
 

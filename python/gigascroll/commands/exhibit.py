@@ -34,19 +34,23 @@ def register(sub) -> None:
     b.add_argument("--no-iiif", action="store_true",
                    help="skip the IIIF export (Image API tiles and Presentation 3.0 manifest)")
     b.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
+    from .light_quality import add_light_quality_options
+    add_light_quality_options(b)
     b.add_argument("--workers", type=int, default=0,
                    help="pack on this many Dask workers (a local cluster, as pack --workers; "
                         "default 0: in this process)")
     b.set_defaults(func=run)
 
 
-def _bake(threads: int):
+def _bake(threads: int, args=None):
     def bake(gallery, spec, pack, directory):
         from ..outputs import write_bytes
         from ..serve import pack_hash
         from ..serve.room_bake import bake_glb, lighting_options, room_key
-        key = room_key(spec, pack_hash(pack), lighting_options())
-        data, stats = bake_glb(gallery, spec, pack, threads)
+        from .light_quality import light_settings_of
+        settings = light_settings_of(args, spec)
+        key = room_key(spec, pack_hash(pack), lighting_options(settings))
+        data, stats = bake_glb(gallery, spec, pack, threads, settings)
         write_bytes(directory / f"{key}.glb", data)
         return {"glb": f"bake/{key}.glb", "bake_points": stats.get("bake_points"),
                 "seconds": stats.get("photon_seconds", 0) + stats.get("build_seconds", 0)
@@ -62,11 +66,13 @@ def run(args) -> int:
         raise UserError("--threads must be in [0, 4096]")
     if not 0 <= args.workers <= 1024:
         raise UserError("--workers must be in [0, 1024]")
+    from .light_quality import check_light_budget
+    check_light_budget(args)
     try:
         with signals_interrupt():
             record = build_show(args.exhibition, args.output, progress=True,
                                 threads=args.threads, workers=args.workers,
-                                bake=None if args.no_bake else _bake(args.threads),
+                                bake=None if args.no_bake else _bake(args.threads, args),
                                 iiif_base=None if args.no_iiif else args.base_url)
     except ExhibitionError as e:
         raise UserError(str(e)) from None

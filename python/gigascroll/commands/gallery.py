@@ -60,7 +60,10 @@ def register(sub) -> None:
     p.add_argument("--no-video", action="store_true", help="skip the MP4")
     p.add_argument("--no-oracle", action="store_true", help="skip the per-frame oracle comparison")
     p.add_argument("--no-reuse", action="store_true", help="trace the right eye in full")
-    p.add_argument("--photons", type=int, default=1 << 18, help="photons for the lighting")
+    p.add_argument("--photons", type=int, default=None,
+                   help="photons for the lighting (default: chosen by --quality)")
+    from .light_quality import add_light_quality_options
+    add_light_quality_options(p, "--photons")
     p.add_argument("--pace", action="store_true", help="sleep to the path's frame rate")
     p.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")
     p.add_argument("--fovea", type=float, default=None, metavar="DEG",
@@ -218,8 +221,10 @@ def run(args) -> int:
         raise UserError(f"--seconds must be in (0, 3600], got {args.seconds}")
     if args.png_every is not None and args.png_every < 1:
         raise UserError("--png-every must be >= 1")
-    if args.photons < 1:
+    if args.photons is not None and args.photons < 1:
         raise UserError("--photons must be >= 1")
+    from .light_quality import check_light_budget
+    check_light_budget(args)
     out = default_out(args)
     tmp = prepare_output(out)  # fails early on an unwritable --out
     with signals_interrupt():  # SIGTERM / SIGHUP: the temporary output goes as for Ctrl-C
@@ -280,8 +285,9 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     from .display_options import display_of
     display = display_of(args, room, args.lighting)
     t0 = time.perf_counter()
+    from .light_quality import light_settings_of
     source = GallerySource(room, pack, args.lighting, photons=args.photons,
-                           threads=args.threads, response=display)
+                           threads=args.threads, response=display, light=light_settings_of(args, room))
     print(f"{source.name}: lit in {time.perf_counter() - t0:.1f} s "
           f"({source.light_stats.get('photons_stored', 0)} photons stored)")
     walk = GalleryWalk(source, pack, path, eye=eye, magnifier=not args.no_magnifier,
@@ -291,7 +297,8 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
                 "exhibition": args.exhibition, "eye": f"{eye[0]}x{eye[1]}",
                 "magnifier": not args.no_magnifier, "lighting": args.lighting,
                 "seconds": round(len(path) / path.fps, 3), "reuse": not args.no_reuse,
-                "photons": args.photons, "frames": len(path),
+                "photons": args.photons or source.light.photons, "light": source.light.describe(),
+                "frames": len(path),
                 "exposure": display.how if args.exposure.mode == "auto" else
                 f"{args.exposure.mode} {args.exposure.value:g}", "tone": args.tone}
     if foveation is not None:

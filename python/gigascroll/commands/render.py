@@ -39,7 +39,8 @@ def register(sub) -> None:
                            "(a scene's auto: factor 1)")
     p.add_argument("--width", type=int, default=256)
     p.add_argument("--height", type=int, default=256)
-    p.add_argument("--photons", type=int, default=1 << 18, help="photons emitted (default 2^18)")
+    p.add_argument("--photons", type=int, default=None,
+                   help="photons emitted (default 2^18; --room: chosen by --quality)")
     p.add_argument("--radius", type=float, default=None,
                    help="gather radius (default 0.02 x the scene's scale: 0.02 in the Cornell box)")
     p.add_argument("--grid", choices=["adaptive", "hash", "kdtree"], default="adaptive",
@@ -58,6 +59,8 @@ def register(sub) -> None:
                         "with --progressive); --room: per pixel of lighting full and per point of "
                         "the bake (default 16)")
     p.add_argument("--seed", type=int, default=0)
+    from .light_quality import add_light_quality_options
+    add_light_quality_options(p, "--room: --photons, --light-samples and --spp")
     p.add_argument("--pipeline", choices=["fused", "two-pass"], default="fused")
     p.add_argument("--cooperative", action="store_true", help="cooperative gather (two-pass pipeline)")
     p.add_argument("--no-indirect", action="store_true",
@@ -121,15 +124,14 @@ def _room_still_options(args) -> dict:
     for given, option, why in _refused_room_options(args):
         if given:
             raise UserError(f"{option} does not apply to --room: {why}")
-    spp = 1 if args.spp is None else args.spp
-    if spp < 1 or math.isqrt(spp) ** 2 != spp:
+    spp = args.spp  # None: the light settings' (--quality)
+    if spp is not None and (spp < 1 or math.isqrt(spp) ** 2 != spp):
         raise UserError(f"--spp with --room must be a square (1, 4, 9, 16, ...): k x k samples "
                         f"per pixel, got {spp}")
-    if args.width * args.height * spp > 1 << 26:
-        raise UserError(f"--room: {args.width} x {args.height} pixels x {spp} spp is more than "
-                        "2^26 samples")
-    options = {"spp": spp, "photons": args.photons, "seed": args.seed, "threads": args.threads,
+    options = {"spp": spp, "seed": args.seed, "threads": args.threads,
                "indirect": not args.no_indirect}
+    if args.photons is not None:
+        options["photons"] = args.photons
     if args.radius is not None:
         options["radius"] = args.radius
     if args.disc is not None:
@@ -195,9 +197,16 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
         cam = [*pose[0], *pose[1]]
     camera = gallery.camera((args.width, args.height), fov=fov,
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
+    from .light_quality import light_settings_of
+    settings = light_settings_of(args, spec)
+    options = {**options, "spp": options["spp"] or settings.spp}
+    if args.width * args.height * options["spp"] > 1 << 26:
+        raise UserError(f"--room: {args.width} x {args.height} pixels x {options['spp']} spp is more "
+                        "than 2^26 samples")
     t0 = time.perf_counter()
     try:
-        image = gallery.still(camera, lighting=args.lighting or "baked", progress=True, **options)
+        _light_room(gallery, settings, args.lighting or "baked", options)
+        image = gallery.still(camera, lighting=args.lighting or "baked", progress=True, spp=options["spp"])
     except ValueError as e:
         raise UserError(str(e)) from None
     total = time.perf_counter() - t0
@@ -207,10 +216,12 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"room {spec.name}: {gallery.triangle_count} triangles, {gallery.painting_count} paintings, "
           f"{args.width}x{args.height}, {options['spp']} spp, lighting {args.lighting or 'baked'}")
+    if gallery.lit:
+        print(f"light     {settings.describe()}")
     if gallery.lit and args.no_indirect:
         print("photons   skipped (--no-indirect: direct light only)")
     elif gallery.lit:
-        print(f"photons   {ms(st['photon_seconds'])}  ({args.photons} emitted, {st['photons_stored']} stored, "
+        print(f"photons   {ms(st['photon_seconds'])}  ({options.get('photons', settings.photons)} emitted, {st['photons_stored']} stored, "
               f"radius {st['radius']:.4g} m)")
         print(f"grid      {ms(st['build_seconds'])}  (build)")
     if gallery.baked:
@@ -219,6 +230,23 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
     _say_display(out, display)
     print(f"wrote {out}")
     return 0
+
+
+def _light_room(gallery, settings, lighting: str, options: dict) -> None:
+    """Lights (and bakes) the room at the knob's settings, the options given explicitly
+    (--photons, --radius, --disc, --light-samples, --seed, --threads, --no-indirect) over them."""
+    from .. import runtime
+
+    if lighting == "unlit":
+        return
+    given = {k: options[k] for k in ("photons", "radius", "disc", "light_samples", "seed", "threads",
+                                     "indirect") if k in options}
+    gallery.light(runtime.VirtualTexture(gallery.pack, (30, 30)), **{**settings.light_options(), **given})
+    if lighting == "baked":
+        bake = settings.bake_options()
+        if "light_samples" in options:
+            bake["light_samples"] = options["light_samples"]
+        gallery.bake(threads=options.get("threads", 0), progress=True, **bake)
 
 
 def _say_display(out: Path, display) -> None:
@@ -239,15 +267,18 @@ def run(args) -> int:
         raise UserError(f"output directory does not exist: {out.parent}")
     if args.width <= 0 or args.height <= 0 or args.width > 16384 or args.height > 16384:
         raise UserError("--width and --height must be in [1, 16384]")
-    if args.photons <= 0:
+    if args.photons is not None and args.photons <= 0:
         raise UserError("--photons must be positive")
+    from .light_quality import check_light_budget
+    check_light_budget(args)
     if args.light_samples is not None and not 1 <= args.light_samples <= 4096:
         raise UserError("--light-samples must be in [1, 4096]")
     if args.room or args.exhibition or args.look_at is not None:
         return run_room(args, out)
     if args.scene is None:
         raise UserError("give a built-in SCENE or --room ROOM --pack PACK")
-    for given, option in ((args.pack, "--pack"), (args.lighting, "--lighting")):
+    for given, option in ((args.pack, "--pack"), (args.lighting, "--lighting"), (args.quality, "--quality"),
+                          (args.light_budget, "--light-budget")):
         if given is not None:
             raise UserError(f"{option} applies to --room; the built-in scene {args.scene} is "
                             "lit by the photon mapper's gather")
@@ -265,7 +296,8 @@ def run(args) -> int:
                             cam[6] if len(cam) == 7 else camera.fov, (args.width, args.height))
         except ValueError as e:
             raise UserError(f"--camera: {e}") from None
-    image, st = render(scene, camera, photons=args.photons, radius=radius, grid=args.grid,
+    photons = 1 << 18 if args.photons is None else args.photons
+    image, st = render(scene, camera, photons=photons, radius=radius, grid=args.grid,
                        gather=args.gather, k=50 if args.k is None else args.k, kernel=args.kernel,
                        spp=spp, light_samples=light_samples, seed=args.seed,
                        pipeline=args.pipeline, cooperative=args.cooperative,
@@ -283,7 +315,7 @@ def run(args) -> int:
     if st["photon_pass_skipped"]:
         print("photon pass   skipped (no indirect light needed)")
     else:
-        print(f"photons   {ms(st['photon_seconds'])}  ({args.photons} emitted, {st['photons_stored']} stored)")
+        print(f"photons   {ms(st['photon_seconds'])}  ({photons} emitted, {st['photons_stored']} stored)")
         print(f"{args.grid:<9} {ms(st['build_seconds'])}  (build)")
     if args.pipeline == "two-pass":
         print(f"trace     {ms(st['trace_seconds'])}  (primary rays and direct light)")

@@ -29,6 +29,8 @@ def register(sub) -> None:
                    help="where baked rooms are cached (default $XDG_CACHE_HOME/gigascroll/rooms "
                         "or ~/.cache/gigascroll/rooms)")
     p.add_argument("--threads", type=int, default=0, help="bake threads (0 = all cores)")
+    from .light_quality import add_light_quality_options
+    add_light_quality_options(p)
     from .display_options import add_display_options
     add_display_options(p, "scene.json's display block carries them to the client")
     p.set_defaults(func=run)
@@ -44,7 +46,8 @@ def _cache_dir(args, show, content_hash: str):
     if show is None or args.cache_dir is not None:
         return args.cache_dir
     from ..serve.room_bake import lighting_options, room_key
-    key = room_key(show.room, content_hash, lighting_options())
+    from .light_quality import light_settings_of
+    key = room_key(show.room, content_hash, lighting_options(light_settings_of(args, show.room)))
     return show.path / "bake" if (show.path / "bake" / f"{key}.glb").is_file() else None
 
 
@@ -57,6 +60,8 @@ def run(args) -> int:
     from .exhibition_options import open_exhibition
     if args.exhibition is None and (args.pack is None or args.room is None):
         raise UserError("give PACK --room ROOM, or --exhibition DIR")
+    from .light_quality import check_light_budget, light_settings_of
+    check_light_budget(args)
     if not 0 <= args.port <= 65535:
         raise UserError(f"--port must be in [0, 65535], got {args.port}")
     if args.cache_dir is not None and not args.cache_dir.strip():
@@ -84,11 +89,13 @@ def run(args) -> int:
         raise UserError(f"cannot open pack {args.pack}: {e}") from None
     content_hash = pack_hash(pack)
     try:
+        from ..serve.room_bake import load_room_spec
+        spec = show.room if show is not None else load_room_spec(args.room, pack)
         with signals_interrupt():  # SIGTERM during the bake: the same clean exit as Ctrl-C
             room = baked_room(args.room or "exhibition", pack, content_hash,
                               _cache_dir(args, show, content_hash),
-                              threads=args.threads, announce=_say,
-                              spec=show.room if show is not None else None)
+                              threads=args.threads, announce=_say, spec=spec,
+                              settings=light_settings_of(args, spec))
     except (OSError, ValueError) as e:
         raise UserError(f"room {args.room}: {e}") from None
     log_to_stderr()

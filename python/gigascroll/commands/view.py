@@ -41,7 +41,10 @@ def register(sub) -> None:
                    help="initial per-eye resolution WxH (default: half the window's width)")
     p.add_argument("--target-fps", type=float, default=20.0,
                    help="the resolution adapts to hold this frame rate (default 20)")
-    p.add_argument("--photons", type=int, default=1 << 17)
+    p.add_argument("--photons", type=int, default=None,
+                   help="photons for the lighting (default: chosen by --quality)")
+    from .light_quality import add_light_quality_options
+    add_light_quality_options(p, "--photons")
     p.add_argument("--per-frame", type=int, default=16, help="tiles loaded per frame at most")
     p.add_argument("--screenshot", default=None,
                    help="file pattern P writes the window's frame to ({n}: a counter, which "
@@ -76,6 +79,8 @@ def run(args) -> int:
     args.record_tour = tour_pattern(args.record_tour, anchor)
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
+    from .light_quality import check_light_budget
+    check_light_budget(args)
     if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") \
             and not os.environ.get("WAYLAND_DISPLAY"):
         raise UserError("no display to open a window on (DISPLAY is not set); "
@@ -172,8 +177,9 @@ class Viewer:
         from ..walk.gallery_walk import GallerySource, GalleryWalk, walk_path
         from .display_options import display_of
         self.np, self.v, self.window, self.args = np, v, window, args
+        from .light_quality import light_settings_of
         self.source = GallerySource(room, pack, args.lighting, photons=args.photons,
-                                    threads=args.threads,
+                                    threads=args.threads, light=light_settings_of(args, room),
                                     response=display_of(args, room, args.lighting))
         path = walk_path(room, seconds=0.05)
         if args.per_frame < 1:

@@ -1,8 +1,8 @@
 """The served room: its spec, its gallery and its baked light as a cached glb.
 
-The bake is `render --room ROOM --lighting baked`'s (`ROOM_LIGHTING`: its photon count and
-seed, the default gather radius and bake settings), so the headset shows the light of the CPU
-renders. The glb is cached under `cache_dir / f"{key}.glb"`, the key hashing the room spec
+The bake is `render --room ROOM --lighting baked`'s: the light's settings of the quality knob
+(gallery/quality.py; the default level unless given) and `ROOM_LIGHTING` (the seed) over them,
+so the headset shows the light of the CPU renders. The glb is cached under `cache_dir / f"{key}.glb"`, the key hashing the room spec
 (surfaces, slots), the pack's content hash and the lighting options: a second start with the
 same key reads the file instead of baking. It is written under a temporary name and renamed,
 so a killed bake never leaves a cache entry that looks complete."""
@@ -31,25 +31,27 @@ from .room_glb import room_glb
 __all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "lighting_options",
            "load_room_spec", "room_key", "baked_room"]
 
-# `gigascroll render --room`'s defaults: light(vt, photons=--photons (2^18), seed=--seed (0))
-# with the default radius, then bake() with its defaults (commands/render.py, Gallery.still).
-ROOM_LIGHTING = {"photons": 1 << 18, "seed": 0}
+# `gigascroll render --room`'s defaults over the knob's settings: seed=--seed (0), the default
+# gather radius (commands/render.py).
+ROOM_LIGHTING = {"seed": 0}
 # Bumped when the glb's layout changes, so old cache entries are not served.
 GLB_FORMAT = 1
 
 
-def lighting_options() -> dict:
-    """What the bake's light depends on, for the cache key: ROOM_LIGHTING, the defaults of
-    Gallery.light and Gallery.bake that it leaves as they are (so a changed default is a
-    new key) and the package's version."""
+def lighting_options(settings=None) -> dict:
+    """What the bake's light depends on, for the cache key: the knob's LightSettings
+    (None: the default level's for the fitted rooms; give the room's), ROOM_LIGHTING, the
+    defaults of Gallery.light and Gallery.bake that they leave as they are (so a changed
+    default is a new key) and the package's version."""
     from .. import __version__
+    light, bake = ({}, {}) if settings is None else (settings.light_options(), settings.bake_options())
 
     def defaults(fn, skip):
         return {n: p.default for n, p in inspect.signature(fn).parameters.items()
                 if p.default is not inspect.Parameter.empty and n not in skip}
 
-    return {"light": {**defaults(Gallery.light, {"threads"}), **ROOM_LIGHTING},
-            "bake": defaults(Gallery.bake, {"threads", "progress"}), "version": __version__}
+    return {"light": {**defaults(Gallery.light, {"threads"}), **light, **ROOM_LIGHTING},
+            "bake": {**defaults(Gallery.bake, {"threads", "progress"}), **bake}, "version": __version__}
 
 
 def default_cache_dir() -> Path:
@@ -135,21 +137,28 @@ def _keeps_a_triangle(surface) -> bool:
     return bool(np.any(np.isfinite(length) & (length > 0)))
 
 
-def bake_glb(gallery: Gallery, spec, pack, threads: int = 0) -> tuple[bytes, dict]:
-    """Lights and bakes the gallery as `render --room --lighting baked` does, and returns
-    (the glb, the lighting stats)."""
+def bake_glb(gallery: Gallery, spec, pack, threads: int = 0, settings=None) -> tuple[bytes, dict]:
+    """Lights and bakes the gallery as `render --room --lighting baked` does (at `settings`,
+    the knob's LightSettings; None: the room's at the default level), and returns (the glb,
+    the lighting stats)."""
+    from ..gallery.quality import light_settings
+
+    settings = light_settings(spec) if settings is None else settings
     # The photons read the paintings' pinned coarse levels: any VT of the pack will do.
-    gallery.light(runtime.VirtualTexture(pack, (30, 30)), threads=threads, **ROOM_LIGHTING)
-    gallery.bake(threads=threads)
+    gallery.light(runtime.VirtualTexture(pack, (30, 30)), threads=threads,
+                  **{**settings.light_options(), **ROOM_LIGHTING})
+    gallery.bake(threads=threads, **settings.bake_options())
     lattice = gallery._bake_lattice()
     return room_glb(lattice, _mesh_infos(gallery, spec, lattice)), dict(gallery.stats)
 
 
 def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None,
-               threads: int = 0, announce=None, spec: RoomSpec | None = None) -> BakedRoom:
+               threads: int = 0, announce=None, spec: RoomSpec | None = None,
+               settings=None) -> BakedRoom:
     """The room `room` (built-in name or file) with the pack's paintings, its glb baked or
     taken from the cache. announce(text), when given, hears one line: hit or bake. `spec`:
-    a RoomSpec to serve instead of `room`'s (an exhibition's)."""
+    a RoomSpec to serve instead of `room`'s (an exhibition's). `settings`: the light's
+    LightSettings (gallery/quality.py; None: the room's at the default level)."""
     expect_type(room, str, "room")
     expect_type(pack, TilePack, "pack")
     expect_type(content_hash, str, "content_hash")
@@ -161,7 +170,9 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
         spec = load_room_spec(room, pack)
     expect_type(spec, RoomSpec, "spec")
     gallery = Gallery.from_room(spec, pack)
-    key = room_key(spec, content_hash, lighting_options())
+    from ..gallery.quality import light_settings
+    settings = light_settings(spec) if settings is None else settings
+    key = room_key(spec, content_hash, lighting_options(settings))
     path = Path(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
     if path.is_file():
         if announce:
@@ -169,7 +180,7 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
         return BakedRoom(spec, gallery, key, path, True)
     if announce:
         announce(f"room {spec.name}: baking the light (cache miss, {path.name})")
-    data, stats = bake_glb(gallery, spec, pack, threads)
+    data, stats = bake_glb(gallery, spec, pack, threads, settings)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_bytes(path, data, durable=True)  # a temporary name, then renamed
     if announce:

@@ -134,9 +134,11 @@ class GallerySource(FrameSource):
 
     lit = True
 
-    def __init__(self, room: RoomSpec, pack, lighting: str = "baked", photons: int = 1 << 18,
-                 spacing: float | None = None, bake_samples: int = 32, threads: int = 0,
-                 exposure: float | None = None, response=None):
+    def __init__(self, room: RoomSpec, pack, lighting: str = "baked", photons: int | None = None,
+                 spacing: float | None = None, bake_samples: int | None = None, threads: int = 0,
+                 exposure: float | None = None, response=None, light=None):
+        """`light`: the light's LightSettings (gallery/quality.py; default: the room's at the
+        default quality level); photons, spacing and bake_samples, when given, override it."""
         from ..gallery.exposure import room_display
         from ..gallery.gallery import Gallery
         if lighting not in ("baked", "full", "unlit"):
@@ -148,15 +150,15 @@ class GallerySource(FrameSource):
         self.name = f"{room.name} ({lighting})"
         self.tiles = [v.PaintingGeometry(p.width, p.height, pack.tile_size, pack.border)
                       for p in pack.paintings]
-        self.light_stats = {}
+        self.light_stats, self.light = {}, None
         t0 = time.perf_counter()
         if lighting != "unlit":
+            from ..gallery.quality import apply_settings, light_settings
+            self.light = light if light is not None else light_settings(room)
             # The photons read the paintings' pinned coarse levels: any VT of the pack will do.
-            self.gallery.light(runtime.VirtualTexture(pack, (30, 30)), photons=photons,
-                               threads=threads)
-            if lighting == "baked":
-                self.gallery.bake(spacing=spacing, light_samples=bake_samples, threads=threads)
-            self.light_stats = dict(self.gallery.stats)
+            self.light_stats = apply_settings(self.gallery, self.light, threads=threads,
+                                              bake=lighting == "baked", photons=photons,
+                                              spacing=spacing, light_samples=bake_samples)
         self.light_seconds = time.perf_counter() - t0
         # response: a display_mapping.Display (default: auto exposure for the room, neutral
         # tone); a bare `exposure` factor keeps that factor with the neutral curve.
