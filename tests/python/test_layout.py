@@ -179,7 +179,7 @@ def test_the_layers_hold_the_package():
                 m.startswith(name + ".") for m in MODULES), name
     assert layer_of("gigascroll.room.files") < layer_of("gigascroll.gallery.gallery") \
         < layer_of("gigascroll.walk.gallery_walk") < layer_of("gigascroll.cli")
-    assert layer_of("gigascroll.gallery") == layer_of("gigascroll.gallery.lights_anything")
+    assert layer_of("gigascroll.gallery") == layer_of("gigascroll.gallery.exposure")
     assert "gigascroll.gallery.gallery" not in reachable("gigascroll.photon")
     assert not any(m.startswith("gigascroll.gallery") for m in reachable("gigascroll.room.files"))
 
