@@ -29,11 +29,11 @@ import numpy as np
 
 from ..errors import UserError
 from ..experiments import pyplot, save_figure, write_json
+from ..gallery.quality import STEPS
 
 ROOMS = ("scroll", "hall")
-# Re-timed jobs (ours or a Mitsuba ladder point) whose single timing is at most this many
-# seconds get --cheap-repeats re-timings instead of --timing-repeats.
-CHEAP_SECONDS = 0.05
+from .ladder_timing import (CHEAP_SECONDS, _interleaved, _time_to_error, apply_repeats,  # noqa: F401
+                            ladder_points_used, retime, retime_plan)
 
 
 def add_arguments(parser) -> None:
@@ -87,6 +87,12 @@ def add_arguments(parser) -> None:
                         help="re-timings of the chosen configurations and ladder points whose single timing "
                              f"is at most {CHEAP_SECONDS * 1e3:.0f} ms (millisecond jobs are the noisiest; "
                              "default 30)")
+    parser.add_argument("--grid", action=argparse.BooleanOptionalAction, default=True,
+                        help="the grid of configurations and its Pareto front (default on; --no-grid: "
+                             "the knob's curve and the default settings only)")
+    parser.add_argument("--knob", action=argparse.BooleanOptionalAction, default=True,
+                        help="the curve along the quality knob (gallery/quality.py: its steps, the levels "
+                             "among them, and the bake's defaults), re-timed as the front's targets (default on)")
     parser.add_argument("--quick", action="store_true", help="small settings, for a smoke test")
     parser.add_argument("--out", default="bench/gallery", help="directory for results.json and plots")
 
@@ -169,7 +175,6 @@ def cached_reference(mi, gal, cam, spp: int, cache: Path, seed: int = 0) -> tupl
     return img, seconds
 
 
-
 def _ints(text: str, what: str) -> list[int]:
     try:
         values = [int(x) for x in text.split(",") if x]
@@ -233,6 +238,8 @@ def run(args) -> int:
              for ls in bake_samples if ls <= 16 and (m == min(disc_radii) or ls >= 4)
              for stride in ((1, 2) if n <= 50 else (2, 4)) for coarse in
              sorted({d == "coarse" for d in details})]
+    if not args.grid:
+        grid = []
     ladder = _ints(args.mitsuba_spp, "--mitsuba-spp")
     if max(photons + disc_photons + coarse_photons + [args.default_photons]) > 30:
         raise UserError("--photons, --disc-photons and --default-photons are powers of two up to 2^30")
@@ -257,7 +264,7 @@ def run(args) -> int:
     fov = 60.0
     per_room = (2 + len(ladder) + len(photons) * len(grid) + len(disc_photons) * sum(1 for d, *_ in grid if d)
                 + len(coarse_photons) * sum(1 for d, *_ in grid if not d)
-                + len(set(spacings) | {200}))
+                + len(set(spacings) | {200}) + (len(STEPS) + 1 if args.knob else 0))
     steps = tqdm(total=len(rooms) * per_room, desc="gallery bench", unit="step")
     for name in rooms:
         spec = builtin_room(name, pack)
@@ -360,6 +367,14 @@ def run(args) -> int:
                 l["repeat_seconds"] = mitsuba_times[l["spp"]]
                 l["median_seconds"] = float(np.median(mitsuba_times[l["spp"]]))
         r["timing_repeats"] = args.timing_repeats
+        if args.knob:
+            from .gallery_knob import measure_knob, print_knob
+
+            r["knob"] = measure_knob(
+                gal, vt, spec, ref, r["mitsuba"],
+                lambda g, v, ss: _still(g, v, "baked", args.width, args.height, ss, fov), time_mitsuba, args,
+                steps.update)
+            print_knob(name, r["knob"])
         del mscene
         # The default settings: baked (16 stratified samples) against full lighting on the
         # same photon map, both against the reference, and the bake-spacing curve.
@@ -455,123 +470,6 @@ def compare_with_mitsuba(configs: list[dict], ladder: list[dict]) -> list[dict]:
     return rows
 
 
-def ladder_points_used(row: dict, ladder: list[dict]) -> list[int]:
-    """The spp of the ladder points a target row's Mitsuba time comes from: its own point,
-    the two it is interpolated between, the cheapest (above the ladder's worst error) or the
-    largest (below the ladder: the lower bound)."""
-    if row["mitsuba_spp"] is not None:
-        return [row["mitsuba_spp"]]
-    pts = sorted((l["relmse"], l["spp"]) for l in ladder)
-    error = row["relmse"]
-    if row["mitsuba_seconds"] is None or error < pts[0][0]:
-        return [max(ladder, key=lambda l: l["seconds"])["spp"]]
-    for (e0, s0), (e1, s1) in zip(pts, pts[1:]):
-        if e0 <= error <= e1:
-            return sorted({s0, s1})
-    return [pts[-1][1]]
-
-
-def _interleaved(a: list, b: list) -> list:
-    """a[0], b[0], a[1], b[1], ... then the longer list's rest."""
-    out = []
-    for i in range(max(len(a), len(b))):
-        out += a[i:i + 1] + b[i:i + 1]
-    return out
-
-
-def retime_plan(rows: list[dict], ladder: list[dict], repeats: int, cheap_repeats: int | None = None,
-                cheap_seconds: float = CHEAP_SECONDS):
-    """What retime() runs: ({id(config): config} of the configurations chosen in `rows`,
-    [(kind, key, rounds)] of the jobs in their interleaved order, kind "ours" (key the
-    config's id) or "mitsuba" (key its spp)). Jobs whose single timing (the config's
-    total_seconds, the ladder point's seconds) is at most `cheap_seconds` get `cheap_repeats`
-    rounds when that is more than `repeats`: a millisecond job's time moves by tens of percent
-    from call to call (the other process's threads, cold caches), so a median of 3 is a coin
-    toss there, and 30 of them cost a fraction of a second."""
-    configs, spps = {}, set()
-    for row in rows:
-        if row["ours"] is not None:
-            configs.setdefault(id(row["ours"]), row["ours"])
-            spps.update(ladder_points_used(row, ladder))
-    seconds = {l["spp"]: l["seconds"] for l in ladder}
-    cheap = max(repeats, cheap_repeats or 0)
-    jobs = _interleaved([("mitsuba", s) for s in sorted(spps)], [("ours", k) for k in configs])
-    return configs, [(kind, key, cheap if (configs[key]["total_seconds"] if kind == "ours" else seconds[key])
-                      <= cheap_seconds else repeats) for kind, key in jobs]
-
-
-def retime(rows: list[dict], ladder: list[dict], time_ours, time_mitsuba, repeats: int,
-           cheap_repeats: int | None = None, cheap_seconds: float = CHEAP_SECONDS):
-    """Re-times every configuration chosen in `rows` (compare_with_mitsuba's, `ours` not None)
-    with time_ours(config) -> seconds, and every ladder point those rows use with
-    time_mitsuba(spp) -> seconds, in rounds, ours and Mitsuba's interleaved, every other round
-    in reverse order (so drifts in the machine's load fall on both alike); each job for its
-    retime_plan() number of rounds. Returns ({id(config): [seconds, ...]}, {spp: [seconds,
-    ...]}), each list in the order timed."""
-    configs, jobs = retime_plan(rows, ladder, repeats, cheap_repeats, cheap_seconds)
-    ours = {key: [] for kind, key, _ in jobs if kind == "ours"}
-    mitsuba = {key: [] for kind, key, _ in jobs if kind == "mitsuba"}
-    for r in range(max([n for *_, n in jobs], default=0)):
-        for kind, key, rounds in (jobs if r % 2 == 0 else jobs[::-1]):
-            if r >= rounds:
-                continue
-            if kind == "ours":
-                ours[key].append(float(time_ours(configs[key])))
-            else:
-                mitsuba[key].append(float(time_mitsuba(key)))
-    return ours, mitsuba
-
-
-def apply_repeats(rows: list[dict], ladder: list[dict], ours_times: dict, mitsuba_times: dict) -> list[dict]:
-    """The target rows with the repeats' medians: Mitsuba's time at each target from the
-    median times of its ladder points (interpolated as before, errors from the single run),
-    ours the median of the chosen configuration's repeats, the speedup their ratio; the
-    spread as the speedup's range (Mitsuba's fastest against our slowest repeat, and the
-    reverse). Rows without repeats (not reached) are returned unchanged."""
-    def ladder_with(stat):
-        return [{**l, "seconds": stat(mitsuba_times[l["spp"]])} for l in ladder if mitsuba_times.get(l["spp"])]
-
-    med = ladder_with(lambda t: float(np.median(t)))
-    lo, hi = ladder_with(min), ladder_with(max)
-    out = []
-    for row in rows:
-        row = dict(row)
-        times = ours_times.get(id(row["ours"])) if row["ours"] is not None else None
-        if times:
-            used = ladder_points_used(row, ladder)
-            ours_med = float(np.median(times))
-            row["ours_repeat_seconds"] = times
-            row["ours_median_seconds"] = ours_med
-            row["mitsuba_repeat_seconds"] = {str(s): mitsuba_times[s] for s in used}
-            if row["mitsuba_seconds"] is not None:
-                m, m_lo, m_hi = (_time_to_error([x for x in lad if x["spp"] in used], row["relmse"])
-                                 for lad in (med, lo, hi))
-                row.update(mitsuba_median_seconds=m, speedup_median=m / ours_med,
-                           speedup_range=[m_lo / max(times), m_hi / min(times)])
-            else:
-                b = [float(np.median(mitsuba_times[s])) for s in used][0]
-                row.update(mitsuba_median_seconds=None, mitsuba_median_bound_seconds=b,
-                           speedup_median=None, speedup_at_least_median=b / ours_med,
-                           speedup_range=None)
-        out.append(row)
-    return out
-
-
-def _time_to_error(ladder: list[dict], error: float) -> float | None:
-    """Seconds Mitsuba needs for `error` (relMSE), log-log interpolated along its ladder;
-    None when even its largest spp does not reach it."""
-    pts = sorted((l["relmse"], l["seconds"]) for l in ladder)
-    if error < pts[0][0]:
-        return None
-    for (e0, t0), (e1, t1) in zip(pts, pts[1:]):
-        if e0 <= error <= e1:
-            if e1 == e0:
-                return t0
-            w = (math.log(error) - math.log(e0)) / (math.log(e1) - math.log(e0))
-            return math.exp(math.log(t0) + w * (math.log(t1) - math.log(t0)))
-    return pts[-1][1]  # our error is above the ladder's worst: its cheapest run already beats it
-
-
 def _config_name(c: dict) -> str:
     s = c.get("gather_stride", 1)
     stride = f", gathers / {s * s}" if s > 1 else ""
@@ -636,6 +534,10 @@ def _plot(name: str, r: dict, out: Path) -> None:
     if timed:
         a.loglog([t["ours_median_seconds"] for t in timed], [t["relmse"] for t in timed], "D",
                  color="C2", ms=5, label="ours re-timed at each target (median)")
+    if r.get("knob"):
+        from .gallery_knob import plot_knob
+
+        plot_knob(a, r["knob"])
     a.set_xlabel("seconds (photon pass + map + bake + still)")
     a.set_ylabel("relMSE against the reference")
     # Below the axes: inside, it hid the front's fine end (bottom left of the plot).
