@@ -127,3 +127,47 @@ def test_a_light_on_a_title_or_index_builds(tmp_path):
         (tmp_path / "show.toml").write_text(SHOW + LIGHT.format(painting=painting))
         room = build_room(load_exhibition(tmp_path / "show.toml"))
         assert room.lights[0].painting in ("blue-study", 1)
+
+
+def _build_error(tmp_path, capsys, text) -> str:
+    f = tmp_path / "show.toml"
+    f.write_text(text)
+    capsys.readouterr()
+    assert main(["exhibit", "build", str(f), "-o", str(tmp_path / "show"), "--no-bake"]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ": error:" in ln]
+    assert len(err) == 1 and not (tmp_path / "show").exists()
+    return err[0]
+
+
+def test_a_painting_the_builtin_room_cannot_show_is_an_error(tmp_path, capsys):
+    # Was: the scroll room showed the first painting and silently left out the others.
+    write_images(tmp_path)
+    text = ('[room]\nbuiltin = "scroll"\n[[paintings]]\ntitle = "Red"\nimage = "red.png"\n'
+            'width_cm = 80\nheight_cm = 60\n[[paintings]]\ntitle = "Blue"\nimage = "blue.png"\n'
+            'width_cm = 40\nheight_cm = 60\n')
+    line = _build_error(tmp_path, capsys, text)
+    assert line.endswith(f"{tmp_path / 'show.toml'}: room.builtin: expected a place for every "
+                         "painting, paintings[1] ('Blue') has none (the 'scroll' room shows 1 "
+                         "painting(s); the hall or a floor plan shows them all)"), line
+    (tmp_path / "show.toml").write_text(text.replace('"scroll"', '"hall"'))
+    from gigascroll.exhibit.build import build_show
+    assert build_show(tmp_path / "show.toml", tmp_path / "hall")["paintings"] == 2
+
+
+def test_a_painting_without_a_placeholder_in_the_room_file_is_an_error(tmp_path, capsys):
+    # Was: a painting the room file has no placeholder for was packed and never shown.
+    from gigascroll.room.example import write_example_room
+    write_example_room(tmp_path / "room.glb")
+    Image.fromarray(np.full((40, 60, 3), 150, np.uint8)).save(tmp_path / "land.png")
+    Image.fromarray(np.full((60, 20, 3), 90, np.uint8)).save(tmp_path / "scroll.png")
+    text = ('[room]\nfile = "room.glb"\n'
+            '[[paintings]]\ntitle = "L"\nname = "landscape"\nimage = "land.png"\n'
+            'width_cm = 150\nheight_cm = 100\n'
+            f'[[paintings]]\ntitle = "S"\nname = "hanging_scroll"\nimage = "scroll.png"\n'
+            f'width_cm = {100 / 3}\nheight_cm = 100\n'
+            '[[paintings]]\ntitle = "Extra"\nimage = "land.png"\nwidth_cm = 150\n'
+            'height_cm = 100\n')
+    line = _build_error(tmp_path, capsys, text)
+    assert line.endswith("room.file: expected a place for every painting, paintings[2] "
+                         "('Extra') has none (the room file's placeholders show 'landscape', "
+                         "'hanging_scroll'; a painting's name names its placeholder)"), line

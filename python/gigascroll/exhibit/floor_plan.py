@@ -102,10 +102,23 @@ def build_room(ex: Exhibition, pack=None) -> RoomSpec:
             raise ExhibitionError(f"{ex.path}: room.builtin: {e}") from None
         for slot in spec.paintings:  # by name: a given pack's order may differ
             slot.painting = pack_name(ex.paintings[int(slot.painting)])
+        _check_all_shown(ex, [s.painting for s in spec.paintings], "room.builtin",
+                         f"the {ex.room['builtin']!r} room shows "
+                         f"{len(spec.paintings)} painting(s); the hall or a floor plan shows "
+                         "them all")
         return spec
     if "file" in ex.room:
         return _file_room(ex, pack, lights)
     return _floor_plan_room(ex, lights)
+
+
+def _check_all_shown(ex: Exhibition, shown: list, key: str, why: str) -> None:
+    """ExhibitionError naming the first painting of the file that no slot shows: a painting
+    is never left out silently."""
+    for p in ex.paintings:
+        if pack_name(p) not in shown:
+            raise ExhibitionError(f"{ex.path}: {key}: expected a place for every painting, "
+                                  f"{p.key} ({p.title[:80]!r}) has none ({why})")
 
 
 def _lights(ex: Exhibition):
@@ -140,9 +153,11 @@ def _file_room(ex: Exhibition, pack, lights) -> RoomSpec:
     except (OSError, ValueError) as e:
         raise ExhibitionError(f"{ex.path}: room.file: {e}") from None
     names = [q.name for q in pack.paintings] if pack is not None else []
+    placed = []
     for slot in spec.paintings:  # the file's placeholder sizes must be the physical sizes
         shown = names[slot.painting] if isinstance(slot.painting, int) and \
             0 <= slot.painting < len(names) else slot.painting
+        placed.append(shown)
         p = next((q for q in ex.paintings if pack_name(q) == shown), None)
         if p is not None and (abs(slot.width_m - p.width_m) > 1e-3
                               or abs(slot.height_m - p.height_m) > 1e-3):
@@ -150,6 +165,10 @@ def _file_room(ex: Exhibition, pack, lights) -> RoomSpec:
                 f"{ex.path}: {p.key}.width_cm / height_cm: expected the room file's slot "
                 f"{slot.width_m:.4g} m x {slot.height_m:.4g} m, got {p.width_m:.4g} m x "
                 f"{p.height_m:.4g} m (sizes are never changed silently)")
+    if pack is not None:
+        _check_all_shown(ex, placed, "room.file", "the room file's placeholders show "
+                         + ", ".join(repr(str(q)) for q in placed[:8])
+                         + "; a painting's name names its placeholder")
     if lights is not None:
         spec.surfaces = [s for s in spec.surfaces if max(s.emission) <= 0]
         spec.surfaces += [light_surface(light, spec.paintings) for light in lights]
