@@ -1,0 +1,597 @@
+// The 16-lane trilinear sampler (sampler.h's TrilinearLanes): the display pass's packets of
+// 16 neighbouring pixels sampled in SIMD lanes, in named steps (the levels, each axis's
+// origin and fractions, the common packet's stretches of texel rows, the general packet's
+// taps and gathered corners).
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "common/divider.h"
+#include "sampling/sampler.h"
+#include "sampling/texel_finder.h"
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
+namespace gigascroll {
+
+// sample_trilinear_rgb8 for a packet of 16 samples in one or two resident tiles per level, all
+// in 16 lanes: trilinear_taps' level rule and taps (in float from the packet's origin, see
+// sample16), the texels at the same addresses (the 4-byte words of each footprint's corners),
+// and blend_levels_rgb8's bilinear blends and blend of the levels. A sample that blends
+// nothing (blend 0) takes its coarse taps at its fine level (as trilinear_taps leaves them)
+// and adds 0 x (g - f) to f; so only the samples that blend two levels must share the
+// coarse tile.
+#if defined(__AVX512F__)
+// GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
+// used uninitialized (GCC bug 105593, fixed in GCC 13).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"  // the same, in _mm512_reduce_*_epi32
+namespace {
+// One level's taps for 16 lanes (trilinear_taps' second loop): weights, tile and in-tile
+// byte offset.
+struct LevelTaps {
+    __m512 fx, fy;
+    __m512i level, cx, cy, row, offset;  // row: the footprint's first texel row in its tile
+};
+// trilinear_taps' level rule: each lane's fine level l0 (lo0 is max with 0 second, which
+// maps NaN to 0 as the select does; below is min), which lanes blend two levels and their
+// weight.
+struct LaneLevels {
+    __m512i l0;
+    __mmask16 blending;
+    __m512 blend;
+};
+inline LaneLevels lane_levels(const float* lod, float top, std::int32_t levels) {
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 lod_c = _mm512_min_ps(_mm512_max_ps(_mm512_loadu_ps(lod), zero), _mm512_set1_ps(top));
+    LaneLevels v;
+    v.l0 = _mm512_cvttps_epi32(lod_c);
+    const __m512 frac = _mm512_sub_ps(lod_c, _mm512_cvtepi32_ps(v.l0));
+    v.blending = _mm512_cmp_ps_mask(frac, zero, _CMP_GT_OQ) &
+                 _mm512_cmplt_epi32_mask(_mm512_add_epi32(v.l0, _mm512_set1_epi32(1)), _mm512_set1_epi32(levels));
+    v.blend = _mm512_maskz_mov_ps(v.blending, frac);
+    return v;
+}
+// The byte masks of a stretch of span <= 128 bytes loaded as two 64-byte halves.
+struct StretchMasks {
+    __mmask64 first, second;
+};
+inline StretchMasks stretch_masks(int span) {
+    return {span >= 64 ? ~__mmask64(0) : (__mmask64(1) << span) - 1,
+            span > 64 ? (__mmask64(1) << (span - 64)) - 1 : 0};
+}
+// The two texel rows below a footprint's pair (its rows 2 and 3), the 128 bytes from its
+// first texel on, fetched into the cache ahead of the next screen row's packets, which read
+// them: at the fine level a screen row steps 1 to 2 texel rows down (a view of an upright
+// painting), mostly onto rows no packet has read yet, and a tile's row is too short (6 cache
+// lines) for the hardware's prefetcher to follow. The fetch of a row outside the slot is
+// wasted, not an error (a prefetch does not fault).
+[[gnu::always_inline]] inline void prefetch_rows_below(const std::uint8_t* first, std::int32_t row_bytes) {
+    const std::uintptr_t below = reinterpret_cast<std::uintptr_t>(first) + 2 * std::uintptr_t(row_bytes);
+    for (int row = 0; row < 2; ++row) {
+        const std::uintptr_t q = below + std::uintptr_t(row) * std::uintptr_t(row_bytes);
+        _mm_prefetch(reinterpret_cast<const char*>(q), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char*>(q + 64), _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char*>(q + 127), _MM_HINT_T0);
+    }
+}
+}  // namespace
+#endif
+
+struct TrilinearLanes::State {
+    State(const VirtualTexture& vt, std::uint32_t painting)
+        : finders{TexelFinder(vt, painting), TexelFinder(vt, painting), TexelFinder(vt, painting),
+                  TexelFinder(vt, painting)},
+          physical(vt.physical()), slot_bytes(vt.slot_bytes()),
+          pyramid{vt.layout().paintings[painting].width(), vt.layout().paintings[painting].height(),
+                  float(vt.layout().paintings[painting].levels() - 1)},
+          levels(std::int32_t(vt.layout().paintings[painting].levels())),
+          divide_p(vt.layout().payload()),
+          tile{std::int32_t(vt.layout().payload()), std::int32_t(vt.layout().border),
+               std::int32_t(vt.layout().tile_size), std::int32_t(finders[0].row_bytes())} {
+        for (int j = 0; j < 6; ++j) std::fill_n(corner_bytes[j], 16, j);
+        const PaintingGeometry& g = vt.layout().paintings[painting];
+        for (std::uint32_t L = 0; L < g.levels(); ++L) {
+            const double sx = std::ldexp(double(g.width()), -int(L)), sy = std::ldexp(double(g.height()), -int(L));
+            axis_levels[0].push_back({sx, std::min(double(g.level_width(L)), sx) - 2.5});  // exact scales
+            axis_levels[1].push_back({sy, std::min(double(g.level_height(L)), sy) - 2.5});
+        }
+    }
+
+    // Per level (fine, coarse) and tile of a packet (first, other), the last page entry.
+    TexelFinder finders[4];
+    // Per axis (x, y) and level L, sample16's constants: the extent 2^-L (exact) and the
+    // last position a packet's lanes may take at L less the origin, min(w_L, extent 2^-L) - 2.5
+    // (see its axis).
+    struct AxisLevel {
+        double scale, limit;
+    };
+    std::vector<AxisLevel> axis_levels[2];
+    // Byte j of a texel's corners (j = 3 x right + channel) in every lane: the stretch paths'
+    // permute offsets, read as memory operands (as constants GCC made each anew at each use).
+    alignas(64) std::int32_t corner_bytes[6][16];
+    // Per finder, the last tile it looked up: its level, tile (cx, cy), its payload's first
+    // texel (cx P, cy P) and its slot (nullptr: not resident). Finders 0 and 2 hold lane 0's
+    // tile at the fine and coarse level, 1 and 3 the neighbour a packet across a tile's edge
+    // took with it (or the tile lane 0 left). A packet whose lane 0 lies in either (most do: a
+    // tile spans several packets) takes it without a division or a page-table entry.
+    struct LastTile {
+        std::int32_t level = -1, cx = 0, cy = 0, x0 = 0, y0 = 0;
+        const std::uint8_t* base = nullptr;
+    } last_tile[4];
+    const std::uint8_t* physical;
+    std::size_t slot_bytes;
+    PyramidExtent pyramid;
+    std::int32_t levels;
+    Divider divide_p;
+    TileExtent tile;
+
+    // The slot of level l's resident tile (cx, cy) through finder c, nullptr for a fallback.
+    const std::uint8_t* base(int c, std::uint32_t l, std::uint32_t cx, std::uint32_t cy) {
+        const PageEntry e = finders[c].entry(l, cx, cy);
+        return e.level() == l ? physical + std::size_t(e.slot()) * slot_bytes : nullptr;
+    }
+#if defined(__AVX512F__)
+    // The samples from their fine and (for the lanes in levels.blending) coarse taps: each
+    // level's tiles, texels and bilinear blend, then the blend of the two levels.
+    bool sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& levels,
+                float* r, float* g, float* b);
+    // sample16's stretches of a level's pair of texel rows (see there) for a packet across a
+    // tile's edge: lane 0's tile last_tile[finder] (tile x0 in lane coordinates x0_lanes,
+    // in_tile its lanes) and its neighbour, into rows[r] = {bytes 0-63, 64-127}. False when
+    // the other lanes are not all in the payload of the neighbour on one side or it is not
+    // resident.
+    bool across_edge(int level, int finder, __m512i nx_lanes, std::int32_t x0_lanes, __mmask16 in_tile,
+                     std::int32_t lo, std::int32_t span, std::size_t row_start, __m512i (&rows)[2][2]);
+#endif
+};
+
+TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting) {
+#if defined(__AVX512F__)
+    // Disabled for a painting the texture does not hold: sample() says so.
+    if (vt.format() == TexelFormat::Rgb8 && painting < vt.layout().paintings.size())
+        state_ = std::make_unique<State>(vt, painting);
+#else
+    (void)vt, (void)painting;  // no lanes to sample in: always disabled
+#endif
+}
+void TrilinearLanes::forget_tiles() {
+    if (!state_) return;
+    for (TexelFinder& f : state_->finders) f.forget();
+    for (State::LastTile& t : state_->last_tile) t.level = -1;
+}
+TrilinearLanes::~TrilinearLanes() = default;
+TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
+
+#if defined(__AVX512F__)
+bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps,
+                                   const LaneLevels& lv, float* r, float* g, float* b) {
+    State& st = *this;
+    const __mmask16 blending = lv.blending;
+    const __m512 blend = lv.blend;
+    const TileExtent t = st.tile;
+    // The tiles of the lanes in mask at their level: the first lane's and, for a packet across a
+    // tile edge, one other, each resident (its slot) with the lanes it holds; false for a third
+    // tile or a tile that is not resident (a fallback).
+    struct LevelTiles {
+        const std::uint8_t* base[2];
+        __mmask16 lanes[2];
+        int count;
+    };
+    auto tiles = [&](const LevelTaps& lt, int c, __mmask16 mask, LevelTiles& out) {
+        out.count = 0;
+        for (int k = 0; k < 2 && mask; ++k) {
+            auto first = [&](__m512i x) {  // the value of mask's first lane (lane 0 nearly always)
+                return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(
+                    mask & 1 ? x : _mm512_maskz_compress_epi32(mask, x))));
+            };
+            const std::uint32_t l = first(lt.level), cx = first(lt.cx), cy = first(lt.cy);
+            const __mmask16 same = _mm512_mask_cmpeq_epi32_mask(mask, lt.level, _mm512_set1_epi32(int(l))) &
+                                   _mm512_mask_cmpeq_epi32_mask(mask, lt.cx, _mm512_set1_epi32(int(cx))) &
+                                   _mm512_mask_cmpeq_epi32_mask(mask, lt.cy, _mm512_set1_epi32(int(cy)));
+            out.base[k] = st.base(2 * c + k, l, cx, cy);
+            if (!out.base[k]) return false;
+            out.lanes[k] = same, out.count = k + 1;
+            mask &= ~same;
+        }
+        return mask == 0;
+    };
+    LevelTiles fine, coarse;
+    if (!tiles(fine_taps, 0, 0xFFFF, fine)) return false;
+    if (blending && !tiles(coarse_taps, 1, blending, coarse)) return false;
+    const std::int32_t row = t.row_bytes;
+    // The 4-byte words at each lane's footprint corners (offset, + 3, + row, + row + 3: the
+    // texel and its right neighbour in two rows), q[0..3]. When the lanes in mask share the
+    // footprint's texel rows and their corners span at most 128 bytes (nearly always: a
+    // packet of neighbouring pixels reads one stretch of two rows), the two stretches are
+    // loaded (masked to the bytes the gathers would read) and the words picked out with byte
+    // permutes; otherwise gathered. The lanes outside mask get some word of the stretch.
+    auto corners = [&](const LevelTaps& lt, const std::uint8_t* base, __mmask16 mask, __m512i (&q)[4]) {
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+        const int lo = _mm512_mask_reduce_min_epi32(mask, lt.offset);
+        const int hi = _mm512_mask_reduce_max_epi32(mask, lt.offset);
+        const int span = hi - lo + 7;  // bytes lo .. hi + 6
+        const int first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(mask & 1 ? lt.row : _mm512_maskz_compress_epi32(mask, lt.row)));
+        if (span <= 128 && !_mm512_mask_cmpneq_epi32_mask(mask, lt.row, _mm512_set1_epi32(first_row))) {
+            const __m512i rel = _mm512_maskz_sub_epi32(mask, lt.offset, _mm512_set1_epi32(lo));
+            // Each lane's byte index rel + 0..3 (rel < 128: one byte).
+            const __m512i spread = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
+            const __m512i idx = _mm512_add_epi8(_mm512_shuffle_epi8(rel, spread), _mm512_set1_epi32(0x03020100));
+            const __m512i idx3 = _mm512_add_epi8(idx, _mm512_set1_epi8(3));
+            const auto [m0, m1] = stretch_masks(span);
+            for (int r = 0; r < 2; ++r) {
+                const std::uint8_t* p = base + lo + r * row;
+                const __m512i a = _mm512_maskz_loadu_epi8(m0, p), b = _mm512_maskz_loadu_epi8(m1, p + 64);
+                q[2 * r] = _mm512_permutex2var_epi8(a, idx, b);
+                q[2 * r + 1] = _mm512_permutex2var_epi8(a, idx3, b);
+            }
+            return;
+        }
+#else
+        (void)mask;
+#endif
+        const std::int32_t delta[4] = {0, 3, row, row + 3};
+        for (int k = 0; k < 4; ++k)
+            q[k] = _mm512_i32gather_epi32(_mm512_add_epi32(lt.offset, _mm512_set1_epi32(delta[k])),
+                                          static_cast<const void*>(base), 1);
+    };
+    // One level's bilinear blend: channels R, G, B of 16 lanes.
+    auto bilinear = [&](const LevelTaps& lt, const LevelTiles& lv, __m512& R, __m512& G, __m512& B)
+                        __attribute__((always_inline)) {
+        const __m512 one = _mm512_set1_ps(1.0f);
+        const __m512 fx = lt.fx, fy = lt.fy;
+        const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
+        const __m512i byte = _mm512_set1_epi32(0xff);
+        const __m512 w[4] = {_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy), _mm512_mul_ps(gx, fy),
+                             _mm512_mul_ps(fx, fy)};
+        __m512i words[4];
+        corners(lt, lv.base[0], lv.lanes[0], words);
+        if (lv.count == 2) {  // the lanes in the other tile
+            __m512i other[4];
+            corners(lt, lv.base[1], lv.lanes[1], other);
+            for (int q = 0; q < 4; ++q) words[q] = _mm512_mask_mov_epi32(words[q], lv.lanes[1], other[q]);
+        }
+        for (int q = 0; q < 4; ++q) {
+            const __m512i texel = words[q];
+            const __m512 tr = _mm512_cvtepi32_ps(_mm512_and_si512(texel, byte));
+            const __m512 tg = _mm512_cvtepi32_ps(_mm512_and_si512(_mm512_srli_epi32(texel, 8), byte));
+            const __m512 tb = _mm512_cvtepi32_ps(_mm512_and_si512(_mm512_srli_epi32(texel, 16), byte));
+            if (q == 0) {
+                R = _mm512_mul_ps(w[0], tr), G = _mm512_mul_ps(w[0], tg), B = _mm512_mul_ps(w[0], tb);
+            } else {
+                R = _mm512_fmadd_ps(w[q], tr, R), G = _mm512_fmadd_ps(w[q], tg, G), B = _mm512_fmadd_ps(w[q], tb, B);
+            }
+        }
+    };
+    __m512 R, G, B;
+    bilinear(fine_taps, fine, R, G, B);
+    if (blending) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
+        __m512 R1, G1, B1;
+        bilinear(coarse_taps, coarse, R1, G1, B1);
+        R = _mm512_fmadd_ps(blend, _mm512_sub_ps(R1, R), R);
+        G = _mm512_fmadd_ps(blend, _mm512_sub_ps(G1, G), G);
+        B = _mm512_fmadd_ps(blend, _mm512_sub_ps(B1, B), B);
+    }
+    _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
+    return true;
+}
+
+// The neighbour is lane 0's tile's cx -+ 1 (a packet's lanes lie in a row of tiles), its
+// bytes addressed from lane 0's tile's lo: the neighbour's texel x is lane 0's tile's -+ P.
+// It exists: sample16's range check keeps every lane two texels inside the painting.
+[[gnu::always_inline]] inline bool TrilinearLanes::State::across_edge(int level, int finder, __m512i nx_lanes,
+                                                                     std::int32_t x0_lanes, __mmask16 in_tile,
+                                                                     std::int32_t lo, std::int32_t span,
+                                                                     std::size_t row_start, __m512i (&rows)[2][2]) {
+    const TileExtent t = tile;
+    const LastTile& own = last_tile[finder];
+    LastTile& other = last_tile[finder + 1];
+    const __mmask16 others = __mmask16(~in_tile);
+    // The other lanes in the right neighbour's payload, or all in the left one's.
+    const bool right = _mm512_mask_cmplt_epi32_mask(others, nx_lanes, _mm512_set1_epi32(x0_lanes + t.payload)) == 0;
+    const std::int32_t side = right ? 1 : -1;
+    if (_mm512_mask_cmpge_epu32_mask(others, _mm512_sub_epi32(nx_lanes, _mm512_set1_epi32(x0_lanes + side * t.payload)),
+                                     _mm512_set1_epi32(t.payload)))
+        return false;
+    if (other.level != level || other.x0 != own.x0 + side * t.payload || other.y0 != own.y0) {
+        const std::int32_t cx = own.cx + side;
+        other = {level, cx, own.cy, own.x0 + side * t.payload, own.y0,
+                 base(finder + 1, std::uint32_t(level), std::uint32_t(cx), std::uint32_t(own.cy))};
+    }
+    if (!other.base) return false;
+    // The row's bytes from lo on: the left tile's before byte `split` (the right tile's first
+    // payload texel), the right tile's from there (a border holds its neighbour's texels, so
+    // both tiles hold the same bytes around it). A tile's bytes before its slot, if any, are
+    // masked off: masked loads do not touch them.
+    const std::int32_t split = 3 * (t.border + (right ? t.payload : 0) - lo);  // in (0, span)
+    const StretchMasks all = stretch_masks(span), left = stretch_masks(split);
+    auto at = [](const std::uint8_t* slot, std::ptrdiff_t offset) {  // no out-of-object pointer formed
+        return reinterpret_cast<const std::uint8_t*>(reinterpret_cast<std::uintptr_t>(slot) + std::uintptr_t(offset));
+    };
+    const std::ptrdiff_t first = std::ptrdiff_t(row_start) + 3 * std::ptrdiff_t(lo), shift = 3 * std::ptrdiff_t(t.payload);
+    const std::ptrdiff_t left_at = first + (right ? 0 : shift), right_at = first - (right ? shift : 0);
+    const std::uint8_t* left_slot = right ? own.base : other.base;
+    const std::uint8_t* right_slot = right ? other.base : own.base;
+    for (int row = 0; row < 2; ++row) {
+        const std::ptrdiff_t l = left_at + row * t.row_bytes, r = right_at + row * t.row_bytes;
+        rows[row][0] = _mm512_mask_loadu_epi8(_mm512_maskz_loadu_epi8(all.first & left.first, at(left_slot, l)),
+                                              all.first & ~left.first, at(right_slot, r));
+        rows[row][1] = _mm512_mask_loadu_epi8(_mm512_maskz_loadu_epi8(all.second & left.second, at(left_slot, l + 64)),
+                                              all.second & ~left.second, at(right_slot, r + 64));
+    }
+    return true;
+}
+
+bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float* b) {
+    if (!state_) return false;
+    State& st = *state_;
+    const std::uint32_t width = st.pyramid.width, height = st.pyramid.height;
+    // Below 2^22 texels a side the float tile division below is exact (see cell) and every
+    // texel index and level extent is a float.
+    constexpr std::uint32_t kMaxSide = 1u << 22;
+    if (width >= kMaxSide || height >= kMaxSide) return false;
+    const LaneLevels lv = lane_levels(packet.lod, st.pyramid.top, st.levels);
+    // The packet's levels: its finest L and at most L + 1 at the fine level (so L + 2 at the
+    // coarse one). Nearly always every lane's is lane 0's: then no reduction over the lanes.
+    std::int32_t L = _mm_cvtsi128_si32(_mm512_castsi512_si128(lv.l0));
+    const bool levels_differ = _mm512_cmpneq_epi32_mask(lv.l0, _mm512_set1_epi32(L)) != 0;
+    if (levels_differ) {
+        L = _mm512_reduce_min_epi32(lv.l0);
+        if (_mm512_reduce_max_epi32(lv.l0) > L + 1) return false;
+    }
+    const __m512i one_i = _mm512_set1_epi32(1);
+    const TileExtent t = st.tile;
+    const __m512 du = _mm512_load_ps(packet.du), dv = _mm512_load_ps(packet.dv);
+    // One axis at level L: lane 0's continuous texel position less 1/2 (trilinear_taps' tx
+    // before its clamp), X = c0 extent 2^-L - 1/2, as an integer origin and a fraction; each
+    // lane's position relative to the origin is frac + d extent 2^-L in float. Level L + k's
+    // position is (X + 1/2) 2^-k - 1/2 = origin_k + (rel 2^-k + frac_k), with origin_k and
+    // frac_k the same split of (origin + 1/2) 2^-k - 1/2 (level_origin, exact).
+    struct Axis {
+        __m512 rel;           // per lane, at level L
+        std::int32_t origin;  // at level L
+    };
+    // Level L + k's origin and fraction: (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1), its
+    // floor by an arithmetic shift, its fraction in eighths (made where a level needs them).
+    auto level_origin = [](const Axis& a, int k, std::int32_t& origin, __m512& frac) {
+        const std::int32_t num = 2 * a.origin + 1 - (1 << k);
+        origin = num >> (k + 1);
+        frac = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
+    };
+    auto axis = [&](double c0, const State::AxisLevel& level, __m512 d, Axis& a) {
+        // c0 extent 2^-L as (c0 extent) 2^-L: the scaling by a power of two is exact.
+        const double X = c0 * level.scale - 0.5;
+        const double o = std::floor(X);
+        if (!(std::abs(o) < double(kMaxSide))) return false;  // NaN or far outside
+        a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(level.scale)), _mm512_set1_ps(float(X - o)));
+        // Two texels inside the painting at level L, so that at levels L, L + 1 and L + 2 no
+        // lane reaches trilinear_taps' clamps (to [0, w_l - 1], and of uv to [0, 1]):
+        // X_{L+k} = (X + 1/2) 2^-k - 1/2 >= 5/8 - 1/2 > 0 and <= w_{L+k} - 1.
+        const double hi = level.limit - o;
+        if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
+            _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
+            return false;
+        a.origin = std::int32_t(o);
+        return true;
+    };
+    Axis ax, ay;
+    if (!axis(packet.u0, st.axis_levels[0][std::size_t(L)], du, ax) ||
+        !axis(packet.v0, st.axis_levels[1][std::size_t(L)], dv, ay))
+        return false;
+    // NaN positions fail neither comparison above: refuse them here.
+    if (_mm512_cmp_ps_mask(ax.rel, ay.rel, _CMP_UNORD_Q)) return false;
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+    // The common packet in fewer steps: every lane's fine level L, and at each level every
+    // lane's nearest texel in one tile (trilinear_taps' tile for every lane) and its footprint
+    // on one pair of texel rows. Per level, each row's stretch is loaded once and every
+    // channel of every corner picked into its own lane by one byte permute. The same taps,
+    // texels, products and sums as below.
+    if (!levels_differ) {
+        // Level L + k's origins, each lane's texel from them (the floor of its position) and
+        // its weights.
+        struct LevelPosition {
+            std::int32_t ox, oy;
+            __m512 fx, fy;
+            __m512i ix, iy, nx, ny;
+        };
+        auto level_position = [&](int k) __attribute__((always_inline)) {
+            LevelPosition p;
+            p.ox = ax.origin, p.oy = ay.origin;
+            __m512 x = ax.rel, y = ay.rel;
+            if (k) {
+                __m512 fx0, fy0;
+                level_origin(ax, k, p.ox, fx0), level_origin(ay, k, p.oy, fy0);
+                const __m512 half = _mm512_set1_ps(0.5f);
+                x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
+            }
+            const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            p.fx = _mm512_sub_ps(x, x_fl), p.fy = _mm512_sub_ps(y, y_fl);
+            p.ix = _mm512_cvttps_epi32(x_fl), p.iy = _mm512_cvttps_epi32(y_fl);
+            // Every lane's nearest texel (trilinear_taps' n_up), less the origin.
+            const __m512 half = _mm512_set1_ps(0.5f);
+            p.nx = _mm512_mask_add_epi32(p.ix, _mm512_cmp_ps_mask(p.fx, half, _CMP_GE_OQ), p.ix, one_i);
+            p.ny = _mm512_mask_add_epi32(p.iy, _mm512_cmp_ps_mask(p.fy, half, _CMP_GE_OQ), p.iy, one_i);
+            return p;
+        };
+        // At a level's position p in lane 0's tile: each lane's footprint's first texel in the
+        // tile (border included), the stretch of bytes from lo on that the footprints' corners
+        // span on their rows, and whether it fits one byte permute: every footprint on the
+        // same pair of texel rows, within 128 bytes.
+        struct Stretch {
+            std::int32_t first_row, lo, span;
+            __m512i rel;  // each lane's first texel less lo
+            bool fits;
+        };
+        auto stretch_in = [&](const LevelPosition& p, const State::LastTile& tile) __attribute__((always_inline)) {
+            Stretch s;
+            const __m512i jx = _mm512_sub_epi32(p.ix, _mm512_set1_epi32(tile.x0 - t.border - p.ox));
+            const __m512i jy = _mm512_sub_epi32(p.iy, _mm512_set1_epi32(tile.y0 - t.border - p.oy));
+            s.first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
+            const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
+            const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
+            s.lo = std::min(jx_a, jx_b);
+            const std::int32_t hi = std::max(jx_a, jx_b);
+            s.rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(s.lo));
+            s.span = 3 * (hi - s.lo) + 6;  // bytes of the corners' channels
+            s.fits = !(_mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(s.first_row)) |
+                       _mm512_cmpgt_epu32_mask(s.rel, _mm512_set1_epi32(hi - s.lo))) &&
+                     s.span <= 128;
+            return s;
+        };
+        // A level's bilinear blends of 16 lanes from each row's stretch (its two 64-byte
+        // halves): every channel of every corner picked into its lane by one byte permute.
+        auto blend_rows = [&](const __m512i (&rows)[2][2], const Stretch& s, const LevelPosition& p, __m512& R,
+                              __m512& G, __m512& B) __attribute__((always_inline)) {
+            // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
+            const __m512i byte0 = _mm512_add_epi32(s.rel, _mm512_add_epi32(s.rel, s.rel));
+            constexpr __mmask64 kLowBytes = 0x1111111111111111ull;
+            const __m512 one = _mm512_set1_ps(1.0f);
+            const __m512 gx = _mm512_sub_ps(one, p.fx), gy = _mm512_sub_ps(one, p.fy);
+            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(p.fx, gy)},
+                                    {_mm512_mul_ps(gx, p.fy), _mm512_mul_ps(p.fx, p.fy)}};
+            __m512 sum[3];
+            for (int row = 0; row < 2; ++row)
+                for (int right = 0; right < 2; ++right)
+                    for (int c = 0; c < 3; ++c) {
+                        const int corner = 3 * right + c;
+                        const __m512i idx = corner ? _mm512_add_epi32(byte0, _mm512_load_si512(st.corner_bytes[corner])) : byte0;
+                        const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, rows[row][0], idx, rows[row][1]));
+                        sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
+                                                        : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
+                    }
+            R = sum[0], G = sum[1], B = sum[2];
+        };
+        // Whether the last tile c at level l holds texel (x, y) (its cx = floor(x / P) exactly
+        // when x - cx P lies in [0, P)).
+        auto holds = [&](const State::LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) {
+            return c.level == l && std::uint32_t(x - c.x0) < std::uint32_t(t.payload) &&
+                   std::uint32_t(y - c.y0) < std::uint32_t(t.payload);
+        };
+        // A level whose lanes' nearest texels (trilinear_taps' tile for each lane) all lie in
+        // lane 0's tile.
+        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
+            const LevelPosition p = level_position(k);
+            // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's, or the
+            // neighbour last taken with it, when either holds that texel.
+            const std::int32_t nx = p.ox + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.nx));
+            const std::int32_t ny = p.oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.ny));
+            State::LastTile& tile = st.last_tile[finder];
+            if (!holds(tile, L + k, nx, ny)) {
+                State::LastTile& other = st.last_tile[finder + 1];
+                if (holds(other, L + k, nx, ny)) {
+                    std::swap(tile, other);
+                } else {
+                    const std::uint32_t cx = st.divide_p(std::uint32_t(nx)), cy = st.divide_p(std::uint32_t(ny));
+                    tile = {L + k, std::int32_t(cx), std::int32_t(cy), std::int32_t(cx) * t.payload,
+                            std::int32_t(cy) * t.payload, st.base(finder, std::uint32_t(L + k), cx, cy)};
+                }
+            }
+            const Stretch s = stretch_in(p, tile);
+            // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
+            // another tile would read this one's border where trilinear_taps might fall back).
+            const __m512i payload = _mm512_set1_epi32(t.payload);
+            if ((_mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload) &
+                 _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload)) != 0xFFFF ||
+                !s.fits || !tile.base)
+                return false;
+            const std::uint8_t* first = tile.base + std::size_t(s.first_row) * std::size_t(t.row_bytes) + std::size_t(s.lo) * 3;
+            const auto [m0, m1] = stretch_masks(s.span);
+            prefetch_rows_below(first, t.row_bytes);
+            __m512i rows[2][2];
+            for (int row = 0; row < 2; ++row) {
+                const std::uint8_t* q = first + row * t.row_bytes;
+                rows[row][0] = _mm512_maskz_loadu_epi8(m0, q), rows[row][1] = _mm512_maskz_loadu_epi8(m1, q + 64);
+            }
+            blend_rows(rows, s, p, R, G, B);
+            return true;
+        };
+        // A level whose lanes lie in lane 0's tile and its neighbour on the left or right (a
+        // packet across a tile's edge; one_tile declined it, leaving lane 0's tile in
+        // last_tile[finder]): one_tile's checks for the lanes' two tiles, each row's stretch
+        // as the level's bytes from both (State::across_edge). The position and stretch are
+        // one_tile's, written again rather than handed over: GCC shares them, and one function
+        // for both paths cost the common packets more (bench/RESULTS.md at 177a369).
+        auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
+            const LevelPosition p = level_position(k);
+            const State::LastTile& tile = st.last_tile[finder];
+            const Stretch s = stretch_in(p, tile);
+            const __m512i payload = _mm512_set1_epi32(t.payload);
+            const __mmask16 in_tile = _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload);
+            __m512i rows[2][2];
+            if (in_tile == 0xFFFF || !tile.base || !s.fits ||
+                _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload) != 0xFFFF ||
+                !st.across_edge(L + k, finder, p.nx, tile.x0 - p.ox, in_tile, s.lo, s.span,
+                                std::size_t(s.first_row) * std::size_t(t.row_bytes), rows))
+                return false;
+            blend_rows(rows, s, p, R, G, B);
+            return true;
+        };
+        __m512 R, G, B, R1, G1, B1;
+        if ((one_tile(0, 0, R, G, B) || two_tiles(0, 0, R, G, B)) &&
+            (!lv.blending || one_tile(1, 2, R1, G1, B1) || two_tiles(1, 2, R1, G1, B1))) {
+            if (lv.blending) {
+                R = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(R1, R), R);
+                G = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(G1, G), G);
+                B = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(B1, B), B);
+            }
+            _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
+            return true;
+        }
+    }
+#endif
+    const __m512 inv_p = _mm512_set1_ps(1.0f / float(t.payload));
+    // A level's taps from the lanes' levels l (L or L + 1 or L + 2).
+    auto taps = [&](__m512i l) {
+        const __m512i k = _mm512_sub_epi32(l, _mm512_set1_epi32(L));
+        const __mmask16 k1 = _mm512_cmpeq_epi32_mask(k, one_i), k2 = _mm512_cmpeq_epi32_mask(k, _mm512_set1_epi32(2));
+        const __m512 minus_k = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_setzero_si512(), k));
+        auto one_axis = [&](const Axis& a, __m512& f, __m512i& cell, __m512i& in_tile) {
+            __m512 x;
+            __m512i origin;
+            if (!(k1 | k2)) {  // every lane at level L (nearly always)
+                x = a.rel, origin = _mm512_set1_epi32(a.origin);
+            } else {
+                std::int32_t o1, o2;
+                __m512 f1, f2;
+                level_origin(a, 1, o1, f1), level_origin(a, 2, o2, f2);
+                const __m512 frac = _mm512_mask_blend_ps(k2, _mm512_maskz_mov_ps(k1, f1), f2);
+                origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin), _mm512_set1_epi32(o1));
+                origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(o2));
+                x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);
+            }
+            const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+            f = _mm512_sub_ps(x, fl);
+            const __m512i i = _mm512_add_epi32(origin, _mm512_cvttps_epi32(fl));
+            const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
+            // floor(n_up / P) as Divider::by_double in float: (n + 1/2) fl(1/P) is within
+            // 2^-23 (n + 1/2) / P of (n + 1/2) / P, below 1 / (2P) for n < 2^22.
+            cell = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(n_up), _mm512_set1_ps(0.5f)), inv_p));
+            const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
+                                               _mm512_set1_epi32(t.border));
+            in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
+        };
+        LevelTaps lt;
+        lt.level = l;
+        __m512i jx, jy;
+        one_axis(ax, lt.fx, lt.cx, jx);
+        one_axis(ay, lt.fy, lt.cy, jy);
+        lt.row = jy;
+        lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
+                                     _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
+        return lt;
+    };
+    const LevelTaps fine_taps = taps(lv.l0);
+    LevelTaps coarse_taps = fine_taps;
+    if (lv.blending) coarse_taps = taps(_mm512_mask_add_epi32(lv.l0, lv.blending, lv.l0, one_i));
+    return st.sample(fine_taps, coarse_taps, lv, r, g, b);
+}
+#pragma GCC diagnostic pop
+#else
+bool TrilinearLanes::sample16(const PacketUv&, float*, float*, float*) { return false; }
+#endif
+
+}  // namespace gigascroll
