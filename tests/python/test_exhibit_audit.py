@@ -171,3 +171,28 @@ def test_a_painting_without_a_placeholder_in_the_room_file_is_an_error(tmp_path,
     assert line.endswith("room.file: expected a place for every painting, paintings[2] "
                          "('Extra') has none (the room file's placeholders show 'landscape', "
                          "'hanging_scroll'; a painting's name names its placeholder)"), line
+
+
+@pytest.mark.parametrize("room", ['builtin = "hall"',
+                                  'walls = [[0, 0], [5, 0], [5, 4], [0, 4]]'])
+def test_look_at_a_flat_painting_keeps_it_whole_in_view(tmp_path, room):
+    # Was: a painting on a table, seen at 45 degrees from the distance that fills 80 % square
+    # on, left the view at its near edge. Now its four corners fit, the nearest edge filling
+    # 80 % of the width (the camera's geometry: centred, the near edge widest).
+    Image.fromarray(np.full((300, 400, 3), (30, 30, 220), np.uint8)).save(tmp_path / "b.png")
+    hang = "" if "hall" in room else 'hang = { on = "table", position_m = [2.5, 2.0] }\n'
+    (tmp_path / "show.toml").write_text(
+        f'[room]\n{room}\n[[paintings]]\ntitle = "Flat"\nimage = "b.png"\nwidth_cm = 40\n'
+        f'height_cm = 30\n{hang}')
+    assert main(["exhibit", "build", str(tmp_path / "show.toml"), "-o", str(tmp_path / "show"),
+                 "--no-bake", "--no-iiif"]) == 0
+    out = tmp_path / "flat.png"
+    assert main(["render", "--exhibition", str(tmp_path / "show"), "--look-at", "Flat",
+                 "--lighting", "unlit", "--width", "160", "--height", "120", "-o",
+                 str(out)]) == 0
+    a = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    blue = (a[..., 2] > 150) & (a[..., 0] < 90)
+    ys, xs = np.nonzero(blue)
+    assert ys.min() > 0 and xs.min() > 0 and ys.max() < 119 and xs.max() < 159  # whole
+    assert 0.78 * 160 <= xs.max() - xs.min() + 1 <= 0.82 * 160
+    assert blue[60, 80]  # the centre of the view is on the painting

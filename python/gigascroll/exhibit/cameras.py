@@ -55,6 +55,36 @@ def fill_distance(width_m: float, height_m: float, fov: float, aspect: float) ->
     return max(width_m / (2 * FILL * tx), height_m / (2 * FILL * ty))
 
 
+def _fitting_distance(centre, front, corners, fov: float, aspect: float) -> float:
+    """The distance along `front` from which the camera, aimed at `centre` (up: +y, as the
+    commands' cameras), sees every corner within FILL of the view: fill_distance for a
+    painting seen square on, farther for one seen at an angle (on a table), whose near edge
+    would otherwise leave the view."""
+    ty = math.tan(math.radians(fov) / 2)
+    tx = aspect * ty
+    fwd = -front
+    up = np.array([0.0, 1.0, 0.0]) if abs(fwd[1]) < 0.999 else np.array([0.0, 0.0, -1.0])
+    right = np.cross(fwd, up)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+
+    def fits(d: float) -> bool:
+        for c in corners:
+            p = c - (centre + d * front)
+            z = float(p @ fwd)
+            if z <= 1e-9 or abs(p @ right) > FILL * tx * z or abs(p @ up) > FILL * ty * z:
+                return False
+        return True
+    size = max(float(np.linalg.norm(c - centre)) for c in corners)
+    lo, hi = 0.0, max(size / (FILL * min(tx, ty)), 1e-3)
+    while not fits(hi):
+        hi *= 2
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if fits(mid) else (mid, hi)
+    return hi
+
+
 def room_bounds(room):
     """(lo, hi) corners of the box around the room's surfaces (None without surfaces)."""
     pts = [np.asarray(s.vertices, float).reshape(-1, 3) for s in room.surfaces]
@@ -83,9 +113,7 @@ def look_at(slot, distance: float | None = None, fov: float = 60.0, aspect: floa
     if not (math.isfinite(fov) and 0 < fov < 180):
         raise ValueError(f"the field of view must be in (0, 180) degrees, got {fov}")
     given = distance is not None
-    if distance is None:  # at least 5 cm: a tiny painting is seen from a camera's nearest
-        distance = max(0.05, fill_distance(slot.width_m, slot.height_m, fov, aspect))
-    if not (math.isfinite(distance) and 0.05 <= distance <= 1000):
+    if distance is not None and not (math.isfinite(distance) and 0.05 <= distance <= 1000):
         raise ValueError(f"--distance must be in [0.05, 1000] metres, got {distance}")
     u, v = np.array(slot.u_axis, float), np.array(slot.v_axis, float)
     centre = np.array(slot.origin, float) + u * slot.width_m / 2 + v * slot.height_m / 2
@@ -94,6 +122,10 @@ def look_at(slot, distance: float | None = None, fov: float = 60.0, aspect: floa
     if abs(front[1]) > 0.9:  # facing up or down: from the visitor's side (image bottom, +v)
         down = v / np.linalg.norm(v)
         front = (front + down) / np.linalg.norm(front + down)
+    if distance is None:  # at least 5 cm: a tiny painting is seen from a camera's nearest
+        corners = [np.array(slot.origin, float) + a * u * slot.width_m + b * v * slot.height_m
+                   for a in (0, 1) for b in (0, 1)]
+        distance = max(0.05, _fitting_distance(centre, front, corners, fov, aspect))
     if not given and bounds is not None:
         room = _inside_distance(centre, front, bounds) - 0.05
         if room > 0.05:
