@@ -146,6 +146,25 @@ struct TrilinearLanes::State {
     // resident.
     bool across_edge(int level, int finder, __m512i nx_lanes, std::int32_t x0_lanes, __mmask16 in_tile,
                      std::int32_t lo, std::int32_t span, std::size_t row_start, __m512i (&rows)[2][2]);
+    // sample16's steps (see there).
+    static constexpr std::uint32_t kMaxSide = 1u << 22;
+    struct Axis;
+    struct Position;
+    static void level_origin(const Axis& a, int k, std::int32_t& origin, __m512& frac);
+    static bool axis(double c0, const AxisLevel& level, __m512 d, Axis& a);
+    LevelTaps taps(const Position& pp, __m512i l) const;
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+    struct LevelPosition;
+    struct Stretch;
+    LevelPosition level_position(const Position& pp, int k) const;
+    Stretch stretch_in(const LevelPosition& p, const LastTile& last) const;
+    void blend_rows(const __m512i (&rows)[2][2], const Stretch& s, const LevelPosition& p, __m512& R, __m512& G,
+                    __m512& B) const;
+    bool holds(const LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) const;
+    bool one_tile(const Position& pp, int k, int finder, __m512& R, __m512& G, __m512& B);
+    bool two_tiles(const Position& pp, int k, int finder, __m512& R, __m512& G, __m512& B);
+    bool sample_stretches(const Position& pp, const LaneLevels& lv, float* r, float* g, float* b);
+#endif
 #endif
 };
 
@@ -325,268 +344,300 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
     return true;
 }
 
+// sample16's packet position at its finest level L on one axis: lane 0's continuous texel
+// position less 1/2 (trilinear_taps' tx before its clamp), X = c0 extent 2^-L - 1/2, as an
+// integer origin and a fraction; each lane's position relative to the origin is frac +
+// d extent 2^-L in float. Level L + k's position is (X + 1/2) 2^-k - 1/2 = origin_k +
+// (rel 2^-k + frac_k), with origin_k and frac_k the same split of (origin + 1/2) 2^-k - 1/2
+// (level_origin, exact).
+struct TrilinearLanes::State::Axis {
+    __m512 rel;           // per lane, at level L
+    std::int32_t origin;  // at level L
+};
+struct TrilinearLanes::State::Position {
+    Axis ax, ay;
+    std::int32_t L;  // the packet's finest level
+};
+
+// Level L + k's origin and fraction: (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1), its
+// floor by an arithmetic shift, its fraction in eighths (made where a level needs them).
+[[gnu::always_inline]] inline void TrilinearLanes::State::level_origin(const Axis& a, int k, std::int32_t& origin,
+                                                                      __m512& frac) {
+    const std::int32_t num = 2 * a.origin + 1 - (1 << k);
+    origin = num >> (k + 1);
+    frac = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
+}
+
+// One axis of the packet at level L from lane 0's coordinate c0 and the lanes' offsets d;
+// false where a lane comes within two texels of the painting's edge (or NaN, far outside).
+[[gnu::always_inline]] inline bool TrilinearLanes::State::axis(double c0, const AxisLevel& level, __m512 d, Axis& a) {
+    // c0 extent 2^-L as (c0 extent) 2^-L: the scaling by a power of two is exact.
+    const double X = c0 * level.scale - 0.5;
+    const double o = std::floor(X);
+    if (!(std::abs(o) < double(kMaxSide))) return false;  // NaN or far outside
+    a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(level.scale)), _mm512_set1_ps(float(X - o)));
+    // Two texels inside the painting at level L, so that at levels L, L + 1 and L + 2 no
+    // lane reaches trilinear_taps' clamps (to [0, w_l - 1], and of uv to [0, 1]):
+    // X_{L+k} = (X + 1/2) 2^-k - 1/2 >= 5/8 - 1/2 > 0 and <= w_{L+k} - 1.
+    const double hi = level.limit - o;
+    if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
+        _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
+        return false;
+    a.origin = std::int32_t(o);
+    return true;
+}
+
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+// Level L + k's origins, each lane's texel from them (the floor of its position) and its
+// weights.
+struct TrilinearLanes::State::LevelPosition {
+    std::int32_t ox, oy;
+    __m512 fx, fy;
+    __m512i ix, iy, nx, ny;
+};
+[[gnu::always_inline]] inline TrilinearLanes::State::LevelPosition TrilinearLanes::State::level_position(
+    const Position& pp, int k) const {
+    LevelPosition p;
+    p.ox = pp.ax.origin, p.oy = pp.ay.origin;
+    __m512 x = pp.ax.rel, y = pp.ay.rel;
+    if (k) {
+        __m512 fx0, fy0;
+        level_origin(pp.ax, k, p.ox, fx0), level_origin(pp.ay, k, p.oy, fy0);
+        const __m512 half = _mm512_set1_ps(0.5f);
+        x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
+    }
+    const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    p.fx = _mm512_sub_ps(x, x_fl), p.fy = _mm512_sub_ps(y, y_fl);
+    p.ix = _mm512_cvttps_epi32(x_fl), p.iy = _mm512_cvttps_epi32(y_fl);
+    // Every lane's nearest texel (trilinear_taps' n_up), less the origin.
+    const __m512 half = _mm512_set1_ps(0.5f);
+    const __m512i one_i = _mm512_set1_epi32(1);
+    p.nx = _mm512_mask_add_epi32(p.ix, _mm512_cmp_ps_mask(p.fx, half, _CMP_GE_OQ), p.ix, one_i);
+    p.ny = _mm512_mask_add_epi32(p.iy, _mm512_cmp_ps_mask(p.fy, half, _CMP_GE_OQ), p.iy, one_i);
+    return p;
+}
+
+// At a level's position p in lane 0's tile: each lane's footprint's first texel in the tile
+// (border included), the stretch of bytes from lo on that the footprints' corners span on
+// their rows, and whether it fits one byte permute: every footprint on the same pair of
+// texel rows, within 128 bytes.
+struct TrilinearLanes::State::Stretch {
+    std::int32_t first_row, lo, span;
+    __m512i rel;  // each lane's first texel less lo
+    bool fits;
+};
+[[gnu::always_inline]] inline TrilinearLanes::State::Stretch TrilinearLanes::State::stretch_in(
+    const LevelPosition& p, const LastTile& last) const {
+    const TileExtent t = tile;
+    Stretch s;
+    const __m512i jx = _mm512_sub_epi32(p.ix, _mm512_set1_epi32(last.x0 - t.border - p.ox));
+    const __m512i jy = _mm512_sub_epi32(p.iy, _mm512_set1_epi32(last.y0 - t.border - p.oy));
+    s.first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
+    const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
+    const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
+    s.lo = std::min(jx_a, jx_b);
+    const std::int32_t hi = std::max(jx_a, jx_b);
+    s.rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(s.lo));
+    s.span = 3 * (hi - s.lo) + 6;  // bytes of the corners' channels
+    s.fits = !(_mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(s.first_row)) |
+               _mm512_cmpgt_epu32_mask(s.rel, _mm512_set1_epi32(hi - s.lo))) &&
+             s.span <= 128;
+    return s;
+}
+
+// A level's bilinear blends of 16 lanes from each row's stretch (its two 64-byte halves):
+// every channel of every corner picked into its lane by one byte permute.
+[[gnu::always_inline]] inline void TrilinearLanes::State::blend_rows(const __m512i (&rows)[2][2], const Stretch& s,
+                                                                    const LevelPosition& p, __m512& R, __m512& G,
+                                                                    __m512& B) const {
+    // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
+    const __m512i byte0 = _mm512_add_epi32(s.rel, _mm512_add_epi32(s.rel, s.rel));
+    constexpr __mmask64 kLowBytes = 0x1111111111111111ull;
+    const __m512 one = _mm512_set1_ps(1.0f);
+    const __m512 gx = _mm512_sub_ps(one, p.fx), gy = _mm512_sub_ps(one, p.fy);
+    const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(p.fx, gy)},
+                            {_mm512_mul_ps(gx, p.fy), _mm512_mul_ps(p.fx, p.fy)}};
+    __m512 sum[3];
+    for (int row = 0; row < 2; ++row)
+        for (int right = 0; right < 2; ++right)
+            for (int c = 0; c < 3; ++c) {
+                const int corner = 3 * right + c;
+                const __m512i idx = corner ? _mm512_add_epi32(byte0, _mm512_load_si512(corner_bytes[corner])) : byte0;
+                const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, rows[row][0], idx, rows[row][1]));
+                sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
+                                                : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
+            }
+    R = sum[0], G = sum[1], B = sum[2];
+}
+
+// Whether the last tile c at level l holds texel (x, y) (its cx = floor(x / P) exactly when
+// x - cx P lies in [0, P)).
+bool TrilinearLanes::State::holds(const LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) const {
+    return c.level == l && std::uint32_t(x - c.x0) < std::uint32_t(tile.payload) &&
+           std::uint32_t(y - c.y0) < std::uint32_t(tile.payload);
+}
+
+// Level L + k when its lanes' nearest texels (trilinear_taps' tile for each lane) all lie in
+// lane 0's tile, through finder `finder`.
+[[gnu::always_inline]] inline bool TrilinearLanes::State::one_tile(const Position& pp, int k, int finder, __m512& R,
+                                                                  __m512& G, __m512& B) {
+    const TileExtent t = tile;
+    const std::int32_t level = pp.L + k;
+    const LevelPosition p = level_position(pp, k);
+    // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's, or the
+    // neighbour last taken with it, when either holds that texel.
+    const std::int32_t nx = p.ox + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.nx));
+    const std::int32_t ny = p.oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.ny));
+    LastTile& own = last_tile[finder];
+    if (!holds(own, level, nx, ny)) {
+        LastTile& other = last_tile[finder + 1];
+        if (holds(other, level, nx, ny)) {
+            std::swap(own, other);
+        } else {
+            const std::uint32_t cx = divide_p(std::uint32_t(nx)), cy = divide_p(std::uint32_t(ny));
+            own = {level, std::int32_t(cx), std::int32_t(cy), std::int32_t(cx) * t.payload, std::int32_t(cy) * t.payload,
+                   base(finder, std::uint32_t(level), cx, cy)};
+        }
+    }
+    const Stretch s = stretch_in(p, own);
+    // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
+    // another tile would read this one's border where trilinear_taps might fall back).
+    const __m512i payload = _mm512_set1_epi32(t.payload);
+    if ((_mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(own.x0 - p.ox)), payload) &
+         _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(own.y0 - p.oy)), payload)) != 0xFFFF ||
+        !s.fits || !own.base)
+        return false;
+    const std::uint8_t* first = own.base + std::size_t(s.first_row) * std::size_t(t.row_bytes) + std::size_t(s.lo) * 3;
+    const auto [m0, m1] = stretch_masks(s.span);
+    prefetch_rows_below(first, t.row_bytes);
+    __m512i rows[2][2];
+    for (int row = 0; row < 2; ++row) {
+        const std::uint8_t* q = first + row * t.row_bytes;
+        rows[row][0] = _mm512_maskz_loadu_epi8(m0, q), rows[row][1] = _mm512_maskz_loadu_epi8(m1, q + 64);
+    }
+    blend_rows(rows, s, p, R, G, B);
+    return true;
+}
+
+// Level L + k when its lanes lie in lane 0's tile and its neighbour on the left or right (a
+// packet across a tile's edge; one_tile declined it, leaving lane 0's tile in
+// last_tile[finder]): one_tile's checks for the lanes' two tiles, each row's stretch as the
+// level's bytes from both (across_edge). The position and stretch are one_tile's, made again
+// rather than handed over: GCC shares them, and one function for both paths cost the common
+// packets more (bench/RESULTS.md at 177a369).
+[[gnu::always_inline]] inline bool TrilinearLanes::State::two_tiles(const Position& pp, int k, int finder, __m512& R,
+                                                                   __m512& G, __m512& B) {
+    const TileExtent t = tile;
+    const LevelPosition p = level_position(pp, k);
+    const LastTile& own = last_tile[finder];
+    const Stretch s = stretch_in(p, own);
+    const __m512i payload = _mm512_set1_epi32(t.payload);
+    const __mmask16 in_tile = _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(own.x0 - p.ox)), payload);
+    __m512i rows[2][2];
+    if (in_tile == 0xFFFF || !own.base || !s.fits ||
+        _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(own.y0 - p.oy)), payload) != 0xFFFF ||
+        !across_edge(pp.L + k, finder, p.nx, own.x0 - p.ox, in_tile, s.lo, s.span,
+                     std::size_t(s.first_row) * std::size_t(t.row_bytes), rows))
+        return false;
+    blend_rows(rows, s, p, R, G, B);
+    return true;
+}
+
+// The common packet in fewer steps: every lane's fine level L, and at each level every lane's
+// nearest texel in one tile (trilinear_taps' tile for every lane) or two neighbouring ones,
+// and its footprint on one pair of texel rows. Per level, each row's stretch is loaded once
+// and every channel of every corner picked into its own lane by one byte permute. The same
+// taps, texels, products and sums as sample's.
+[[gnu::always_inline]] inline bool TrilinearLanes::State::sample_stretches(const Position& pp, const LaneLevels& lv,
+                                                                          float* r, float* g, float* b) {
+    __m512 R, G, B, R1, G1, B1;
+    if (!(one_tile(pp, 0, 0, R, G, B) || two_tiles(pp, 0, 0, R, G, B))) return false;
+    if (lv.blending && !(one_tile(pp, 1, 2, R1, G1, B1) || two_tiles(pp, 1, 2, R1, G1, B1))) return false;
+    if (lv.blending) {
+        R = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(R1, R), R);
+        G = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(G1, G), G);
+        B = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(B1, B), B);
+    }
+    _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
+    return true;
+}
+#endif
+
+// One level's taps for the general packet from the lanes' levels l (L or L + 1 or L + 2).
+[[gnu::always_inline]] inline LevelTaps TrilinearLanes::State::taps(const Position& pp, __m512i l) const {
+    const TileExtent t = tile;
+    const __m512i one_i = _mm512_set1_epi32(1);
+    const __m512 inv_p = _mm512_set1_ps(1.0f / float(t.payload));
+    const __m512i k = _mm512_sub_epi32(l, _mm512_set1_epi32(pp.L));
+    const __mmask16 k1 = _mm512_cmpeq_epi32_mask(k, one_i), k2 = _mm512_cmpeq_epi32_mask(k, _mm512_set1_epi32(2));
+    const __m512 minus_k = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_setzero_si512(), k));
+    auto one_axis = [&](const Axis& a, __m512& f, __m512i& cell, __m512i& in_tile) {
+        __m512 x;
+        __m512i origin;
+        if (!(k1 | k2)) {  // every lane at level L (nearly always)
+            x = a.rel, origin = _mm512_set1_epi32(a.origin);
+        } else {
+            std::int32_t o1, o2;
+            __m512 f1, f2;
+            level_origin(a, 1, o1, f1), level_origin(a, 2, o2, f2);
+            const __m512 frac = _mm512_mask_blend_ps(k2, _mm512_maskz_mov_ps(k1, f1), f2);
+            origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin), _mm512_set1_epi32(o1));
+            origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(o2));
+            x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);
+        }
+        const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+        f = _mm512_sub_ps(x, fl);
+        const __m512i i = _mm512_add_epi32(origin, _mm512_cvttps_epi32(fl));
+        const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
+        // floor(n_up / P) as Divider::by_double in float: (n + 1/2) fl(1/P) is within
+        // 2^-23 (n + 1/2) / P of (n + 1/2) / P, below 1 / (2P) for n < 2^22.
+        cell = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(n_up), _mm512_set1_ps(0.5f)), inv_p));
+        const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
+                                           _mm512_set1_epi32(t.border));
+        in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
+    };
+    LevelTaps lt;
+    lt.level = l;
+    __m512i jx, jy;
+    one_axis(pp.ax, lt.fx, lt.cx, jx);
+    one_axis(pp.ay, lt.fy, lt.cy, jy);
+    lt.row = jy;
+    lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
+                                 _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
+    return lt;
+}
+
+// The packet's levels (its finest L and at most L + 1 at the fine level, so L + 2 at the
+// coarse one), its position on each axis, then the common packet's stretches or the general
+// packet's taps and gathered corners.
 bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float* b) {
     if (!state_) return false;
     State& st = *state_;
-    const std::uint32_t width = st.pyramid.width, height = st.pyramid.height;
-    // Below 2^22 texels a side the float tile division below is exact (see cell) and every
-    // texel index and level extent is a float.
-    constexpr std::uint32_t kMaxSide = 1u << 22;
-    if (width >= kMaxSide || height >= kMaxSide) return false;
+    // Below 2^22 texels a side the float tile division is exact (see taps) and every texel
+    // index and level extent is a float.
+    if (st.pyramid.width >= State::kMaxSide || st.pyramid.height >= State::kMaxSide) return false;
     const LaneLevels lv = lane_levels(packet.lod, st.pyramid.top, st.levels);
-    // The packet's levels: its finest L and at most L + 1 at the fine level (so L + 2 at the
-    // coarse one). Nearly always every lane's is lane 0's: then no reduction over the lanes.
-    std::int32_t L = _mm_cvtsi128_si32(_mm512_castsi512_si128(lv.l0));
-    const bool levels_differ = _mm512_cmpneq_epi32_mask(lv.l0, _mm512_set1_epi32(L)) != 0;
+    // Nearly always every lane's level is lane 0's: then no reduction over the lanes.
+    State::Position pp;
+    pp.L = _mm_cvtsi128_si32(_mm512_castsi512_si128(lv.l0));
+    const bool levels_differ = _mm512_cmpneq_epi32_mask(lv.l0, _mm512_set1_epi32(pp.L)) != 0;
     if (levels_differ) {
-        L = _mm512_reduce_min_epi32(lv.l0);
-        if (_mm512_reduce_max_epi32(lv.l0) > L + 1) return false;
+        pp.L = _mm512_reduce_min_epi32(lv.l0);
+        if (_mm512_reduce_max_epi32(lv.l0) > pp.L + 1) return false;
     }
-    const __m512i one_i = _mm512_set1_epi32(1);
-    const TileExtent t = st.tile;
     const __m512 du = _mm512_load_ps(packet.du), dv = _mm512_load_ps(packet.dv);
-    // One axis at level L: lane 0's continuous texel position less 1/2 (trilinear_taps' tx
-    // before its clamp), X = c0 extent 2^-L - 1/2, as an integer origin and a fraction; each
-    // lane's position relative to the origin is frac + d extent 2^-L in float. Level L + k's
-    // position is (X + 1/2) 2^-k - 1/2 = origin_k + (rel 2^-k + frac_k), with origin_k and
-    // frac_k the same split of (origin + 1/2) 2^-k - 1/2 (level_origin, exact).
-    struct Axis {
-        __m512 rel;           // per lane, at level L
-        std::int32_t origin;  // at level L
-    };
-    // Level L + k's origin and fraction: (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1), its
-    // floor by an arithmetic shift, its fraction in eighths (made where a level needs them).
-    auto level_origin = [](const Axis& a, int k, std::int32_t& origin, __m512& frac) {
-        const std::int32_t num = 2 * a.origin + 1 - (1 << k);
-        origin = num >> (k + 1);
-        frac = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
-    };
-    auto axis = [&](double c0, const State::AxisLevel& level, __m512 d, Axis& a) {
-        // c0 extent 2^-L as (c0 extent) 2^-L: the scaling by a power of two is exact.
-        const double X = c0 * level.scale - 0.5;
-        const double o = std::floor(X);
-        if (!(std::abs(o) < double(kMaxSide))) return false;  // NaN or far outside
-        a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(level.scale)), _mm512_set1_ps(float(X - o)));
-        // Two texels inside the painting at level L, so that at levels L, L + 1 and L + 2 no
-        // lane reaches trilinear_taps' clamps (to [0, w_l - 1], and of uv to [0, 1]):
-        // X_{L+k} = (X + 1/2) 2^-k - 1/2 >= 5/8 - 1/2 > 0 and <= w_{L+k} - 1.
-        const double hi = level.limit - o;
-        if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
-            _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
-            return false;
-        a.origin = std::int32_t(o);
-        return true;
-    };
-    Axis ax, ay;
-    if (!axis(packet.u0, st.axis_levels[0][std::size_t(L)], du, ax) ||
-        !axis(packet.v0, st.axis_levels[1][std::size_t(L)], dv, ay))
+    if (!State::axis(packet.u0, st.axis_levels[0][std::size_t(pp.L)], du, pp.ax) ||
+        !State::axis(packet.v0, st.axis_levels[1][std::size_t(pp.L)], dv, pp.ay))
         return false;
-    // NaN positions fail neither comparison above: refuse them here.
-    if (_mm512_cmp_ps_mask(ax.rel, ay.rel, _CMP_UNORD_Q)) return false;
+    // NaN positions fail neither comparison in axis: refuse them here.
+    if (_mm512_cmp_ps_mask(pp.ax.rel, pp.ay.rel, _CMP_UNORD_Q)) return false;
 #if defined(__AVX512VBMI__) && defined(__AVX512BW__)
-    // The common packet in fewer steps: every lane's fine level L, and at each level every
-    // lane's nearest texel in one tile (trilinear_taps' tile for every lane) and its footprint
-    // on one pair of texel rows. Per level, each row's stretch is loaded once and every
-    // channel of every corner picked into its own lane by one byte permute. The same taps,
-    // texels, products and sums as below.
-    if (!levels_differ) {
-        // Level L + k's origins, each lane's texel from them (the floor of its position) and
-        // its weights.
-        struct LevelPosition {
-            std::int32_t ox, oy;
-            __m512 fx, fy;
-            __m512i ix, iy, nx, ny;
-        };
-        auto level_position = [&](int k) __attribute__((always_inline)) {
-            LevelPosition p;
-            p.ox = ax.origin, p.oy = ay.origin;
-            __m512 x = ax.rel, y = ay.rel;
-            if (k) {
-                __m512 fx0, fy0;
-                level_origin(ax, k, p.ox, fx0), level_origin(ay, k, p.oy, fy0);
-                const __m512 half = _mm512_set1_ps(0.5f);
-                x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
-            }
-            const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            p.fx = _mm512_sub_ps(x, x_fl), p.fy = _mm512_sub_ps(y, y_fl);
-            p.ix = _mm512_cvttps_epi32(x_fl), p.iy = _mm512_cvttps_epi32(y_fl);
-            // Every lane's nearest texel (trilinear_taps' n_up), less the origin.
-            const __m512 half = _mm512_set1_ps(0.5f);
-            p.nx = _mm512_mask_add_epi32(p.ix, _mm512_cmp_ps_mask(p.fx, half, _CMP_GE_OQ), p.ix, one_i);
-            p.ny = _mm512_mask_add_epi32(p.iy, _mm512_cmp_ps_mask(p.fy, half, _CMP_GE_OQ), p.iy, one_i);
-            return p;
-        };
-        // At a level's position p in lane 0's tile: each lane's footprint's first texel in the
-        // tile (border included), the stretch of bytes from lo on that the footprints' corners
-        // span on their rows, and whether it fits one byte permute: every footprint on the
-        // same pair of texel rows, within 128 bytes.
-        struct Stretch {
-            std::int32_t first_row, lo, span;
-            __m512i rel;  // each lane's first texel less lo
-            bool fits;
-        };
-        auto stretch_in = [&](const LevelPosition& p, const State::LastTile& tile) __attribute__((always_inline)) {
-            Stretch s;
-            const __m512i jx = _mm512_sub_epi32(p.ix, _mm512_set1_epi32(tile.x0 - t.border - p.ox));
-            const __m512i jy = _mm512_sub_epi32(p.iy, _mm512_set1_epi32(tile.y0 - t.border - p.oy));
-            s.first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(jy));
-            const std::int32_t jx_a = _mm_cvtsi128_si32(_mm512_castsi512_si128(jx));
-            const std::int32_t jx_b = _mm_extract_epi32(_mm512_extracti32x4_epi32(jx, 3), 3);
-            s.lo = std::min(jx_a, jx_b);
-            const std::int32_t hi = std::max(jx_a, jx_b);
-            s.rel = _mm512_sub_epi32(jx, _mm512_set1_epi32(s.lo));
-            s.span = 3 * (hi - s.lo) + 6;  // bytes of the corners' channels
-            s.fits = !(_mm512_cmpneq_epi32_mask(jy, _mm512_set1_epi32(s.first_row)) |
-                       _mm512_cmpgt_epu32_mask(s.rel, _mm512_set1_epi32(hi - s.lo))) &&
-                     s.span <= 128;
-            return s;
-        };
-        // A level's bilinear blends of 16 lanes from each row's stretch (its two 64-byte
-        // halves): every channel of every corner picked into its lane by one byte permute.
-        auto blend_rows = [&](const __m512i (&rows)[2][2], const Stretch& s, const LevelPosition& p, __m512& R,
-                              __m512& G, __m512& B) __attribute__((always_inline)) {
-            // Each lane's first byte in its dword, the others zeroed by the permutes' mask.
-            const __m512i byte0 = _mm512_add_epi32(s.rel, _mm512_add_epi32(s.rel, s.rel));
-            constexpr __mmask64 kLowBytes = 0x1111111111111111ull;
-            const __m512 one = _mm512_set1_ps(1.0f);
-            const __m512 gx = _mm512_sub_ps(one, p.fx), gy = _mm512_sub_ps(one, p.fy);
-            const __m512 w[2][2] = {{_mm512_mul_ps(gx, gy), _mm512_mul_ps(p.fx, gy)},
-                                    {_mm512_mul_ps(gx, p.fy), _mm512_mul_ps(p.fx, p.fy)}};
-            __m512 sum[3];
-            for (int row = 0; row < 2; ++row)
-                for (int right = 0; right < 2; ++right)
-                    for (int c = 0; c < 3; ++c) {
-                        const int corner = 3 * right + c;
-                        const __m512i idx = corner ? _mm512_add_epi32(byte0, _mm512_load_si512(st.corner_bytes[corner])) : byte0;
-                        const __m512 texel = _mm512_cvtepi32_ps(_mm512_maskz_permutex2var_epi8(kLowBytes, rows[row][0], idx, rows[row][1]));
-                        sum[c] = row == 0 && right == 0 ? _mm512_mul_ps(w[0][0], texel)
-                                                        : _mm512_fmadd_ps(w[row][right], texel, sum[c]);
-                    }
-            R = sum[0], G = sum[1], B = sum[2];
-        };
-        // Whether the last tile c at level l holds texel (x, y) (its cx = floor(x / P) exactly
-        // when x - cx P lies in [0, P)).
-        auto holds = [&](const State::LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) {
-            return c.level == l && std::uint32_t(x - c.x0) < std::uint32_t(t.payload) &&
-                   std::uint32_t(y - c.y0) < std::uint32_t(t.payload);
-        };
-        // A level whose lanes' nearest texels (trilinear_taps' tile for each lane) all lie in
-        // lane 0's tile.
-        auto one_tile = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const LevelPosition p = level_position(k);
-            // Lane 0's tile by its nearest texel, as trilinear_taps: the last one's, or the
-            // neighbour last taken with it, when either holds that texel.
-            const std::int32_t nx = p.ox + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.nx));
-            const std::int32_t ny = p.oy + _mm_cvtsi128_si32(_mm512_castsi512_si128(p.ny));
-            State::LastTile& tile = st.last_tile[finder];
-            if (!holds(tile, L + k, nx, ny)) {
-                State::LastTile& other = st.last_tile[finder + 1];
-                if (holds(other, L + k, nx, ny)) {
-                    std::swap(tile, other);
-                } else {
-                    const std::uint32_t cx = st.divide_p(std::uint32_t(nx)), cy = st.divide_p(std::uint32_t(ny));
-                    tile = {L + k, std::int32_t(cx), std::int32_t(cy), std::int32_t(cx) * t.payload,
-                            std::int32_t(cy) * t.payload, st.base(finder, std::uint32_t(L + k), cx, cy)};
-                }
-            }
-            const Stretch s = stretch_in(p, tile);
-            // Every lane's nearest texel in the tile's payload (its tile is lane 0's: a lane of
-            // another tile would read this one's border where trilinear_taps might fall back).
-            const __m512i payload = _mm512_set1_epi32(t.payload);
-            if ((_mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload) &
-                 _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload)) != 0xFFFF ||
-                !s.fits || !tile.base)
-                return false;
-            const std::uint8_t* first = tile.base + std::size_t(s.first_row) * std::size_t(t.row_bytes) + std::size_t(s.lo) * 3;
-            const auto [m0, m1] = stretch_masks(s.span);
-            prefetch_rows_below(first, t.row_bytes);
-            __m512i rows[2][2];
-            for (int row = 0; row < 2; ++row) {
-                const std::uint8_t* q = first + row * t.row_bytes;
-                rows[row][0] = _mm512_maskz_loadu_epi8(m0, q), rows[row][1] = _mm512_maskz_loadu_epi8(m1, q + 64);
-            }
-            blend_rows(rows, s, p, R, G, B);
-            return true;
-        };
-        // A level whose lanes lie in lane 0's tile and its neighbour on the left or right (a
-        // packet across a tile's edge; one_tile declined it, leaving lane 0's tile in
-        // last_tile[finder]): one_tile's checks for the lanes' two tiles, each row's stretch
-        // as the level's bytes from both (State::across_edge). The position and stretch are
-        // one_tile's, written again rather than handed over: GCC shares them, and one function
-        // for both paths cost the common packets more (bench/RESULTS.md at 177a369).
-        auto two_tiles = [&](int k, int finder, __m512& R, __m512& G, __m512& B) __attribute__((always_inline)) {
-            const LevelPosition p = level_position(k);
-            const State::LastTile& tile = st.last_tile[finder];
-            const Stretch s = stretch_in(p, tile);
-            const __m512i payload = _mm512_set1_epi32(t.payload);
-            const __mmask16 in_tile = _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.nx, _mm512_set1_epi32(tile.x0 - p.ox)), payload);
-            __m512i rows[2][2];
-            if (in_tile == 0xFFFF || !tile.base || !s.fits ||
-                _mm512_cmplt_epu32_mask(_mm512_sub_epi32(p.ny, _mm512_set1_epi32(tile.y0 - p.oy)), payload) != 0xFFFF ||
-                !st.across_edge(L + k, finder, p.nx, tile.x0 - p.ox, in_tile, s.lo, s.span,
-                                std::size_t(s.first_row) * std::size_t(t.row_bytes), rows))
-                return false;
-            blend_rows(rows, s, p, R, G, B);
-            return true;
-        };
-        __m512 R, G, B, R1, G1, B1;
-        if ((one_tile(0, 0, R, G, B) || two_tiles(0, 0, R, G, B)) &&
-            (!lv.blending || one_tile(1, 2, R1, G1, B1) || two_tiles(1, 2, R1, G1, B1))) {
-            if (lv.blending) {
-                R = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(R1, R), R);
-                G = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(G1, G), G);
-                B = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(B1, B), B);
-            }
-            _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
-            return true;
-        }
-    }
+    if (!levels_differ && st.sample_stretches(pp, lv, r, g, b)) return true;
 #endif
-    const __m512 inv_p = _mm512_set1_ps(1.0f / float(t.payload));
-    // A level's taps from the lanes' levels l (L or L + 1 or L + 2).
-    auto taps = [&](__m512i l) {
-        const __m512i k = _mm512_sub_epi32(l, _mm512_set1_epi32(L));
-        const __mmask16 k1 = _mm512_cmpeq_epi32_mask(k, one_i), k2 = _mm512_cmpeq_epi32_mask(k, _mm512_set1_epi32(2));
-        const __m512 minus_k = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_setzero_si512(), k));
-        auto one_axis = [&](const Axis& a, __m512& f, __m512i& cell, __m512i& in_tile) {
-            __m512 x;
-            __m512i origin;
-            if (!(k1 | k2)) {  // every lane at level L (nearly always)
-                x = a.rel, origin = _mm512_set1_epi32(a.origin);
-            } else {
-                std::int32_t o1, o2;
-                __m512 f1, f2;
-                level_origin(a, 1, o1, f1), level_origin(a, 2, o2, f2);
-                const __m512 frac = _mm512_mask_blend_ps(k2, _mm512_maskz_mov_ps(k1, f1), f2);
-                origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin), _mm512_set1_epi32(o1));
-                origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(o2));
-                x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);
-            }
-            const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-            f = _mm512_sub_ps(x, fl);
-            const __m512i i = _mm512_add_epi32(origin, _mm512_cvttps_epi32(fl));
-            const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
-            // floor(n_up / P) as Divider::by_double in float: (n + 1/2) fl(1/P) is within
-            // 2^-23 (n + 1/2) / P of (n + 1/2) / P, below 1 / (2P) for n < 2^22.
-            cell = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(n_up), _mm512_set1_ps(0.5f)), inv_p));
-            const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
-                                               _mm512_set1_epi32(t.border));
-            in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
-        };
-        LevelTaps lt;
-        lt.level = l;
-        __m512i jx, jy;
-        one_axis(ax, lt.fx, lt.cx, jx);
-        one_axis(ay, lt.fy, lt.cy, jy);
-        lt.row = jy;
-        lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
-                                     _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
-        return lt;
-    };
-    const LevelTaps fine_taps = taps(lv.l0);
+    const LevelTaps fine_taps = st.taps(pp, lv.l0);
     LevelTaps coarse_taps = fine_taps;
-    if (lv.blending) coarse_taps = taps(_mm512_mask_add_epi32(lv.l0, lv.blending, lv.l0, one_i));
+    if (lv.blending) coarse_taps = st.taps(pp, _mm512_mask_add_epi32(lv.l0, lv.blending, lv.l0, _mm512_set1_epi32(1)));
     return st.sample(fine_taps, coarse_taps, lv, r, g, b);
 }
 #pragma GCC diagnostic pop
