@@ -39,7 +39,7 @@ QUALITY_LEVELS = ("draft", "preview", "final")
 DEFAULT_QUALITY = "final"
 # The stated target of each level: RMS relative error of the blurred luminance on walls and
 # floors against a converged reference (paintings at final: 0.5%).
-ERROR_TARGETS = {"draft": 0.08, "preview": 0.04, "final": 0.01}
+ERROR_TARGETS = {"draft": 0.08, "preview": 0.06, "final": 0.01}
 # The rooms the steps were measured on: area / diagonal^2 (hall 1.58, scroll 0.96).
 FITTED_AREA_RATIO = 1.27
 MAX_BUDGET_S = 86400.0
