@@ -161,8 +161,8 @@ def check_budget(budget) -> float:
 
 # The cost model of predicted_seconds, seconds on 2 cores of the machine the steps were
 # measured on: per photon traced and stored, per lattice point and per ray a point casts.
-SECONDS_PER_PHOTON = 1.0e-6
-SECONDS_PER_POINT_RAY = 1.2e-7
+SECONDS_PER_PHOTON = 3.5e-7
+SECONDS_PER_POINT_RAY = 1.0e-7
 
 
 def predicted_seconds(s: LightSettings, m: RoomMeasures) -> float:
