@@ -29,8 +29,9 @@ def register(sub) -> None:
     b.add_argument("--base-url", default=DEFAULT_BASE_URL, metavar="URL",
                    help="where the show's iiif/ folder will be served: the IIIF Presentation "
                         "manifest and the Image API ids point there (default "
-                        f"{DEFAULT_BASE_URL}: `python -m http.server 8000` run in the show "
-                        "directory serves it)")
+                        f"{DEFAULT_BASE_URL}: `gigascroll serve --exhibition DIR` serves it "
+                        "on its default port, as does `python -m http.server 8000` run in the "
+                        "show directory)")
     b.add_argument("--no-iiif", action="store_true",
                    help="skip the IIIF export (Image API tiles and Presentation 3.0 manifest)")
     b.add_argument("--threads", type=int, default=0, help="worker threads (0 = all cores)")

@@ -40,6 +40,15 @@ def _say(text: str) -> None:
     print(f"gigascroll serve: {text}", file=sys.stderr, flush=True)
 
 
+def _iiif_id(iiif) -> str:
+    """The id the show's IIIF manifest gives itself (exhibit build's --base-url)."""
+    import json
+    try:
+        return str(json.loads((iiif / "manifest.json").read_text(encoding="utf-8"))["id"])[:200]
+    except (OSError, ValueError, KeyError, TypeError):
+        return "no readable manifest.json"
+
+
 def _cache_dir(args, show, content_hash: str):
     """--cache-dir; for a show whose bake (exhibit build's) holds this room's glb, the show's
     bake/ (read only: a miss bakes into the user cache, never into the show)."""
@@ -102,7 +111,11 @@ def run(args) -> int:
     from .display_options import display_of
     display = display_of(args, room.spec)
     _say(f"display: EV100 {display.ev100:.2f} ({display.how}), tone {display.tone}")
-    app = make_app(pack, room, content_hash, display=display)
+    iiif = show.path / "iiif" if show is not None and (show.path / "iiif").is_dir() else None
+    app = make_app(pack, room, content_hash, display=display, iiif_dir=iiif)
+    if iiif is not None:
+        _say(f"the show's IIIF folder at /iiif/ (manifest /iiif/manifest.json; its ids name "
+             f"{_iiif_id(iiif)})")
     caught = serve_forever(app, args.host, args.port, ssl_context, sock=sock,
                            announce=lambda url: print(f"serving {url}", flush=True))
     _say(f"stopped ({caught})")

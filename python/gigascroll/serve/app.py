@@ -36,6 +36,7 @@ IMMUTABLE = "public, max-age=31536000, immutable"
 NUMBER = re.compile(r"[0-9]{1,9}")
 PACK_KEY, ROOM_KEY, STATE_KEY = web.AppKey("pack", object), web.AppKey("room", object), \
     web.AppKey("state", object)
+IIIF_KEY = web.AppKey("iiif_dir", object)
 
 
 def _one_line(text: str, limit: int = 200) -> str:
@@ -199,11 +200,28 @@ async def client_file(request: web.Request) -> web.StreamResponse:
                                            "Content-Type": CONTENT_TYPES[path.suffix]})
 
 
+IIIF_TYPES = {".json": "application/json", ".jpg": "image/jpeg"}
+
+
+async def iiif_file(request: web.Request) -> web.StreamResponse:
+    """A file of the show's IIIF folder (exhibit build's iiif/: the Presentation manifest, the
+    Image API info.json and tiles), with CORS open as IIIF viewers on other sites need."""
+    path = client_path(request.match_info["path"], request.app[IIIF_KEY], IIIF_TYPES)
+    if path is None:
+        raise _fail(web.HTTPNotFound, "not a file of the show's IIIF folder")
+    return web.FileResponse(path, headers={"Cache-Control": "no-cache",
+                                           "Content-Type": IIIF_TYPES[path.suffix],
+                                           "Access-Control-Allow-Origin": "*"})
+
+
 def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT_DIR,
-             read_threads: int = 4, max_inflight: int = 16, display=None) -> web.Application:
+             read_threads: int = 4, max_inflight: int = 16, display=None,
+             iiif_dir=None) -> web.Application:
     """The application serving `pack` (an open TilePack) and `room` (a BakedRoom, or None for
     tiles only). content_hash: the pack's (computed when None). display: the camera response
-    scene.json gives the client (a display_mapping.Display; None: the room's automatic one)."""
+    scene.json gives the client (a display_mapping.Display; None: the room's automatic one).
+    iiif_dir: a show's IIIF folder, served under /iiif/ (where exhibit build's default
+    --base-url points when serve listens on port 8000)."""
     from .room_bake import BakedRoom
 
     expect_type(pack, TilePack, "pack")
@@ -225,6 +243,9 @@ def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT
     app.router.add_get("/api/room/{key}.glb", room_glb)
     app.router.add_get("/api/tiles/{hash}/{painting}/{level}/{tx}/{ty}", tile)
     app.router.add_post("/api/tiles/{hash}/batch", batch)
+    if iiif_dir is not None:
+        app[IIIF_KEY] = Path(expect_type(iiif_dir, (str, os.PathLike), "iiif_dir"))
+        app.router.add_get("/iiif/{path:.+}", iiif_file)
 
     async def shutdown(app):
         state.pool.shutdown(wait=True, cancel_futures=True)

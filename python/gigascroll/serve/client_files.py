@@ -17,20 +17,21 @@ CONTENT_TYPES = {".js": "text/javascript", ".mjs": "text/javascript", ".html": "
 MAX_PATH = 512
 
 
-def client_path(relative: str, root: Path = CLIENT_DIR) -> Path | None:
-    """The file `relative` names inside `root`, or None when it is not servable."""
+def client_path(relative: str, root: Path = CLIENT_DIR, types=CONTENT_TYPES) -> Path | None:
+    """The file `relative` names inside `root`, or None when it is not servable (`types`: the
+    suffixes served, the client's by default)."""
     if not relative or len(relative) > MAX_PATH or "\0" in relative or "\\" in relative:
         return None
     parts = relative.split("/")
     if any(not p or p.startswith(".") for p in parts):
         return None
-    if Path(parts[-1]).suffix not in CONTENT_TYPES:
+    if Path(parts[-1]).suffix not in types:
         return None
     try:
         base = root.resolve(strict=True)
         target = (base / relative).resolve(strict=True)
     except (OSError, RuntimeError, ValueError):  # missing, a symlink loop, a bad name
         return None
-    if not target.is_relative_to(base) or not target.is_file() or target.suffix not in CONTENT_TYPES:
+    if not target.is_relative_to(base) or not target.is_file() or target.suffix not in types:
         return None
     return target
