@@ -75,3 +75,4 @@ def test_every_id_resolves_at_serves_address(served):
 def test_nothing_else_is_served(served, path):
     _, url = served
     assert fetch(f"{url}/iiif/{path}")[0] == 404
+
