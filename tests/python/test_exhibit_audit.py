@@ -196,3 +196,33 @@ def test_look_at_a_flat_painting_keeps_it_whole_in_view(tmp_path, room):
     assert ys.min() > 0 and xs.min() > 0 and ys.max() < 119 and xs.max() < 159  # whole
     assert 0.78 * 160 <= xs.max() - xs.min() + 1 <= 0.82 * 160
     assert blue[60, 80]  # the centre of the view is on the painting
+
+
+TOUR = ('[tour]\nkeyframes = [ {{ position = [{x}, 1.6, 2.0], target = [2.0, 1.45, 0.0], '
+        'time = 0 }}, {{ position = [2.0, 1.6, 2.0], target = [2.0, 1.45, 0.0], time = 30 }} ]\n')
+
+
+def test_a_tour_through_a_wall_names_the_keyframe(tmp_path, capsys):
+    # Was: a keyframe outside the floor plan (x = 9 in a 6 m room) built and walked through
+    # the wall.
+    write_images(tmp_path)
+    line = _build_error(tmp_path, capsys, SHOW + TOUR.format(x=9.0))
+    assert line.endswith("show.toml: tour: tour keyframe 0 (t = 0 s): the head is at x = 9, "
+                         "z = 2 m between keyframes 0 and 1, outside the floor plan"), line
+    from gigascroll.exhibit.build import build_show
+    (tmp_path / "show.toml").write_text(SHOW + TOUR.format(x=5.0))
+    assert build_show(tmp_path / "show.toml", tmp_path / "show")["paintings"] == 2
+
+
+def test_a_tour_file_outside_the_room_is_refused(image_show, capsys):
+    import json
+    tour = {"keyframes": [{"position": [40, 1.6, 2], "target": [2, 1.45, 0], "time": 0},
+                          {"position": [2, 1.6, 2], "target": [2, 1.45, 0], "time": 60}]}
+    f = image_show / "outside.json"
+    f.write_text(json.dumps(tour))
+    capsys.readouterr()
+    assert main(["gallery", "--exhibition", str(image_show / "show"), "--tour", str(f),
+                 "--eye", "32x32", "--no-video", "--out", str(image_show / "wt")]) == 2
+    err = capsys.readouterr().err
+    assert "--tour: tour keyframe 0 (t = 0 s): the head is at x = 40, z = 2 m" in err
+    assert not (image_show / "wt").exists()

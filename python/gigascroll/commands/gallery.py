@@ -134,7 +134,7 @@ def walk_camera_path(args, room, show, eye):
     """The walk's CameraPath: --look-at (standing there for --seconds), --tour FILE, --path,
     or with --exhibition and neither the show's tour; one of them at most."""
     from ..exhibit import ExhibitionError
-    from ..exhibit.tours import load_tour, tour_path
+    from ..exhibit.tours import check_inside, load_tour, tour_path
     from .exhibition_options import headset_view, look_at_pose
     given = [o for o, v in (("--look-at", args.look_at), ("--tour", args.tour),
                             ("--path", args.path)) if v is not None]
@@ -145,7 +145,9 @@ def walk_camera_path(args, room, show, eye):
         if pose is not None:
             return standing_path(pose, _seconds(args))
         if args.tour is not None:
-            return first_seconds(tour_path(load_tour(args.tour)), args.seconds)
+            tour = load_tour(args.tour)
+            check_inside(tour, show.exhibition if show is not None else None)
+            return first_seconds(tour_path(tour), args.seconds)
         if args.path is None and show is not None:
             return first_seconds(tour_path(show.tour), args.seconds)
     except (ExhibitionError, ValueError) as e:

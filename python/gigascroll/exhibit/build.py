@@ -38,7 +38,7 @@ from .floor_plan import build_room
 from .labels import label_image
 from .model import Exhibition, load_exhibition
 from .schema import ExhibitionError
-from .tours import check_limits, default_tour, tour_from_dict, tour_to_dict
+from .tours import check_inside, check_limits, default_tour, tour_from_dict, tour_to_dict
 
 __all__ = ["COMMAND", "PACK_NAME", "build_show", "pack_inputs", "content_hash"]
 
@@ -189,6 +189,8 @@ def _tour(ex: Exhibition, spec):
     tour = tour_from_dict(ex.tour, f"{ex.path}: tour") if ex.tour else default_tour(spec, ex)
     try:
         check_limits(tour)
+        if ex.tour:
+            check_inside(tour, ex)
     except ValueError as e:
         raise ExhibitionError(f"{ex.path}: tour: {e}") from None
     return tour

@@ -32,7 +32,8 @@ import numpy as np
 from .schema import ExhibitionError, validate
 
 __all__ = ["Tour", "tour_from_dict", "load_tour", "save_tour", "tour_to_dict", "catmull_rom",
-           "tour_samples", "check_limits", "tour_path", "default_tour", "ALPHA"]
+           "tour_samples", "check_limits", "check_inside", "tour_path", "default_tour",
+           "ALPHA"]
 
 ALPHA = 0.5
 STOP_S = 2.0
@@ -199,6 +200,27 @@ def check_limits(tour: Tour) -> None:
         raise ValueError(f"tour keyframe {k} (t = {tour.time[k]:g} s): the head moves at "
                          f"{speed:.3g} m/s between keyframes {k} and {k + 1}, faster than "
                          f"max_speed_mps {tour.max_speed_mps:g}")
+
+
+def check_inside(tour: Tour, ex) -> None:
+    """ValueError naming the keyframe where the head (sampled as for check_limits) leaves a
+    floor plan room's polygon (`ex` an Exhibition with walls): a tour that walks through
+    walls is never silent. Other rooms are not checked: the built-in ones are open on the
+    visitor's side."""
+    if ex is None or "walls" not in ex.room:
+        return
+    import shapely
+
+    from .floor_plan import floor_polygon
+    ts, pos, seg = tour_samples(tour)
+    x, z = pos[:, 0], pos[:, 2]
+    bad = np.flatnonzero(~shapely.contains_xy(floor_polygon(ex), x, z))
+    if bad.size:
+        j = int(bad[0])
+        k = int(seg[j])
+        raise ValueError(f"tour keyframe {k} (t = {tour.time[k]:g} s): the head is at x = "
+                         f"{x[j]:.3g}, z = {z[j]:.3g} m between keyframes {k} and "
+                         f"{k + 1}, outside the floor plan")
 
 
 def tour_path(tour: Tour, fps: float | None = None):
