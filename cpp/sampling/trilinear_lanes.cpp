@@ -473,7 +473,7 @@ struct TrilinearLanes::State::Stretch {
 
 // Whether the last tile c at level l holds texel (x, y) (its cx = floor(x / P) exactly when
 // x - cx P lies in [0, P)).
-bool TrilinearLanes::State::holds(const LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) const {
+[[gnu::always_inline]] inline bool TrilinearLanes::State::holds(const LastTile& c, std::int32_t l, std::int32_t x, std::int32_t y) const {
     return c.level == l && std::uint32_t(x - c.x0) < std::uint32_t(tile.payload) &&
            std::uint32_t(y - c.y0) < std::uint32_t(tile.payload);
 }
