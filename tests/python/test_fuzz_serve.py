@@ -5,6 +5,7 @@ always an answer, never a 5xx, never a traceback in its log)."""
 
 from __future__ import annotations
 
+import os
 import re
 import string
 
@@ -44,7 +45,9 @@ def files(tmp_path_factory):
     (d / "empty").mkdir()
     (d / "manifest-dir" / "manifest.json").mkdir(parents=True)
     (d / "cache").mkdir()
+    os.mkfifo(d / "fifo.pem")
     return {k: str(v) for k, v in dict(pack=d / "pack", cert=cert, key=key, junk=d / "junk.pem",
+                                        fifo=d / "fifo.pem",
                                         glb=d / "garbage.glb", empty=d / "empty",
                                         manifest_dir=d / "manifest-dir", cache=d / "cache",
                                         missing=d / "missing", dir=d).items()}
@@ -71,7 +74,10 @@ def serve_argv(draw, f):
                                 ["--tls-cert", f["junk"], "--tls-key", f["key"]],
                                 ["--tls-cert", f["key"], "--tls-key", f["cert"]],
                                 ["--tls-cert", f["missing"], "--tls-key", f["missing"]],
-                                ["--tls-cert", f["dir"], "--tls-key", f["key"]]]))
+                                ["--tls-cert", f["dir"], "--tls-key", f["key"]],
+                                ["--tls-cert", f["fifo"], "--tls-key", f["key"]],
+                                ["--tls-cert", f["cert"], "--tls-key", f["fifo"]],
+                                ["--tls-cert", "/dev/zero", "--tls-key", "/dev/zero"]]))
     cache = draw(st.sampled_from([f["cache"]] * 4 + [f["glb"], f["missing"] + "/a/b", "",
                                                      "/proc/no/such", f["pack"] + "/index.bin"]))
     threads = draw(st.sampled_from([[], ["--threads", "1"], ["--threads", "-3"]]))

@@ -54,6 +54,9 @@ def _too_large(message: str, size: int):
                                          text=message + "\n", content_type="text/plain")
 
 
+LOGGED = web.RequestKey("logged", bool)  # set on a request whose error has had its log line
+
+
 @web.middleware
 async def one_line_errors(request: web.Request, handler):
     """Every error as a 4xx with a one-line body and one log line: HTTP errors keep their
@@ -65,6 +68,7 @@ async def one_line_errors(request: web.Request, handler):
             reason = e.text.strip() if e.text else e.reason
             LOG.warning("%d %s %s: %s", e.status, request.method, _one_line(repr(request.path_qs)),
                         _one_line(reason))
+            request[LOGGED] = True
             if not e.text or e.text.strip() == f"{e.status}: {e.reason}":
                 e.text = f"{e.status} {e.reason}\n"
         raise
@@ -73,7 +77,33 @@ async def one_line_errors(request: web.Request, handler):
     except Exception as e:  # noqa: BLE001 (the promise: no 5xx, no traceback)
         LOG.warning("400 %s %s: unexpected %s: %s", request.method,
                     _one_line(repr(request.path_qs)), type(e).__name__, _one_line(e))
+        request[LOGGED] = True
         return web.Response(status=400, text=f"bad request ({type(e).__name__})\n")
+
+
+async def log_other_errors(request: web.Request, response: web.StreamResponse) -> None:
+    """The log line of a 4xx that no handler raised: a file response's 416 to an
+    unsatisfiable Range, expect_small_body's 413."""
+    if response.status >= 400 and not request.get(LOGGED):
+        request[LOGGED] = True
+        LOG.warning("%d %s %s: %s", response.status, request.method,
+                    _one_line(repr(request.path_qs)), _one_line(response.reason or ""))
+
+
+async def expect_small_body(request: web.Request):
+    """`Expect: 100-continue` on a batch: a body over MAX_BODY is refused at once with a 413,
+    before the client sends it; anything else is told to continue."""
+    if request.content_length is not None and request.content_length > MAX_BODY:
+        response = web.Response(status=413, text=f"body over {MAX_BODY} bytes\n")
+        response.force_close()  # the body is never read: the connection cannot go on
+        return response
+    if request.version != (1, 1):  # as aiohttp's own handler: HTTP/1.0 has no 100 Continue
+        return None
+    if request.headers.get("Expect", "").lower() != "100-continue":
+        return web.Response(status=417, text="only Expect: 100-continue is understood\n")
+    await request.writer.write(b"HTTP/1.1 100 Continue\r\n\r\n")
+    request.writer.output_size = 0
+    return None
 
 
 class _State:
@@ -242,7 +272,7 @@ def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT
     app.router.add_get("/api/scene.json", scene)
     app.router.add_get("/api/room/{key}.glb", room_glb)
     app.router.add_get("/api/tiles/{hash}/{painting}/{level}/{tx}/{ty}", tile)
-    app.router.add_post("/api/tiles/{hash}/batch", batch)
+    app.router.add_post("/api/tiles/{hash}/batch", batch, expect_handler=expect_small_body)
     if iiif_dir is not None:
         app[IIIF_KEY] = Path(expect_type(iiif_dir, (str, os.PathLike), "iiif_dir"))
         app.router.add_get("/iiif/{path:.+}", iiif_file)
@@ -251,4 +281,5 @@ def make_app(pack, room=None, content_hash: str | None = None, client_dir=CLIENT
         state.pool.shutdown(wait=True, cancel_futures=True)
 
     app.on_cleanup.append(shutdown)
+    app.on_response_prepare.append(log_other_errors)
     return app

@@ -89,6 +89,42 @@ def room_key(spec, content_hash: str, lighting: dict) -> str:
     return h.hexdigest()
 
 
+def _cache_folder(folder) -> Path:
+    """The cache directory, made if missing; OSError at once (before a bake of minutes) when
+    it is not a directory (and, by _check_writable, before a bake when it cannot be written)."""
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise OSError(f"cache directory {folder}: {e.strerror or e}") from None
+    if not folder.is_dir():
+        raise OSError(f"cache directory {folder}: not a directory")
+    return folder
+
+
+def _check_writable(folder: Path) -> None:
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OSError(f"cache directory {folder}: not writable")
+
+
+def _glb_damage(path: Path) -> str | None:
+    """Why the cached glb at `path` cannot be served (None when its GLB header says it is
+    whole: magic, version 2 and a length equal to the file's): an entry truncated or
+    replaced outside gigascroll is baked again rather than sent to every client."""
+    try:
+        with open(path, "rb") as f:
+            header = f.read(12)
+            size = os.fstat(f.fileno()).st_size
+    except OSError as e:
+        return f"cache entry unreadable: {e.strerror or e}"
+    if len(header) < 12 or header[:4] != b"glTF":
+        return "cache entry damaged: not a GLB"
+    version, length = int.from_bytes(header[4:8], "little"), int.from_bytes(header[8:12], "little")
+    if version != 2 or length != size:
+        return f"cache entry damaged: {size} bytes, its header says {length}"
+    return None
+
+
 @dataclass
 class BakedRoom:
     """A room ready to serve: spec, gallery, cache key, the glb's path and whether it came
@@ -173,15 +209,16 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
     from ..gallery.quality import light_settings
     settings = light_settings(spec) if settings is None else settings
     key = room_key(spec, content_hash, lighting_options(settings))
-    path = Path(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
-    if path.is_file():
+    path = _cache_folder(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
+    damage = _glb_damage(path) if path.is_file() else "cache miss"
+    if damage is None:
         if announce:
             announce(f"room {spec.name}: bake cache hit ({path.name})")
         return BakedRoom(spec, gallery, key, path, True)
+    _check_writable(path.parent)
     if announce:
-        announce(f"room {spec.name}: baking the light (cache miss, {path.name})")
+        announce(f"room {spec.name}: baking the light ({damage}, {path.name})")
     data, stats = bake_glb(gallery, spec, pack, threads, settings)
-    path.parent.mkdir(parents=True, exist_ok=True)
     write_bytes(path, data, durable=True)  # a temporary name, then renamed
     if announce:
         announce(f"room {spec.name}: baked {stats['bake_points']} points in "

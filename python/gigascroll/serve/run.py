@@ -17,6 +17,7 @@ __all__ = ["LOOPBACK_HOSTS", "tls_context", "listen_socket", "start_site", "serv
            "OneLineFormatter"]
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+MAX_PEM_BYTES = 1 << 20  # a certificate chain and its key are kilobytes
 
 
 class OneLineFormatter(logging.Formatter):
@@ -35,7 +36,14 @@ class OneLineFormatter(logging.Formatter):
 
 def tls_context(cert: str, key: str) -> ssl.SSLContext:
     """A server context from PEM files; OSError / ssl.SSLError (an OSError) when they are
-    missing or do not hold a certificate and its key."""
+    missing, not regular files (a FIFO would block OpenSSL's read forever, a device never
+    end: checked before they are opened) or do not hold a certificate and its key."""
+    from ..room.assets import check_regular
+    for path, what in ((cert, "--tls-cert"), (key, "--tls-key")):
+        st = check_regular(path, f"{what} {path}")
+        if st.st_size > MAX_PEM_BYTES:
+            raise OSError(f"{what} {path}: {st.st_size} bytes, not a PEM file (at most "
+                          f"{MAX_PEM_BYTES})")
     ctx = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
     ctx.minimum_version = ssl.TLSVersion.TLSv1_2
     ctx.load_cert_chain(cert, key)
