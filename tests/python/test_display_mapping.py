@@ -163,7 +163,7 @@ def test_white_painting_at_the_reference_illuminance_shows_paper_white(packs):
 def _render(pack, tmp_path, argv, name):
     out = tmp_path / name
     rc = cli.main(["render", "--room", "scroll", "--pack", str(pack), "--width", "96",
-                   "--height", "64", "--photons", "20000", "--light-samples", "32",
+                   "--height", "64", "--photons", "20000", "--light-samples", "32", "--spp", "1",
                    "--threads", "2", "--camera", "6,1.5,-1.6,6.4,1.45,0,50", *argv, "-o", str(out)])
     assert rc == 0
     return out
@@ -182,7 +182,8 @@ def test_render_and_a_gallery_frame_show_the_same_pixels(packs, tmp_path):
         still = np.asarray(Image.open(_render(packs[1], tmp_path, argv, "still.png")))
         setting = ExposureSetting.parse(argv[1] if argv else "auto")
         display = room_display(room, setting, argv[3] if argv else "neutral")
-        source = GallerySource(room, pack, "baked", photons=20000, threads=2, response=display)
+        source = GallerySource(room, pack, "baked", photons=20000, bake_samples=32, threads=2,
+                               response=display)
         cam = source.gallery.camera((96, 64), fov=50.0, eye=(6, 1.5, -1.6), target=(6.4, 1.45, 0))
         walk = GalleryWalk(source, pack, walk_path(room, 0.05), eye=(96, 64), magnifier=False,
                            oracle=False, wait_loads=True, threads=2)
@@ -213,7 +214,9 @@ def test_exr_stays_linear_radiance(packs, tmp_path):
     room = builtin_room("scroll", pack)
     gallery = Gallery.from_room(room, pack)
     cam = gallery.camera((96, 64), fov=50.0, eye=(6, 1.5, -1.6), target=(6.4, 1.45, 0))
-    radiance = gallery.still(cam, photons=20000, light_samples=32, threads=2)
+    from gigascroll.gallery.quality import apply_settings, light_settings
+    apply_settings(gallery, light_settings(room), threads=2, photons=20000, light_samples=32)
+    radiance = gallery.still(cam, spp=1)  # render --room's light: the knob's default level
     assert np.allclose(ra, radiance, rtol=1e-5, atol=1e-7)
     expected = room_display(room).srgb8(rb)
     assert np.abs(np.asarray(Image.open(png)).astype(int) - expected).max() <= 1
