@@ -10,7 +10,7 @@ APT_PACKAGES := build-essential cmake ninja-build pkg-config libembree-dev libzs
   libconcurrentqueue-dev libreaderwriterqueue-dev libnanoflann-dev nlohmann-json3-dev \
   liblcms2-dev colord-data iipimage-server lighttpd ccache \
   xvfb xdotool libgl1-mesa-dri libglx-mesa0 libgs-common \
-  libsquish-dev chromium
+  libsquish-dev chromium fonts-droid-fallback
 JOBS ?= $(shell nproc)
 # Compiler cache: a second checkout (or a clean rebuild) compiles only what changed. CMake reads
 # the launcher from the environment on first configure; BASEDIR makes paths checkout-relative.
