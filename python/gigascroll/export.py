@@ -27,7 +27,7 @@ from typing import Iterator
 import numpy as np
 
 from .outputs import (MARK, atomic_file, check_output, encode_image, owned_by,
-                      refuse_protected, remove_stale_temps, replace_dir, signals_deferred,
+                      refuse_input, refuse_protected, remove_stale_temps, replace_dir, signals_deferred,
                       signals_interrupt, temp_dir, write_bytes, write_mark, write_text)
 
 __all__ = ["export_pack", "FORMATS", "open_pack", "level_bands"]
@@ -286,6 +286,7 @@ def export_pack(pack_path, out, fmt: str, *, painting=None, quality: int = 90,
     owned = owned_by("export", format=fmt)
     folder = {"iiif": out, "dzi": final[-1], "tiff": None}[fmt]
     for f in final:  # the shared rules: a directory only if an export made it
+        refuse_input(f, pack_path, "the pack being exported")
         check_output(f, force=force, directory=f == folder, owned=owned,
                      what=f"an export ({fmt}) of gigascroll")
     if not out.parent.is_dir():

@@ -32,7 +32,7 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "check_output",
+__all__ = ["MARK", "beside", "protected_reason", "refuse_protected", "refuse_input", "check_output",
            "write_mark", "has_mark", "owned_by", "temp_dir", "remove_stale_temps", "atomic_file", "write_bytes",
            "write_text", "replace_dir", "write_image", "encode_image", "Interrupted",
            "signals_interrupt", "signals_deferred", "ignore_sigxfsz", "write_error", "WriteError",
@@ -100,6 +100,29 @@ def refuse_protected(path) -> Path:
     reason = protected_reason(p)
     if reason:
         raise OSError(f"{p}: {reason}; refusing to write there")
+    return p
+
+
+def _places(path) -> set[Path]:
+    """`path` absolute by name and with symbolic links resolved (where that works)."""
+    p = Path(path)
+    places = {Path(os.path.abspath(p))}
+    with contextlib.suppress(OSError, RuntimeError):
+        places.add(p.resolve())
+    return places
+
+
+def refuse_input(path, source, what: str = "an input of this command") -> Path:
+    """`path` as a Path, or OSError when writing it would write over or into `source` (a file
+    or directory the command reads): `path` is `source`, lies inside it, or holds it (by name
+    or once symbolic links are resolved). `export PACK -o PACK/index.bin` would otherwise
+    replace the pack's own index while it is being read."""
+    p = Path(path)
+    for out in _places(p):
+        for src in _places(source):
+            if out == src or src in out.parents or out in src.parents:
+                where = "is" if out == src else "is inside" if src in out.parents else "holds"
+                raise OSError(f"{p}: {where} {what} ({source}); refusing to write there")
     return p
 
 

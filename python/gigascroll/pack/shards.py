@@ -13,6 +13,7 @@ and still hash to what it recorded, and builds the rest (shard_records)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import queue
@@ -25,7 +26,8 @@ from typing import Callable, Iterator
 import numpy as np
 
 from .. import _core
-from ..outputs import MARK, check_output, fsync_dir as _fsync_dir, owned_by, replace_dir, write_mark
+from ..outputs import (MARK, check_output, fsync_dir as _fsync_dir, has_mark, owned_by, replace_dir,
+                       write_mark)
 from .cluster import run_on_dask
 from .images import ImageSource, open_image
 from .shard_records import (NotRegularFile, file_hash as _file_hash, read_record, record_digest,
@@ -268,6 +270,7 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
         if bar is not None:
             bar.close()
         kept = len(records)
+        _drop_if_bare(shard_dir)  # nothing built (a scheduler never reached): nothing to resume
         note = (f"{kept} of {n} shards are complete in {shard_dir}; rerun with --resume "
                 "(resume=True) to reuse them")
         if _is_lost_worker(e):
@@ -301,6 +304,14 @@ def build_sharded(inputs, sources: list[ImageSource], offsets, table: tuple[int,
     (shard_dir / MARK).unlink()  # the work directory's mark: not part of the pack
     _fsync_dir(shard_dir)
     replace_dir(shard_dir, out, owned=owned)
+
+
+def _drop_if_bare(shard_dir: Path) -> None:
+    """Removes OUT.shards/ when it holds nothing but its own mark (a build that failed before
+    any shard was written leaves no work directory behind)."""
+    with contextlib.suppress(OSError):
+        if [p.name for p in shard_dir.iterdir()] == [MARK] and has_mark(shard_dir, "pack-shards"):
+            shutil.rmtree(shard_dir)
 
 
 def _shard_dir(out: Path, resume: bool) -> Path:

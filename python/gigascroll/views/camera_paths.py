@@ -156,19 +156,38 @@ class CameraPath:
         if not isinstance(d, dict):
             raise ValueError(f"{path}: not a camera path JSON file (expected an object)")
 
-        def dec(a):
-            return None if a is None else np.array(
-                [[np.nan if v is None else v for v in row] for row in a], dtype=np.float64)
+        def dec(name, nulls=False):
+            a = d[name] if not nulls else d.get(name)
+            if a is None and nulls:
+                return None
+            _only_numbers(path, name, a, nulls)
+            return np.array([[np.nan if v is None else v for v in row] for row in a]
+                            if nulls else a, dtype=np.float64)
         try:
-            return cls(np.asarray(d["position"], float), np.asarray(d["forward"], float),
-                       np.asarray(d["up"], float), dec(d.get("magnifier_target")),
-                       dec(d.get("magnifier_normal")), _number(path, d.get("fps", FPS)),
-                       d.get("name", ""))
+            return cls(dec("position"), dec("forward"), dec("up"),
+                       dec("magnifier_target", True), dec("magnifier_normal", True),
+                       _number(path, d.get("fps", FPS)), d.get("name", ""))
         except KeyError as e:
             raise ValueError(f"{path}: camera path file is missing {e}") from None
         except (TypeError, OverflowError, RecursionError) as e:
             msg = "nested too deeply" if isinstance(e, RecursionError) else e
             raise ValueError(f"{path}: camera path file has values of the wrong type ({msg})") from None
+
+
+def _only_numbers(path, name: str, rows, nulls: bool) -> None:
+    """ValueError unless `rows` is a list of lists of JSON numbers (and nulls where allowed):
+    numpy would read "6" as 6.0 and true as 1.0, a wrong path rather than an error."""
+    if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
+        raise ValueError(f"{path}: camera path file has values of the wrong type ({name} must "
+                         "be a list of [x, y, z] rows)")
+    for k, row in enumerate(rows):
+        if len(row) != 3:
+            raise ValueError(f"{path}: camera path {name} must have shape (n, 3), row {k} has "
+                             f"{len(row)} values")
+        for v in row:
+            if not (v is None and nulls) and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                raise ValueError(f"{path}: camera path file has values of the wrong type "
+                                 f"({name} row {k} holds {v!r:.40}, not a number)")
 
 
 def _number(path, v) -> float:

@@ -1,0 +1,116 @@
+"""Outputs and inputs in shapes the first hardening tests did not try: an export written into
+the pack it reads (`-o PACK/index.bin --force` replaced the pack's own index and exited 0), a
+sharded build whose scheduler is never reached (it left an empty OUT.shards/ behind), and a
+camera path whose numbers are strings or booleans (numpy read "6" as 6.0: a wrong walk
+instead of an error)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import socket
+import subprocess
+import sys
+
+import pytest
+
+from gigascroll import build_pack
+from gigascroll.experiments import pattern_image
+from gigascroll.export import export_pack
+from gigascroll.outputs import refuse_input
+from gigascroll.views import CameraPath
+
+
+def _digests(folder) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())}
+
+
+@pytest.fixture(scope="module")
+def pack_dir(tmp_path_factory):
+    root = tmp_path_factory.mktemp("audit-outputs")
+    build_pack(pattern_image(200, 90), root / "p.pack", tile_size=32, border=2)
+    return root / "p.pack"
+
+
+@pytest.mark.parametrize("fmt, name", [("tiff", "index.bin"), ("tiff", "manifest.json"),
+                                       ("tiff", "new.tif"), ("iiif", "sub"), ("dzi", "deep")])
+def test_export_never_writes_into_its_pack(pack_dir, tmp_path, fmt, name):
+    before = _digests(pack_dir)
+    link = tmp_path / "link.pack"
+    link.symlink_to(pack_dir, target_is_directory=True)
+    for source, out in ((pack_dir, pack_dir / name), (link, pack_dir / name),
+                        (pack_dir, link / name), (pack_dir, pack_dir / "x" / ".." / name)):
+        with pytest.raises(OSError, match="inside the pack being exported"):
+            export_pack(source, out, fmt, force=True)
+    assert _digests(pack_dir) == before
+    # Beside the pack is fine, and reads back the pack's pixels (the export's own tests
+    # compare them): here only that it was written.
+    assert export_pack(pack_dir, tmp_path / f"ok-{fmt}", fmt).exists()
+
+
+def test_export_into_its_pack_is_one_line_exit_2(pack_dir):
+    before = _digests(pack_dir)
+    r = subprocess.run([sys.executable, "-m", "gigascroll", "export", str(pack_dir), "-o",
+                        str(pack_dir / "index.bin"), "--format", "tiff", "--force"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "inside the pack being exported" in r.stderr
+    assert _digests(pack_dir) == before
+
+
+@pytest.mark.parametrize("out, source, word", [
+    ("a", "a", "is"), ("a/b", "a", "is inside"), ("a", "a/b/c", "holds"),
+    ("a/../a/b", "a", "is inside"), ("link/b", "a", "is inside")])
+def test_refuse_input_by_name_and_through_links(tmp_path, out, source, word):
+    (tmp_path / "a" / "b").mkdir(parents=True)
+    (tmp_path / "link").symlink_to(tmp_path / "a", target_is_directory=True)
+    with pytest.raises(OSError, match=f": {word} the input"):
+        refuse_input(tmp_path / out, tmp_path / source, "the input")
+    for other in ("ab", "a-b", "c"):  # a shared prefix is not a parent
+        assert refuse_input(tmp_path / other, tmp_path / "a") == tmp_path / other
+
+
+def _closed_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_unreached_scheduler_leaves_no_shard_directory(tmp_path):
+    pytest.importorskip("dask.distributed")
+    from PIL import Image
+    import numpy as np
+    Image.fromarray(np.zeros((20, 30, 3), np.uint8)).save(tmp_path / "a.png")
+    r = subprocess.run([sys.executable, "-m", "gigascroll", "pack", "a.png", "-o", "z.pack",
+                        "--scheduler", f"tcp://127.0.0.1:{_closed_port()}", "--timeout", "2"],
+                       capture_output=True, text=True, timeout=240, cwd=tmp_path)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert sorted(os.listdir(tmp_path)) == ["a.png"]
+
+
+GOOD = {"fps": 30, "position": [[1, 1.6, 2], [1.1, 1.6, 2]], "forward": [[0, 0, -1]] * 2,
+        "up": [[0, 1, 0]] * 2}
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"position": [["1", 1.6, 2], [1.1, 1.6, 2]]}, "not a number"),
+    ({"forward": [[0, 0, -1], [0, 0, True]]}, "not a number"),
+    ({"up": [[0, 1, 0], [0, None, 0]]}, "not a number"),
+    ({"position": [[1, 1.6], [1.1, 1.6, 2]]}, "shape"),
+    ({"position": {"0": [1, 1.6, 2]}}, "wrong type"),
+    ({"magnifier_target": [[0, 1.5, 0], ["0", 1.5, 0]], "magnifier_normal": [[0, 0, 1]] * 2},
+     "not a number"),
+])
+def test_camera_path_numbers_must_be_numbers(tmp_path, change, message):
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({**GOOD, **change}))
+    with pytest.raises(ValueError, match=message):
+        CameraPath.load(path)
+    # The same file with numbers loads, to the values numpy reads from it.
+    path.write_text(json.dumps(GOOD))
+    p = CameraPath.load(path)
+    assert p.position.tolist() == [[1, 1.6, 2], [1.1, 1.6, 2]] and p.fps == 30
+    path.write_text(json.dumps({**GOOD, "magnifier_target": [[0, 1.5, 0], [None] * 3],
+                                "magnifier_normal": [[0, 0, 1], [None] * 3]}))
+    assert CameraPath.load(path).magnifier_target[0].tolist() == [0, 1.5, 0]
