@@ -41,7 +41,11 @@ def _require_regular(mode: int, what: str):
 
 def check_regular(path: Path, what: str, missing_ok: bool = False) -> os.stat_result | None:
     """stat of `path` when it is a regular file; OSError naming `what` when it is anything
-    else (FileNotFoundError when it does not exist, unless missing_ok: then None)."""
+    else (FileNotFoundError when it does not exist, unless missing_ok: then None). A path is a
+    str, bytes or os.PathLike: TypeError for anything else (os.stat would take an int as an
+    open file descriptor)."""
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise TypeError(f"{what}: a path must be a str or a Path, got {type(path).__name__}")
     try:
         st = os.stat(path)
     except FileNotFoundError:
