@@ -42,7 +42,8 @@ def _folder_name(name: str, used: set[str]) -> str:
 
 def write_exhibition_iiif(pack_path, paintings, out, base_url: str, *, label: str,
                           summary: str = "", quality: int = 90, threads: int = 0,
-                          force: bool = False, progress: bool = False) -> Path:
+                          force: bool = False, progress: bool = False,
+                          language: str = "en") -> Path:
     """Exports each of `paintings` (objects with `title`, `width_cm`, `height_cm`, the
     optional metadata of gigascroll.exhibit's Painting, and `pack_name` or `name`: its
     painting in the pack at `pack_path`) as IIIF tiles into OUT/<painting>/ with the id
@@ -78,7 +79,8 @@ def write_exhibition_iiif(pack_path, paintings, out, base_url: str, *, label: st
                             threads=threads, progress=progress, service_id=service)
                 entries.append(exhibition_painting(p, service, info=tmp / folder / "info.json"))
             write_presentation_manifest(tmp / MANIFEST_NAME, entries,
-                                        f"{base_url}/{MANIFEST_NAME}", label, summary=summary)
+                                        f"{base_url}/{MANIFEST_NAME}", label, summary=summary,
+                                        language=language)
             write_mark(tmp, COMMAND)  # last: the output is whole
             replace_dir(tmp, out, owned)
         except BaseException:

@@ -9,7 +9,9 @@ with the exhibition's paintings; `painting_from_info` makes a painting's entry f
 exported info.json, so the canvas, the image body and the service agree with the tiles.
 
 Rules applied here, from the Presentation 3.0 specification: every id an absolute http(s)
-URI; label, summary and metadata values language maps ({"en": ["..."]}); canvas width and
+URI; label, summary and metadata values language maps ({"en": ["..."]}: the texts in the
+given `language`, a BCP 47 tag or "none" where it is not known, as for titles and names;
+the metadata's field names, which this module writes, in English); canvas width and
 height positive integers; `rights` a single URI from Creative Commons or
 RightsStatements.org (the only sources the specification allows without a registered
 extension); annotations with motivation "painting" targeting their canvas."""
@@ -95,6 +97,9 @@ class PresentationPainting:
     extra: dict = field(default_factory=dict)  # more metadata: label -> value strings
 
 
+FIELD_LANGUAGE = "en"  # the metadata's field names ("Artist", "Credit"): English words
+
+
 def _lang(text: str, language: str) -> dict:
     return {language: [str(text)]}
 
@@ -117,7 +122,8 @@ def _metadata(p: PresentationPainting, language: str) -> list[dict]:
         w, h = size
         rows.append(("Dimensions", f"{h:g} x {w:g} cm (height x width)"))
     rows += [("Accession number", p.accession), *p.extra.items()]
-    return [{"label": _lang(k, language), "value": _lang(v, language)} for k, v in rows if v]
+    return [{"label": _lang(k, FIELD_LANGUAGE), "value": _lang(v, language)}
+            for k, v in rows if v]
 
 
 def _canvas(base: str, i: int, p: PresentationPainting, language: str) -> dict:
@@ -145,7 +151,7 @@ def _canvas(base: str, i: int, p: PresentationPainting, language: str) -> dict:
     if p.rights is not None:
         canvas["rights"] = check_rights(p.rights)
     if p.credit:
-        canvas["requiredStatement"] = {"label": _lang("Credit", language),
+        canvas["requiredStatement"] = {"label": _lang("Credit", FIELD_LANGUAGE),
                                        "value": _lang(p.credit, language)}
     return canvas
 

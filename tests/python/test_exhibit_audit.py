@@ -226,3 +226,31 @@ def test_a_tour_file_outside_the_room_is_refused(image_show, capsys):
     err = capsys.readouterr().err
     assert "--tour: tour keyframe 0 (t = 0 s): the head is at x = 40, z = 2 m" in err
     assert not (image_show / "wt").exists()
+
+
+@pytest.mark.parametrize("language", [None, "zh-Hant"])
+def test_iiif_language_maps_tag_names_as_given_or_none(tmp_path, language):
+    # Was: every title, name and credit tagged "en", a Chinese title too; IIIF asks for the
+    # text's language, "none" where it is not known. Field names stay English.
+    import json
+    write_images(tmp_path)
+    text = SHOW if language is None else SHOW.replace(
+        'title = "Two studies"', f'title = "Two studies"\nlanguage = "{language}"')
+    text = text.replace('title = "Red study"', 'title = "红色习作"\ncredit = "赠"')
+    (tmp_path / "show.toml").write_text(text)
+    from gigascroll.exhibit.build import build_show
+    build_show(tmp_path / "show.toml", tmp_path / "show", iiif_base="http://localhost:8000/iiif")
+    m = json.loads((tmp_path / "show" / "iiif" / "manifest.json").read_text())
+    tag = language or "none"
+    red = m["items"][0]
+    assert m["label"] == {tag: ["Two studies"]} and red["label"] == {tag: ["红色习作"]}
+    assert red["requiredStatement"] == {"label": {"en": ["Credit"]}, "value": {tag: ["赠"]}}
+    assert {"label": {"en": ["Artist"]}, "value": {tag: ["A. Painter"]}} in red["metadata"]
+
+
+def test_a_bad_language_tag_names_the_key(tmp_path, capsys):
+    write_images(tmp_path)
+    line = _build_error(tmp_path, capsys, SHOW.replace(
+        'title = "Two studies"', 'title = "Two studies"\nlanguage = "English"'))
+    assert line.endswith("show.toml: language: expected a BCP 47 language tag such as en, "
+                         "zh-Hant or ja, or none, got 'English'"), line

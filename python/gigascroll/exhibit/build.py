@@ -268,7 +268,7 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
             pack_dir = tmp / PACK_NAME if given_pack is None else given_pack
             try:
                 write_exhibition_iiif(pack_dir, ex.paintings, tmp / IIIF_NAME, iiif_base,
-                                      label=ex.title, threads=threads)
+                                      label=ex.title, threads=threads, language=ex.language)
             except ValueError as e:
                 raise ExhibitionError(f"{ex.path}: IIIF: {e}") from None
             record["iiif"] = f"{IIIF_NAME}/manifest.json"

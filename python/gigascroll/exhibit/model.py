@@ -110,6 +110,7 @@ class Exhibition:
     tour: dict | None = None
     labels: bool = True
     aspect_tolerance: float = DEFAULT_ASPECT_TOLERANCE
+    language: str = "none"   # of the titles and names: the IIIF language maps' tag
 
     def painting(self, which) -> Painting:
         """A painting by title, pack name or index (int or digits); ValueError naming the
@@ -199,7 +200,8 @@ def exhibition_from_dict(data: dict, where: str, base: Path) -> Exhibition:
     return Exhibition(where, data.get("title", Path(where).stem), room, paintings,
                       list(data.get("lights", [])), data.get("tour"),
                       bool(data.get("labels", True)),
-                      float(data.get("aspect_tolerance", DEFAULT_ASPECT_TOLERANCE)))
+                      float(data.get("aspect_tolerance", DEFAULT_ASPECT_TOLERANCE)),
+                      str(data.get("language", "none")))
 
 
 def _unique_name(title: str, taken: set[str], given: str | None = None) -> str:

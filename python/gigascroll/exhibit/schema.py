@@ -32,6 +32,15 @@ def _validator(name: str):
     return Draft202012Validator(schema(name), registry=registry)
 
 
+# The schemas' patterns in words, for the errors.
+PATTERN_WORDS = {
+    "^([a-z]{2,3}(-[A-Za-z0-9]{1,8})*|none)$":
+        "a BCP 47 language tag such as en, zh-Hant or ja, or none",
+    "^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$":
+        "1 to 100 letters, digits, '_', '.' or '-', not starting with '.' or '-'",
+}
+
+
 def key_name(path) -> str:
     """A JSON path (keys and indices) as `paintings[2].width_cm` ('(top level)' when empty)."""
     out = ""
@@ -59,6 +68,9 @@ def _expected(error) -> str:
         return f"expected a number {words[v]} {s}, got {_short(error.instance)}"
     if v == "enum":
         return f"expected one of {', '.join(map(str, s))}, got {_short(error.instance)}"
+    if v == "pattern":
+        return f"expected {PATTERN_WORDS.get(s, 'text matching ' + s)}, got " \
+               f"{_short(error.instance)}"
     if v in ("minItems", "maxItems", "minLength", "maxLength"):
         return f"expected {'at least' if v.startswith('min') else 'at most'} {s} " \
                f"{'items' if v.endswith('Items') else 'characters'}, got {len(error.instance)}"
