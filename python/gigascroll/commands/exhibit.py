@@ -77,11 +77,12 @@ def run(args) -> int:
                                 iiif_base=None if args.no_iiif else args.base_url)
     except ExhibitionError as e:
         raise UserError(str(e)) from None
-    pack = ("reused (unchanged)" if record["reused_pack"] else
-            "packed" if record["packed"] else "used as given")
+    pack = ("the previous build's pack reused (unchanged)" if record["reused_pack"] else
+            "packed" if record["packed"] else "shown from the given pack as is (no labels)")
     if record.get("merged_packs") and not record["reused_pack"]:
-        pack += f" with {len(record['merged_packs'])} given pack(s) merged in"
-    print(f"{record['paintings']} paintings, pack {pack}"
+        pack += (f", with the paintings of {len(record['merged_packs'])} given pack(s) "
+                 "merged in (tiles copied, not re-encoded)")
+    print(f"{record['paintings']} paintings: {pack}"
           + (f", light baked ({record['bake']['bake_points']} points)" if "bake" in record else "")
           + f", {record['seconds']:.1f} s")
     print(f"wrote {os.path.abspath(args.output)}/ (exhibition.json, tour.json, build.json"
