@@ -93,6 +93,8 @@ export function makeView(frame, fovYDeg, viewport) {
            frame, viewport: [...viewport], tanHalfY };
 }
 
+const MAX_COORDINATE = 1e12;   // the core camera's bound on a position (cpp/views/camera.cpp)
+
 // `?camera=x,y,z,tx,ty,tz[,fov]` as `render --camera` reads it; null when absent. Throws on a
 // malformed value (the page shows the message) rather than silently drawing another view.
 export function parseCameraParam(search) {
@@ -101,6 +103,8 @@ export function parseCameraParam(search) {
   const v = text.split(',').map((s) => (s.trim() === '' ? NaN : Number(s)));
   if ((v.length !== 6 && v.length !== 7) || !v.every(Number.isFinite))
     throw new Error(`?camera wants x,y,z,tx,ty,tz[,fov] finite numbers, got "${text}"`);
+  if (v.slice(0, 6).some((x) => Math.abs(x) > MAX_COORDINATE))
+    throw new Error(`?camera: eye and target must be within +-1e12 m (render --camera's limit), got "${text}"`);
   const fov = v.length === 7 ? v[6] : DEFAULT_FOV;
   if (!(fov > 0 && fov < 180)) throw new Error(`?camera: the field of view must be in (0, 180), got ${fov}`);
   const eye = v.slice(0, 3), target = v.slice(3, 6);

@@ -22,6 +22,7 @@ import { MultiviewTarget, multiviewViews } from './multiview.js';
 import { GpuTimer } from './gpu_timer.js';
 
 const FEEDBACK_REDUCTION = 8;   // eyes' feedback at 1/8 resolution, the magnifier's at full
+const MAX_SIZE = 8192;          // ?size's bound per side: a canvas WebGL2 can draw (and a tab can hold)
 const { dot, sub } = vec3;
 
 async function fetchOk(url, kind) {
@@ -33,7 +34,8 @@ async function fetchOk(url, kind) {
 function options(search) {
   const q = new URLSearchParams(search);
   const size = q.get('size') && /^(\d+)x(\d+)$/.exec(q.get('size'));
-  if (q.get('size') && !size) throw new Error(`?size wants WxH, got "${q.get('size')}"`);
+  if (q.get('size') && !(size && [size[1], size[2]].every((n) => Number(n) >= 1 && Number(n) <= MAX_SIZE)))
+    throw new Error(`?size wants WxH, each in [1, ${MAX_SIZE}] pixels, got "${q.get('size')}"`);
   const ipd = q.get('ipd') === null ? DEFAULT_IPD : Number(q.get('ipd'));
   if (!(ipd >= 0 && ipd < 1)) throw new Error(`?ipd wants metres in [0, 1), got "${q.get('ipd')}"`);
   if (![null, '0', '1'].includes(q.get('multiview'))) throw new Error(`?multiview wants 0 or 1, got "${q.get('multiview')}"`);

@@ -1,0 +1,68 @@
+"""The browser client's page as a visitor opens it, and URL parameters its first tests did not
+try: the page loads and draws with no failed request and no console error (the browser's own
+favicon request was a 404 on every visit), a ?size no canvas can have (0 pixels, or 99999 a
+side, which froze the tab) and a ?camera beyond the core camera's +-1e12 m are refused with one
+line, as `gigascroll render --camera` refuses them."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+import gigascroll as g
+from browser import browser, chromium_path, serve_pack  # noqa: F401 - fixtures
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory):
+    root = tmp_path_factory.mktemp("audit_web")
+    g.build_pack(g.render_ink_landscape(1200, 100, 0, 100), root / "p.pack")
+    with serve_pack(root / "p.pack", room="scroll", cache_dir=root / "cache") as url:
+        yield url, root / "p.pack"
+
+
+def test_the_page_loads_with_no_failed_request_and_no_console_error(browser, served):  # noqa: F811
+    url, _ = served
+    p = browser.new_page()
+    failed, errors = [], []
+    p.on("response", lambda r: r.status >= 400 and failed.append(f"{r.status} {r.url}"))
+    p.on("requestfailed", lambda r: failed.append(f"failed {r.url}"))
+    p.on("console", lambda m: m.type == "error" and errors.append(m.text))
+    p.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        p.goto(f"{url}/?size=64x48")
+        p.wait_for_function("window.gigascroll && window.gigascroll.frame() > 2", timeout=120_000)
+        p.evaluate("window.gigascroll.ready()")
+        assert p.evaluate("window.gigascroll.error") is None
+        assert failed == [] and errors == [], (failed, errors)
+    finally:
+        p.close()
+
+
+@pytest.mark.parametrize("query, message", [
+    ("size=0x0", "?size wants"), ("size=64x0", "?size wants"),
+    ("size=99999x99999", "?size wants"), ("size=8193x16", "?size wants"),
+    ("camera=1e13,1.6,0,0,1.6,1", "within +-1e12"), ("camera=0,1.6,0,0,1.6,-2e12", "within +-1e12"),
+])
+def test_url_parameters_no_canvas_or_camera_can_have(browser, served, query, message):  # noqa: F811
+    url, _ = served
+    p = browser.new_page()
+    try:
+        p.goto(f"{url}/?{query}")
+        p.wait_for_function("window.gigascroll && window.gigascroll.error !== null", timeout=60_000)
+        error = p.evaluate("window.gigascroll.error")
+        assert message in error and "\n" not in error, error
+    finally:
+        p.close()
+
+
+def test_render_refuses_the_camera_the_page_refuses(served, tmp_path):
+    """The same ?camera value is an error for `render --camera` (the convention it follows)."""
+    _, pack = served
+    r = subprocess.run([sys.executable, "-m", "gigascroll", "render", "--room", "scroll", "--pack",
+                        str(pack), "--camera", "1e13,1.6,0,0,1.6,1", "-o", str(tmp_path / "c.png"),
+                        "--width", "8", "--height", "8", "--lighting", "unlit"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "1e12" in r.stderr and not (tmp_path / "c.png").exists(), r.stderr
