@@ -2,9 +2,14 @@
 first (gltf.py: the JSON Schema, the rules beyond it, the triangle budget), then trimesh reads
 the drawn meshes from what gltf.py hands it. Every node's world transform (the product of its
 ancestors' matrix / TRS) is applied to its vertices, and a node whose transform mirrors has
-its triangles' winding reversed, as glTF specifies. Materials are read from the file's JSON:
-albedo = baseColorFactor (rgb), emission = emissiveFactor x KHR_materials_emissive_strength.
-The first camera node gives the room's camera; the scene's name names the room.
+its triangles' winding reversed, as glTF specifies, so emission keeps facing the same way.
+Materials are read from the file's JSON (trimesh keeps baseColorFactor only to 8 bits and drops
+KHR_materials_emissive_strength): albedo = baseColorFactor (rgb; the alpha and any textures are
+ignored), emission radiance = emissiveFactor x KHR_materials_emissive_strength (W / m^2 / sr per
+channel, linear; 1 when the extension is absent). A primitive without a material is an error:
+glTF's default material is white (albedo 1). The first camera node gives the room's camera: eye
+at the node's world position, target from its extras {"target": [x, y, z]} or 1 m down its -z;
+the scene's name (else the file's stem) names the room.
 """
 
 from __future__ import annotations
