@@ -285,6 +285,8 @@ public:
     }
 
 private:
+    // render_display's per-pixel path, the display pass's oracle (display_reference.cpp).
+    struct DisplayOracle;
     void require_lit() const;
     void check_texture(const VirtualTexture& vt) const;
     Vec3f barycentric(std::uint32_t tri, Vec3f p) const;  // (b1, b2, 0) on tri's lattice
