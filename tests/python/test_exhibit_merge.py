@@ -221,3 +221,26 @@ def test_merge_packs_verifies_and_reseeds(mixed):
         merge_packs([("x", mixed / "b.pack", 0), ("x", mixed / "b.pack", 0)], mixed / "c.pack")
     with pytest.raises(ValueError, match=r"has paintings 0\.\.0, not 3"):
         merge_packs([("x", mixed / "b.pack", 3)], mixed / "c.pack")
+
+
+def test_an_old_version_1_pack_merges_into_version_2(mixed):
+    """A version-1 pack (one tiles.bin, unseeded checksums) gives its painting's tiles, cut
+    into a tile file of its own, with every checksum seeded for the new key; the samples are
+    the source's."""
+    import warnings
+
+    from gigascroll.pack import TilePack
+    from gigascroll.pack.reader import PurePack
+    from test_pack_reader import make_v1_pack
+    v1 = make_v1_pack(mixed / "b.pack", mixed / "old.pack")
+    out = merge_packs([("a", mixed / "a.pack", 0), ("old", v1, "only")], mixed / "m.pack")
+    assert out.version == 2 and len(out.tile_files) == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        _same_samples(out, 1, TilePack(v1), 0)
+    with PurePack(out.path) as pure:  # the independent reader checks the new checksums
+        pp = pure.paintings[1]
+        for level, (nx, ny) in enumerate(pp.level_tiles):
+            for ty in range(ny):
+                for tx in range(nx):
+                    pure.read_tile(1, level, tx, ty)
