@@ -244,3 +244,26 @@ def test_an_old_version_1_pack_merges_into_version_2(mixed):
             for ty in range(ny):
                 for tx in range(nx):
                     pure.read_tile(1, level, tx, ty)
+
+
+def test_a_given_packs_instances_stay_instances(mixed):
+    """A pack whose painting "copy" is an instance of "wide": shown with an image, both are
+    merged and "copy" stays an instance (no second copy of the tiles); shown alone (its
+    source not in the show), "copy" brings its source's tiles as a stored painting."""
+    from gigascroll.pack import TilePack
+    src = build_pack([_noise(2, 150, 250)], mixed / "inst.pack", names=["wide"],
+                     instances=[("copy", 0)], **SETTINGS)
+    assert json.loads((mixed / "inst.pack" / "manifest.json").read_text())[
+        "paintings"][1]["instance_of"] == 0
+    out = merge_packs([("img", mixed / "a.pack", 1), ("w", mixed / "inst.pack", "wide"),
+                       ("c", mixed / "inst.pack", "copy")], mixed / "m.pack")
+    m = json.loads((Path(out.path) / "manifest.json").read_text())
+    by = {p["name"]: p for p in m["paintings"]}
+    assert "instance_of" in by["c"] and m["paintings"][by["c"]["instance_of"]]["name"] == "w"
+    assert len(m["tile_files"]) == 2
+    names = [p.name for p in out.paintings]
+    _same_samples(out, names.index("c"), src, 1)
+    alone = merge_packs([("c", mixed / "inst.pack", "copy")], mixed / "alone.pack")
+    assert "instance_of" not in json.loads(
+        (Path(alone.path) / "manifest.json").read_text())["paintings"][0]
+    _same_samples(alone, 0, TilePack(mixed / "inst.pack"), 1)
