@@ -12,6 +12,7 @@ import os
 import socket
 import subprocess
 import sys
+import time
 import urllib.parse
 
 import numpy as np
@@ -154,3 +155,119 @@ def test_a_damaged_cache_entry_is_baked_again(tmp_path, pack_dir, monkeypatch):
     assert len(calls) == 5
     header = np.frombuffer(first.glb_path.read_bytes()[:12], "<u4")
     assert header[2] == first.glb_path.stat().st_size
+
+
+# ----------------------------------------------------------------------------- many clients
+
+@pytest.fixture(scope="module")
+def big_tiles(tmp_path_factory):
+    """A pack of 128-px tiles (a 64-tile batch is 3 MiB) and its key list."""
+    from gigascroll import TilePack
+    root = tmp_path_factory.mktemp("audit-serve-big")
+    build_pack(pattern_image(2000, 300), root / "p.pack")
+    pack = TilePack(str(root / "p.pack"))
+    keys = [[0, 0, x, y] for x in range(pack.paintings[0].level_tiles[0][0])
+            for y in range(pack.paintings[0].level_tiles[0][1]) if pack.has_tile(0, 0, x, y)]
+    return pack, (keys * 64)[:64]
+
+
+def _batch_request(h: str, keys) -> bytes:
+    body = json.dumps({"keys": keys}).encode()
+    return (b"POST /api/tiles/%s/batch HTTP/1.1\r\nHost: x\r\nContent-Length: %d\r\n\r\n"
+            % (h.encode(), len(body)) + body)
+
+
+def _read_response(s: socket.socket) -> tuple[bytes, bytes]:
+    """(head, body) of one response with a Content-Length, leaving the connection open."""
+    data = b""
+    while b"\r\n\r\n" not in data:
+        data += s.recv(65536)
+    head, body = data.split(b"\r\n\r\n", 1)
+    length = int(next(line.split(b":")[1] for line in head.split(b"\r\n")
+                      if line.lower().startswith(b"content-length")))
+    while len(body) < length:
+        body += s.recv(1 << 20)
+    return head, body
+
+
+def test_open_connections_do_not_keep_their_last_batch(big_tiles):
+    """A keep-alive connection that stays open after its batch holds no copy of it: the
+    server's traced memory after 20 such connections is far below 20 batches (it was 20)."""
+    import tracemalloc
+    pack, keys = big_tiles
+    h = pack_hash(pack)
+    expected = b"".join(pack.read_tile(*k).tobytes() for k in keys)
+    with ServerThread(make_app(pack)) as url:
+        u = urllib.parse.urlsplit(url)
+        tracemalloc.start()
+        try:
+            before = tracemalloc.get_traced_memory()[0]
+            socks = []
+            for _ in range(20):
+                s = socket.create_connection((u.hostname, u.port), timeout=30)
+                s.sendall(_batch_request(h, keys))
+                head, body = _read_response(s)
+                assert head.startswith(b"HTTP/1.1 200") and body == expected
+                socks.append(s)
+            held = tracemalloc.get_traced_memory()[0] - before
+        finally:
+            tracemalloc.stop()
+            for s in socks:
+                s.close()
+    assert held < 4 * len(expected), f"{held / 2**20:.0f} MiB held by 20 idle connections"
+
+
+def test_head_of_a_tile_is_headers_only(big_tiles):
+    pack, keys = big_tiles
+    h = pack_hash(pack)
+    tile = "/api/tiles/%s/%d/%d/%d/%d" % (h, *keys[0])
+    with ServerThread(make_app(pack)) as url:
+        answer = _exchange(url, f"HEAD {tile} HTTP/1.1\r\nHost: x\r\n\r\nGET {tile} HTTP/1.1\r\n"
+                                f"Host: x\r\nConnection: close\r\n\r\n".encode())
+    head1, rest = answer.split(b"\r\n\r\n", 1)
+    head2, body = rest.split(b"\r\n\r\n", 1)  # the HEAD answer sent no body before this
+    assert head1.startswith(b"HTTP/1.1 200") and b"Content-Length: 49152" in head1
+    assert head2.startswith(b"HTTP/1.1 200") and body == pack.read_tile(*keys[0]).tobytes()
+
+
+def test_clients_that_never_read_are_dropped_not_waited_for(big_tiles, monkeypatch, caplog):
+    """Two slots, four clients asking for 3 MiB batches and reading nothing: another client's
+    tile request gets a 429 with Retry-After while the slots are held, never a hang; the slow
+    clients holding slots are disconnected after their deadline, each with one log line,
+    every slot comes back and the tile is then served with the core's bytes."""
+    from gigascroll.serve import app as app_module
+    pack, keys = big_tiles
+    h = pack_hash(pack)
+    monkeypatch.setattr(app_module, "SLOT_WAIT_S", 0.5)
+    monkeypatch.setattr(app_module, "SEND_GRACE_S", 1.0)
+    monkeypatch.setattr(app_module, "SEND_MIN_RATE", 1 << 20)  # 3 MiB: 4 s in all
+    app = make_app(pack, max_inflight=2)
+    tile = f"/api/tiles/{h}/0/0/0/0"
+    get = f"GET {tile} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n".encode()
+    with caplog.at_level(logging.INFO, logger="gigascroll.serve"), ServerThread(app) as url:
+        u = urllib.parse.urlsplit(url)
+        slow = []
+        for _ in range(4):
+            s = socket.socket()
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # before connect: a small window
+            s.connect((u.hostname, u.port))
+            s.sendall(_batch_request(h, keys))
+            slow.append(s)
+        busy = _exchange(url, get)
+        assert busy.startswith(b"HTTP/1.1 429") and b"Retry-After: 1" in busy, busy[:200]
+        for _ in range(200):  # the deadlines pass: every slot returns
+            if app[app_module.STATE_KEY].inflight._value == 2 and len(
+                    [m for m in _serve_lines(caplog) if "client too slow" in m]) == 2:
+                break
+            time.sleep(0.1)
+        answer = _exchange(url, get)
+        for s in slow:
+            s.close()
+    assert answer.startswith(b"HTTP/1.1 200")
+    assert answer.split(b"\r\n\r\n", 1)[1] == pack.read_tile(0, 0, 0, 0).tobytes()
+    lines = _serve_lines(caplog)
+    # Two held the slots until their deadline; the two others waited for one and got a 429.
+    assert sum("client too slow" in m for m in lines) == 2, lines
+    assert sum(m.startswith("429 POST") for m in lines) == 2, lines
+    assert app[app_module.STATE_KEY].inflight._value == 2
+    assert not any("Traceback" in r.getMessage() or r.exc_info for r in caplog.records)

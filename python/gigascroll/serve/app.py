@@ -6,7 +6,9 @@ Tiles are read through the core reader (`TilePack.read_tile_into`: checksums ver
 decoded) on a fixed pool of threads (the reads release the GIL); at most `max_inflight` tile
 requests are read and written at once, each at most MAX_BATCH tiles, and request bodies are
 capped at MAX_BODY: the memory a crowd of clients can pin is bounded by
-max_inflight x MAX_BATCH x tile bytes. Every bad request is a 4xx with a one-line text body
+max_inflight x MAX_BATCH x tile bytes. A slot is held at most send_deadline() while the bytes
+go out (a client that stops reading is disconnected) and waited for at most SLOT_WAIT_S (then a
+429 the client retries), so clients that never read cannot stall the others. Every bad request is a 4xx with a one-line text body
 and one log line; an unexpected error is answered the same way (never a 5xx or a traceback)."""
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ __all__ = ["make_app", "MAX_BODY", "LOG"]
 
 LOG = logging.getLogger("gigascroll.serve")
 MAX_BODY = 64 * 1024
+SLOT_WAIT_S = 10.0                      # a tile request's wait for a slot, then a 429
+SEND_GRACE_S, SEND_MIN_RATE = 10.0, 64 * 1024   # a response's time to go out (send_deadline)
 IMMUTABLE = "public, max-age=31536000, immutable"
 NUMBER = re.compile(r"[0-9]{1,9}")
 PACK_KEY, ROOM_KEY, STATE_KEY = web.AppKey("pack", object), web.AppKey("room", object), \
@@ -72,8 +76,12 @@ async def one_line_errors(request: web.Request, handler):
             if not e.text or e.text.strip() == f"{e.status}: {e.reason}":
                 e.text = f"{e.status} {e.reason}\n"
         raise
-    except (asyncio.CancelledError, ConnectionResetError):
+    except asyncio.CancelledError:
         raise
+    except ConnectionError:  # the client left while its request was read: nobody to answer
+        LOG.info("%s %s: client left", request.method, _one_line(repr(request.path_qs)))
+        request[LOGGED] = True
+        return web.Response(status=400, text="connection lost\n")
     except Exception as e:  # noqa: BLE001 (the promise: no 5xx, no traceback)
         LOG.warning("400 %s %s: unexpected %s: %s", request.method,
                     _one_line(repr(request.path_qs)), type(e).__name__, _one_line(e))
@@ -141,16 +149,55 @@ class _State:
         return out
 
     async def send_tiles(self, request, keys, headers) -> web.StreamResponse:
-        """Reads and writes the tiles within the bound on requests in flight."""
-        async with self.inflight:
+        """Reads and writes the tiles within the bound on requests in flight. A slot is waited
+        for at most SLOT_WAIT_S (then a 429: retry), and held while the bytes go out for at
+        most send_deadline(): a client that stops reading is dropped, so a few of them cannot
+        hold every slot (and the tiles' memory) for ever."""
+        try:
+            await asyncio.wait_for(self.inflight.acquire(), SLOT_WAIT_S)
+        except asyncio.TimeoutError:
+            raise web.HTTPTooManyRequests(
+                text=f"every tile slot busy for {SLOT_WAIT_S:g} s; retry\n",
+                content_type="text/plain", headers={"Retry-After": "1"}) from None
+        try:
             try:
                 body = await asyncio.get_running_loop().run_in_executor(self.pool, self.read, keys)
             except (OSError, ValueError) as e:  # a damaged pack: the tile cannot be served
                 raise _fail(web.HTTPNotFound, f"tile unreadable: {_one_line(e)}") from None
-            resp = web.Response(body=body, content_type="application/octet-stream", headers=headers)
-            await resp.prepare(request)
-            await resp.write_eof()
+            resp = web.StreamResponse(headers=headers)
+            resp.content_type, resp.content_length = "application/octet-stream", len(body)
+            try:
+                await asyncio.wait_for(_send(resp, request, body), send_deadline(len(body)))
+            except (asyncio.TimeoutError, ConnectionError) as e:
+                _drop(request, e, len(body))
             return resp
+        finally:
+            self.inflight.release()
+
+
+def send_deadline(size: int) -> float:
+    """Seconds a response of `size` bytes may take to go out: SEND_GRACE_S plus the time at
+    SEND_MIN_RATE bytes a second (a 64-tile batch of 128-px tiles: about 58 s)."""
+    return SEND_GRACE_S + size / SEND_MIN_RATE
+
+
+async def _send(resp: web.StreamResponse, request: web.Request, body: bytearray) -> None:
+    """Writes `body` through a StreamResponse, which keeps no reference to it: a Response
+    would hold its body for as long as the keep-alive connection stays open, 3 MB a
+    connection that never closes."""
+    await resp.prepare(request)
+    if request.method != "HEAD":  # a HEAD answer is its headers only
+        await resp.write(body)
+    await resp.write_eof()
+
+
+def _drop(request: web.Request, e: BaseException, size: int) -> None:
+    """One log line for a client that left, or that read too slowly and is disconnected."""
+    what = (f"client too slow: {size} bytes not taken in {send_deadline(size):.0f} s, "
+            "disconnected") if isinstance(e, asyncio.TimeoutError) else "client left before the tiles were sent"
+    LOG.warning("%s %s: %s", request.method, _one_line(repr(request.path_qs)), what)
+    if request.transport is not None:
+        request.transport.abort()
 
 
 def _state(request) -> _State:
