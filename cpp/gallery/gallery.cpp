@@ -916,7 +916,8 @@ void Gallery::bake(const BakeSettings& s) {
         }
     const SurfaceDisc::Detail detail = s.coarse_disc ? SurfaceDisc::Detail::Coarse : SurfaceDisc::Detail::Fine;
     bake_done_ = 0;
-    bake_total_ = rows.size() * (stride > 1 ? 2 : 1);
+    bake_total_ = rows.size() * ((stride > 1 ? 2 : 1) +
+                                 (s.sparse_final_gather && stride > 1 && s.final_gather > 0 && map_ ? 1 : 0));
     // BakeSettings::inset_edges: a sixteenth of the triangle's lattice spacing, and clear of
     // float rounding at the scene's epsilon.
     std::vector<float> inset(tris);
@@ -977,7 +978,9 @@ void Gallery::bake(const BakeSettings& s) {
         }
         bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
     }, s.threads ? s.threads : lighting_.threads);
-    if (stride > 1)
+    // Adds (add = true) or writes the sub-lattice's values interpolated onto every point.
+    auto interpolate = [&](const std::vector<Vec3f>& sub_f, const std::vector<Vec3f>& sub_b,
+                           std::vector<Vec3f>& out_f, std::vector<Vec3f>& out_b, bool add) {
         parallel_for(rows.size(), 16, [&](std::size_t rb, std::size_t re) {
             for (std::size_t r = rb; r < re; ++r) {
                 const auto [t, i] = rows[r];
@@ -986,8 +989,8 @@ void Gallery::bake(const BakeSettings& s) {
                 if (!(max_component(scene_.albedo(t)) > 0)) continue;
                 for (int side = 0; side < 2; ++side) {
                     if (!(reachable[t] >> side & 1)) continue;
-                    const Vec3f* G = (side == 0 ? gather_front : gather_back).data() + sub_offset[t];
-                    Vec3f* E = (side == 0 ? front : back).data() + offset[t];
+                    const Vec3f* G = (side == 0 ? sub_f : sub_b).data() + sub_offset[t];
+                    Vec3f* E = (side == 0 ? out_f : out_b).data() + offset[t];
                     for (std::uint32_t j = 0; i + j <= nt; ++j) {
                         // Linear on the sub-lattice's triangles, as irradiance_baked reads the
                         // lattice. i + j <= n keeps every corner with a non-zero weight on it.
@@ -1001,13 +1004,18 @@ void Gallery::bake(const BakeSettings& s) {
                             g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
                                 G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
                         }
-                        if (separate) (side == 0 ? indirect_front : indirect_back)[offset[t] + lattice_index(i, j, nt)] = g;
-                        else E[lattice_index(i, j, nt)] += g;
+                        if (add) E[lattice_index(i, j, nt)] += g;
+                        else E[lattice_index(i, j, nt)] = g;
                     }
                 }
             }
             bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
         }, s.threads ? s.threads : lighting_.threads);
+    };
+    if (stride > 1) {
+        if (separate) interpolate(gather_front, gather_back, indirect_front, indirect_back, false);
+        else interpolate(gather_front, gather_back, front, back, true);
+    }
     std::vector<Vec3f> direct_front, direct_back;
     if (fg) direct_front = front, direct_back = back;
     if (separate && !filter)
@@ -1046,14 +1054,31 @@ void Gallery::bake(const BakeSettings& s) {
     };
     if (s.fill_covered) fill(covered_front, covered_back);
     if (fg) {
-        // The final gather over the first pass (front, back), into the direct light's arrays.
+        // The final gather over the first pass (front, back), into the direct light's arrays;
+        // sparse: onto the gathers' sub-lattice (reused), filled where covered, interpolated.
+        const bool sparse = s.sparse_final_gather && stride > 1;
+        std::vector<std::uint8_t> sub_mask_front, sub_mask_back;
+        if (sparse) {
+            std::fill(gather_front.begin(), gather_front.end(), Vec3f(0, 0, 0));
+            std::fill(gather_back.begin(), gather_back.end(), Vec3f(0, 0, 0));
+            sub_mask_front.assign(sub_offset[tris], 0), sub_mask_back.assign(sub_offset[tris], 0);
+            if (s.fill_covered)
+                for (std::size_t t = 0; t < tris; ++t)
+                    for (std::uint32_t i = 0; i <= n[t]; i += stride)
+                        for (std::uint32_t j = 0; i + j <= n[t]; j += stride) {
+                            const std::uint64_t k = offset[t] + lattice_index(i, j, n[t]);
+                            const std::uint64_t q = sub_offset[t] + lattice_index(i / stride, j / stride, n[t] / stride);
+                            sub_mask_front[q] = mask_front[k], sub_mask_back[q] = mask_back[k];
+                        }
+        }
         parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
             for (std::size_t r = rb; r < re; ++r) {
                 const auto [t, i] = rows[r];
                 const std::uint32_t nt = n[t];
                 if (!(max_component(scene_.albedo(t)) > 0)) continue;
+                if (sparse && i % stride != 0) continue;
                 const Vec3f N = scene_.normal(t);
-                for (std::uint32_t j = 0; i + j <= nt; ++j) {
+                for (std::uint32_t j = 0; i + j <= nt; j += sparse ? stride : 1) {
                     const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
                     Vec3f p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
                     if (s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
@@ -1064,12 +1089,28 @@ void Gallery::bake(const BakeSettings& s) {
                     for (int side = 0; side < 2; ++side) {
                         if (!(reachable[t] >> side & 1)) continue;
                         if (s.fill_covered && (side == 0 ? mask_front : mask_back)[k]) continue;
-                        (side == 0 ? direct_front : direct_back)[k] +=
-                            final_gather(p, side == 0 ? N : -N, s.final_gather, front, back, n, offset);
+                        const Vec3f E = final_gather(p, side == 0 ? N : -N, s.final_gather, front, back, n, offset);
+                        if (sparse)
+                            (side == 0 ? gather_front : gather_back)[sub_offset[t] + lattice_index(
+                                i / stride, j / stride, nt / stride)] = E;
+                        else
+                            (side == 0 ? direct_front : direct_back)[k] += E;
                     }
                 }
             }
         }, s.threads ? s.threads : lighting_.threads);
+        if (sparse) {
+            if (s.fill_covered)
+                parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
+                    for (std::size_t t = tb; t < te; ++t) {
+                        fill_covered_points(gather_front.data() + sub_offset[t], sub_mask_front.data() + sub_offset[t],
+                                            n[t] / stride);
+                        fill_covered_points(gather_back.data() + sub_offset[t], sub_mask_back.data() + sub_offset[t],
+                                            n[t] / stride);
+                    }
+                }, s.threads ? s.threads : lighting_.threads);
+            interpolate(gather_front, gather_back, direct_front, direct_back, true);
+        }
         front = std::move(direct_front), back = std::move(direct_back);
         if (s.fill_covered) fill(mask_front, mask_back);
     }

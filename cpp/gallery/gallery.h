@@ -157,6 +157,10 @@ struct BakeSettings {
     // mottle on walls, floors and paintings below 1% (bench mottle) for about twice the
     // light + bake time of none.
     int final_gather = 16;
+    // With gather_stride s > 1: the final gather too only on the sub-lattice of every s-th
+    // point (1 / s^2 of them; covered ones filled from their neighbours), interpolated between
+    // (the indirect light it finds is smooth): about a quarter of the bake's time at s = 2.
+    bool sparse_final_gather = false;
 };
 
 struct LightingStats {
