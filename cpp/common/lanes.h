@@ -59,6 +59,7 @@ struct Lanes<1> {
         // Logical shifts (zeros in).
         friend I srl(I a, int s) { return I(std::int32_t(std::uint32_t(a.v) >> s)); }
         friend I min(I a, I b) { return I(a.v < b.v ? a.v : b.v); }
+        friend I max(I a, I b) { return I(a.v > b.v ? a.v : b.v); }
         friend M operator==(I a, I b) { return {a.v == b.v}; }
         friend M operator!=(I a, I b) { return {a.v != b.v}; }
         friend M operator>(I a, I b) { return {a.v > b.v}; }
@@ -125,6 +126,7 @@ struct Lanes<8> {
         friend I operator|(I a, I b) { return I(_mm256_or_si256(a.v, b.v)); }
         friend I srl(I a, int s) { return I(_mm256_srli_epi32(a.v, s)); }
         friend I min(I a, I b) { return I(_mm256_min_epi32(a.v, b.v)); }
+        friend I max(I a, I b) { return I(_mm256_max_epi32(a.v, b.v)); }
         friend M operator==(I a, I b) { return {_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v))}; }
         friend M operator!=(I a, I b) { return !(a == b); }
         friend M operator>(I a, I b) { return {_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v))}; }
@@ -191,6 +193,7 @@ struct Lanes<16> {
         friend I operator|(I a, I b) { return I(_mm512_or_si512(a.v, b.v)); }
         friend I srl(I a, int s) { return I(_mm512_srli_epi32(a.v, unsigned(s))); }
         friend I min(I a, I b) { return I(_mm512_min_epi32(a.v, b.v)); }
+        friend I max(I a, I b) { return I(_mm512_max_epi32(a.v, b.v)); }
         friend M operator==(I a, I b) { return {_mm512_cmpeq_epi32_mask(a.v, b.v)}; }
         friend M operator!=(I a, I b) { return {_mm512_cmpneq_epi32_mask(a.v, b.v)}; }
         friend M operator>(I a, I b) { return {_mm512_cmpgt_epi32_mask(a.v, b.v)}; }
@@ -414,6 +417,24 @@ inline Lanes<16>::F gather(Lanes<16>::F src, const void* base, Lanes<16>::I inde
 }
 inline Lanes<16>::I gather(Lanes<16>::I src, const void* base, Lanes<16>::I index, Lanes<16>::M m) {
     return Lanes<16>::I(_mm512_mask_i32gather_epi32(src.v, m.v, index.v, base, 4));
+}
+#endif
+
+// The 4-byte word at base + offset bytes per lane (any alignment): a texel's RGB and the
+// next byte, where the sampler reads a footprint's corners.
+inline Lanes<1>::I gather_bytes(const std::uint8_t* base, Lanes<1>::I offset) {
+    std::int32_t x;
+    std::memcpy(&x, base + offset.v, 4);
+    return Lanes<1>::I(x);
+}
+#if defined(__AVX2__)
+inline Lanes<8>::I gather_bytes(const std::uint8_t* base, Lanes<8>::I offset) {
+    return Lanes<8>::I(_mm256_i32gather_epi32(reinterpret_cast<const int*>(base), offset.v, 1));
+}
+#endif
+#if defined(__AVX512F__)
+inline Lanes<16>::I gather_bytes(const std::uint8_t* base, Lanes<16>::I offset) {
+    return Lanes<16>::I(_mm512_i32gather_epi32(offset.v, static_cast<const void*>(base), 1));
 }
 #endif
 

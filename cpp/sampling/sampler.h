@@ -72,7 +72,13 @@ public:
     TrilinearLanes& operator=(TrilinearLanes&&) = delete;
     bool sample16(const PacketUv& packet, float* r, float* g, float* b);
     // Whether sample16 can succeed at all (AVX-512 build, RGB8 slots).
-    bool enabled() const { return state_ != nullptr; }
+    bool enabled() const;
+    // sample16 at W lanes a step (common/lanes.h: W = 1, 8 where the build has AVX2, 16
+    // where it has AVX-512), with or without the common packet's byte-permuted stretches
+    // (AVX-512 VBMI, W = 16): the same samples, for the tests of every width. RGB8 slots, any
+    // build.
+    template <int W>
+    bool sample_lanes(const PacketUv& packet, float* r, float* g, float* b, bool stretches);
     // Forgets the page entries sample16 keeps from call to call (valid only while the caller
     // holds one read lock: a new lock, a new residency).
     void forget_tiles();

@@ -1,12 +1,16 @@
 // The 16-lane trilinear sampler (sampler.h's TrilinearLanes): the display pass's packets of
 // 16 neighbouring pixels sampled in SIMD lanes, in named steps (the levels, each axis's
 // origin and fractions, the common packet's stretches of texel rows, the general packet's
-// taps and gathered corners).
+// taps and gathered corners). The general packet's steps are one text for every width
+// (common/lanes.h: W lanes a step, the same floats at each); the common packet's stretches
+// are AVX-512's byte permutes.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 
 #include "common/divider.h"
+#include "common/lanes.h"
 #include "sampling/sampler.h"
 #include "sampling/texel_finder.h"
 
@@ -16,14 +20,13 @@
 
 namespace gigascroll {
 
-// sample_trilinear_rgb8 for a packet of 16 samples in one or two resident tiles per level, all
-// in 16 lanes: trilinear_taps' level rule and taps (in float from the packet's origin, see
+// sample_trilinear_rgb8 for a packet of 16 samples in one or two resident tiles per level, in
+// lanes: trilinear_taps' level rule and taps (in float from the packet's origin, see
 // sample16), the texels at the same addresses (the 4-byte words of each footprint's corners),
 // and blend_levels_rgb8's bilinear blends and blend of the levels. A sample that blends
 // nothing (blend 0) takes its coarse taps at its fine level (as trilinear_taps leaves them)
 // and adds 0 x (g - f) to f; so only the samples that blend two levels must share the
 // coarse tile.
-#if defined(__AVX512F__)
 // GCC 12 warns that the _mm512_undefined_* sources inside its own AVX-512 intrinsics may be
 // used uninitialized (GCC bug 105593, fixed in GCC 13).
 #pragma GCC diagnostic push
@@ -33,28 +36,35 @@ namespace {
 // One level's taps for 16 lanes (trilinear_taps' second loop): weights, tile and in-tile
 // byte offset.
 struct LevelTaps {
-    __m512 fx, fy;
-    __m512i level, cx, cy, row, offset;  // row: the footprint's first texel row in its tile
+    alignas(64) float fx[16], fy[16];
+    alignas(64) std::int32_t level[16], cx[16], cy[16];
+    alignas(64) std::int32_t row[16], offset[16];  // row: the footprint's first texel row in its tile
 };
 // trilinear_taps' level rule: each lane's fine level l0 (lo0 is max with 0 second, which
-// maps NaN to 0 as the select does; below is min), which lanes blend two levels and their
-// weight.
+// maps NaN to 0 as the select does; below is min), which lanes blend two levels (lane k in
+// bit k) and their weight.
 struct LaneLevels {
-    __m512i l0;
-    __mmask16 blending;
-    __m512 blend;
+    alignas(64) std::int32_t l0[16];
+    alignas(64) float blend[16];
+    unsigned blending = 0;
 };
-inline LaneLevels lane_levels(const float* lod, float top, std::int32_t levels) {
-    const __m512 zero = _mm512_setzero_ps();
-    const __m512 lod_c = _mm512_min_ps(_mm512_max_ps(_mm512_loadu_ps(lod), zero), _mm512_set1_ps(top));
-    LaneLevels v;
-    v.l0 = _mm512_cvttps_epi32(lod_c);
-    const __m512 frac = _mm512_sub_ps(lod_c, _mm512_cvtepi32_ps(v.l0));
-    v.blending = _mm512_cmp_ps_mask(frac, zero, _CMP_GT_OQ) &
-                 _mm512_cmplt_epi32_mask(_mm512_add_epi32(v.l0, _mm512_set1_epi32(1)), _mm512_set1_epi32(levels));
-    v.blend = _mm512_maskz_mov_ps(v.blending, frac);
-    return v;
+template <int W>
+void lane_levels(const float* lod, float top, std::int32_t levels, LaneLevels& v) {
+    using L = Lanes<W>;
+    using F = typename L::F;
+    using I = typename L::I;
+    v.blending = 0;
+    for (int k = 0; k < 16; k += W) {
+        const F lod_c = min(max(F::load(lod + k), F(0.0f)), F(top));
+        const I l0 = to_int(lod_c);
+        const F frac = lod_c - L::to_float(l0);
+        const auto blending = (frac > F(0.0f)) & (I(levels) > l0 + I(1));
+        l0.store(v.l0 + k);
+        L::select(blending, frac, F(0.0f)).store(v.blend + k);
+        v.blending |= blending.bits() << k;
+    }
 }
+#if defined(__AVX512F__)
 // The byte masks of a stretch of span <= 128 bytes loaded as two 64-byte halves.
 struct StretchMasks {
     __mmask64 first, second;
@@ -78,8 +88,8 @@ inline StretchMasks stretch_masks(int span) {
         _mm_prefetch(reinterpret_cast<const char*>(q + 127), _MM_HINT_T0);
     }
 }
-}  // namespace
 #endif
+}  // namespace
 
 struct TrilinearLanes::State {
     State(const VirtualTexture& vt, std::uint32_t painting)
@@ -134,26 +144,37 @@ struct TrilinearLanes::State {
         const PageEntry e = finders[c].entry(l, cx, cy);
         return e.level() == l ? physical + std::size_t(e.slot()) * slot_bytes : nullptr;
     }
+    // sample16's steps (see there).
+    static constexpr std::uint32_t kMaxSide = 1u << 22;
+    struct Axis;
+    struct Position;
+    struct LevelTiles;
+    static void level_origin(const Axis& a, int k, std::int32_t& origin, float& frac);
+    template <int W>
+    static bool axis(double c0, const AxisLevel& level, const float* d, Axis& a);
+    template <int W>
+    void taps(const Position& pp, const std::int32_t* l, LevelTaps& lt) const;
+    template <int W>
+    bool tiles(const LevelTaps& lt, int c, unsigned mask, LevelTiles& out);
+    template <int W>
+    void corners(const LevelTaps& lt, const std::uint8_t* base, unsigned mask, int k0, typename Lanes<W>::I (&q)[4]) const;
+    template <int W>
+    void bilinear(const LevelTaps& lt, const LevelTiles& tl, int k0, typename Lanes<W>::F& R, typename Lanes<W>::F& G,
+                  typename Lanes<W>::F& B) const;
+    template <int W>
+    bool sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& lv, float* r, float* g,
+                float* b);
 #if defined(__AVX512F__)
-    // The samples from their fine and (for the lanes in levels.blending) coarse taps: each
-    // level's tiles, texels and bilinear blend, then the blend of the two levels.
-    bool sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& levels,
-                float* r, float* g, float* b);
-    // sample16's stretches of a level's pair of texel rows (see there) for a packet across a
+    // The stretches of a level's pair of texel rows (see sample16) for a packet across a
     // tile's edge: lane 0's tile last_tile[finder] (tile x0 in lane coordinates x0_lanes,
     // in_tile its lanes) and its neighbour, into rows[r] = {bytes 0-63, 64-127}. False when
     // the other lanes are not all in the payload of the neighbour on one side or it is not
     // resident.
     bool across_edge(int level, int finder, __m512i nx_lanes, std::int32_t x0_lanes, __mmask16 in_tile,
                      std::int32_t lo, std::int32_t span, std::size_t row_start, __m512i (&rows)[2][2]);
-    // sample16's steps (see there).
-    static constexpr std::uint32_t kMaxSide = 1u << 22;
-    struct Axis;
-    struct Position;
-    static void level_origin(const Axis& a, int k, std::int32_t& origin, __m512& frac);
-    static bool axis(double c0, const AxisLevel& level, __m512 d, Axis& a);
-    LevelTaps taps(const Position& pp, __m512i l) const;
+#endif
 #if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+    bool stretch_corners(const LevelTaps& lt, const std::uint8_t* base, unsigned mask, __m512i (&q)[4]) const;
     struct LevelPosition;
     struct Stretch;
     LevelPosition level_position(const Position& pp, int k) const;
@@ -165,17 +186,12 @@ struct TrilinearLanes::State {
     bool two_tiles(const Position& pp, int k, int finder, __m512& R, __m512& G, __m512& B);
     bool sample_stretches(const Position& pp, const LaneLevels& lv, float* r, float* g, float* b);
 #endif
-#endif
 };
 
 TrilinearLanes::TrilinearLanes(const VirtualTexture& vt, std::uint32_t painting) {
-#if defined(__AVX512F__)
     // Disabled for a painting the texture does not hold: sample() says so.
     if (vt.format() == TexelFormat::Rgb8 && painting < vt.layout().paintings.size())
         state_ = std::make_unique<State>(vt, painting);
-#else
-    (void)vt, (void)painting;  // no lanes to sample in: always disabled
-#endif
 }
 void TrilinearLanes::forget_tiles() {
     if (!state_) return;
@@ -185,119 +201,143 @@ void TrilinearLanes::forget_tiles() {
 TrilinearLanes::~TrilinearLanes() = default;
 TrilinearLanes::TrilinearLanes(TrilinearLanes&&) noexcept = default;
 
-#if defined(__AVX512F__)
-bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps,
-                                   const LaneLevels& lv, float* r, float* g, float* b) {
-    State& st = *this;
-    const __mmask16 blending = lv.blending;
-    const __m512 blend = lv.blend;
-    const TileExtent t = st.tile;
-    // The tiles of the lanes in mask at their level: the first lane's and, for a packet across a
-    // tile edge, one other, each resident (its slot) with the lanes it holds; false for a third
-    // tile or a tile that is not resident (a fallback).
-    struct LevelTiles {
-        const std::uint8_t* base[2];
-        __mmask16 lanes[2];
-        int count;
-    };
-    auto tiles = [&](const LevelTaps& lt, int c, __mmask16 mask, LevelTiles& out) {
-        out.count = 0;
-        for (int k = 0; k < 2 && mask; ++k) {
-            auto first = [&](__m512i x) {  // the value of mask's first lane (lane 0 nearly always)
-                return std::uint32_t(_mm_cvtsi128_si32(_mm512_castsi512_si128(
-                    mask & 1 ? x : _mm512_maskz_compress_epi32(mask, x))));
-            };
-            const std::uint32_t l = first(lt.level), cx = first(lt.cx), cy = first(lt.cy);
-            const __mmask16 same = _mm512_mask_cmpeq_epi32_mask(mask, lt.level, _mm512_set1_epi32(int(l))) &
-                                   _mm512_mask_cmpeq_epi32_mask(mask, lt.cx, _mm512_set1_epi32(int(cx))) &
-                                   _mm512_mask_cmpeq_epi32_mask(mask, lt.cy, _mm512_set1_epi32(int(cy)));
-            out.base[k] = st.base(2 * c + k, l, cx, cy);
-            if (!out.base[k]) return false;
-            out.lanes[k] = same, out.count = k + 1;
-            mask &= ~same;
-        }
-        return mask == 0;
-    };
-    LevelTiles fine, coarse;
-    if (!tiles(fine_taps, 0, 0xFFFF, fine)) return false;
-    if (blending && !tiles(coarse_taps, 1, blending, coarse)) return false;
-    const std::int32_t row = t.row_bytes;
-    // The 4-byte words at each lane's footprint corners (offset, + 3, + row, + row + 3: the
-    // texel and its right neighbour in two rows), q[0..3]. When the lanes in mask share the
-    // footprint's texel rows and their corners span at most 128 bytes (nearly always: a
-    // packet of neighbouring pixels reads one stretch of two rows), the two stretches are
-    // loaded (masked to the bytes the gathers would read) and the words picked out with byte
-    // permutes; otherwise gathered. The lanes outside mask get some word of the stretch.
-    auto corners = [&](const LevelTaps& lt, const std::uint8_t* base, __mmask16 mask, __m512i (&q)[4]) {
+// The tiles of the lanes in mask at their level: the first lane's and, for a packet across a
+// tile edge, one other, each resident (its slot) with the lanes it holds.
+struct TrilinearLanes::State::LevelTiles {
+    const std::uint8_t* base[2];
+    unsigned lanes[2];
+    int count;
+};
+// False for a third tile or a tile that is not resident (a fallback).
+template <int W>
+bool TrilinearLanes::State::tiles(const LevelTaps& lt, int c, unsigned mask, LevelTiles& out) {
+    using I = typename Lanes<W>::I;
+    out.count = 0;
+    for (int k = 0; k < 2 && mask; ++k) {
+        const int first = std::countr_zero(mask);  // lane 0 nearly always
+        const std::int32_t l = lt.level[first], cx = lt.cx[first], cy = lt.cy[first];
+        unsigned same = 0;
+        for (int k0 = 0; k0 < 16; k0 += W)
+            same |= ((I::load(lt.level + k0) == I(l)) & (I::load(lt.cx + k0) == I(cx)) & (I::load(lt.cy + k0) == I(cy)))
+                        .bits() << k0;
+        same &= mask;
+        out.base[k] = base(2 * c + k, std::uint32_t(l), std::uint32_t(cx), std::uint32_t(cy));
+        if (!out.base[k]) return false;
+        out.lanes[k] = same, out.count = k + 1;
+        mask &= ~same;
+    }
+    return mask == 0;
+}
+
+// The 4-byte words at lanes k0 .. k0 + W - 1's footprint corners (offset, + 3, + row,
+// + row + 3: the texel and its right neighbour in two rows), q[0..3]: gathered, or at 16
+// lanes picked out of the rows' stretches (stretch_corners) where they fit.
+template <int W>
+void TrilinearLanes::State::corners(const LevelTaps& lt, const std::uint8_t* base, unsigned mask, int k0,
+                                    typename Lanes<W>::I (&q)[4]) const {
+    using I = typename Lanes<W>::I;
 #if defined(__AVX512VBMI__) && defined(__AVX512BW__)
-        const int lo = _mm512_mask_reduce_min_epi32(mask, lt.offset);
-        const int hi = _mm512_mask_reduce_max_epi32(mask, lt.offset);
-        const int span = hi - lo + 7;  // bytes lo .. hi + 6
-        const int first_row = _mm_cvtsi128_si32(_mm512_castsi512_si128(mask & 1 ? lt.row : _mm512_maskz_compress_epi32(mask, lt.row)));
-        if (span <= 128 && !_mm512_mask_cmpneq_epi32_mask(mask, lt.row, _mm512_set1_epi32(first_row))) {
-            const __m512i rel = _mm512_maskz_sub_epi32(mask, lt.offset, _mm512_set1_epi32(lo));
-            // Each lane's byte index rel + 0..3 (rel < 128: one byte).
-            const __m512i spread = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
-            const __m512i idx = _mm512_add_epi8(_mm512_shuffle_epi8(rel, spread), _mm512_set1_epi32(0x03020100));
-            const __m512i idx3 = _mm512_add_epi8(idx, _mm512_set1_epi8(3));
-            const auto [m0, m1] = stretch_masks(span);
-            for (int r = 0; r < 2; ++r) {
-                const std::uint8_t* p = base + lo + r * row;
-                const __m512i a = _mm512_maskz_loadu_epi8(m0, p), b = _mm512_maskz_loadu_epi8(m1, p + 64);
-                q[2 * r] = _mm512_permutex2var_epi8(a, idx, b);
-                q[2 * r + 1] = _mm512_permutex2var_epi8(a, idx3, b);
-            }
+    if constexpr (W == 16) {
+        __m512i words[4];
+        if (stretch_corners(lt, base, mask, words)) {
+            for (int k = 0; k < 4; ++k) q[k] = I(words[k]);
             return;
         }
-#else
-        (void)mask;
-#endif
-        const std::int32_t delta[4] = {0, 3, row, row + 3};
-        for (int k = 0; k < 4; ++k)
-            q[k] = _mm512_i32gather_epi32(_mm512_add_epi32(lt.offset, _mm512_set1_epi32(delta[k])),
-                                          static_cast<const void*>(base), 1);
-    };
-    // One level's bilinear blend: channels R, G, B of 16 lanes.
-    auto bilinear = [&](const LevelTaps& lt, const LevelTiles& lv, __m512& R, __m512& G, __m512& B)
-                        __attribute__((always_inline)) {
-        const __m512 one = _mm512_set1_ps(1.0f);
-        const __m512 fx = lt.fx, fy = lt.fy;
-        const __m512 gx = _mm512_sub_ps(one, fx), gy = _mm512_sub_ps(one, fy);
-        const __m512i byte = _mm512_set1_epi32(0xff);
-        const __m512 w[4] = {_mm512_mul_ps(gx, gy), _mm512_mul_ps(fx, gy), _mm512_mul_ps(gx, fy),
-                             _mm512_mul_ps(fx, fy)};
-        __m512i words[4];
-        corners(lt, lv.base[0], lv.lanes[0], words);
-        if (lv.count == 2) {  // the lanes in the other tile
-            __m512i other[4];
-            corners(lt, lv.base[1], lv.lanes[1], other);
-            for (int q = 0; q < 4; ++q) words[q] = _mm512_mask_mov_epi32(words[q], lv.lanes[1], other[q]);
-        }
-        for (int q = 0; q < 4; ++q) {
-            const __m512i texel = words[q];
-            const __m512 tr = _mm512_cvtepi32_ps(_mm512_and_si512(texel, byte));
-            const __m512 tg = _mm512_cvtepi32_ps(_mm512_and_si512(_mm512_srli_epi32(texel, 8), byte));
-            const __m512 tb = _mm512_cvtepi32_ps(_mm512_and_si512(_mm512_srli_epi32(texel, 16), byte));
-            if (q == 0) {
-                R = _mm512_mul_ps(w[0], tr), G = _mm512_mul_ps(w[0], tg), B = _mm512_mul_ps(w[0], tb);
-            } else {
-                R = _mm512_fmadd_ps(w[q], tr, R), G = _mm512_fmadd_ps(w[q], tg, G), B = _mm512_fmadd_ps(w[q], tb, B);
-            }
-        }
-    };
-    __m512 R, G, B;
-    bilinear(fine_taps, fine, R, G, B);
-    if (blending) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
-        __m512 R1, G1, B1;
-        bilinear(coarse_taps, coarse, R1, G1, B1);
-        R = _mm512_fmadd_ps(blend, _mm512_sub_ps(R1, R), R);
-        G = _mm512_fmadd_ps(blend, _mm512_sub_ps(G1, G), G);
-        B = _mm512_fmadd_ps(blend, _mm512_sub_ps(B1, B), B);
     }
-    _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
+#endif
+    (void)mask;
+    const std::int32_t row = tile.row_bytes;
+    const std::int32_t delta[4] = {0, 3, row, row + 3};
+    const I offset = I::load(lt.offset + k0);
+    for (int k = 0; k < 4; ++k) q[k] = gather_bytes(base, offset + I(delta[k]));
+}
+
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+// When the lanes in mask share the footprint's texel rows and their corners span at most 128
+// bytes (nearly always: a packet of neighbouring pixels reads one stretch of two rows), the
+// two stretches loaded (masked to the bytes the gathers would read) and the words picked out
+// with byte permutes; false otherwise. The lanes outside mask get some word of the stretch.
+[[gnu::always_inline]] inline bool TrilinearLanes::State::stretch_corners(const LevelTaps& lt, const std::uint8_t* base,
+                                                                         unsigned mask16, __m512i (&q)[4]) const {
+    const __mmask16 mask = __mmask16(mask16);
+    const __m512i offset = _mm512_load_si512(lt.offset), row_of = _mm512_load_si512(lt.row);
+    const std::int32_t row = tile.row_bytes;
+    const int lo = _mm512_mask_reduce_min_epi32(mask, offset);
+    const int hi = _mm512_mask_reduce_max_epi32(mask, offset);
+    const int span = hi - lo + 7;  // bytes lo .. hi + 6
+    const int first_row = lt.row[std::countr_zero(mask16)];
+    if (span > 128 || _mm512_mask_cmpneq_epi32_mask(mask, row_of, _mm512_set1_epi32(first_row))) return false;
+    const __m512i rel = _mm512_maskz_sub_epi32(mask, offset, _mm512_set1_epi32(lo));
+    // Each lane's byte index rel + 0..3 (rel < 128: one byte).
+    const __m512i spread = _mm512_broadcast_i32x4(_mm_setr_epi8(0, 0, 0, 0, 4, 4, 4, 4, 8, 8, 8, 8, 12, 12, 12, 12));
+    const __m512i idx = _mm512_add_epi8(_mm512_shuffle_epi8(rel, spread), _mm512_set1_epi32(0x03020100));
+    const __m512i idx3 = _mm512_add_epi8(idx, _mm512_set1_epi8(3));
+    const auto [m0, m1] = stretch_masks(span);
+    for (int r = 0; r < 2; ++r) {
+        const std::uint8_t* p = base + lo + r * row;
+        const __m512i a = _mm512_maskz_loadu_epi8(m0, p), b = _mm512_maskz_loadu_epi8(m1, p + 64);
+        q[2 * r] = _mm512_permutex2var_epi8(a, idx, b);
+        q[2 * r + 1] = _mm512_permutex2var_epi8(a, idx3, b);
+    }
+    return true;
+}
+#endif
+
+// One level's bilinear blend of lanes k0 .. k0 + W - 1: channels R, G, B.
+template <int W>
+[[gnu::always_inline]] inline void TrilinearLanes::State::bilinear(const LevelTaps& lt, const LevelTiles& tl, int k0,
+                                                                  typename Lanes<W>::F& R, typename Lanes<W>::F& G,
+                                                                  typename Lanes<W>::F& B) const {
+    using L = Lanes<W>;
+    using F = typename L::F;
+    using I = typename L::I;
+    const F one(1.0f), fx = F::load(lt.fx + k0), fy = F::load(lt.fy + k0);
+    const F gx = one - fx, gy = one - fy;
+    const F w[4] = {gx * gy, fx * gy, gx * fy, fx * fy};
+    I words[4];
+    corners<W>(lt, tl.base[0], tl.lanes[0], k0, words);
+    if (tl.count == 2) {  // the lanes in the other tile
+        I other[4];
+        corners<W>(lt, tl.base[1], tl.lanes[1], k0, other);
+        const auto in_other = mask_of<W>(tl.lanes[1] >> k0);
+        for (int q = 0; q < 4; ++q) words[q] = L::select(in_other, other[q], words[q]);
+    }
+    const I byte(0xff);
+    for (int q = 0; q < 4; ++q) {
+        const F tr = L::to_float(words[q] & byte), tg = L::to_float(srl(words[q], 8) & byte);
+        const F tb = L::to_float(srl(words[q], 16) & byte);
+        if (q == 0) {
+            R = w[0] * tr, G = w[0] * tg, B = w[0] * tb;
+        } else {
+            R = fma(w[q], tr, R), G = fma(w[q], tg, G), B = fma(w[q], tb, B);
+        }
+    }
+}
+
+// The samples from their fine and (for the lanes in levels.blending) coarse taps: each
+// level's tiles, texels and bilinear blend, then the blend of the two levels.
+template <int W>
+bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& lv,
+                                   float* r, float* g, float* b) {
+    using F = typename Lanes<W>::F;
+    LevelTiles fine, coarse;
+    if (!tiles<W>(fine_taps, 0, 0xFFFF, fine)) return false;
+    if (lv.blending && !tiles<W>(coarse_taps, 1, lv.blending, coarse)) return false;
+    for (int k = 0; k < 16; k += W) {
+        F R, G, B;
+        bilinear<W>(fine_taps, fine, k, R, G, B);
+        if (lv.blending) {  // f + blend (g - f); the lanes that blend nothing read their fine level again
+            F R1, G1, B1;
+            bilinear<W>(coarse_taps, coarse, k, R1, G1, B1);
+            const F blend = F::load(lv.blend + k);
+            R = fma(blend, R1 - R, R), G = fma(blend, G1 - G, G), B = fma(blend, B1 - B, B);
+        }
+        R.store(r + k), G.store(g + k), B.store(b + k);
+    }
     return true;
 }
 
+#if defined(__AVX512F__)
 // The neighbour is lane 0's tile's cx -+ 1 (a packet's lanes lie in a row of tiles), its
 // bytes addressed from lane 0's tile's lo: the neighbour's texel x is lane 0's tile's -+ P.
 // It exists: sample16's range check keeps every lane two texels inside the painting.
@@ -344,6 +384,8 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
     return true;
 }
 
+#endif
+
 // sample16's packet position at its finest level L on one axis: lane 0's continuous texel
 // position less 1/2 (trilinear_taps' tx before its clamp), X = c0 extent 2^-L - 1/2, as an
 // integer origin and a fraction; each lane's position relative to the origin is frac +
@@ -351,8 +393,8 @@ bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& 
 // (rel 2^-k + frac_k), with origin_k and frac_k the same split of (origin + 1/2) 2^-k - 1/2
 // (level_origin, exact).
 struct TrilinearLanes::State::Axis {
-    __m512 rel;           // per lane, at level L
-    std::int32_t origin;  // at level L
+    alignas(64) float rel[16];  // per lane, at level L
+    std::int32_t origin;        // at level L
 };
 struct TrilinearLanes::State::Position {
     Axis ax, ay;
@@ -362,27 +404,31 @@ struct TrilinearLanes::State::Position {
 // Level L + k's origin and fraction: (o + 1/2) 2^-k - 1/2 = (2o + 1 - 2^k) / 2^(k+1), its
 // floor by an arithmetic shift, its fraction in eighths (made where a level needs them).
 [[gnu::always_inline]] inline void TrilinearLanes::State::level_origin(const Axis& a, int k, std::int32_t& origin,
-                                                                      __m512& frac) {
+                                                                      float& frac) {
     const std::int32_t num = 2 * a.origin + 1 - (1 << k);
     origin = num >> (k + 1);
-    frac = _mm512_set1_ps(float(num & ((2 << k) - 1)) / float(2 << k));
+    frac = float(num & ((2 << k) - 1)) / float(2 << k);
 }
 
 // One axis of the packet at level L from lane 0's coordinate c0 and the lanes' offsets d;
 // false where a lane comes within two texels of the painting's edge (or NaN, far outside).
-[[gnu::always_inline]] inline bool TrilinearLanes::State::axis(double c0, const AxisLevel& level, __m512 d, Axis& a) {
+template <int W>
+[[gnu::always_inline]] inline bool TrilinearLanes::State::axis(double c0, const AxisLevel& level, const float* d,
+                                                              Axis& a) {
+    using F = typename Lanes<W>::F;
     // c0 extent 2^-L as (c0 extent) 2^-L: the scaling by a power of two is exact.
     const double X = c0 * level.scale - 0.5;
     const double o = std::floor(X);
     if (!(std::abs(o) < double(kMaxSide))) return false;  // NaN or far outside
-    a.rel = _mm512_fmadd_ps(d, _mm512_set1_ps(float(level.scale)), _mm512_set1_ps(float(X - o)));
     // Two texels inside the painting at level L, so that at levels L, L + 1 and L + 2 no
     // lane reaches trilinear_taps' clamps (to [0, w_l - 1], and of uv to [0, 1]):
     // X_{L+k} = (X + 1/2) 2^-k - 1/2 >= 5/8 - 1/2 > 0 and <= w_{L+k} - 1.
-    const double hi = level.limit - o;
-    if (_mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(2.0 - o)), _CMP_LT_OQ) |
-        _mm512_cmp_ps_mask(a.rel, _mm512_set1_ps(float(hi)), _CMP_GT_OQ))
-        return false;
+    const F lo(float(2.0 - o)), hi(float(level.limit - o));
+    for (int k = 0; k < 16; k += W) {
+        const F rel = fma(F::load(d + k), F(float(level.scale)), F(float(X - o)));
+        if (any<W>((rel < lo) | (rel > hi))) return false;
+        rel.store(a.rel + k);
+    }
     a.origin = std::int32_t(o);
     return true;
 }
@@ -399,12 +445,12 @@ struct TrilinearLanes::State::LevelPosition {
     const Position& pp, int k) const {
     LevelPosition p;
     p.ox = pp.ax.origin, p.oy = pp.ay.origin;
-    __m512 x = pp.ax.rel, y = pp.ay.rel;
+    __m512 x = _mm512_load_ps(pp.ax.rel), y = _mm512_load_ps(pp.ay.rel);
     if (k) {
-        __m512 fx0, fy0;
+        float fx0, fy0;
         level_origin(pp.ax, k, p.ox, fx0), level_origin(pp.ay, k, p.oy, fy0);
         const __m512 half = _mm512_set1_ps(0.5f);
-        x = _mm512_fmadd_ps(x, half, fx0), y = _mm512_fmadd_ps(y, half, fy0);
+        x = _mm512_fmadd_ps(x, half, _mm512_set1_ps(fx0)), y = _mm512_fmadd_ps(y, half, _mm512_set1_ps(fy0));
     }
     const __m512 x_fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
     const __m512 y_fl = _mm512_roundscale_ps(y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
@@ -555,94 +601,124 @@ struct TrilinearLanes::State::Stretch {
     if (!(one_tile(pp, 0, 0, R, G, B) || two_tiles(pp, 0, 0, R, G, B))) return false;
     if (lv.blending && !(one_tile(pp, 1, 2, R1, G1, B1) || two_tiles(pp, 1, 2, R1, G1, B1))) return false;
     if (lv.blending) {
-        R = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(R1, R), R);
-        G = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(G1, G), G);
-        B = _mm512_fmadd_ps(lv.blend, _mm512_sub_ps(B1, B), B);
+        const __m512 blend = _mm512_load_ps(lv.blend);
+        R = _mm512_fmadd_ps(blend, _mm512_sub_ps(R1, R), R);
+        G = _mm512_fmadd_ps(blend, _mm512_sub_ps(G1, G), G);
+        B = _mm512_fmadd_ps(blend, _mm512_sub_ps(B1, B), B);
     }
     _mm512_storeu_ps(r, R), _mm512_storeu_ps(g, G), _mm512_storeu_ps(b, B);
     return true;
 }
 #endif
 
+
 // One level's taps for the general packet from the lanes' levels l (L or L + 1 or L + 2).
-[[gnu::always_inline]] inline LevelTaps TrilinearLanes::State::taps(const Position& pp, __m512i l) const {
+template <int W>
+[[gnu::always_inline]] inline void TrilinearLanes::State::taps(const Position& pp, const std::int32_t* ls,
+                                                              LevelTaps& lt) const {
+    using L = Lanes<W>;
+    using F = typename L::F;
+    using I = typename L::I;
     const TileExtent t = tile;
-    const __m512i one_i = _mm512_set1_epi32(1);
-    const __m512 inv_p = _mm512_set1_ps(1.0f / float(t.payload));
-    const __m512i k = _mm512_sub_epi32(l, _mm512_set1_epi32(pp.L));
-    const __mmask16 k1 = _mm512_cmpeq_epi32_mask(k, one_i), k2 = _mm512_cmpeq_epi32_mask(k, _mm512_set1_epi32(2));
-    const __m512 minus_k = _mm512_cvtepi32_ps(_mm512_sub_epi32(_mm512_setzero_si512(), k));
-    auto one_axis = [&](const Axis& a, __m512& f, __m512i& cell, __m512i& in_tile) {
-        __m512 x;
-        __m512i origin;
-        if (!(k1 | k2)) {  // every lane at level L (nearly always)
-            x = a.rel, origin = _mm512_set1_epi32(a.origin);
-        } else {
-            std::int32_t o1, o2;
-            __m512 f1, f2;
-            level_origin(a, 1, o1, f1), level_origin(a, 2, o2, f2);
-            const __m512 frac = _mm512_mask_blend_ps(k2, _mm512_maskz_mov_ps(k1, f1), f2);
-            origin = _mm512_mask_blend_epi32(k1, _mm512_set1_epi32(a.origin), _mm512_set1_epi32(o1));
-            origin = _mm512_mask_blend_epi32(k2, origin, _mm512_set1_epi32(o2));
-            x = _mm512_add_ps(_mm512_scalef_ps(a.rel, minus_k), frac);
-        }
-        const __m512 fl = _mm512_roundscale_ps(x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-        f = _mm512_sub_ps(x, fl);
-        const __m512i i = _mm512_add_epi32(origin, _mm512_cvttps_epi32(fl));
-        const __m512i n_up = _mm512_mask_add_epi32(i, _mm512_cmp_ps_mask(f, _mm512_set1_ps(0.5f), _CMP_GE_OQ), i, one_i);
-        // floor(n_up / P) as Divider::by_double in float: (n + 1/2) fl(1/P) is within
-        // 2^-23 (n + 1/2) / P of (n + 1/2) / P, below 1 / (2P) for n < 2^22.
-        cell = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_add_ps(_mm512_cvtepi32_ps(n_up), _mm512_set1_ps(0.5f)), inv_p));
-        const __m512i j = _mm512_add_epi32(_mm512_sub_epi32(i, _mm512_mullo_epi32(cell, _mm512_set1_epi32(t.payload))),
-                                           _mm512_set1_epi32(t.border));
-        in_tile = _mm512_min_epi32(_mm512_max_epi32(j, _mm512_setzero_si512()), _mm512_set1_epi32(t.tile - 2));
-    };
-    LevelTaps lt;
-    lt.level = l;
-    __m512i jx, jy;
-    one_axis(pp.ax, lt.fx, lt.cx, jx);
-    one_axis(pp.ay, lt.fy, lt.cy, jy);
-    lt.row = jy;
-    lt.offset = _mm512_add_epi32(_mm512_mullo_epi32(jy, _mm512_set1_epi32(t.row_bytes)),
-                                 _mm512_mullo_epi32(jx, _mm512_set1_epi32(3)));
-    return lt;
+    const F inv_p(1.0f / float(t.payload));
+    for (int k0 = 0; k0 < 16; k0 += W) {
+        const I l = I::load(ls + k0);
+        const I k = l - I(pp.L);
+        const auto k1 = k == I(1), k2 = k == I(2);
+        auto one_axis = [&](const Axis& a, float* f_out, std::int32_t* cell_out) {
+            F x = F::load(a.rel + k0);
+            I origin(a.origin);
+            if (any<W>(k1 | k2)) {  // not every lane at level L (rare)
+                std::int32_t o1, o2;
+                float f1, f2;
+                level_origin(a, 1, o1, f1), level_origin(a, 2, o2, f2);
+                const F frac = L::select(k2, F(f2), L::select(k1, F(f1), F(0.0f)));
+                origin = L::select(k2, I(o2), L::select(k1, I(o1), origin));
+                // x 2^-k (exact) plus the level's fraction.
+                x = x * L::select(k2, F(0.25f), L::select(k1, F(0.5f), F(1.0f))) + frac;
+            }
+            const F fl = floor(x);
+            const F f = x - fl;
+            const I i = origin + to_int(fl);
+            const I n_up = L::select(f >= F(0.5f), i + I(1), i);
+            // floor(n_up / P) as Divider::by_double in float: (n + 1/2) fl(1/P) is within
+            // 2^-23 (n + 1/2) / P of (n + 1/2) / P, below 1 / (2P) for n < 2^22.
+            const I cell = to_int((L::to_float(n_up) + F(0.5f)) * inv_p);
+            const I j = i - cell * I(t.payload) + I(t.border);
+            f.store(f_out + k0), cell.store(cell_out + k0);
+            return min(max(j, I(0)), I(t.tile - 2));  // the footprint's first texel in its tile
+        };
+        const I jx = one_axis(pp.ax, lt.fx, lt.cx), jy = one_axis(pp.ay, lt.fy, lt.cy);
+        l.store(lt.level + k0), jy.store(lt.row + k0);
+        (jy * I(t.row_bytes) + jx * I(3)).store(lt.offset + k0);
+    }
 }
 
 // The packet's levels (its finest L and at most L + 1 at the fine level, so L + 2 at the
 // coarse one), its position on each axis, then the common packet's stretches or the general
 // packet's taps and gathered corners.
-bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float* b) {
+template <int W>
+bool TrilinearLanes::sample_lanes(const PacketUv& packet, float* r, float* g, float* b, bool stretches) {
+    using L = Lanes<W>;
+    using I = typename L::I;
     if (!state_) return false;
     State& st = *state_;
     // Below 2^22 texels a side the float tile division is exact (see taps) and every texel
     // index and level extent is a float.
     if (st.pyramid.width >= State::kMaxSide || st.pyramid.height >= State::kMaxSide) return false;
-    const LaneLevels lv = lane_levels(packet.lod, st.pyramid.top, st.levels);
-    // Nearly always every lane's level is lane 0's: then no reduction over the lanes.
+    LaneLevels lv;
+    lane_levels<W>(packet.lod, st.pyramid.top, st.levels, lv);
+    // Nearly always every lane's level is lane 0's.
     State::Position pp;
-    pp.L = _mm_cvtsi128_si32(_mm512_castsi512_si128(lv.l0));
-    const bool levels_differ = _mm512_cmpneq_epi32_mask(lv.l0, _mm512_set1_epi32(pp.L)) != 0;
+    pp.L = lv.l0[0];
+    bool levels_differ = false;
+    for (int k = 0; k < 16; k += W) levels_differ = levels_differ || any<W>(I::load(lv.l0 + k) != I(pp.L));
     if (levels_differ) {
-        pp.L = _mm512_reduce_min_epi32(lv.l0);
-        if (_mm512_reduce_max_epi32(lv.l0) > pp.L + 1) return false;
+        const auto [lowest, highest] = std::minmax_element(lv.l0, lv.l0 + 16);
+        pp.L = *lowest;
+        if (*highest > pp.L + 1) return false;
     }
-    const __m512 du = _mm512_load_ps(packet.du), dv = _mm512_load_ps(packet.dv);
-    if (!State::axis(packet.u0, st.axis_levels[0][std::size_t(pp.L)], du, pp.ax) ||
-        !State::axis(packet.v0, st.axis_levels[1][std::size_t(pp.L)], dv, pp.ay))
+    if (!State::axis<W>(packet.u0, st.axis_levels[0][std::size_t(pp.L)], packet.du, pp.ax) ||
+        !State::axis<W>(packet.v0, st.axis_levels[1][std::size_t(pp.L)], packet.dv, pp.ay))
         return false;
     // NaN positions fail neither comparison in axis: refuse them here.
-    if (_mm512_cmp_ps_mask(pp.ax.rel, pp.ay.rel, _CMP_UNORD_Q)) return false;
+    for (int k = 0; k < 16; k += W) {
+        const typename L::F x = L::F::load(pp.ax.rel + k), y = L::F::load(pp.ay.rel + k);
+        if (any<W>(!(x <= x) | !(y <= y))) return false;
+    }
 #if defined(__AVX512VBMI__) && defined(__AVX512BW__)
-    if (!levels_differ && st.sample_stretches(pp, lv, r, g, b)) return true;
+    if constexpr (W == 16)
+        if (stretches && !levels_differ && st.sample_stretches(pp, lv, r, g, b)) return true;
 #endif
-    const LevelTaps fine_taps = st.taps(pp, lv.l0);
-    LevelTaps coarse_taps = fine_taps;
-    if (lv.blending) coarse_taps = st.taps(pp, _mm512_mask_add_epi32(lv.l0, lv.blending, lv.l0, _mm512_set1_epi32(1)));
-    return st.sample(fine_taps, coarse_taps, lv, r, g, b);
+    (void)stretches;
+    LevelTaps fine_taps;
+    st.taps<W>(pp, lv.l0, fine_taps);
+    if (!lv.blending) return st.sample<W>(fine_taps, fine_taps, lv, r, g, b);
+    alignas(64) std::int32_t l1[16];
+    for (int k = 0; k < 16; k += W)
+        L::select(mask_of<W>(lv.blending >> k), I::load(lv.l0 + k) + I(1), I::load(lv.l0 + k)).store(l1 + k);
+    LevelTaps coarse_taps;
+    st.taps<W>(pp, l1, coarse_taps);
+    return st.sample<W>(fine_taps, coarse_taps, lv, r, g, b);
+}
+template bool TrilinearLanes::sample_lanes<1>(const PacketUv&, float*, float*, float*, bool);
+#if defined(__AVX2__)
+template bool TrilinearLanes::sample_lanes<8>(const PacketUv&, float*, float*, float*, bool);
+#endif
+#if defined(__AVX512F__)
+template bool TrilinearLanes::sample_lanes<16>(const PacketUv&, float*, float*, float*, bool);
+#endif
+
+bool TrilinearLanes::enabled() const { return state_ != nullptr && kWidest == 16; }
+
+bool TrilinearLanes::sample16(const PacketUv& packet, float* r, float* g, float* b) {
+#if defined(__AVX512F__)
+    return sample_lanes<16>(packet, r, g, b, true);
+#else
+    (void)packet, (void)r, (void)g, (void)b;
+    return false;  // no lanes to sample in: always declined
+#endif
 }
 #pragma GCC diagnostic pop
-#else
-bool TrilinearLanes::sample16(const PacketUv&, float*, float*, float*) { return false; }
-#endif
 
 }  // namespace gigascroll

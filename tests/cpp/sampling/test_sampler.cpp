@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -509,6 +510,55 @@ TEST(TrilinearLanes, PacketsFromTheirOriginAgreeWithTheReferenceOrDecline) {
         else EXPECT_LT(accepted, packets * 9 / 10);
         RecordProperty("largest_difference_codes_" + std::to_string(int(resident * 100)), std::to_string(worst));
     }
+}
+
+// sample16 at every width the host has (TrilinearLanes::sample_lanes: W = 1, 8, 16 lanes a
+// step, without the common packet's byte-permuted stretches) and with the stretches (AVX-512
+// VBMI) against W = 1: the same packets accepted, the same bits (the display's packets as
+// above, all tiles or half of them resident).
+TEST(TrilinearLanes, EveryWidthAndTheStretchesGiveTheScalarSamples) {
+    const CutPainting painting(1777, 901, 64, 4, 41);
+    const std::uint32_t L = painting.level_count();
+    std::size_t accepted = 0;
+    for (double resident : {1.0, 0.5}) {
+        VirtualTexture vt(painting.layout, 24, 24, painting.source());
+        std::mt19937 rng(59);
+        painting.insert_random(vt, resident, rng);
+        TrilinearLanes one(vt, 0), wide(vt, 0);
+        std::uniform_real_distribution<double> unit(-0.03, 1.03), slope(-1.0, 1.0);
+        const auto lock = vt.read_lock();
+        for (std::size_t q = 0; q < 3000; ++q) {
+            const double step = std::exp2(slope(rng) * 3.0) / 1777.0;
+            const double tilt = q % 5 == 0 ? slope(rng) * 4 : slope(rng) * 0.05;
+            const float lod0 = q % 7 == 0 ? float(slope(rng) * L) : float(std::log2(step * 1777.0) + 0.2 * slope(rng));
+            PacketUv packet;
+            packet.u0 = unit(rng), packet.v0 = unit(rng);
+            for (int k = 0; k < 16; ++k) {
+                packet.du[k] = float(step * k), packet.dv[k] = float(tilt * step * k);
+                packet.lod[k] = q % 11 == 0 ? std::floor(lod0) : lod0 + 0.01f * float(k);
+            }
+            if (q % 13 == 0) packet.lod[q % 16] = std::numeric_limits<float>::quiet_NaN();
+            alignas(64) float want[3][16], got[3][16];
+            const bool ok = one.sample_lanes<1>(packet, want[0], want[1], want[2], false);
+            accepted += ok;
+            auto expect_same = [&](bool ok_w, int width, bool stretches) {
+                ASSERT_EQ(ok_w, ok) << "width " << width << " stretches " << stretches << " packet " << q;
+                if (ok)
+                    for (int c = 0; c < 3; ++c)
+                        for (int k = 0; k < 16; ++k)
+                            ASSERT_EQ(std::bit_cast<std::uint32_t>(got[c][k]), std::bit_cast<std::uint32_t>(want[c][k]))
+                                << "width " << width << " stretches " << stretches << " packet " << q << " lane " << k;
+            };
+#if defined(__AVX2__)
+            expect_same(wide.sample_lanes<8>(packet, got[0], got[1], got[2], false), 8, false);
+#endif
+#if defined(__AVX512F__)
+            expect_same(wide.sample_lanes<16>(packet, got[0], got[1], got[2], false), 16, false);
+            expect_same(wide.sample_lanes<16>(packet, got[0], got[1], got[2], true), 16, true);
+#endif
+        }
+    }
+    EXPECT_GT(accepted, 2000u);  // the packets compared are many
 }
 
 // A packet whose lanes reach the painting's edge, where sample() clamps, is declined.
