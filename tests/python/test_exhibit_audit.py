@@ -254,3 +254,26 @@ def test_a_bad_language_tag_names_the_key(tmp_path, capsys):
         'title = "Two studies"', 'title = "Two studies"\nlanguage = "English"'))
     assert line.endswith("show.toml: language: expected a BCP 47 language tag such as en, "
                          "zh-Hant or ja, or none, got 'English'"), line
+
+
+def test_a_long_painting_is_lit_along_its_length(tmp_path, monkeypatch):
+    # Was: one 0.3 m panel at the centre of any painting: a 4.8 m scroll got 200 lx in the
+    # middle and a third of that at its ends. Now one panel per 1.2 m, solved together.
+    # Reference: the direct illuminance by Lambert's polygon formula (direct_lux).
+    import gigascroll.exhibit.floor_plan as fp
+    from gigascroll.exhibit import load_exhibition
+    from gigascroll.gallery.illuminance import direct_lux
+    Image.fromarray(np.full((60, 480, 3), 128, np.uint8)).save(tmp_path / "wide.png")
+    (tmp_path / "wide.toml").write_text(
+        '[room]\nwalls = [[0, 0], [8, 0], [8, 5], [0, 5]]\n[[paintings]]\ntitle = "Wide"\n'
+        'image = "wide.png"\nwidth_cm = 480\nheight_cm = 60\nhang = { wall = 0, along_m = 4.0 }\n')
+    ex = load_exhibition(tmp_path / "wide.toml")
+    uniformity = {}
+    for span in (fp.PANEL_SPAN_M, 100.0):  # the rule, and one panel as before
+        monkeypatch.setattr(fp, "PANEL_SPAN_M", span)
+        room = fp.build_room(ex)
+        lux = direct_lux(room, 0, 64)
+        assert lux.mean() == pytest.approx(200, rel=1e-6)  # the solve, by the same formula
+        uniformity[len(room.lights[0].panels)] = lux.min() / lux.mean()
+    assert set(uniformity) == {4, 1}
+    assert uniformity[4] > 0.5 > 0.35 > uniformity[1]

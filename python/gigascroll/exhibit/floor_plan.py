@@ -11,9 +11,10 @@ painting, its size and the wall's, never a silent resize. Tables and vitrines ar
 their (possibly tilted) painting and must stand inside the floor plan without overlapping.
 
 The floor and ceiling are the plan's bounding rectangle (the walls close the room); default
-lights, when the file gives none, are one 0.3 m panel per painting aimed at its centre 30
-degrees off vertical (over a table: straight down), each solved for 200 lux of direct light
-on its painting."""
+lights, when the file gives none, are one light per painting: a row of 0.3 m panels, one per
+1.2 m of its width, 10 cm below the ceiling, each aimed at its share of the painting 30
+degrees off vertical (over a table: straight down), solved together for 200 lux of direct
+light on the painting."""
 
 from __future__ import annotations
 
@@ -34,6 +35,7 @@ __all__ = ["build_room", "floor_polygon", "wall_frames", "WALL_GAP_M", "Wall"]
 
 WALL_GAP_M = 0.005      # a painting's plane in front of its wall (or its frame's front)
 SPOT_SIZE_M = 0.30
+PANEL_SPAN_M = 1.2      # a default light's panels at most this far apart along its painting
 SPOT_AIM_DEG = 30.0
 TABLE_MARGIN_M = 0.05   # a table's top beyond its painting on each side
 
@@ -364,6 +366,10 @@ def _table_slot(ex, p, poly, footprints: list):
 
 
 def _default_lights(ex, walls, height) -> list[LightSpec]:
+    """One light per painting, solved for GALLERY_LUX: a row of SPOT_SIZE_M panels at most
+    PANEL_SPAN_M apart along the painting's width (one for a painting up to that wide), each
+    aimed at the middle of its share of the painting, so a long scroll is lit along its
+    length rather than by one spot at its centre."""
     lights, y = [], height - 0.1
     for p in ex.paintings:
         h = p.hang
@@ -371,13 +377,16 @@ def _default_lights(ex, walls, height) -> list[LightSpec]:
             w = walls[h.wall]
             centre = (np.array([w.a[0], h.centre_height_m, w.a[1]]) + w.t * h.along_m)
             setback = max(0.3, (y - h.centre_height_m) * math.tan(math.radians(SPOT_AIM_DEG)))
-            at = centre + w.n * setback
-            at[1] = y
+            lift, along = w.n * setback + np.array([0.0, y - h.centre_height_m, 0.0]), w.t
         else:
             centre = np.array([h.position_m[0], h.height_m, h.position_m[1]])
-            at = centre + np.array([0.0, y - h.height_m, 0.0])
-        panel = rectangle(at, centre - at, SPOT_SIZE_M, SPOT_SIZE_M)
-        lights.append(LightSpec(f"light-{p.name}", [panel], lux=GALLERY_LUX, painting=p.name))
+            lift, along = np.array([0.0, y - h.height_m, 0.0]), table_axes(h)[0]
+        n = max(1, math.ceil(p.width_m / PANEL_SPAN_M - 1e-9))
+        panels = []
+        for k in range(n):
+            aim_at = centre + along * (p.width_m * ((k + 0.5) / n - 0.5))
+            panels.append(rectangle(aim_at + lift, -lift, SPOT_SIZE_M, SPOT_SIZE_M))
+        lights.append(LightSpec(f"light-{p.name}", panels, lux=GALLERY_LUX, painting=p.name))
     return lights
 
 
