@@ -277,3 +277,27 @@ def test_a_long_painting_is_lit_along_its_length(tmp_path, monkeypatch):
         uniformity[len(room.lights[0].panels)] = lux.min() / lux.mean()
     assert set(uniformity) == {4, 1}
     assert uniformity[4] > 0.5 > 0.35 > uniformity[1]
+
+
+def test_default_panels_face_down_and_keep_the_30_degree_rule(tmp_path):
+    # Was: panels tilted toward the wall 2.5 cm under the ceiling lit the ceiling beside them
+    # with hundreds of times the painting's illuminance, which the bake's final gather spread
+    # as sparkles over every surface. Facing down, they send the ceiling no direct light.
+    from gigascroll.exhibit import load_exhibition
+    from gigascroll.exhibit.floor_plan import build_room
+    write_images(tmp_path)
+    (tmp_path / "show.toml").write_text(SHOW)
+    ex = load_exhibition(tmp_path / "show.toml")
+    room = build_room(ex)
+    for light, p in zip(room.lights, ex.paintings):
+        slot = next(s for s in room.paintings if s.name == p.name)
+        centre = (np.array(slot.origin) + np.array(slot.u_axis) * slot.width_m / 2
+                  + np.array(slot.v_axis) * slot.height_m / 2)
+        for corners in light.panels:
+            c = np.asarray(corners)
+            normal = np.cross(c[1] - c[0], c[2] - c[0])  # counter-clockwise from the lit side
+            assert normal[1] < 0 and abs(normal[0]) + abs(normal[2]) < 1e-9 * abs(normal[1])
+            assert c[:, 1].max() == pytest.approx(3.0 - 0.1)  # 10 cm under the ceiling
+            to_painting = centre - c.mean(axis=0)
+            off = np.degrees(np.arccos(-to_painting[1] / np.linalg.norm(to_painting)))
+            assert off == pytest.approx(30.0, abs=0.5)

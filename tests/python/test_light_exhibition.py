@@ -35,14 +35,12 @@ def test_a_shows_figures(show, capsys):
     d = json.loads((report / "light.json").read_text())
     assert [p["name"] for p in d["paintings"]] == ["Red study", "Blue study"]  # no labels
     assert d["exhibition"] == str(show / "show") and d["pack"].endswith("paintings.pack")
-    # Each light is solved for 200 lx of its own direct light on its painting; the blue
-    # study also gets some of the red study's spot (spill only adds).
-    red, blue = d["paintings"]
-    assert red["direct_mean_lux_analytic"] == pytest.approx(200, rel=0.01)
-    assert 198 <= blue["direct_mean_lux_analytic"] <= 230
+    # Each light is solved for 200 lx of its own direct light on its painting; the other
+    # painting's light spills some onto it (spill only adds).
     for p in d["paintings"]:
+        assert 198 <= p["direct_mean_lux_analytic"] <= 250
         # Direct plus the walls' bounce: at least the direct light, within 2x of it.
-        assert 190 <= p["mean_lux"] <= 400
+        assert 0.95 * p["direct_mean_lux_analytic"] <= p["mean_lux"] <= 400
         assert (report / p["map"]).is_file()
     assert "Red study: min" in out and f"wrote {report}/" in out
 

@@ -11,10 +11,10 @@ painting, its size and the wall's, never a silent resize. Tables and vitrines ar
 their (possibly tilted) painting and must stand inside the floor plan without overlapping.
 
 The floor and ceiling are the plan's bounding rectangle (the walls close the room); default
-lights, when the file gives none, are one light per painting: a row of 0.3 m panels, one per
-1.2 m of its width, 10 cm below the ceiling, each aimed at its share of the painting 30
-degrees off vertical (over a table: straight down), solved together for 200 lux of direct
-light on the painting."""
+lights, when the file gives none, are one light per painting: a row of 0.3 m panels facing
+down, 10 cm below the ceiling, one per 1.2 m of its width, each set back from the wall so
+that the middle of its share of the painting lies 30 degrees off vertical from it (over a
+table: straight above), solved together for 200 lux of direct light on the painting."""
 
 from __future__ import annotations
 
@@ -36,6 +36,7 @@ __all__ = ["build_room", "floor_polygon", "wall_frames", "WALL_GAP_M", "Wall"]
 WALL_GAP_M = 0.005      # a painting's plane in front of its wall (or its frame's front)
 SPOT_SIZE_M = 0.30
 PANEL_SPAN_M = 1.2      # a default light's panels at most this far apart along its painting
+DOWN = (0.0, -1.0, 0.0)  # the default lights' panels face down
 SPOT_AIM_DEG = 30.0
 TABLE_MARGIN_M = 0.05   # a table's top beyond its painting on each side
 
@@ -368,14 +369,19 @@ def _table_slot(ex, p, poly, footprints: list):
 def _default_lights(ex, walls, height) -> list[LightSpec]:
     """One light per painting, solved for GALLERY_LUX: a row of SPOT_SIZE_M panels at most
     PANEL_SPAN_M apart along the painting's width (one for a painting up to that wide), each
-    aimed at the middle of its share of the painting, so a long scroll is lit along its
-    length rather than by one spot at its centre."""
+    over the middle of its share of the painting, 30 degrees off vertical from it, so a long
+    scroll is lit along its length rather than by one spot at its centre. The panels face
+    down, as ceiling fixtures do: a panel tilted toward the wall would light the ceiling a
+    few centimetres away, a hot patch whose light the bake's final gather turns into
+    sparkles all over the room."""
     lights, y = [], height - 0.1
     for p in ex.paintings:
         h = p.hang
         if h.wall is not None:
             w = walls[h.wall]
-            centre = (np.array([w.a[0], h.centre_height_m, w.a[1]]) + w.t * h.along_m)
+            face = WALL_GAP_M + (p.frame.depth_m if p.frame else 0.0)  # the painting's plane
+            centre = (np.array([w.a[0], h.centre_height_m, w.a[1]]) + w.t * h.along_m
+                      + w.n * face)
             setback = max(0.3, (y - h.centre_height_m) * math.tan(math.radians(SPOT_AIM_DEG)))
             lift, along = w.n * setback + np.array([0.0, y - h.centre_height_m, 0.0]), w.t
         else:
@@ -385,7 +391,7 @@ def _default_lights(ex, walls, height) -> list[LightSpec]:
         panels = []
         for k in range(n):
             aim_at = centre + along * (p.width_m * ((k + 0.5) / n - 0.5))
-            panels.append(rectangle(aim_at + lift, -lift, SPOT_SIZE_M, SPOT_SIZE_M))
+            panels.append(rectangle(aim_at + lift, DOWN, SPOT_SIZE_M, SPOT_SIZE_M))
         lights.append(LightSpec(f"light-{p.name}", panels, lux=GALLERY_LUX, painting=p.name))
     return lights
 
