@@ -6,6 +6,8 @@ and read by :class:`TilePack`.
 - :mod:`.synth`: the built-in ink landscape (`synth_painting`, `render_ink_landscape`)
 - :mod:`.build`: the page-table layout and the build (`plan_layout`, `build_pack`)
 - :mod:`.inspect`: reading back (`pack_manifest`, `read_level`, `verify_pack`, `pack_summary`)
+- :mod:`.merge`: paintings of existing packs gathered into a new pack, their tiles copied as
+  stored, never re-encoded (`merge_packs`; an exhibition of images and packs)
 """
 
 from .._core import PackPainting, TilePack, painting_geometry
