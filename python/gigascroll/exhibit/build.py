@@ -155,7 +155,7 @@ def _pack_show(ex: Exhibition, dst: Path, settings: dict, *, progress, threads,
             build_pack(inputs, images, names=names, **options)
         labels = [n for n in names if n.startswith("label-")]
         try:
-            merge_packs(_merge_items(ex, str(images), labels), dst)
+            merge_packs(_merge_items(ex, str(images), labels), dst, progress=progress)
         except (OSError, ValueError) as e:
             raise ExhibitionError(f"{ex.path}: paintings: cannot merge the given packs into "
                                   f"the show's: {e}") from None

@@ -42,11 +42,12 @@ _STORED = 1
 _VERSION = 2
 
 
-def merge_packs(items, out, *, force: bool = False, layout: str = "brkga", seed: int = 0):
+def merge_packs(items, out, *, force: bool = False, layout: str = "brkga", seed: int = 0,
+                progress: bool = False):
     """Builds the pack `out` from `items`, (name, pack directory, painting) triples (painting:
     a name or an index in that pack), and returns it opened (TilePack). See the module
     docstring. ValueError for bad items or packs whose settings differ; OSError for an
-    unreadable or corrupt source pack."""
+    unreadable or corrupt source pack. `progress`: a bar counting the tiles verified."""
     import xxhash  # noqa: F401  (the reader's dependency: fail before any work)
     items = _check_items(items)
     out = Path(out)
@@ -56,7 +57,7 @@ def merge_packs(items, out, *, force: bool = False, layout: str = "brkga", seed:
         resolved = [_resolve(packs, name, path, which) for name, path, which in items]
         settings = _common_settings(packs, items)
         stored, instances = _dedupe(resolved)
-        return _assemble(packs, stored, instances, out, settings, layout, seed)
+        return _assemble(packs, stored, instances, out, settings, layout, seed, progress)
     finally:
         for p in packs.values():
             p.close()
@@ -151,16 +152,20 @@ def _dedupe(resolved):
     return stored, instances
 
 
-def _assemble(packs, stored, instances, out: Path, settings, layout, seed):
+def _assemble(packs, stored, instances, out: Path, settings, layout, seed, progress=False):
     tile, border, codec = settings["tile_size"], settings["border"], settings["codec"]
     src = [packs[real].paintings[i] for _, real, i in stored]
     sizes = [painting_geometry(p.width, p.height, tile, border)["table_size"] for p in src]
     sizes += [sizes[j] for _, j in instances]
     table_w, table_h, offsets, info = plan_layout(sizes, layout, seed)
     tmp = temp_dir(out)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=sum(p.tile_count for p in src), unit="tile", desc="merge packs")
     try:
         for j, (_, real, index) in enumerate(stored):
-            _write_shard(packs[real], index, j, tmp)
+            _write_shard(packs[real], index, j, tmp, bar)
         paintings = [(name, p.width, p.height, p.source, p.conversion, *offsets[j],
                       "" if p.colour is None else json.dumps(p.colour))
                      for j, ((name, _, _), p) in enumerate(zip(stored, src))]
@@ -173,10 +178,13 @@ def _assemble(packs, stored, instances, out: Path, settings, layout, seed):
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        if bar is not None:
+            bar.close()
     return _core.TilePack(out)
 
 
-def _write_shard(pack: PurePack, p: int, j: int, directory: Path) -> None:
+def _write_shard(pack: PurePack, p: int, j: int, directory: Path, bar=None) -> None:
     """Painting `p` of `pack` as painting `j`'s shard: its tile file (linked or copied) and
     its index, each tile's checksum verified and seeded anew."""
     pp = pack.paintings[p]
@@ -204,6 +212,8 @@ def _write_shard(pack: PurePack, p: int, j: int, directory: Path) -> None:
                         new[k]["offset"], new[k]["length"] = offset, len(data)
                         offset += len(data)
                     k += 1
+            if bar is not None:
+                bar.update(nx * ny)
         if fd is not None:
             os.pwrite(fd, _HEADER.pack(_TILES_MAGIC, _VERSION, 0, pp.tile_count,
                                        offset - _HEADER.size), 0)
