@@ -280,13 +280,18 @@ def test_a_pack_is_used_as_is(show_dir):
     build_pack([red, blue], show_dir / "mine.pack", names=["r", "b"])
     text = SHOW.replace('image = "red.png"', 'pack = "mine.pack"\npainting = "r"')
     text = text.replace('image = "blue.png"', 'pack = "mine.pack"\npainting = 1')
-    (show_dir / "show.toml").write_text(text)
+    (show_dir / "show.toml").write_text("labels = false\n" + text)
     record = build_show(show_dir / "show.toml", show_dir / "show")
     assert not record["packed"] and not record["reused_pack"]
     assert not (show_dir / "show" / "paintings.pack").exists()
     show = open_show(show_dir / "show")
     assert Path(show.pack.path).resolve() == (show_dir / "mine.pack").resolve()
-    assert [s.painting for s in show.room.paintings] == ["r", "b"]  # no labels: not our pack
+    assert [s.painting for s in show.room.paintings] == ["r", "b"]  # no labels asked for
+    # With the labels (the default) the pack is merged into the show's own, which holds them.
+    (show_dir / "show.toml").write_text(text)
+    assert build_show(show_dir / "show.toml", show_dir / "show1")["packed"]
+    assert [s.painting for s in open_show(show_dir / "show1").room.paintings] == [
+        "red-study", "blue-study", "label-red-study", "label-blue-study"]
     # Mixing images with a pack merges them into the show's pack (test_exhibit_merge.py).
     (show_dir / "show.toml").write_text(SHOW.replace('image = "red.png"',
                                                      'pack = "mine.pack"'))

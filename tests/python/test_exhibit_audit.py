@@ -32,10 +32,11 @@ def as_is_show(tmp_path_factory):
     blue = np.asarray(Image.open(d / "blue.png"))
     build_pack([red, blue], d / "mine.pack", names=["r", "b"])
     text = SHOW.replace('image = "red.png"', 'pack = "mine.pack"\npainting = "r"')
-    (d / "show.toml").write_text(text.replace('image = "blue.png"',
-                                              'pack = "mine.pack"\npainting = 1'))
+    (d / "show.toml").write_text("labels = false\n" + text.replace(
+        'image = "blue.png"', 'pack = "mine.pack"\npainting = 1'))
     assert main(["exhibit", "build", str(d / "show.toml"), "-o", str(d / "show"), "--no-bake",
                  "--no-iiif"]) == 0
+    assert not (d / "show" / "paintings.pack").exists()  # the pack shown as is
     return d
 
 

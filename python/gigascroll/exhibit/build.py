@@ -6,9 +6,10 @@ once), tour.json (the file's tour or the default one), bake/ (the baked light, w
 command's `bake` hook) and build.json (what this build did: packed or reused, seconds).
 
 Paintings given as packs: when every painting comes from one pack (each of its paintings
-at most once), that pack is shown as is (exhibition.json names it; no labels: they would
-need a pack of the show's own). Otherwise (images and packs mixed, several packs, a pack
-painting shown twice) the images are packed with the given packs' tile size, border and
+at most once) and no wall labels are to be hung (labels = false, or a built-in or file
+room), that pack is shown as is (exhibition.json names it). Otherwise (images and packs
+mixed, several packs, a pack painting shown twice, labels on a floor plan's walls, which
+need a pack of the show's own) the images are packed with the given packs' tile size, border and
 codec and every given pack's painting is merged in (pack.merge: its tiles copied as stored,
 hard-linked where possible, never re-encoded), under the painting's own name; a painting
 shown twice is stored once and the others are instances of it.
@@ -97,9 +98,13 @@ def content_hash(inputs, names, instances=(), packs=(), settings=None) -> str:
 
 def _as_is_pack(ex: Exhibition) -> str | None:
     """The pack the show shows as is: the one every painting comes from, each of its
-    paintings at most once; None when the show packs images or merges packs."""
+    paintings at most once, when no wall labels are to be hung (they need the show's own
+    pack); None when the show packs images or merges packs."""
     packs = {os.path.realpath(p.pack) if p.pack else None for p in ex.paintings}
     if len(packs) != 1 or None in packs:
+        return None
+    if ex.labels and "walls" in ex.room and any(
+            p.hang is not None and p.hang.wall is not None for p in ex.paintings):
         return None
     shown = [str(p.pack_painting) for p in ex.paintings]
     return ex.paintings[0].pack if len(set(shown)) == len(shown) else None
