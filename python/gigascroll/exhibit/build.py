@@ -200,6 +200,31 @@ def _tour(ex: Exhibition, spec):
         raise ExhibitionError(f"{ex.path}: tour: {e}") from None
     return tour
 
+
+def _show_pack(ex: Exhibition, out: Path, tmp: Path, previous, settings, given_pack, record,
+               **options):
+    """(content hash, the pack's place in exhibition.json, the pack opened): the given pack
+    as is, the previous build's pack when its hash is the same (hard links), or a new one
+    (_pack_show). Records in `record` what was done."""
+    from ..pack import TilePack
+    if given_pack is not None:
+        return None, given_pack, TilePack(given_pack)
+    inputs, names, instances = pack_inputs(ex)
+    packs = [(p.name, os.path.realpath(p.pack), str(p.pack_painting))
+             for p in ex.paintings if p.pack]
+    digest = content_hash(inputs, names, instances, packs, settings)
+    if previous and previous.get("pack_hash") == digest \
+            and (out / PACK_NAME / "manifest.json").is_file():
+        _link_tree(out / PACK_NAME, tmp / PACK_NAME)
+        record["reused_pack"] = True
+    else:
+        _pack_show(ex, tmp / PACK_NAME, settings, **options)
+        record["packed"] = True
+    if packs:
+        record["merged_packs"] = sorted({p for _, p, _ in packs})
+    return digest, PACK_NAME, TilePack(tmp / PACK_NAME)
+
+
 def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
                progress: bool = False, threads: int = 0, workers: int = 0) -> dict:
     """Builds the show of `exhibition` (a path or an Exhibition) into `out`; returns the
@@ -209,7 +234,6 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
     Image API tiles with a Presentation 3.0 manifest (gigascroll.iiif_exhibition).
     `workers` > 0 packs on that many Dask workers (a LocalCluster), as `pack --workers`."""
     from ..gallery import Gallery
-    from ..pack import TilePack
     t0 = time.perf_counter()
     ex = exhibition if isinstance(exhibition, Exhibition) else load_exhibition(exhibition)
     out = Path(out)
@@ -236,25 +260,9 @@ def build_show(exhibition, out, *, bake=None, iiif_base: str | None = None,
     tmp = temp_dir(out, command=COMMAND)
     try:
         record = {"exhibition": ex.path, "packed": False, "reused_pack": False}
-        if given_pack is None:
-            inputs, names, instances = pack_inputs(ex)
-            packs = [(p.name, os.path.realpath(p.pack), str(p.pack_painting))
-                     for p in ex.paintings if p.pack]
-            digest = content_hash(inputs, names, instances, packs, settings)
-            if previous and previous.get("pack_hash") == digest \
-                    and (out / PACK_NAME / "manifest.json").is_file():
-                _link_tree(out / PACK_NAME, tmp / PACK_NAME)
-                record["reused_pack"] = True
-            else:
-                _pack_show(ex, tmp / PACK_NAME, settings, progress=progress, threads=threads,
-                           workers=workers)
-                record["packed"] = True
-            if packs:
-                record["merged_packs"] = sorted({p for _, p, _ in packs})
-            pack_path = PACK_NAME
-            pack = TilePack(tmp / PACK_NAME)
-        else:
-            digest, pack_path, pack = None, given_pack, TilePack(given_pack)
+        digest, pack_path, pack = _show_pack(ex, out, tmp, previous, settings, given_pack,
+                                             record, progress=progress, threads=threads,
+                                             workers=workers)
         spec = spec if spec is not None else build_room(ex, pack)
         try:
             gallery = Gallery.from_room(spec, pack)
