@@ -302,3 +302,28 @@ def test_default_panels_face_down_and_keep_the_30_degree_rule(tmp_path):
             to_painting = centre - c.mean(axis=0)
             off = np.degrees(np.arccos(-to_painting[1] / np.linalg.norm(to_painting)))
             assert off == pytest.approx(30.0, abs=0.5)
+
+
+def test_the_files_lux_sets_the_default_lights(tmp_path):
+    # A museum lights works on paper and silk at about 50 lx (CIE 157:2004's high and medium
+    # categories); the default lights had a fixed 200 lx. Reference: Lambert's polygon
+    # formula (direct_lux) on each painting, spill from the other painting's light allowed.
+    from gigascroll.exhibit import load_exhibition
+    from gigascroll.exhibit.floor_plan import build_room
+    from gigascroll.gallery.illuminance import direct_lux
+    write_images(tmp_path)
+    for lux in (None, 50):
+        (tmp_path / "show.toml").write_text(SHOW if lux is None else f"lux = {lux}\n" + SHOW)
+        room = build_room(load_exhibition(tmp_path / "show.toml"))
+        target = 200 if lux is None else 50
+        assert [light.lux for light in room.lights] == [target, target]
+        for k in range(2):
+            assert target <= direct_lux(room, k, 32).mean() <= 1.25 * target
+
+
+def test_lux_where_no_default_lights_are_made_is_an_error(tmp_path, capsys):
+    write_images(tmp_path)
+    text = ('lux = 50\n[room]\nbuiltin = "hall"\n[[paintings]]\ntitle = "Red"\n'
+            'image = "red.png"\nwidth_cm = 80\nheight_cm = 60\n')
+    line = _build_error(tmp_path, capsys, text)
+    assert "show.toml: lux: expected only in a floor plan room without [[lights]]" in line

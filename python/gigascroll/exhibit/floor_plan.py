@@ -14,7 +14,8 @@ The floor and ceiling are the plan's bounding rectangle (the walls close the roo
 lights, when the file gives none, are one light per painting: a row of 0.3 m panels facing
 down, 10 cm below the ceiling, one per 1.2 m of its width, each set back from the wall so
 that the middle of its share of the painting lies 30 degrees off vertical from it (over a
-table: straight above), solved together for 200 lux of direct light on the painting."""
+table: straight above), solved together for the file's `lux` (default 200 lux) of direct
+light on the painting."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ import numpy as np
 
 from ..room.lights import LightSpec, light_surface, lights_from_json, rectangle
 from ..room.spec import PaintingSlot, RoomSpec
-from ..room.builtin import (CEILING_ALBEDO, FLOOR_ALBEDO, GALLERY_LUX, TABLE_ALBEDO,
+from ..room.builtin import (CEILING_ALBEDO, FLOOR_ALBEDO, TABLE_ALBEDO,
                              WALL_ALBEDO, _box_quads, _quad, _surface)
 from .labels import LABEL_GAP_M, LABEL_H_M, LABEL_W_M
 from .model import Exhibition
@@ -367,7 +368,7 @@ def _table_slot(ex, p, poly, footprints: list):
 
 
 def _default_lights(ex, walls, height) -> list[LightSpec]:
-    """One light per painting, solved for GALLERY_LUX: a row of SPOT_SIZE_M panels at most
+    """One light per painting, solved for the file's `lux` (default 200): a row of SPOT_SIZE_M panels at most
     PANEL_SPAN_M apart along the painting's width (one for a painting up to that wide), each
     over the middle of its share of the painting, 30 degrees off vertical from it, so a long
     scroll is lit along its length rather than by one spot at its centre. The panels face
@@ -392,7 +393,7 @@ def _default_lights(ex, walls, height) -> list[LightSpec]:
         for k in range(n):
             aim_at = centre + along * (p.width_m * ((k + 0.5) / n - 0.5))
             panels.append(rectangle(aim_at + lift, DOWN, SPOT_SIZE_M, SPOT_SIZE_M))
-        lights.append(LightSpec(f"light-{p.name}", panels, lux=GALLERY_LUX, painting=p.name))
+        lights.append(LightSpec(f"light-{p.name}", panels, lux=ex.lux, painting=p.name))
     return lights
 
 

@@ -28,6 +28,7 @@ TABLE_HEIGHT_CM = 90.0            # a table's or vitrine's painting centre by de
 DEFAULT_WALL_HEIGHT_M = 3.5
 DEFAULT_ASPECT_TOLERANCE = 0.02
 MAX_FILE_BYTES = 1 << 20
+DEFAULT_LUX = 200.0       # the default lights' target (the built-in rooms' GALLERY_LUX)
 
 
 @dataclass
@@ -111,6 +112,7 @@ class Exhibition:
     labels: bool = True
     aspect_tolerance: float = DEFAULT_ASPECT_TOLERANCE
     language: str = "none"   # of the titles and names: the IIIF language maps' tag
+    lux: float = DEFAULT_LUX  # the default lights' target on each painting
 
     def painting(self, which) -> Painting:
         """A painting by title, pack name or index (int or digits); ValueError naming the
@@ -197,11 +199,16 @@ def exhibition_from_dict(data: dict, where: str, base: Path) -> Exhibition:
         paintings.append(p)
     if walls is not None:
         room.setdefault("height_m", DEFAULT_WALL_HEIGHT_M)
+    if "lux" in data and (walls is None or data.get("lights")):
+        raise ExhibitionError(f"{where}: lux: expected only in a floor plan room without "
+                              "[[lights]] (it is the default lights' target; give each light "
+                              "its own lux, or the built-in rooms light themselves)")
     return Exhibition(where, data.get("title", Path(where).stem), room, paintings,
                       list(data.get("lights", [])), data.get("tour"),
                       bool(data.get("labels", True)),
                       float(data.get("aspect_tolerance", DEFAULT_ASPECT_TOLERANCE)),
-                      str(data.get("language", "none")))
+                      str(data.get("language", "none")),
+                      float(data.get("lux", DEFAULT_LUX)))
 
 
 def _unique_name(title: str, taken: set[str], given: str | None = None) -> str:
