@@ -101,6 +101,10 @@ def test_what_the_commands_made(ran):
     # The walk's video, frames and report land next to the pack, as the README says.
     walk = d / "my_painting-walk"
     assert (walk / "report.md").is_file() and any((walk / "frames").iterdir())
+    # The show's light report lands next to the show, its painting named by its title.
+    import json
+    report = json.loads((d / "show-light" / "light.json").read_text())
+    assert [p["name"] for p in report["paintings"]] == ["My painting"]
     # The show hangs the painting at its real size.
     from gigascroll.exhibit.show import open_show
     slot = open_show(d / "show").room.paintings[0]
