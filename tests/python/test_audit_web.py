@@ -66,3 +66,32 @@ def test_render_refuses_the_camera_the_page_refuses(served, tmp_path):
                         "--width", "8", "--height", "8", "--lighting", "unlit"],
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "1e12" in r.stderr and not (tmp_path / "c.png").exists(), r.stderr
+
+
+def test_the_readme_camera_looks_at_the_painting_from_inside_the_room(served):
+    """The README's ?camera example stands inside the scroll room and looks at the painting's
+    front (it stood behind the wall: a black page)."""
+    import json
+    import re
+    import urllib.request
+    from pathlib import Path
+
+    import numpy as np
+    url, _ = served
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    found = re.findall(r"\?camera=([-0-9.,]+)", readme)
+    assert found, "the README shows a ?camera example"
+    with urllib.request.urlopen(url + "/api/scene.json") as r:
+        room = json.load(r)["room"]
+    lo, hi = np.array(room["bounds"])
+    slot = room["slots"][0]
+    origin, u, v = (np.array(slot[k], float) for k in ("origin", "u_axis", "v_axis"))
+    normal = np.cross(u, v)
+    for text in found:
+        x = [float(t) for t in text.split(",")]
+        eye, target = np.array(x[:3]), np.array(x[3:6])
+        assert np.all(lo < eye) and np.all(eye < hi), (text, room["bounds"])
+        d = target - eye
+        t = (origin - eye) @ normal / (d @ normal)   # where the gaze meets the painting's plane
+        hit = eye + t * d - origin
+        assert t > 0 and 0 <= hit @ u <= slot["width_m"] and 0 <= hit @ v <= slot["height_m"], text
