@@ -438,4 +438,18 @@ inline Lanes<16>::I gather_bytes(const std::uint8_t* base, Lanes<16>::I offset) 
 }
 #endif
 
+// Lane k's int32, in registers (a vector just stored and read back as one lane waits for the
+// store: the loads of a wide store's parts do not forward).
+inline std::int32_t lane_value(Lanes<1>::I x, int) { return x.v; }
+#if defined(__AVX2__)
+inline std::int32_t lane_value(Lanes<8>::I x, int k) {
+    return _mm_cvtsi128_si32(_mm256_castsi256_si128(_mm256_permutevar8x32_epi32(x.v, _mm256_set1_epi32(k))));
+}
+#endif
+#if defined(__AVX512F__)
+inline std::int32_t lane_value(Lanes<16>::I x, int k) {
+    return _mm_cvtsi128_si32(_mm512_castsi512_si128(_mm512_permutexvar_epi32(_mm512_set1_epi32(k), x.v)));
+}
+#endif
+
 }  // namespace gigascroll

@@ -286,9 +286,10 @@ struct LatticeLanes {
         const unsigned front = (normals_agree ? 0xFFFFu : 0u) ^ back_lanes;
         if (front != 0 && front != 0xFFFF) return false;
         // Per lane its cell (ci, cj), sub-triangle (upper) and position in the cell (fx, fy).
-        alignas(64) std::int32_t ci[16], cj[16];
+        I ci_v[kChunks], cj_v[kChunks];
         F fx[kChunks], fy[kChunks];
         unsigned upper = 0;
+        typename L::M upper_m[kChunks];
         for (int q = 0; q < kChunks; ++q) {
             const F b1 = F::load(h.u + q * W), b2 = F::load(h.v + q * W);
             // Inside: b1, b2 >= 0 and b1 + b2 <= 1 (false for NaN), so lattice_cell's clamps and
@@ -298,9 +299,9 @@ struct LatticeLanes {
             const Cells<W> cl = cells<W>(b1, b2, I(c.n));
             const auto past = cl.x + cl.y > F(1.0f);
             if (any<W>(past & !cl.room)) return false;  // on the far edge: lattice_cell scales back onto it
-            upper |= (past & cl.room).bits() << (q * W);
-            cl.i.store(ci + q * W), cl.j.store(cj + q * W);
-            fx[q] = cl.x, fy[q] = cl.y;
+            upper_m[q] = past & cl.room;
+            upper |= upper_m[q].bits() << (q * W);
+            ci_v[q] = cl.i, cj_v[q] = cl.j, fx[q] = cl.x, fy[q] = cl.y;
         }
         const bool seen_front = front != 0;
         // Lane 0's sub-triangle, then lane 15's, then the first lane left out's in turn (a
@@ -311,23 +312,33 @@ struct LatticeLanes {
         // would.
         constexpr int kMaxCells = 10;
         F E[3][kChunks];
-        unsigned covered = 0;
-        for (int cells_lit = 0; covered != 0xFFFF; ++cells_lit) {
-            if (cells_lit == kMaxCells) return false;
-            const int lane = cells_lit == 0 ? 0 : (cells_lit == 1 ? 15 : std::countr_zero(~covered));
-            const std::int32_t li = ci[lane], lj = cj[lane];
+        typename L::M covered[kChunks];
+        auto covered_bits = [&] {
+            unsigned bits = 0;
+            for (int q = 0; q < kChunks; ++q) bits |= covered[q].bits() << (q * W);
+            return bits;
+        };
+        // The lanes not yet covered on lane's sub-triangle, lit from it (the first: every
+        // lane lit, the others' light replaced later).
+        auto add_cell = [&](int lane, bool first) {
+            const std::int32_t li = lane_value(ci_v[lane / W], lane % W), lj = lane_value(cj_v[lane / W], lane % W);
             const bool up = (upper >> lane) & 1;
             const CellLight& cell = cell_light(li, lj, up, seen_front);
-            // The lanes not yet covered on lane's sub-triangle, lit from it.
             for (int q = 0; q < kChunks; ++q) {
-                const auto on = (I::load(ci + q * W) == I(li)) & (I::load(cj + q * W) == I(lj)) &
-                                mask_of<W>((up ? upper : ~upper) >> (q * W)) & !mask_of<W>(covered >> (q * W));
+                auto on = (ci_v[q] == I(li)) & (cj_v[q] == I(lj)) & (up ? upper_m[q] : !upper_m[q]);
+                if (!first) on = on & !covered[q];
                 for (int k = 0; k < 3; ++k) {
                     const F lit = cell.template light<W>(k, fx[q], fy[q]);
-                    E[k][q] = cells_lit == 0 ? lit : L::select(on, lit, E[k][q]);
+                    E[k][q] = first ? lit : L::select(on, lit, E[k][q]);
                 }
-                covered |= on.bits() << (q * W);
+                covered[q] = first ? on : covered[q] | on;
             }
+        };
+        add_cell(0, true);
+        if (covered_bits() != 0xFFFF) add_cell(15, false);
+        for (int cells_lit = 2; covered_bits() != 0xFFFF; ++cells_lit) {
+            if (cells_lit == kMaxCells) return false;
+            add_cell(std::countr_zero(~covered_bits()), false);
         }
         for (int k = 0; k < 3; ++k)
             for (int q = 0; q < kChunks; ++q) E[k][q].store(out.E[k] + q * W);

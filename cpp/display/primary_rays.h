@@ -9,10 +9,8 @@
 #include <cstring>
 #include <limits>
 #include <vector>
-#if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
 
+#include "common/lanes.h"
 #include "views/camera.h"
 
 namespace gigascroll {
@@ -83,13 +81,12 @@ void cast_rows(RTCScene scene, const Camera& eye, std::size_t row_begin, std::si
                 if (!any) continue;
                 directions(row_dir, i0, i0 + 16);  // only for the packets that are cast
             } else {  // the lanes below n, all 16 with whole_tail
-#if defined(__AVX512F__)
-                // One store (GCC kept the loop below scalar: 52 instructions a packet).
-                const std::uint32_t lanes = n == 16 || whole_tail ? 0xFFFFu : (1u << n) - 1;
-                _mm512_store_si512(valid, _mm512_maskz_set1_epi32(__mmask16(lanes), -1));
-#else
-                for (std::uint32_t k = 0; k < 16; ++k) valid[k] = k < n || whole_tail ? -1 : 0;
-#endif
+                // In lanes: one store at 16 (GCC kept a loop over k scalar: 52 instructions a
+                // packet).
+                using L = Lanes<kWidest>;
+                const unsigned lanes = n == 16 || whole_tail ? 0xFFFFu : (1u << n) - 1;
+                for (int k = 0; k < 16; k += kWidest)
+                    L::select(mask_of<kWidest>(lanes >> k), L::I(-1), L::I(0)).store(valid + k);
             }
             for (std::uint32_t k = 0; k < 16; ++k) {
                 packet.ray.tfar[k] = std::numeric_limits<float>::infinity();

@@ -35,7 +35,7 @@ void inverse_sqrt_16(float* x) {
 // W pixels' channels (R, G, B in lanes) stored interleaved at out[0..3W-1] (the first n
 // pixels' at out[0..3n-1]), through the lanes' bits in memory.
 template <int W>
-void store_rgb(typename Lanes<W>::F R, typename Lanes<W>::F G, typename Lanes<W>::F B, float* out,
+[[gnu::always_inline]] inline void store_rgb(typename Lanes<W>::F R, typename Lanes<W>::F G, typename Lanes<W>::F B, float* out,
                std::uint32_t n) {
     alignas(64) float c[3][W];
     R.store(c[0]), G.store(c[1]), B.store(c[2]);
@@ -48,7 +48,7 @@ void store_rgb(typename Lanes<W>::F R, typename Lanes<W>::F G, typename Lanes<W>
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // At 16 lanes, two two-source permutes per output vector: R and G into place, then B.
 template <>
-inline void store_rgb<16>(Lanes<16>::F R, Lanes<16>::F G, Lanes<16>::F B, float* out, std::uint32_t n) {
+[[gnu::always_inline]] inline void store_rgb<16>(Lanes<16>::F R, Lanes<16>::F G, Lanes<16>::F B, float* out, std::uint32_t n) {
     struct Indices {
         alignas(64) std::int32_t rg[3][16], b[3][16];
         constexpr Indices() : rg{}, b{} {
@@ -83,7 +83,7 @@ inline std::uint32_t lanes_of(std::uint32_t n, int k0) { return n > std::uint32_
 // its pending pixels in the same order (SrgbCurve's decode; albedo x reflectance;
 // x irradiance / pi; + emission), so the same floats.
 template <int W = kWidest>
-void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const float (&M)[3][16],
+[[gnu::always_inline]] inline void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const float (&M)[3][16],
                   const DisplayOptions& o, const SrgbCurve& srgb, float* __restrict rgb, std::uint32_t n = 16) {
     using F = typename Lanes<W>::F;
     const F reflectance(o.painting_reflectance), inv_pi(kInvPi);
@@ -104,7 +104,7 @@ void shade_packet(const float (&tex)[3][16], const float (&E)[3][16], const floa
 // albedo x irradiance / pi + emission, the operations of the row's per-pixel loop in its
 // order, so the same floats; their levels (lod) NaN, as every pixel off the paintings.
 template <int W = kWidest>
-void shade_room_packet(const LaneLight& L, float* __restrict rgb, float* __restrict lod, std::uint32_t n = 16) {
+[[gnu::always_inline]] inline void shade_room_packet(const LaneLight& L, float* __restrict rgb, float* __restrict lod, std::uint32_t n = 16) {
     using F = typename Lanes<W>::F;
     const F inv_pi(kInvPi), nan(std::numeric_limits<float>::quiet_NaN());
     for (int k = 0; k < 16 && lanes_of(n, k); k += W) {

@@ -459,52 +459,6 @@ __attribute__((noinline)) bool trilinear_taps(const double* __restrict u_in,
     return any_two != 0;
 }
 
-// Both levels' bilerp_rgb8 of one sample and sample_trilinear's blend, out[0..2]; `wide`
-// also writes a garbage out[3] (the next sample's first channel, written after).
-inline void blend_levels_rgb8(const std::uint8_t* fine, const std::uint8_t* coarse, std::size_t row,
-                              float fx0, float fy0, float fx1, float fy1, float blend, bool wide,
-                              float* out) {
-#if defined(__AVX2__)
-    // The two footprints in the two halves of 8 lanes: the same products and sums per half.
-    auto texels = [](const std::uint8_t* a, const std::uint8_t* b) {
-        std::int32_t x, y;
-        std::memcpy(&x, a, 4);
-        std::memcpy(&y, b, 4);
-        return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_insert_epi32(_mm_cvtsi32_si128(x), y, 1)));
-    };
-    auto halves = [](float a, float b) {
-        return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(a)), _mm_set1_ps(b), 1);
-    };
-    const __m256 one = _mm256_set1_ps(1.0f), fx = halves(fx0, fx1), fy = halves(fy0, fy1);
-    const __m256 gx = _mm256_sub_ps(one, fx), gy = _mm256_sub_ps(one, fy);
-    __m256 c = _mm256_mul_ps(_mm256_mul_ps(gx, gy), texels(fine, coarse));
-    c = _mm256_add_ps(c, _mm256_mul_ps(_mm256_mul_ps(fx, gy), texels(fine + 3, coarse + 3)));
-    c = _mm256_add_ps(c, _mm256_mul_ps(_mm256_mul_ps(gx, fy), texels(fine + row, coarse + row)));
-    c = _mm256_add_ps(c, _mm256_mul_ps(_mm256_mul_ps(fx, fy), texels(fine + row + 3, coarse + row + 3)));
-    const __m128 f = _mm256_castps256_ps128(c), g = _mm256_extractf128_ps(c, 1);
-    const __m128 r = _mm_add_ps(f, _mm_mul_ps(_mm_set1_ps(blend), _mm_sub_ps(g, f)));
-    if (wide) {
-        _mm_storeu_ps(out, r);
-    } else {
-        alignas(16) float lanes[4];
-        _mm_store_ps(lanes, r);
-        out[0] = lanes[0], out[1] = lanes[1], out[2] = lanes[2];
-    }
-#elif defined(__SSE2__)
-    (void)wide;
-    alignas(16) float f[4], g[4];
-    bilerp_rgb8_wide(fine, row, fx0, fy0, f);
-    bilerp_rgb8_wide(coarse, row, fx1, fy1, g);
-    for (int k = 0; k < 3; ++k) out[k] = f[k] + blend * (g[k] - f[k]);
-#else
-    (void)wide;
-    float c[3];
-    bilerp_rgb8(fine, row, 3, 1, fx0, fy0, out);
-    bilerp_rgb8(coarse, row, 3, 1, fx1, fy1, c);
-    for (int k = 0; k < 3; ++k) out[k] += blend * (c[k] - out[k]);
-#endif
-}
-
 void sample_trilinear_rgb8(const VirtualTexture& vt, const SampleRequest& r, std::size_t begin,
                            std::size_t end) {
     const PaintingGeometry& pt = vt.layout().paintings[r.painting];

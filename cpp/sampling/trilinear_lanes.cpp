@@ -49,7 +49,7 @@ struct LaneLevels {
     unsigned blending = 0;
 };
 template <int W>
-void lane_levels(const float* lod, float top, std::int32_t levels, LaneLevels& v) {
+[[gnu::always_inline]] inline void lane_levels(const float* lod, float top, std::int32_t levels, LaneLevels& v) {
     using L = Lanes<W>;
     using F = typename L::F;
     using I = typename L::I;
@@ -210,7 +210,7 @@ struct TrilinearLanes::State::LevelTiles {
 };
 // False for a third tile or a tile that is not resident (a fallback).
 template <int W>
-bool TrilinearLanes::State::tiles(const LevelTaps& lt, int c, unsigned mask, LevelTiles& out) {
+[[gnu::always_inline]] inline bool TrilinearLanes::State::tiles(const LevelTaps& lt, int c, unsigned mask, LevelTiles& out) {
     using I = typename Lanes<W>::I;
     out.count = 0;
     for (int k = 0; k < 2 && mask; ++k) {
@@ -233,7 +233,7 @@ bool TrilinearLanes::State::tiles(const LevelTaps& lt, int c, unsigned mask, Lev
 // + row + 3: the texel and its right neighbour in two rows), q[0..3]: gathered, or at 16
 // lanes picked out of the rows' stretches (stretch_corners) where they fit.
 template <int W>
-void TrilinearLanes::State::corners(const LevelTaps& lt, const std::uint8_t* base, unsigned mask, int k0,
+[[gnu::always_inline]] inline void TrilinearLanes::State::corners(const LevelTaps& lt, const std::uint8_t* base, unsigned mask, int k0,
                                     typename Lanes<W>::I (&q)[4]) const {
     using I = typename Lanes<W>::I;
 #if defined(__AVX512VBMI__) && defined(__AVX512BW__)
@@ -317,7 +317,7 @@ template <int W>
 // The samples from their fine and (for the lanes in levels.blending) coarse taps: each
 // level's tiles, texels and bilinear blend, then the blend of the two levels.
 template <int W>
-bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& lv,
+[[gnu::always_inline]] inline bool TrilinearLanes::State::sample(const LevelTaps& fine_taps, const LevelTaps& coarse_taps, const LaneLevels& lv,
                                    float* r, float* g, float* b) {
     using F = typename Lanes<W>::F;
     LevelTiles fine, coarse;
