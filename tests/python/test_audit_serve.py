@@ -271,3 +271,38 @@ def test_clients_that_never_read_are_dropped_not_waited_for(big_tiles, monkeypat
     assert sum(m.startswith("429 POST") for m in lines) == 2, lines
     assert app[app_module.STATE_KEY].inflight._value == 2
     assert not any("Traceback" in r.getMessage() or r.exc_info for r in caplog.records)
+
+
+def test_server_thread_misuse_is_a_value_error(pack_dir):
+    """A second start, an app another ServerThread serves and a bad port are ValueErrors;
+    stop() from four threads at once (and again later) stops once, without an error."""
+    import threading
+    from gigascroll import TilePack
+    pack = TilePack(str(pack_dir))
+    for port in (-1, 65536, True, "80", 1.5):
+        with pytest.raises(ValueError, match="port"):
+            ServerThread(make_app(pack), port=port)
+    app = make_app(pack)
+    server = ServerThread(app)
+    url = server.start()
+    with pytest.raises(ValueError, match="started already"):
+        server.start()
+    with pytest.raises(ValueError, match="served already"):
+        ServerThread(app).start()
+    errors = []
+
+    def stop():
+        try:
+            server.stop()
+        except BaseException as e:  # noqa: BLE001 - collected for the assert
+            errors.append(e)
+    threads = [threading.Thread(target=stop) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60)
+    server.stop()
+    assert errors == [] and not any(t.is_alive() for t in threads)
+    u = urllib.parse.urlsplit(url)
+    with pytest.raises(OSError):  # nothing listens there any more
+        socket.create_connection((u.hostname, u.port), timeout=5).close()

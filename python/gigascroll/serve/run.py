@@ -108,32 +108,48 @@ def serve_forever(app: web.Application, host: str, port: int,
 
 class ServerThread:
     """The app on a background thread's event loop: `with ServerThread(app) as url: ...` or
-    start() -> URL and stop()."""
+    start() -> URL and stop(). One start per object; stop() may be called from any thread,
+    any number of times (the first stops, the others wait for it). ValueError for a bad port,
+    a second start, or an app another ServerThread serves."""
 
     def __init__(self, app: web.Application, host: str = "127.0.0.1", port: int = 0,
                  ssl_context: ssl.SSLContext | None = None):
+        if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
+            raise ValueError(f"port must be an integer in [0, 65535], got {port!r}")
         self.app, self.host, self.port, self.ssl_context = app, host, port, ssl_context
         self.url: str | None = None
         self._loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._loop.run_forever, name="serve", daemon=True)
         self._runner = None
+        self._lock = threading.Lock()
+        self._started = False
 
     def start(self) -> str:
-        self._thread.start()
-        future = asyncio.run_coroutine_threadsafe(
-            start_site(self.app, self.host, self.port, self.ssl_context), self._loop)
-        try:
-            self._runner, self.url = future.result(timeout=60)
-        except BaseException:
-            self._loop.call_soon_threadsafe(self._loop.stop)
-            self._thread.join()
-            raise
-        return self.url
+        with self._lock:
+            if self._started:
+                raise ValueError("this ServerThread was started already (make a new one)")
+            if self.app.frozen:
+                raise ValueError("this application is served already (by another ServerThread "
+                                 "or runner): make a new one with make_app")
+            self._started = True
+            self._thread.start()
+            future = asyncio.run_coroutine_threadsafe(
+                start_site(self.app, self.host, self.port, self.ssl_context), self._loop)
+            try:
+                self._runner, self.url = future.result(timeout=60)
+            except BaseException:
+                self._close_loop()
+                raise
+            return self.url
 
     def stop(self) -> None:
-        if self._runner is not None:
-            asyncio.run_coroutine_threadsafe(self._runner.cleanup(), self._loop).result(timeout=60)
-            self._runner = None
+        with self._lock:
+            if self._runner is not None:
+                runner, self._runner = self._runner, None
+                asyncio.run_coroutine_threadsafe(runner.cleanup(), self._loop).result(timeout=60)
+            self._close_loop()
+
+    def _close_loop(self) -> None:
         if self._thread.is_alive():
             self._loop.call_soon_threadsafe(self._loop.stop)
             self._thread.join()
