@@ -95,3 +95,50 @@ def test_the_readme_camera_looks_at_the_painting_from_inside_the_room(served):
         t = (origin - eye) @ normal / (d @ normal)   # where the gaze meets the painting's plane
         hit = eye + t * d - origin
         assert t > 0 and 0 <= hit @ u <= slot["width_m"] and 0 <= hit @ v <= slot["height_m"], text
+
+
+FETCH_BATCH = """async ([url, keys, tileBytes]) => {
+  const { fetchBatch, retryAfterMs } = await import('/client/vt/fetch_batch.js');
+  const waits = [];
+  const r = await fetchBatch({ id: 1, url, keys, indices: keys.map((_, i) => i), tileBytes },
+                             async (ms) => { waits.push(ms); });
+  const sum = (b) => new Uint8Array(b).reduce((s, x) => s + x, 0);
+  return { error: r.error ?? null, sums: r.tiles ? r.tiles.map((t) => sum(t.bytes)) : null, waits,
+           parsed: [retryAfterMs('2', 1), retryAfterMs(null, 1), retryAfterMs(null, 3),
+                    retryAfterMs('999', 1), retryAfterMs('x', 2)] };
+}"""
+
+
+@pytest.mark.parametrize("busy", [2, 99])
+def test_a_busy_server_is_asked_again(browser, served, busy):  # noqa: F811
+    """The client's batch fetch answers the server's 429 (every tile slot busy) by asking
+    again after Retry-After: two 429s and then the tiles give the tiles (the coarse tail a
+    page waits for was a failed page); a server busy for ever gives up after MAX_TRIES."""
+    import numpy as np
+    url, pack_path = served
+    from gigascroll import TilePack
+    from gigascroll.serve import pack_hash
+    pack = TilePack(str(pack_path))
+    keys = [[0, pack.paintings[0].levels - 1, 0, 0], [0, 0, 0, 0]]
+    batch = f"/api/tiles/{pack_hash(pack)}/batch"
+    p = browser.new_page()
+    answered = []
+
+    def route(r):
+        answered.append(r.request.url)
+        if len(answered) <= busy:
+            r.fulfill(status=429, headers={"Retry-After": "1"}, body="busy\n")
+        else:
+            r.continue_()
+    try:
+        p.goto(f"{url}/api/scene.json")  # a page of the origin: the module imports alone
+        p.route(f"**{batch}", route)
+        got = p.evaluate(FETCH_BATCH, [batch, keys, 128 * 128 * 3])
+    finally:
+        p.close()
+    assert got["parsed"] == [2000, 250, 1000, 5000, 500]
+    if busy == 2:
+        assert got["error"] is None and len(answered) == 3 and got["waits"] == [1000, 1000]
+        assert got["sums"] == [int(pack.read_tile(*k).astype(np.int64).sum()) for k in keys]
+    else:
+        assert "HTTP 429" in got["error"] and len(answered) == 6 and len(got["waits"]) == 5

@@ -4,6 +4,8 @@
 // them); a worker fetches and splits them (loader_worker.js); arrived tiles wait in a queue
 // that the frame drains within its upload budget.
 
+import { fetchBatch } from "./fetch_batch.js";
+
 export class TileLoader {
   constructor(geometry, tiles, { maxBatchesInFlight = 4, useWorker = true } = {}) {
     this.geometry = geometry;
@@ -70,20 +72,5 @@ export class TileLoader {
   dispose() {
     if (this.worker) this.worker.terminate();
     this.worker = null;
-  }
-}
-
-// The worker's job on the main thread, where no Worker exists.
-async function fetchBatch({ id, url, keys, indices, tileBytes }) {
-  try {
-    const r = await fetch(url, { method: "POST", headers: { "Content-Type": "application/json" },
-                                 body: JSON.stringify({ keys }) });
-    if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
-    const body = await r.arrayBuffer();
-    if (body.byteLength !== keys.length * tileBytes) throw new Error(`${url}: short batch`);
-    const tile = (k) => body.slice(k * tileBytes, (k + 1) * tileBytes);
-    return { id, tiles: indices.map((index, k) => ({ index, bytes: tile(k) })) };
-  } catch (e) {
-    return { id, error: String(e && e.message ? e.message : e) };
   }
 }
