@@ -114,3 +114,46 @@ def test_camera_path_numbers_must_be_numbers(tmp_path, change, message):
     path.write_text(json.dumps({**GOOD, "magnifier_target": [[0, 1.5, 0], [None] * 3],
                                 "magnifier_normal": [[0, 0, 1], [None] * 3]}))
     assert CameraPath.load(path).magnifier_target[0].tolist() == [0, 1.5, 0]
+
+
+SIGTERM_WHILE_WORKERS_START = '''
+import asyncio, pathlib, sys
+import distributed.nanny
+async def slow_start(self):  # the nanny announces itself, then takes its time
+    pathlib.Path({marker!r}).touch()
+    await asyncio.sleep(120)
+distributed.nanny.Nanny.start_unsafe = slow_start
+from gigascroll import cli
+raise SystemExit(cli.main(["pack", "a.png", "b.png", "-o", "z.pack", "--workers", "2"]))
+'''
+
+
+def test_sigterm_while_dask_workers_start_is_one_line(tmp_path):
+    """SIGTERM while the local Dask cluster's workers start: one line and exit 143, not
+    distributed's exit hook's AssertionError traceback and 'Task exception was never
+    retrieved'."""
+    import signal
+    import time
+    pytest.importorskip("dask.distributed")
+    from PIL import Image
+    import numpy as np
+    for name in ("a.png", "b.png"):
+        Image.fromarray(np.zeros((20, 30, 3), np.uint8)).save(tmp_path / name)
+    marker = tmp_path / "nanny-starting"
+    p = subprocess.Popen([sys.executable, "-c", SIGTERM_WHILE_WORKERS_START.format(marker=str(marker))],
+                         cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        for _ in range(1200):
+            if marker.exists() or p.poll() is not None:
+                break
+            time.sleep(0.05)
+        assert marker.exists(), p.communicate(timeout=60)
+        p.send_signal(signal.SIGTERM)
+        out, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    lines = [line for line in err.replace("\r", "\n").splitlines() if line.strip()]
+    assert p.returncode == 143 and "Traceback" not in err, err[-3000:]
+    assert lines[-1] == "gigascroll pack: interrupted (stopped by SIGTERM)", err[-3000:]
+    assert not (tmp_path / "z.pack").exists()

@@ -177,6 +177,21 @@ def quiet_dask():
         logger.setLevel(old)
 
 
+def _drop_unstarted_clusters() -> None:
+    """A LocalCluster whose start was interrupted stays registered with distributed, whose exit
+    hook then fails on it with a traceback (AssertionError: Status.init), and its nannies' start
+    task ends in 'Task exception was never retrieved': close it here, quietly, unregister it,
+    and keep asyncio's logger quiet for the rest of this (ending) process."""
+    from distributed.deploy.spec import SpecCluster
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL + 1)
+    for cluster in list(SpecCluster._instances):
+        try:
+            cluster.close(timeout=10)
+        except BaseException:  # noqa: BLE001 - half started: whatever its close says
+            pass
+        SpecCluster._instances.discard(cluster)
+
+
 def _await_workers(client, where: str, timeout: float) -> None:
     try:
         client.wait_for_workers(1, timeout=timeout)
@@ -229,7 +244,11 @@ def run_on_dask(build_shard: Callable, tasks, workers: int, scheduler: str | Non
         if scheduler is not None:
             client, where = _connect(scheduler, connect_s), f"the Dask scheduler at {scheduler}"
         else:
-            cluster = local_cluster(workers)
+            try:
+                cluster = local_cluster(workers)
+            except BaseException:  # SIGTERM or Ctrl-C while the workers start
+                _drop_unstarted_clusters()
+                raise
             client, where = Client(cluster), "the local Dask cluster"
         try:
             _await_workers(client, where, workers_s)
