@@ -306,3 +306,27 @@ def test_server_thread_misuse_is_a_value_error(pack_dir):
     u = urllib.parse.urlsplit(url)
     with pytest.raises(OSError):  # nothing listens there any more
         socket.create_connection((u.hostname, u.port), timeout=5).close()
+
+
+def test_a_damaged_glb_in_a_show_is_not_rebaked_into_the_show(tmp_path, pack_dir):
+    """serve --exhibition reads the show's bake/ only when its glb is whole: a damaged one is
+    baked again into the user's cache, never written into the show."""
+    from types import SimpleNamespace
+    from gigascroll import TilePack
+    from gigascroll.commands.serve import _cache_dir
+    from gigascroll.gallery.quality import light_settings
+    from gigascroll.room.builtin import builtin_room
+    from gigascroll.serve.room_bake import lighting_options, room_key
+    pack = TilePack(str(pack_dir))
+    h = pack_hash(pack)
+    spec = builtin_room("scroll", pack)
+    show = SimpleNamespace(path=tmp_path / "show", room=spec)
+    glb = tmp_path / "show" / "bake" / f"{room_key(spec, h, lighting_options(light_settings(spec)))}.glb"
+    glb.parent.mkdir(parents=True)
+    args = SimpleNamespace(cache_dir=None)
+    assert _cache_dir(args, show, h) is None                 # no glb: the user cache
+    glb.write_bytes(_small_glb())
+    assert _cache_dir(args, show, h) == glb.parent           # whole: the show's
+    glb.write_bytes(_small_glb()[:-4])
+    assert _cache_dir(args, show, h) is None                 # damaged: the user cache
+    assert _cache_dir(SimpleNamespace(cache_dir=str(tmp_path)), show, h) == str(tmp_path)

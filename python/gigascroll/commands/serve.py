@@ -54,10 +54,11 @@ def _cache_dir(args, show, content_hash: str):
     bake/ (read only: a miss bakes into the user cache, never into the show)."""
     if show is None or args.cache_dir is not None:
         return args.cache_dir
-    from ..serve.room_bake import lighting_options, room_key
+    from ..serve.room_bake import glb_damage, lighting_options, room_key
     from .light_quality import light_settings_of
     key = room_key(show.room, content_hash, lighting_options(light_settings_of(args, show.room)))
-    return show.path / "bake" if (show.path / "bake" / f"{key}.glb").is_file() else None
+    glb = show.path / "bake" / f"{key}.glb"
+    return glb.parent if glb.is_file() and glb_damage(glb) is None else None  # damaged: rebake elsewhere
 
 
 def run(args) -> int:

@@ -28,7 +28,7 @@ from ..room.spec import RoomSpec
 from ..outputs import write_bytes
 from .room_glb import room_glb
 
-__all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "lighting_options",
+__all__ = ["ROOM_LIGHTING", "BakedRoom", "default_cache_dir", "glb_damage", "lighting_options",
            "load_room_spec", "room_key", "baked_room"]
 
 # `gigascroll render --room`'s defaults over the knob's settings: seed=--seed (0), the default
@@ -107,7 +107,7 @@ def _check_writable(folder: Path) -> None:
         raise OSError(f"cache directory {folder}: not writable")
 
 
-def _glb_damage(path: Path) -> str | None:
+def glb_damage(path: Path) -> str | None:
     """Why the cached glb at `path` cannot be served (None when its GLB header says it is
     whole: magic, version 2 and a length equal to the file's): an entry truncated or
     replaced outside gigascroll is baked again rather than sent to every client."""
@@ -210,7 +210,7 @@ def baked_room(room: str, pack, content_hash: str, cache_dir: Path | None = None
     settings = light_settings(spec) if settings is None else settings
     key = room_key(spec, content_hash, lighting_options(settings))
     path = _cache_folder(cache_dir if cache_dir is not None else default_cache_dir()) / f"{key}.glb"
-    damage = _glb_damage(path) if path.is_file() else "cache miss"
+    damage = glb_damage(path) if path.is_file() else "cache miss"
     if damage is None:
         if announce:
             announce(f"room {spec.name}: bake cache hit ({path.name})")
