@@ -219,8 +219,8 @@ def _measure(args, pack, room, show=None) -> tuple[dict, dict]:
 
 def run(args) -> int:
     from ..gallery.light_report import write_report
-    from ..outputs import (beside, check_output, owned_by, replace_dir, signals_interrupt,
-                           temp_dir, write_mark)
+    from ..outputs import (beside, check_output, owned_by, refuse_input, replace_dir,
+                           signals_interrupt, temp_dir, write_mark)
     from ..pack import TilePack
 
     from .exhibition_options import open_exhibition
@@ -236,6 +236,8 @@ def run(args) -> int:
         raise UserError(f"{p} is not a tile pack (no manifest.json)")
     out = Path(args.out) if args.out is not None else beside(p, "light")
     try:
+        if show is None:  # a report inside the pack would change the pack
+            refuse_input(out, p, "the pack being lit")
         check_output(out, force=True, directory=True, owned=owned_by(COMMAND),
                      what="a light report")
     except OSError as e:
