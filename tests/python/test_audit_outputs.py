@@ -159,12 +159,14 @@ def test_sigterm_while_dask_workers_start_is_one_line(tmp_path):
     assert not (tmp_path / "z.pack").exists()
 
 
+@pytest.mark.parametrize("command, words", [("light", "the pack being lit"),
+                                             ("gallery", "the pack being walked")])
 @pytest.mark.parametrize("out", ["l", ".", "x/../l"])
-def test_light_never_writes_into_its_pack(pack_dir, out):
+def test_light_and_gallery_never_write_into_their_pack(pack_dir, out, command, words):
     before = _digests(pack_dir)
     target = os.path.normpath(str(pack_dir / out)) if out == "." else str(pack_dir / out)
-    r = subprocess.run([sys.executable, "-m", "gigascroll", "light", str(pack_dir), "--room", "scroll",
-                        "--out", target], capture_output=True, text=True, timeout=120)
+    r = subprocess.run([sys.executable, "-m", "gigascroll", command, str(pack_dir), "--room",
+                        "scroll", "--out", target], capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
-    assert "the pack being lit" in r.stderr
+    assert words in r.stderr
     assert _digests(pack_dir) == before

@@ -215,7 +215,7 @@ def builtin_pack(work: Path | None = None):
 
 def run(args) -> int:
     from ..walk.record import prepare_output
-    from ..outputs import signals_interrupt
+    from ..outputs import refuse_input, signals_interrupt
 
     eye = parse_eye(args.eye)
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
@@ -228,6 +228,11 @@ def run(args) -> int:
     from .light_quality import check_light_budget
     check_light_budget(args)
     out = default_out(args)
+    if args.pack is not None:  # a walk inside the pack would change the pack
+        try:
+            refuse_input(out, args.pack, "the pack being walked")
+        except OSError as e:
+            raise UserError(f"--out {e}") from None
     tmp = prepare_output(out)  # fails early on an unwritable --out
     with signals_interrupt():  # SIGTERM / SIGHUP: the temporary output goes as for Ctrl-C
         try:
