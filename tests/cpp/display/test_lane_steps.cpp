@@ -280,3 +280,25 @@ TEST(ReleaseLanes, EveryWidthEqualsTheScalarRelease) {
 #endif
     }
 }
+
+TEST(ReleaseLanes, ClaimedRowMinimaAreTheThreeNeighboursMinimum) {
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<float> depth(0.5f, 8.0f), coin(0.0f, 1.0f);
+    const float inf = std::numeric_limits<float>::infinity();
+    for (std::size_t w : {1u, 2u, 15u, 16u, 17u, 40u, 333u}) {
+        std::vector<std::uint64_t> claims(w);
+        for (std::size_t k = 0; k < w; ++k)
+            claims[k] = coin(rng) < 0.3f ? kUnclaimed
+                                         : (std::uint64_t(std::bit_cast<std::uint32_t>(depth(rng))) << 32 | std::uint64_t(k));
+        std::vector<float> depths(w + 2), row_min(w);
+        claimed_row_min(claims.data(), w, depths.data(), row_min.data());
+        auto at = [&](std::ptrdiff_t x) {
+            if (x < 0 || x >= std::ptrdiff_t(w) || claims[std::size_t(x)] == kUnclaimed) return inf;
+            return std::bit_cast<float>(std::uint32_t(claims[std::size_t(x)] >> 32));
+        };
+        for (std::size_t x = 0; x < w; ++x) {
+            const std::ptrdiff_t i = std::ptrdiff_t(x);
+            ASSERT_EQ(row_min[x], std::min({at(i - 1), at(i), at(i + 1)})) << "w " << w << " x " << x;
+        }
+    }
+}
