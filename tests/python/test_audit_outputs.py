@@ -170,3 +170,17 @@ def test_light_and_gallery_never_write_into_their_pack(pack_dir, out, command, w
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert words in r.stderr
     assert _digests(pack_dir) == before
+
+
+def test_view_screenshots_never_go_into_its_pack(pack_dir):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    for shot in ("shot-{n}.png", "x/../a.png"):
+        r = subprocess.run([sys.executable, "-m", "gigascroll", "view", str(pack_dir), "--room",
+                            "scroll", "--screenshot", str(pack_dir / shot)],
+                           capture_output=True, text=True, timeout=120, env=env)
+        assert r.returncode == 2 and "inside the pack being viewed" in r.stderr, r.stderr
+    # Beside the pack the same pattern passes this check (and meets the missing display).
+    r = subprocess.run([sys.executable, "-m", "gigascroll", "view", str(pack_dir), "--room",
+                        "scroll", "--screenshot", str(pack_dir.parent / "shot-{n}.png")],
+                       capture_output=True, text=True, timeout=120, env=env)
+    assert r.returncode == 2 and "no display" in r.stderr, r.stderr

@@ -76,6 +76,12 @@ def run(args) -> int:
     # The default is beside the pack, valid whenever the pack is (checked before the window).
     args.screenshot = (screenshot_pattern(args.screenshot) if args.screenshot is not None
                        else default_screenshot(anchor))
+    if args.pack is not None:  # shots inside the pack would change the pack
+        from ..outputs import refuse_input
+        try:
+            refuse_input(Path(args.screenshot.format(n=0)), args.pack, "the pack being viewed")
+        except OSError as e:
+            raise UserError(f"--screenshot {e}") from None
     args.record_tour = tour_pattern(args.record_tour, anchor)
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
