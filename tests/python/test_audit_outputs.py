@@ -184,3 +184,16 @@ def test_view_screenshots_never_go_into_its_pack(pack_dir):
                         "scroll", "--screenshot", str(pack_dir.parent / "shot-{n}.png")],
                        capture_output=True, text=True, timeout=120, env=env)
     assert r.returncode == 2 and "no display" in r.stderr, r.stderr
+
+
+def test_render_never_writes_into_its_pack(pack_dir, tmp_path):
+    before = _digests(pack_dir)
+    argv = [sys.executable, "-m", "gigascroll", "render", "--room", "scroll", "--pack", str(pack_dir),
+            "--width", "8", "--height", "8", "--lighting", "unlit", "-o"]
+    r = subprocess.run(argv + [str(pack_dir / "still.png")], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2 and "inside the pack being rendered" in r.stderr, r.stderr
+    assert _digests(pack_dir) == before
+    r = subprocess.run(argv + [str(tmp_path / "still.png")], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0 and (tmp_path / "still.png").is_file(), r.stderr

@@ -265,6 +265,12 @@ def run(args) -> int:
         raise UserError(f"unsupported output format {out.suffix!r}; use one of {', '.join(FORMATS)}")
     if not out.parent.is_dir():
         raise UserError(f"output directory does not exist: {out.parent}")
+    if args.pack:  # an image inside the pack would change the pack
+        from ..outputs import refuse_input
+        try:
+            refuse_input(out, args.pack, "the pack being rendered")
+        except OSError as e:
+            raise UserError(str(e)) from None
     if args.width <= 0 or args.height <= 0 or args.width > 16384 or args.height > 16384:
         raise UserError("--width and --height must be in [1, 16384]")
     if args.photons is not None and args.photons <= 0:
