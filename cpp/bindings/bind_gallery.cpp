@@ -103,20 +103,21 @@ void bind_gallery(nb::module_& m) {
         .def("_bake", [](Gallery& g, double spacing, int light_samples, unsigned threads, bool stratified,
                          bool skip_unlit, int gather_stride, bool inset_edges, bool coarse_disc,
                          bool analytic_direct, int shadow_probes, bool fill_covered, float indirect_filter,
-                         int final_gather, bool sparse_final_gather) {
+                         int final_gather, bool sparse_final_gather, float hot_spots) {
             BakeSettings s;
             s.spacing = spacing, s.light_samples = light_samples, s.threads = threads;
             s.stratified = stratified, s.skip_unlit = skip_unlit, s.gather_stride = gather_stride;
             s.inset_edges = inset_edges, s.coarse_disc = coarse_disc, s.analytic_direct = analytic_direct;
             s.shadow_probes = shadow_probes, s.fill_covered = fill_covered, s.indirect_filter = indirect_filter;
             s.final_gather = final_gather, s.sparse_final_gather = sparse_final_gather;
+            s.hot_spots = hot_spots;
             nb::gil_scoped_release release;
             g.bake(s);
         }, "spacing"_a, "light_samples"_a, "threads"_a, "stratified"_a = true, "skip_unlit"_a = true,
            "gather_stride"_a = 1, "inset_edges"_a = true,
            "coarse_disc"_a = false, "analytic_direct"_a = true, "shadow_probes"_a = 4,
            "fill_covered"_a = true, "indirect_filter"_a = 0.0f,
-           "final_gather"_a = 16, "sparse_final_gather"_a = false)
+           "final_gather"_a = 16, "sparse_final_gather"_a = false, "hot_spots"_a = 4.0f)
         .def("_bake_progress", &Gallery::bake_progress)
         .def("_bake_lattice", [](const Gallery& g) {
             // Copies of the bake's lattices and the triangles' frames, taken under the read
@@ -179,6 +180,7 @@ void bind_gallery(nb::module_& m) {
             d["bake_points"] = s.bake_points;
             d["bake_sides_skipped"] = s.bake_sides_skipped;
             d["bake_points_covered"] = s.bake_points_covered;
+            d["bake_hot_points"] = s.bake_hot_points;
             d["radius"] = s.radius;
             d["spacing"] = s.spacing;
             d["albedo_levels"] = s.albedo_levels;

@@ -1,4 +1,5 @@
 #include "gallery/gallery.h"
+#include "gallery/hot_lattice.h"
 
 #include <algorithm>
 #include <array>
@@ -1071,6 +1072,10 @@ void Gallery::bake(const BakeSettings& s) {
                             sub_mask_front[q] = mask_front[k], sub_mask_back[q] = mask_back[k];
                         }
         }
+        // BakeSettings::hot_spots: out of the lattice the rays look up, into lights of their own.
+        const HotLattice hot = extract_hot_points(scene_, front, back, offset, n, tri_v0_, tri_e1_, tri_e2_,
+                                                  s.hot_spots, 4096);
+        stats_.bake_hot_points = hot.position.size();
         parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
             for (std::size_t r = rb; r < re; ++r) {
                 const auto [t, i] = rows[r];
@@ -1089,7 +1094,9 @@ void Gallery::bake(const BakeSettings& s) {
                     for (int side = 0; side < 2; ++side) {
                         if (!(reachable[t] >> side & 1)) continue;
                         if (s.fill_covered && (side == 0 ? mask_front : mask_back)[k]) continue;
-                        const Vec3f E = final_gather(p, side == 0 ? N : -N, s.final_gather, front, back, n, offset);
+                        const Vec3f E = final_gather(p, side == 0 ? N : -N, s.final_gather, front, back, n, offset) +
+                                        hot_irradiance(scene_, hot, p, side == 0 ? N : -N, s.hot_samples,
+                                                       std::fmod(double(2 * k + side) * 0.6180339887498949, 1.0));
                         if (sparse)
                             (side == 0 ? gather_front : gather_back)[sub_offset[t] + lattice_index(
                                 i / stride, j / stride, nt / stride)] = E;
@@ -1115,6 +1122,7 @@ void Gallery::bake(const BakeSettings& s) {
         if (s.fill_covered) fill(mask_front, mask_back);
     }
     stats_.bake_points_covered = covered;
+    if (!fg) stats_.bake_hot_points = 0;
     bake_n_ = std::move(n);
     offset.pop_back();
     bake_offset_ = std::move(offset);

@@ -161,6 +161,11 @@ struct BakeSettings {
     // point (1 / s^2 of them; covered ones filled from their neighbours), interpolated between
     // (the indirect light it finds is smooth): about a quarter of the bake's time at s = 2.
     bool sparse_final_gather = false;
+    // With final_gather: first-pass lattice points brighter (albedo x E) than this many times
+    // the lattice's mean leave the gather and light each point as small area lights with a
+    // shadow ray each, at most hot_samples of them per point (hot_lattice.h). 0: off.
+    float hot_spots = 4.0f;
+    int hot_samples = 32;
 };
 
 struct LightingStats {
@@ -168,6 +173,7 @@ struct LightingStats {
     std::uint64_t photons_stored = 0, bake_points = 0;
     std::uint64_t bake_sides_skipped = 0;  // triangle sides skip_unlit set to zero
     std::uint64_t bake_points_covered = 0;  // lattice point sides fill_covered filled
+    std::uint64_t bake_hot_points = 0;  // first-pass point sides hot_spots made lights
     float radius = 0;
     double spacing = 0;
     std::vector<std::uint32_t> albedo_levels;  // per painting slot: the level photons read

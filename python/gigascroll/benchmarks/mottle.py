@@ -55,6 +55,8 @@ def add_arguments(parser) -> None:
                         help="bake(indirect_filter=...) values, comma-separated (default 0: the default)")
     parser.add_argument("--final-gathers", default="16",
                         help="bake(final_gather=...) rays per point, comma-separated (default 16: the default)")
+    parser.add_argument("--hot-spots", default="4",
+                        help="bake(hot_spots=...) factors, comma-separated (default 4: the default; 0 off)")
     parser.add_argument("--fill-covered", default="1",
                         help="bake(fill_covered=...): 1 and/or 0, comma-separated (default 1)")
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
@@ -139,7 +141,7 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
         t1 = time.perf_counter()
         bst = gal.bake(spacing=diag / n, light_samples=samples, gather_stride=cf["gather_stride"],
                        fill_covered=cf["fill_covered"], indirect_filter=cf["indirect_filter"],
-                       final_gather=cf["final_gather"])
+                       final_gather=cf["final_gather"], hot_spots=cf["hot_spots"])
         t2 = time.perf_counter()
         img, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
         if segments is None:
@@ -149,7 +151,7 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
         img = img.reshape(args.height, k, args.width, k, 3).mean(axis=(1, 3))
         c = {"photons_log2": photons, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": samples,
              "radius_factor": cf["radius_factor"], "disc": cf["disc"], "gather_stride": cf["gather_stride"],
-             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "final_gather": cf["final_gather"], "points_covered": bst["bake_points_covered"],
+             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "final_gather": cf["final_gather"], "hot_spots": cf["hot_spots"], "hot_points": bst["bake_hot_points"], "points_covered": bst["bake_points_covered"],
              "radius_m": st["radius"], "light_seconds": t1 - t0, "bake_seconds": t2 - t1,
              "bake_points": bst["bake_points"],
              "light_and_bake_over_mitsuba": (t2 - t0) / mitsuba_seconds,
@@ -228,15 +230,21 @@ def run(args) -> int:
         raise UserError(f"--final-gathers are integers, got {args.final_gathers!r}") from None
     if not gathers or min(gathers) < 0 or max(gathers) > 4096:
         raise UserError(f"--final-gathers are rays in [0, 4096], got {args.final_gathers!r}")
+    try:
+        hots = [float(x) for x in args.hot_spots.split(",") if x]
+    except ValueError:
+        raise UserError(f"--hot-spots are numbers, got {args.hot_spots!r}") from None
+    if not hots or not all(h == 0 or 1 <= h <= 1e6 for h in hots):
+        raise UserError(f"--hot-spots are 0 or in [1, 1e6], got {args.hot_spots!r}")
     strides = _ints(args.gather_strides, "--gather-strides")
     if not set(strides) <= {1, 2, 4, 8}:
         raise UserError("--gather-strides takes 1, 2, 4, 8")
     configs = [dict(photons=p, diagonal_over=n, bake_samples=s, radius_factor=f, disc=d, gather_stride=st,
-                    fill_covered=fc, indirect_filter=fi, final_gather=fg)
+                    fill_covered=fc, indirect_filter=fi, final_gather=fg, hot_spots=h)
                for p in photons for n in _ints(args.spacings, "--spacings")
                for s in _ints(args.bake_samples, "--bake-samples") for f in factors for d in flags["disc"]
                for st in strides for fc in flags["fill_covered"] for fi in filters
-               for fg in gathers]
+               for fg in gathers for h in hots]
     try:
         import mitsuba as mi
     except ImportError:
@@ -246,7 +254,7 @@ def run(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     results = {"settings": {k: getattr(args, k) for k in (
         "width", "height", "supersample", "sigma", "photons", "spacings", "bake_samples", "radius_factors", "disc",
-        "gather_strides", "fill_covered", "indirect_filters", "final_gathers", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
+        "gather_strides", "fill_covered", "indirect_filters", "final_gathers", "hot_spots", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
     with tempfile.TemporaryDirectory(prefix="gigascroll-bench-mottle-") as scratch:
         for name in rooms:
             results["rooms"][name] = measure_room(mi, name, args, Path(scratch), configs)
@@ -264,6 +272,6 @@ def _print_room(name: str, r: dict) -> None:
                  if c["mottle"].get(cl)]
         print(f"{name}: 2^{c['photons_log2']} photons, r x {c['radius_factor']:g}{' disc' if c['disc'] else ''}, "
               f"diag/{c['diagonal_over']}, {c['bake_samples']} samples, stride {c['gather_stride']}, "
-              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}, final gather {c['final_gather']}: "
+              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}, final gather {c['final_gather']}, hot {c['hot_spots']:g} ({c['hot_points']}): "
               f"{', '.join(parts)}; light+bake {c['light_seconds'] + c['bake_seconds']:.2f} s "
               f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)")

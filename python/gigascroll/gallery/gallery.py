@@ -171,7 +171,8 @@ class Gallery(_core._Gallery):
              progress: bool = False, stratified: bool = True, skip_unlit: bool = True,
              gather_stride: int = 1, inset_edges: bool = True, coarse_disc: bool = False,
              analytic_direct: bool = True, shadow_probes: int = 4, fill_covered: bool = True,
-             indirect_filter: float = 0.0, final_gather: int = 16, sparse_final_gather: bool = False) -> dict:
+             indirect_filter: float = 0.0, final_gather: int = 16, sparse_final_gather: bool = False,
+             hot_spots: float = 4.0) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
         point with `light_samples` emitter samples plus the photon gather. stratified: the
@@ -203,7 +204,13 @@ class Gallery(_core._Gallery):
         cosine rays per lattice point looking up a first pass's lattice (0: the photon density
         at the point; 16, the default, takes the mottle below 1%). sparse_final_gather (with
         gather_stride s > 1): the final gather too on every s-th point only, interpolated between
-        (the indirect light is smooth; a quarter of the bake's time at s = 2). progress=True shows a tqdm bar over the lattice rows. Returns `stats`."""
+        (the indirect light is smooth; a quarter of the bake's time at s = 2). hot_spots=h (with
+        final_gather): first-pass lattice points whose outgoing light (albedo x E) is above h
+        times the room's mean (the ceiling a few centimetres from a light) leave the gather and
+        light every point as small area lights with a shadow ray each: a few rays landing on such
+        a patch would otherwise leave white specks all over the bake (0: off;
+        stats["bake_hot_points"] counts them). progress=True shows a tqdm bar over the lattice
+        rows. Returns `stats`."""
         s = 0.0 if spacing is None else float(spacing)
         if not math.isfinite(s) or s < 0 or (spacing is not None and s == 0):
             raise ValueError(f"spacing must be positive and finite, got {spacing!r}")
@@ -226,9 +233,13 @@ class Gallery(_core._Gallery):
         if isinstance(final_gather, bool) or not isinstance(final_gather, (int, np.integer)) \
                 or not 0 <= final_gather <= 4096:
             raise ValueError(f"final_gather must be an integer in [0, 4096] (rays), got {final_gather!r}")
+        h = float(hot_spots) if isinstance(hot_spots, (int, float, np.integer, np.floating)) \
+            and not isinstance(hot_spots, bool) else math.nan
+        if not (math.isfinite(h) and (h == 0 or 1 <= h <= 1e6)):
+            raise ValueError(f"hot_spots must be 0 (off) or a number in [1, 1e6], got {hot_spots!r}")
         args = (s, int(light_samples), int(threads), bool(stratified), bool(skip_unlit),
                 int(gather_stride), bool(inset_edges), bool(coarse_disc), bool(analytic_direct),
-                int(shadow_probes), bool(fill_covered), f, int(final_gather), bool(sparse_final_gather))
+                int(shadow_probes), bool(fill_covered), f, int(final_gather), bool(sparse_final_gather), h)
         if not progress:
             self._bake(*args)
             return self.stats
