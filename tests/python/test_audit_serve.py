@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -330,3 +331,49 @@ def test_a_damaged_glb_in_a_show_is_not_rebaked_into_the_show(tmp_path, pack_dir
     glb.write_bytes(_small_glb()[:-4])
     assert _cache_dir(args, show, h) is None                 # damaged: the user cache
     assert _cache_dir(SimpleNamespace(cache_dir=str(tmp_path)), show, h) == str(tmp_path)
+
+
+def test_out_of_descriptors_is_a_few_lines_and_passes(tmp_path, pack_dir):
+    """Idle connections past the process's open-file limit: asyncio's accept error was logged
+    with a traceback at every retry (thousands of lines); now one line every 10 s, and the
+    server serves again once they close. serve also raises its soft limit to the hard one."""
+    import resource
+    import urllib.request
+    from serve_support import ServeProcess
+
+    from gigascroll import TilePack
+
+    def limit():  # soft 48, hard 64: serve raises the soft one to 64
+        resource.setrlimit(resource.RLIMIT_NOFILE, (48, 64))
+
+    real_popen = subprocess.Popen
+
+    def popen(*args, **kwargs):
+        return real_popen(*args, preexec_fn=limit, **kwargs)
+    subprocess.Popen = popen
+    try:
+        proc = ServeProcess([pack_dir, "--room", "scroll", "--port", "0", "--cache-dir",
+                             tmp_path / "cache"], tmp_path)
+    finally:
+        subprocess.Popen = real_popen
+    try:
+        limits = open(f"/proc/{proc.pid}/limits").read()
+        assert re.search(r"Max open files\s+64\s+64", limits), limits
+        u = urllib.parse.urlsplit(proc.url)
+        idle = []
+        for _ in range(100):
+            try:
+                idle.append(socket.create_connection((u.hostname, u.port), timeout=2))
+            except OSError:
+                break
+        time.sleep(3)  # the server meets the limit, retrying its accept
+        for s in idle:
+            s.close()
+        time.sleep(1.5)
+        with urllib.request.urlopen(proc.url + "/api/scene.json", timeout=30) as r:
+            assert json.load(r)["pack"]["hash"] == pack_hash(TilePack(str(pack_dir)))
+    finally:
+        code = proc.stop()
+    log = proc.stderr()
+    assert code == 0 and "Traceback" not in log, log[-2000:]
+    assert 1 <= log.count("out of system resource") <= 3, log[-2000:]

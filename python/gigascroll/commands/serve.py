@@ -65,7 +65,7 @@ def run(args) -> int:
     from .. import TilePack
     from ..outputs import signals_interrupt
     from ..serve import baked_room, make_app, pack_hash, serve_forever, tls_context
-    from ..serve.run import LOOPBACK_HOSTS, listen_socket, log_to_stderr
+    from ..serve.run import LOOPBACK_HOSTS, listen_socket, log_to_stderr, raise_open_files_limit
 
     from .exhibition_options import open_exhibition
     if args.exhibition is None and (args.pack is None or args.room is None):
@@ -88,6 +88,7 @@ def run(args) -> int:
     elif args.host not in LOOPBACK_HOSTS:
         _say(f"warning: serving plain HTTP on {args.host}: a headset needs HTTPS off "
              "localhost for WebXR (give --tls-cert and --tls-key, or use adb reverse)")
+    raise_open_files_limit()  # each visitor's connections hold descriptors
     try:
         sock = listen_socket(args.host, args.port)
     except OSError as e:

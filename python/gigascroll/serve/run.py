@@ -10,6 +10,7 @@ import socket
 import ssl
 import sys
 import threading
+import time
 
 from aiohttp import web
 
@@ -170,11 +171,47 @@ def _bad_http_too(record: logging.LogRecord) -> bool:
     return record.levelno >= logging.INFO or str(record.msg).startswith("Error handling request")
 
 
+class EveryFewSeconds(logging.Filter):
+    """Lets a record through at most once every `seconds` per message start (its first 40
+    characters): asyncio logs 'socket.accept() out of system resource' with a traceback at
+    every retry while the process has no file descriptor left, thousands a minute."""
+
+    def __init__(self, seconds: float = 10.0):
+        super().__init__()
+        self.seconds, self.last = seconds, {}
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        key, now = str(record.msg)[:40], time.monotonic()
+        if now - self.last.get(key, -1e300) < self.seconds:
+            return False
+        self.last[key] = now
+        return True
+
+
+def raise_open_files_limit() -> int:
+    """Raises the soft limit on open files to the hard one (at most 65536) so that many
+    visitors' connections fit; returns the limit now in force."""
+    import resource
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    want = min(hard if hard != resource.RLIM_INFINITY else 65536, 65536)
+    if soft == resource.RLIM_INFINITY or soft >= want:
+        return soft
+    try:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (want, hard))
+        return want
+    except (ValueError, OSError):
+        return soft
+
+
 def log_to_stderr(level: int = logging.INFO) -> None:
-    """One-line records of the server's and aiohttp's loggers on stderr."""
+    """One-line records of the server's, aiohttp's and asyncio's loggers on stderr (asyncio's
+    at most once every 10 s per message: EveryFewSeconds)."""
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(OneLineFormatter())
-    for name in ("gigascroll.serve", "aiohttp"):
+    asyncio_logger = logging.getLogger("asyncio")
+    if not any(isinstance(f, EveryFewSeconds) for f in asyncio_logger.filters):
+        asyncio_logger.addFilter(EveryFewSeconds())
+    for name in ("gigascroll.serve", "aiohttp", "asyncio"):
         logger = logging.getLogger(name)
         logger.handlers[:] = [handler]
         logger.setLevel(level)
