@@ -117,7 +117,7 @@ void bind_gallery(nb::module_& m) {
            "gather_stride"_a = 1, "inset_edges"_a = true,
            "coarse_disc"_a = false, "analytic_direct"_a = true, "shadow_probes"_a = 4,
            "fill_covered"_a = true, "indirect_filter"_a = 0.0f,
-           "final_gather"_a = 16, "sparse_final_gather"_a = false, "hot_spots"_a = 4.0f)
+           "final_gather"_a = 16, "sparse_final_gather"_a = false, "hot_spots"_a = 8.0f)
         .def("_bake_progress", &Gallery::bake_progress)
         .def("_bake_lattice", [](const Gallery& g) {
             // Copies of the bake's lattices and the triangles' frames, taken under the read

@@ -164,8 +164,8 @@ struct BakeSettings {
     // With final_gather: first-pass lattice points brighter (albedo x E) than this many times
     // the lattice's mean leave the gather and light each point as small area lights with a
     // shadow ray each, at most hot_samples of them per point (hot_lattice.h). 0: off.
-    float hot_spots = 4.0f;
-    int hot_samples = 32;
+    float hot_spots = 8.0f;
+    int hot_samples = 16;
 };
 
 struct LightingStats {

@@ -55,8 +55,8 @@ def add_arguments(parser) -> None:
                         help="bake(indirect_filter=...) values, comma-separated (default 0: the default)")
     parser.add_argument("--final-gathers", default="16",
                         help="bake(final_gather=...) rays per point, comma-separated (default 16: the default)")
-    parser.add_argument("--hot-spots", default="4",
-                        help="bake(hot_spots=...) factors, comma-separated (default 4: the default; 0 off)")
+    parser.add_argument("--hot-spots", default="8",
+                        help="bake(hot_spots=...) factors, comma-separated (default 8: the default; 0 off)")
     parser.add_argument("--fill-covered", default="1",
                         help="bake(fill_covered=...): 1 and/or 0, comma-separated (default 1)")
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")

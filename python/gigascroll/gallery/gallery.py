@@ -172,7 +172,7 @@ class Gallery(_core._Gallery):
              gather_stride: int = 1, inset_edges: bool = True, coarse_disc: bool = False,
              analytic_direct: bool = True, shadow_probes: int = 4, fill_covered: bool = True,
              indirect_filter: float = 0.0, final_gather: int = 16, sparse_final_gather: bool = False,
-             hot_spots: float = 4.0) -> dict:
+             hot_spots: float = 8.0) -> dict:
         """Bakes irradiance once for the current lighting: a lattice on every triangle, both
         sides, `spacing` metres apart along its edges (None: the room's diagonal / 200), each
         point with `light_samples` emitter samples plus the photon gather. stratified: the
