@@ -78,3 +78,15 @@ def test_hot_spots_argument_is_checked(lit):
     for bad in (-1, 0.5, float("nan"), float("inf"), True, "16"):
         with pytest.raises(ValueError, match="hot_spots"):
             gal.bake(spacing=0.2, final_gather=4, hot_spots=bad)
+
+
+def test_sparse_final_gather_leaves_no_specks_either(lit):
+    """The same with the final gather on every other point only, interpolated (the knob's
+    cheaper steps): measured 0.2% of the pixels more than 50% off and a 99.9th percentile of
+    73%, against 6.6% and 400% without the hot lights."""
+    kw = dict(gather_stride=2, sparse_final_gather=True)
+    st, rel, _ = errors(*lit, **kw)
+    assert st["bake_hot_points"] > 0
+    assert (rel > 0.5).mean() < 0.01 and np.percentile(rel, 99.9) < 1.0, ((rel > 0.5).mean(), np.percentile(rel, 99.9))
+    _, rel, _ = errors(*lit, hot_spots=0, **kw)
+    assert (rel > 0.5).mean() > 0.03 and np.percentile(rel, 99.9) > 2
