@@ -377,3 +377,31 @@ def test_out_of_descriptors_is_a_few_lines_and_passes(tmp_path, pack_dir):
     log = proc.stderr()
     assert code == 0 and "Traceback" not in log, log[-2000:]
     assert 1 <= log.count("out of system resource") <= 3, log[-2000:]
+
+
+def test_ctrl_c_does_not_wait_for_clients_that_stopped_reading(tmp_path, big_tiles):
+    """SIGINT with six clients that asked for 3 MiB batches and read nothing, and idle ones:
+    the server exits 0 with its 'stopped' line within a few seconds (aiohttp's default
+    shutdown wait let them hold it for about a minute; a hang fails here by the timeout)."""
+    import signal
+    from serve_support import ServeProcess
+    pack, keys = big_tiles
+    proc = ServeProcess([pack.path, "--room", "scroll", "--port", "0", "--cache-dir",
+                         tmp_path / "cache"], tmp_path)
+    u = urllib.parse.urlsplit(proc.url)
+    held = []
+    try:
+        for _ in range(6):
+            s = socket.socket()
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+            s.connect((u.hostname, u.port))
+            s.sendall(_batch_request(pack_hash(pack), keys))
+            held.append(s)
+        held += [socket.create_connection((u.hostname, u.port)) for _ in range(4)]
+        time.sleep(1)
+        code = proc.stop(signal.SIGINT, timeout=30)  # kills (code -9) when it does not stop
+    finally:
+        for s in held:
+            s.close()
+    log = proc.stderr()
+    assert code == 0 and "stopped (SIGINT)" in log and "Traceback" not in log, log[-2000:]

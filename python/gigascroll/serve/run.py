@@ -19,6 +19,9 @@ __all__ = ["LOOPBACK_HOSTS", "tls_context", "listen_socket", "start_site", "serv
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 MAX_PEM_BYTES = 1 << 20  # a certificate chain and its key are kilobytes
+# On Ctrl-C or SIGTERM, requests in flight get this long to finish before they are cancelled:
+# aiohttp's default (60 s) let a client that stopped reading hold the exit for a minute.
+SHUTDOWN_GRACE_S = 2.0
 
 
 class OneLineFormatter(logging.Formatter):
@@ -73,7 +76,8 @@ async def start_site(app: web.Application, host: str, port: int,
                      sock: socket.socket | None = None) -> tuple[web.AppRunner, str]:
     """Starts `app` on `sock`, else on host:port (0: a free port); (its runner, its URL).
     OSError when the address is taken or unavailable."""
-    runner = web.AppRunner(app, access_log=None, handle_signals=False)
+    runner = web.AppRunner(app, access_log=None, handle_signals=False,
+                           shutdown_timeout=SHUTDOWN_GRACE_S)
     await runner.setup()
     site = (web.SockSite(runner, sock, ssl_context=ssl_context) if sock is not None else
             web.TCPSite(runner, host, port, ssl_context=ssl_context, reuse_address=True))
