@@ -1,7 +1,7 @@
 """`gigascroll bench gallery`: the built-in `scroll` and `hall` rooms with a pack of smooth
 synthetic paintings. For each room: Mitsuba 3's path tracer on a spp ladder against a
 high-spp reference (computed once and cached), and a grid of our baked-still configurations
-(photons x gather (the sphere, or the surface disc at multiples of the auto radius) x bake
+(photons x gather (the sphere, or the surface disc at multiples of the auto radius) x final gather x bake
 spacing x bake light samples x gather stride x rays per pixel), each timed end to end: photon pass + photon
 map build + bake + the still itself. The error-time Pareto front of those configurations is
 compared with Mitsuba's time to the same error (log-log interpolation along its ladder), on
@@ -68,6 +68,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--disc-details", default="fine,coarse",
                         help="how finely the bake clips the discs: fine (up to 128 rays) and/or coarse "
                              "(up to 32; bake(coarse_disc=True)); default fine,coarse")
+    parser.add_argument("--final-gathers", default="0,16",
+                        help="bake(final_gather=...) rays per lattice point tried at every configuration "
+                             "(default 0,16: none, the cheap end's, and the bake's default)")
     parser.add_argument("--supersamples", default="1,3,5",
                         help="rays per pixel per axis of the configurations' stills (default 1,3,5)")
     parser.add_argument("--default-photons", type=int, default=20,
@@ -200,6 +203,7 @@ def run(args) -> int:
         args.width, args.height, args.supersample = 32, 18, 2
         args.photons, args.spacings, args.bake_samples, args.default_photons = "14,16", "25,50", "4,16", 16
         args.supersamples, args.disc, args.coarse_photons = "1,2", False, ""
+        args.final_gathers = args.final_gathers if args.final_gathers != "0,16" else "16"
         args.full_samples, args.reference_spp, args.mitsuba_spp = 16, 64, "1,4,16"
         args.cheap_repeats = min(args.cheap_repeats, args.timing_repeats)
     if min(args.width, args.height, args.supersample, args.reference_spp, args.full_samples, args.timing_repeats,
@@ -215,6 +219,12 @@ def run(args) -> int:
     spacings = _ints(args.spacings, "--spacings")
     bake_samples = _ints(args.bake_samples, "--bake-samples")
     supersamples = _ints(args.supersamples, "--supersamples")
+    try:
+        final_gathers = sorted({int(x) for x in args.final_gathers.split(",") if x})
+    except ValueError:
+        raise UserError(f"--final-gathers are integers, got {args.final_gathers!r}") from None
+    if not final_gathers or min(final_gathers) < 0 or max(final_gathers) > 4096:
+        raise UserError(f"--final-gathers are rays in [0, 4096], got {args.final_gathers!r}")
     strides = _ints(args.gather_strides, "--gather-strides")
     if not set(strides) <= {1, 2}:
         raise UserError("--gather-strides takes 1 and/or 2")
@@ -258,7 +268,7 @@ def run(args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="gigascroll-bench-gallery-")
     pack = TilePack(args.pack) if args.pack else build_bench_pack(scratch.name)
     results = {"settings": {k: getattr(args, k) for k in (
-                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "coarse_photons", "spacings", "bake_samples", "default_photons",
+                   "width", "height", "supersample", "supersamples", "gather_strides", "disc", "disc_radii", "disc_details", "photons", "disc_photons", "coarse_photons", "spacings", "bake_samples", "final_gathers", "default_photons",
                    "full_samples", "reference_spp", "mitsuba_spp", "timing_repeats", "cheap_repeats")},
                "load_average": os.getloadavg(), "rooms": {}}
     fov = 60.0
@@ -315,22 +325,23 @@ def run(args) -> int:
                 if (disc and stride > 1 and stride * diag / n > st["radius"]) or (p in coarse_photons and n > 12):
                     steps.update()
                     continue
-                t0 = time.perf_counter()
-                bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride, coarse_disc=coarse,
-                               analytic_direct=analytic)
-                bake_seconds = time.perf_counter() - t0
-                for ss in supersamples:
-                    img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
-                    c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
-                         "disc": bool(disc), "disc_radius_factor": disc, "coarse_disc": coarse, "analytic_direct": analytic,
-                         "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
-                         "gather_stride": stride, "supersample": ss, "bake_points": bst["bake_points"],
-                         "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
-                         "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
-                         "still_seconds": still_seconds, **image_errors(img, ref)}
-                    c["total_seconds"] = light_seconds + bake_seconds + still_seconds
-                    c["light_radius"] = light_radius  # what light() was given (None: auto)
-                    configs.append(c)
+                for fg in final_gathers:
+                    t0 = time.perf_counter()
+                    bst = gal.bake(spacing=diag / n, light_samples=ls, gather_stride=stride, coarse_disc=coarse,
+                                   analytic_direct=analytic, final_gather=fg)
+                    bake_seconds = time.perf_counter() - t0
+                    for ss in supersamples:
+                        img, still_seconds = _still(gal, vt, "baked", args.width, args.height, ss, fov)
+                        c = {"photons_log2": p, "photons_stored": st["photons_stored"], "radius_m": st["radius"],
+                             "disc": bool(disc), "disc_radius_factor": disc, "coarse_disc": coarse, "analytic_direct": analytic,
+                             "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": ls,
+                             "gather_stride": stride, "final_gather": fg, "supersample": ss, "bake_points": bst["bake_points"],
+                             "sides_skipped": bst["bake_sides_skipped"], "photon_seconds": st["photon_seconds"],
+                             "build_seconds": light_seconds - st["photon_seconds"], "bake_seconds": bake_seconds,
+                             "still_seconds": still_seconds, **image_errors(img, ref)}
+                        c["total_seconds"] = light_seconds + bake_seconds + still_seconds
+                        c["light_radius"] = light_radius  # what light() was given (None: auto)
+                        configs.append(c)
                 steps.update()
         r["configs"] = configs
         r["front"] = pareto_front(configs)
@@ -343,7 +354,7 @@ def run(args) -> int:
             gal.light(vt, photons=1 << c["photons_log2"], radius=c["light_radius"], disc=c["disc"])
             gal.bake(spacing=diag / c["diagonal_over"], light_samples=c["bake_samples"],
                      gather_stride=c["gather_stride"], coarse_disc=c["coarse_disc"],
-                     analytic_direct=c["analytic_direct"])
+                     analytic_direct=c["analytic_direct"], final_gather=c.get("final_gather", 16))
             seconds = time.perf_counter() - t0
             img, still_seconds = _still(gal, vt, "baked", args.width, args.height, c["supersample"], fov)
             rerun_errors.setdefault(id(c), []).append(relmse(img, ref))
@@ -410,7 +421,7 @@ def run(args) -> int:
 CONFIG_COLUMNS = ("room", "photons_log2", "photons_stored", "radius_m", "disc", "disc_radius_factor", "coarse_disc",
                   "analytic_direct",
                   "diagonal_over", "spacing_m",
-                  "bake_samples", "gather_stride", "supersample", "bake_points", "sides_skipped",
+                  "bake_samples", "gather_stride", "final_gather", "supersample", "bake_points", "sides_skipped",
                   "photon_seconds", "build_seconds", "bake_seconds", "still_seconds", "total_seconds",
                   "relmse", "psnr", "flip")
 
@@ -476,6 +487,8 @@ def _config_name(c: dict) -> str:
     disc = (f", disc r x {c.get('disc_radius_factor', 2)}{' coarse' if c.get('coarse_disc') else ''}"
             if c.get("disc") else "")
     mean = ", sample mean" if not c.get("analytic_direct", True) else ""
+    fg = c.get("final_gather", 16)
+    stride += f", final gather {fg}" if fg != 16 else ""
     return (f"2^{c['photons_log2']}{disc}, diag/{c['diagonal_over']}, {c['bake_samples']} samples{mean}{stride}, "
             f"{c['supersample']}x{c['supersample']} rays")
 
