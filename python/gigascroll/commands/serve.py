@@ -40,6 +40,15 @@ def _say(text: str) -> None:
     print(f"gigascroll serve: {text}", file=sys.stderr, flush=True)
 
 
+def _announce(url: str) -> None:
+    """The URL served; on every address (--host 0.0.0.0 or ::), also the URLs a headset on
+    this machine's network opens, since 0.0.0.0 is no address to type."""
+    from ..serve.run import network_urls
+    print(f"serving {url}", flush=True)
+    for other in network_urls(url):
+        print(f"  on this machine's network: {other}", flush=True)
+
+
 def _iiif_id(iiif) -> str:
     """The id the show's IIIF manifest gives itself (exhibit build's --base-url)."""
     import json
@@ -119,6 +128,6 @@ def run(args) -> int:
         _say(f"the show's IIIF folder at /iiif/ (manifest /iiif/manifest.json; its ids name "
              f"{_iiif_id(iiif)})")
     caught = serve_forever(app, args.host, args.port, ssl_context, sock=sock,
-                           announce=lambda url: print(f"serving {url}", flush=True))
+                           announce=_announce)
     _say(f"stopped ({caught})")
     return 0

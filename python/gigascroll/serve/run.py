@@ -60,6 +60,35 @@ def _url(site_address, tls: bool) -> str:
     return f"{'https' if tls else 'http'}://{host}:{port}/"
 
 
+def network_urls(url: str) -> list[str]:
+    """For a URL on an unspecified address (0.0.0.0, ::): the same URL on each address this
+    machine is reached by from its networks (the one a headset types), found from the
+    routing table without sending a packet and from the host name; [] for any other URL."""
+    scheme, _, rest = url.partition("://")
+    host, _, port = rest.rstrip("/").rpartition(":")
+    if host not in ("0.0.0.0", "[::]"):
+        return []
+    families = [(socket.AF_INET, "192.0.2.1")] + (  # documentation addresses: never reached
+        [(socket.AF_INET6, "2001:db8::1")] if host == "[::]" else [])
+    found: list[str] = []
+    for family, probe in families:
+        try:
+            with socket.socket(family, socket.SOCK_DGRAM) as s:
+                s.connect((probe, 9))
+                found.append(s.getsockname()[0])
+        except OSError:
+            pass  # no route of this family
+    try:
+        for info in socket.getaddrinfo(socket.gethostname(), None, type=socket.SOCK_STREAM):
+            if info[0] == socket.AF_INET or host == "[::]":
+                found.append(info[4][0])
+    except OSError:
+        pass
+    addresses = [a for a in dict.fromkeys(found)
+                 if not a.startswith(("127.", "::1", "fe80:")) and a != "::"]
+    return [f"{scheme}://{f'[{a}]' if ':' in a else a}:{port}/" for a in addresses]
+
+
 def listen_socket(host: str, port: int) -> socket.socket:
     """A socket listening on host:port (0: a free port), made before anything slow (the
     bake) so that a taken port fails at once. OSError when the address is taken, unknown or
