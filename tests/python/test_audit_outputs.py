@@ -179,6 +179,12 @@ def test_view_screenshots_never_go_into_its_pack(pack_dir):
                             "scroll", "--screenshot", str(pack_dir / shot)],
                            capture_output=True, text=True, timeout=120, env=env)
         assert r.returncode == 2 and "inside the pack being viewed" in r.stderr, r.stderr
+    for tour in ("tour-{n}.json", "../p.pack/t.json"):  # nor the tours it records
+        r = subprocess.run([sys.executable, "-m", "gigascroll", "view", str(pack_dir), "--room",
+                            "scroll", "--record-tour", str(pack_dir / tour)],
+                           capture_output=True, text=True, timeout=120, env=env)
+        assert r.returncode == 2 and "--record-tour" in r.stderr, r.stderr
+        assert "inside the pack being viewed" in r.stderr, r.stderr
     # Beside the pack the same pattern passes this check (and meets the missing display).
     r = subprocess.run([sys.executable, "-m", "gigascroll", "view", str(pack_dir), "--room",
                         "scroll", "--screenshot", str(pack_dir.parent / "shot-{n}.png")],

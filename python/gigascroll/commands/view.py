@@ -83,6 +83,11 @@ def run(args) -> int:
         except OSError as e:
             raise UserError(f"--screenshot {e}") from None
     args.record_tour = tour_pattern(args.record_tour, anchor)
+    if args.pack is not None:  # nor a recorded tour
+        try:
+            refuse_input(Path(args.record_tour.format(n=0)), args.pack, "the pack being viewed")
+        except OSError as e:
+            raise UserError(f"--record-tour {e}") from None
     # Bad options fail before the display is looked for, so they are reported everywhere.
     foveation = parse_foveation(args.fovea, args.fovea_factor, eye)
     from .light_quality import check_light_budget
