@@ -229,6 +229,8 @@ def run(args) -> int:
     check_light_budget(args)
     out = default_out(args)
     if args.pack is not None:  # a walk inside the pack would change the pack
+        if not (Path(args.pack) / "manifest.json").is_file():  # the first thing to say
+            raise UserError(f"{args.pack} is not a tile pack (no manifest.json)")
         try:
             refuse_input(out, args.pack, "the pack being walked")
         except OSError as e:
@@ -275,10 +277,7 @@ def _walk(args, out: Path, tmp: Path, eye, foveation) -> dict:
     if show is not None:
         pack, room = show.pack, show.room
     elif args.pack:
-        p = Path(args.pack)
-        if not (p / "manifest.json").is_file():
-            raise UserError(f"{p} is not a tile pack (no manifest.json)")
-        pack = TilePack(p)
+        pack = TilePack(Path(args.pack))  # a pack's manifest: checked in run()
     else:
         pack = builtin_pack()
     if show is None:
