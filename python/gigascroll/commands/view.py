@@ -77,6 +77,8 @@ def run(args) -> int:
     args.screenshot = (screenshot_pattern(args.screenshot) if args.screenshot is not None
                        else default_screenshot(anchor))
     if args.pack is not None:  # shots inside the pack would change the pack
+        if not (Path(args.pack) / "manifest.json").is_file():  # the first thing to say
+            raise UserError(f"{args.pack} is not a tile pack (no manifest.json)")
         from ..outputs import refuse_input
         try:
             refuse_input(Path(args.screenshot.format(n=0)), args.pack, "the pack being viewed")
