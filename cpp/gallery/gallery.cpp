@@ -1,4 +1,5 @@
 #include "gallery/gallery.h"
+#include "gallery/bake_job.h"
 #include "gallery/hot_lattice.h"
 
 #include <algorithm>
@@ -851,6 +852,10 @@ Vec3f Gallery::final_gather(Vec3f p, Vec3f n, int rays, const std::vector<Vec3f>
     return E * (1.0f / float(rays));
 }
 
+// Gallery::bake in steps (bake_job.h holds what they share), in the order they run:
+// lattice layout, first pass (direct light and photon gathers), the gathers interpolated
+// off their sub-lattice, the gathers added or filtered, covered points filled, the final
+// gather, commit. Every step over the lattice rows advances bake_done_.
 void Gallery::bake(const BakeSettings& s) {
     require(std::isfinite(s.spacing) && s.spacing >= 0, "Gallery.bake: spacing must be finite and >= 0");
     require(s.light_samples >= 1 && s.light_samples <= 1 << 16,
@@ -864,21 +869,44 @@ void Gallery::bake(const BakeSettings& s) {
     require_lit();
     require(s.gather_stride == 1 || s.gather_stride == 2 || s.gather_stride == 4 || s.gather_stride == 8,
             "Gallery.bake: gather_stride must be 1, 2, 4 or 8");
-    const std::uint32_t stride = std::uint32_t(s.gather_stride);
-    const double spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
-    const std::size_t tris = tri_v0_.size();
+    BakeJob job(s, lighting_.threads);
+    bake_lattice_layout(job);
+    bake_allocate(job);
+    bake_first_pass(job);
+    if (job.stride > 1) {
+        if (job.separate)
+            bake_interpolate(job, job.gather_front, job.gather_back, job.indirect_front, job.indirect_back, false);
+        else
+            bake_interpolate(job, job.gather_front, job.gather_back, job.front, job.back, true);
+    }
+    bake_add_indirect(job);
+    bake_fill_covered(job);
+    if (job.fg) bake_final_gather_pass(job);
+    bake_commit(job);
+    stats_.bake_seconds = seconds_since(t0);
+}
+
+// The lattice per triangle: n = ceil(longest edge / spacing) segments, rounded up to a
+// multiple of gather_stride; offsets into the point arrays. Throws before anything changes.
+void Gallery::bake_lattice_layout(BakeJob& job) const {
+    const BakeSettings& s = job.s;
+    const std::uint32_t stride = job.stride;
+    job.spacing = s.spacing > 0 ? s.spacing : double(scene_.diagonal()) / 200.0;
+    const std::size_t tris = job.tris = tri_v0_.size();
     // However coarse the spacing, a triangle has n >= gather_stride segments per edge.
     require(tris * lattice_points(stride) <= s.max_points,
             "Gallery.bake: " + std::to_string(tris) + " triangles are too many to bake: each needs at least " +
                 std::to_string(lattice_points(stride)) + " lattice points and a bake holds at most " +
                 std::to_string(s.max_points) + " (32 bytes each), so at most " +
                 std::to_string(s.max_points / lattice_points(stride)) + " triangles");
-    std::vector<std::uint32_t> n(tris);
-    std::vector<std::uint64_t> offset(tris + 1, 0);
+    std::vector<std::uint32_t>& n = job.n;
+    std::vector<std::uint64_t>& offset = job.offset;
+    n.resize(tris);
+    offset.assign(tris + 1, 0);
     for (std::size_t t = 0; t < tris; ++t) {
         const double l = std::max({double(length(tri_e1_[t])), double(length(tri_e2_[t])),
                                    double(length(tri_e2_[t] - tri_e1_[t]))});
-        const double segments = std::ceil(l / spacing);
+        const double segments = std::ceil(l / job.spacing);
         require(segments < 65536, "Gallery.bake: spacing too fine for the room (more than 65535 "
                                   "lattice segments along a triangle edge)");
         n[t] = std::max(1u, std::uint32_t(segments));
@@ -888,249 +916,292 @@ void Gallery::bake(const BakeSettings& s) {
                 "Gallery.bake: spacing too fine: more than " + std::to_string(s.max_points) +
                     " lattice points");
     }
-    const std::uint64_t total = offset[tris];
+    job.total = offset[tris];
+}
+
+// The bake's arrays, work rows, reachable sides and edge insets; the gallery unbaked from
+// here until bake_commit; the progress counters reset.
+void Gallery::bake_allocate(BakeJob& job) {
+    const BakeSettings& s = job.s;
+    const std::size_t tris = job.tris;
+    const std::uint32_t stride = job.stride;
+    const std::uint64_t total = job.total;
     // On the previous bake's storage (its pages were a twentieth of a fine bake when fresh);
     // the gallery is unbaked until this bake completes.
-    std::vector<Vec3f> front = std::move(bake_front_), back = std::move(bake_back_);
+    job.front = std::move(bake_front_), job.back = std::move(bake_back_);
     bake_n_.clear(), bake_offset_.clear(), bake_front_.clear(), bake_back_.clear();
-    front.assign(total, Vec3f(0, 0, 0)), back.assign(total, Vec3f(0, 0, 0));
+    job.front.assign(total, Vec3f(0, 0, 0)), job.back.assign(total, Vec3f(0, 0, 0));
     // gather_stride s > 1: the gathers on the sub-lattice of the points whose i and j are
     // multiples of s (n / s segments), interpolated onto the others after the direct light.
-    std::vector<std::uint64_t> sub_offset(tris + 1, 0);
+    job.sub_offset.assign(tris + 1, 0);
     if (stride > 1)
-        for (std::size_t t = 0; t < tris; ++t) sub_offset[t + 1] = sub_offset[t] + lattice_points(n[t] / stride);
-    std::vector<Vec3f> gather_front(sub_offset[tris]), gather_back(sub_offset[tris]);
+        for (std::size_t t = 0; t < tris; ++t)
+            job.sub_offset[t + 1] = job.sub_offset[t] + lattice_points(job.n[t] / stride);
+    job.gather_front.resize(job.sub_offset[tris]), job.gather_back.resize(job.sub_offset[tris]);
     // Work items are lattice rows (triangle t, row i): a room is a few large triangles, so
     // splitting by triangle would leave one core with a whole wall.
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> rows;
     for (std::size_t t = 0; t < tris; ++t)
-        for (std::uint32_t i = 0; i <= n[t]; ++i) rows.emplace_back(std::uint32_t(t), i);
+        for (std::uint32_t i = 0; i <= job.n[t]; ++i) job.rows.emplace_back(std::uint32_t(t), i);
     // Per triangle, bit 0 / 1: the front / back side can receive light.
-    std::vector<std::uint8_t> reachable(tris, 3);
-    std::uint64_t skipped = 0;
+    job.reachable.assign(tris, 3);
     if (s.skip_unlit)
         for (std::size_t t = 0; t < tris; ++t) {
             const Vec3f N = scene_.normal(std::uint32_t(t));
-            reachable[t] = std::uint8_t(int(side_reachable(std::uint32_t(t), N)) |
-                                        int(side_reachable(std::uint32_t(t), -N)) << 1);
-            skipped += (reachable[t] & 1 ? 0 : 1) + (reachable[t] & 2 ? 0 : 1);
+            job.reachable[t] = std::uint8_t(int(side_reachable(std::uint32_t(t), N)) |
+                                            int(side_reachable(std::uint32_t(t), -N)) << 1);
+            job.skipped += (job.reachable[t] & 1 ? 0 : 1) + (job.reachable[t] & 2 ? 0 : 1);
         }
-    const SurfaceDisc::Detail detail = s.coarse_disc ? SurfaceDisc::Detail::Coarse : SurfaceDisc::Detail::Fine;
     bake_done_ = 0;
-    bake_total_ = rows.size() * ((stride > 1 ? 2 : 1) +
-                                 (s.sparse_final_gather && stride > 1 && s.final_gather > 0 && map_ ? 1 : 0));
+    bake_total_ = job.rows.size() * ((stride > 1 ? 2 : 1) +
+                                     (s.sparse_final_gather && stride > 1 && s.final_gather > 0 && map_ ? 1 : 0));
     // BakeSettings::inset_edges: a sixteenth of the triangle's lattice spacing, and clear of
     // float rounding at the scene's epsilon.
-    std::vector<float> inset(tris);
+    job.inset.resize(tris);
     for (std::size_t t = 0; t < tris; ++t) {
         const float l = std::max({length(tri_e1_[t]), length(tri_e2_[t]), length(tri_e2_[t] - tri_e1_[t])});
-        inset[t] = std::max(l / float(n[t]) / 16.0f, 32.0f * scene_.epsilon());
+        job.inset[t] = std::max(l / float(job.n[t]) / 16.0f, 32.0f * scene_.epsilon());
     }
     // BakeSettings::fill_covered: per point and side, whether it is covered.
-    std::vector<std::uint8_t> covered_front(s.fill_covered ? total : 0), covered_back(s.fill_covered ? total : 0);
+    job.covered_front.resize(s.fill_covered ? total : 0), job.covered_back.resize(s.fill_covered ? total : 0);
     // BakeSettings::indirect_filter: the gathers kept apart from the direct light until filtered.
-    const bool filter = s.indirect_filter > 0 && map_ && gather_.radius > 0;
-    const bool fg = s.final_gather > 0 && map_;
-    const bool separate = filter || fg;  // the gathers apart from the direct light until the end
-    std::vector<Vec3f> indirect_front(separate ? total : 0), indirect_back(separate ? total : 0);
-    parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
+    job.filter = s.indirect_filter > 0 && map_ && gather_.radius > 0;
+    job.fg = s.final_gather > 0 && map_;
+    job.separate = job.filter || job.fg;  // the gathers apart from the direct light until the end
+    job.sparse = s.sparse_final_gather && stride > 1;
+    job.indirect_front.resize(job.separate ? total : 0), job.indirect_back.resize(job.separate ? total : 0);
+}
+
+// Lattice point (i, j) of triangle t; with inset_edges, a point on an edge moved toward the
+// centroid (at most halfway): inside the triangle, off the neighbouring surfaces' planes.
+Vec3f Gallery::bake_point(const BakeJob& job, std::uint32_t t, std::uint32_t i, std::uint32_t j) const {
+    const std::uint32_t nt = job.n[t];
+    Vec3f p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
+    if (job.s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
+        const Vec3f c = tri_v0_[t] + (tri_e1_[t] + tri_e2_[t]) * (1.0f / 3.0f);
+        const float dc = length(c - p);
+        if (dc > 0) p += (c - p) * std::min(0.5f, job.inset[t] / dc);
+    }
+    return p;
+}
+
+// The first pass, row by row: per point and reachable side, covered (flagged, its gather
+// still taken on the sub-lattice) or the direct light, plus the photon gather (stride 1: at
+// every point, added or kept apart; else on the sub-lattice only).
+void Gallery::bake_first_pass(BakeJob& job) {
+    const BakeSettings& s = job.s;
+    const std::uint32_t stride = job.stride;
+    const SurfaceDisc::Detail detail = s.coarse_disc ? SurfaceDisc::Detail::Coarse : SurfaceDisc::Detail::Fine;
+    parallel_for(job.rows.size(), 4, [&](std::size_t rb, std::size_t re) {
         ShadeCounters c;
         KnnHeap heap;
         for (std::size_t r = rb; r < re; ++r) {
-            const auto [t, i] = rows[r];
-            const std::uint32_t nt = n[t];
+            const auto [t, i] = job.rows[r];
+            const std::uint32_t nt = job.n[t];
             const Vec3f N = scene_.normal(t);
             if (!(max_component(scene_.albedo(t)) > 0)) continue;  // black either way
             for (std::uint32_t j = 0; i + j <= nt; ++j) {
-                const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
+                const std::uint64_t k = job.offset[t] + lattice_index(i, j, nt);
                 Hit h;
                 h.tri = t;
-                h.p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
-                if (s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
-                    // Toward the centroid (at most halfway): inside the triangle, off the
-                    // neighbouring surfaces' planes.
-                    const Vec3f c = tri_v0_[t] + (tri_e1_[t] + tri_e2_[t]) * (1.0f / 3.0f);
-                    const float dc = length(c - h.p);
-                    if (dc > 0) h.p += (c - h.p) * std::min(0.5f, inset[t] / dc);
-                }
+                h.p = bake_point(job, t, i, j);
+                const bool on_sub = stride > 1 && i % stride == 0 && j % stride == 0;
                 for (int side = 0; side < 2; ++side) {
-                    if (!(reachable[t] >> side & 1)) continue;  // stays zero
+                    if (!(job.reachable[t] >> side & 1)) continue;  // stays zero
                     h.front = side == 0;
                     h.n = h.front ? N : -N;
-                    const bool on_sub = stride > 1 && i % stride == 0 && j % stride == 0;
-                    if (s.fill_covered && covered_point(scene_, h.p, h.n, 8.0f * inset[t])) {
-                        (h.front ? covered_front : covered_back)[k] = 1;
-                        if (on_sub)  // the gathers' sub-lattice interpolates onto uncovered points too
-                            (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(
-                                i / stride, j / stride, nt / stride)] = indirect(h.p, h.n, heap, detail);
+                    std::vector<Vec3f>& gather = h.front ? job.gather_front : job.gather_back;
+                    const std::uint64_t q =
+                        on_sub ? job.sub_offset[t] + lattice_index(i / stride, j / stride, nt / stride) : 0;
+                    if (s.fill_covered && covered_point(scene_, h.p, h.n, 8.0f * job.inset[t])) {
+                        (h.front ? job.covered_front : job.covered_back)[k] = 1;
+                        // The gathers' sub-lattice interpolates onto uncovered points too.
+                        if (on_sub) gather[q] = indirect(h.p, h.n, heap, detail);
                         continue;
                     }
                     Vec3f E = s.stratified ? direct_stratified(h, s.light_samples, c, s.analytic_direct ? s.shadow_probes : -1)
                                            : renderer_->direct_irradiance(h, s.light_samples, c);
-                    if (stride == 1 && separate) (h.front ? indirect_front : indirect_back)[k] = indirect(h.p, h.n, heap, detail);
+                    if (stride == 1 && job.separate)
+                        (h.front ? job.indirect_front : job.indirect_back)[k] = indirect(h.p, h.n, heap, detail);
                     else if (stride == 1) E += indirect(h.p, h.n, heap, detail);
-                    else if (i % stride == 0 && j % stride == 0)
-                        (h.front ? gather_front : gather_back)[sub_offset[t] + lattice_index(i / stride, j / stride,
-                                                                                             nt / stride)] =
-                            indirect(h.p, h.n, heap, detail);
-                    (h.front ? front : back)[k] = E;
+                    else if (on_sub) gather[q] = indirect(h.p, h.n, heap, detail);
+                    (h.front ? job.front : job.back)[k] = E;
                 }
             }
         }
         bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
-    }, s.threads ? s.threads : lighting_.threads);
-    // Adds (add = true) or writes the sub-lattice's values interpolated onto every point.
-    auto interpolate = [&](const std::vector<Vec3f>& sub_f, const std::vector<Vec3f>& sub_b,
-                           std::vector<Vec3f>& out_f, std::vector<Vec3f>& out_b, bool add) {
-        parallel_for(rows.size(), 16, [&](std::size_t rb, std::size_t re) {
-            for (std::size_t r = rb; r < re; ++r) {
-                const auto [t, i] = rows[r];
-                const std::uint32_t nt = n[t], m = nt / stride, a = i / stride;
-                const float fx = float(i % stride) / float(stride);
-                if (!(max_component(scene_.albedo(t)) > 0)) continue;
-                for (int side = 0; side < 2; ++side) {
-                    if (!(reachable[t] >> side & 1)) continue;
-                    const Vec3f* G = (side == 0 ? sub_f : sub_b).data() + sub_offset[t];
-                    Vec3f* E = (side == 0 ? out_f : out_b).data() + offset[t];
-                    for (std::uint32_t j = 0; i + j <= nt; ++j) {
-                        // Linear on the sub-lattice's triangles, as irradiance_baked reads the
-                        // lattice. i + j <= n keeps every corner with a non-zero weight on it.
-                        const std::uint32_t b = j / stride;
-                        const float fy = float(j % stride) / float(stride);
-                        Vec3f g = G[lattice_index(a, b, m)] * (1 - fx - fy);
-                        if (fx + fy <= 1) {
-                            if (fx > 0) g += G[lattice_index(a + 1, b, m)] * fx;
-                            if (fy > 0) g += G[lattice_index(a, b + 1, m)] * fy;
-                        } else {
-                            g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
-                                G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
-                        }
-                        if (add) E[lattice_index(i, j, nt)] += g;
-                        else E[lattice_index(i, j, nt)] = g;
+    }, job.threads);
+}
+
+// The sub-lattice's values (sub_f, sub_b) interpolated onto every point of (out_f, out_b):
+// added (add = true) or written. Linear on the sub-lattice's triangles, as irradiance_baked
+// reads the lattice; i + j <= n keeps every corner with a non-zero weight on it.
+void Gallery::bake_interpolate(BakeJob& job, const std::vector<Vec3f>& sub_f, const std::vector<Vec3f>& sub_b,
+                               std::vector<Vec3f>& out_f, std::vector<Vec3f>& out_b, bool add) {
+    const std::uint32_t stride = job.stride;
+    parallel_for(job.rows.size(), 16, [&](std::size_t rb, std::size_t re) {
+        for (std::size_t r = rb; r < re; ++r) {
+            const auto [t, i] = job.rows[r];
+            const std::uint32_t nt = job.n[t], m = nt / stride, a = i / stride;
+            const float fx = float(i % stride) / float(stride);
+            if (!(max_component(scene_.albedo(t)) > 0)) continue;
+            for (int side = 0; side < 2; ++side) {
+                if (!(job.reachable[t] >> side & 1)) continue;
+                const Vec3f* G = (side == 0 ? sub_f : sub_b).data() + job.sub_offset[t];
+                Vec3f* E = (side == 0 ? out_f : out_b).data() + job.offset[t];
+                for (std::uint32_t j = 0; i + j <= nt; ++j) {
+                    const std::uint32_t b = j / stride;
+                    const float fy = float(j % stride) / float(stride);
+                    Vec3f g = G[lattice_index(a, b, m)] * (1 - fx - fy);
+                    if (fx + fy <= 1) {
+                        if (fx > 0) g += G[lattice_index(a + 1, b, m)] * fx;
+                        if (fy > 0) g += G[lattice_index(a, b + 1, m)] * fy;
+                    } else {
+                        g = G[lattice_index(a + 1, b + 1, m)] * (fx + fy - 1) +
+                            G[lattice_index(a, b + 1, m)] * (1 - fx) + G[lattice_index(a + 1, b, m)] * (1 - fy);
                     }
+                    if (add) E[lattice_index(i, j, nt)] += g;
+                    else E[lattice_index(i, j, nt)] = g;
                 }
             }
-            bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
-        }, s.threads ? s.threads : lighting_.threads);
-    };
-    if (stride > 1) {
-        if (separate) interpolate(gather_front, gather_back, indirect_front, indirect_back, false);
-        else interpolate(gather_front, gather_back, front, back, true);
-    }
-    std::vector<Vec3f> direct_front, direct_back;
-    if (fg) direct_front = front, direct_back = back;
-    if (separate && !filter)
-        for (std::uint64_t k = 0; k < total; ++k) front[k] += indirect_front[k], back[k] += indirect_back[k];
-    if (filter)
-        parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
-            std::vector<Vec3f> smooth;
-            for (std::size_t t = tb; t < te; ++t) {
-                if (!(max_component(scene_.albedo(std::uint32_t(t))) > 0)) continue;
-                const float inv_n = 1.0f / float(n[t]);
-                smooth.resize(lattice_points(n[t]));
-                for (int side = 0; side < 2; ++side) {
-                    if (!(reachable[t] >> side & 1)) continue;
-                    const Vec3f* G = (side == 0 ? indirect_front : indirect_back).data() + offset[t];
-                    const std::uint8_t* mask =
-                        s.fill_covered ? (side == 0 ? covered_front : covered_back).data() + offset[t] : nullptr;
-                    filter_indirect(G, mask, n[t], tri_e1_[t] * inv_n, tri_e2_[t] * inv_n,
-                                    s.indirect_filter * gather_.radius, smooth.data());
-                    Vec3f* E = (side == 0 ? front : back).data() + offset[t];
-                    for (std::size_t q = 0; q < smooth.size(); ++q) E[q] += smooth[q];
-                }
-            }
-        }, s.threads ? s.threads : lighting_.threads);
-    std::uint64_t covered = 0;
-    if (s.fill_covered)
-        for (std::uint64_t k = 0; k < total; ++k) covered += covered_front[k] + covered_back[k];
-    std::vector<std::uint8_t> mask_front, mask_back;  // fill_covered_points clears its masks
-    if (s.fill_covered && fg) mask_front = covered_front, mask_back = covered_back;
-    auto fill = [&](std::vector<std::uint8_t>& cf, std::vector<std::uint8_t>& cb) {
-        parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
-            for (std::size_t t = tb; t < te; ++t) {
-                fill_covered_points(front.data() + offset[t], cf.data() + offset[t], n[t]);
-                fill_covered_points(back.data() + offset[t], cb.data() + offset[t], n[t]);
-            }
-        }, s.threads ? s.threads : lighting_.threads);
-    };
-    if (s.fill_covered) fill(covered_front, covered_back);
-    if (fg) {
-        // The final gather over the first pass (front, back), into the direct light's arrays;
-        // sparse: onto the gathers' sub-lattice (reused), filled where covered, interpolated.
-        const bool sparse = s.sparse_final_gather && stride > 1;
-        std::vector<std::uint8_t> sub_mask_front, sub_mask_back;
-        if (sparse) {
-            std::fill(gather_front.begin(), gather_front.end(), Vec3f(0, 0, 0));
-            std::fill(gather_back.begin(), gather_back.end(), Vec3f(0, 0, 0));
-            sub_mask_front.assign(sub_offset[tris], 0), sub_mask_back.assign(sub_offset[tris], 0);
-            if (s.fill_covered)
-                for (std::size_t t = 0; t < tris; ++t)
-                    for (std::uint32_t i = 0; i <= n[t]; i += stride)
-                        for (std::uint32_t j = 0; i + j <= n[t]; j += stride) {
-                            const std::uint64_t k = offset[t] + lattice_index(i, j, n[t]);
-                            const std::uint64_t q = sub_offset[t] + lattice_index(i / stride, j / stride, n[t] / stride);
-                            sub_mask_front[q] = mask_front[k], sub_mask_back[q] = mask_back[k];
-                        }
         }
-        // BakeSettings::hot_spots: out of the lattice the rays look up, into lights of their own.
-        const HotLattice hot = extract_hot_points(scene_, front, back, offset, n, tri_v0_, tri_e1_, tri_e2_,
-                                                  s.hot_spots, 4096);
-        stats_.bake_hot_points = hot.position.size();
-        parallel_for(rows.size(), 4, [&](std::size_t rb, std::size_t re) {
-            for (std::size_t r = rb; r < re; ++r) {
-                const auto [t, i] = rows[r];
-                const std::uint32_t nt = n[t];
-                if (!(max_component(scene_.albedo(t)) > 0)) continue;
-                if (sparse && i % stride != 0) continue;
-                const Vec3f N = scene_.normal(t);
-                for (std::uint32_t j = 0; i + j <= nt; j += sparse ? stride : 1) {
-                    const std::uint64_t k = offset[t] + lattice_index(i, j, nt);
-                    Vec3f p = tri_v0_[t] + tri_e1_[t] * (float(i) / float(nt)) + tri_e2_[t] * (float(j) / float(nt));
-                    if (s.inset_edges && (i == 0 || j == 0 || i + j == nt)) {
-                        const Vec3f c = tri_v0_[t] + (tri_e1_[t] + tri_e2_[t]) * (1.0f / 3.0f);
-                        const float dc = length(c - p);
-                        if (dc > 0) p += (c - p) * std::min(0.5f, inset[t] / dc);
+        bake_done_.fetch_add(re - rb, std::memory_order_relaxed);
+    }, job.threads);
+}
+
+// The gathers kept apart (separate) onto the first pass: added, or with indirect_filter
+// smoothed per triangle first. With the final gather, the direct light is kept before.
+void Gallery::bake_add_indirect(BakeJob& job) {
+    const BakeSettings& s = job.s;
+    if (job.fg) job.direct_front = job.front, job.direct_back = job.back;
+    if (job.separate && !job.filter)
+        for (std::uint64_t k = 0; k < job.total; ++k)
+            job.front[k] += job.indirect_front[k], job.back[k] += job.indirect_back[k];
+    if (!job.filter) return;
+    parallel_for(job.tris, 1, [&](std::size_t tb, std::size_t te) {
+        std::vector<Vec3f> smooth;
+        for (std::size_t t = tb; t < te; ++t) {
+            if (!(max_component(scene_.albedo(std::uint32_t(t))) > 0)) continue;
+            const float inv_n = 1.0f / float(job.n[t]);
+            smooth.resize(lattice_points(job.n[t]));
+            for (int side = 0; side < 2; ++side) {
+                if (!(job.reachable[t] >> side & 1)) continue;
+                const Vec3f* G = (side == 0 ? job.indirect_front : job.indirect_back).data() + job.offset[t];
+                const std::vector<std::uint8_t>& covered = side == 0 ? job.covered_front : job.covered_back;
+                const std::uint8_t* mask = s.fill_covered ? covered.data() + job.offset[t] : nullptr;
+                filter_indirect(G, mask, job.n[t], tri_e1_[t] * inv_n, tri_e2_[t] * inv_n,
+                                s.indirect_filter * gather_.radius, smooth.data());
+                Vec3f* E = (side == 0 ? job.front : job.back).data() + job.offset[t];
+                for (std::size_t q = 0; q < smooth.size(); ++q) E[q] += smooth[q];
+            }
+        }
+    }, job.threads);
+}
+
+// fill_covered: the covered point sides counted, their masks kept for the final gather, and
+// the first pass's covered points filled from their uncovered neighbours.
+void Gallery::bake_fill_covered(BakeJob& job) {
+    if (!job.s.fill_covered) return;
+    for (std::uint64_t k = 0; k < job.total; ++k) job.covered += job.covered_front[k] + job.covered_back[k];
+    // fill_covered_points clears its masks.
+    if (job.fg) job.mask_front = job.covered_front, job.mask_back = job.covered_back;
+    bake_fill(job, job.front, job.back, job.covered_front, job.covered_back, job.offset, job.n, 1);
+}
+
+// fill_covered_points on every triangle's lattice of (f, b) (points from off[t], n[t] /
+// divisor segments) under masks (mf, mb), which it clears.
+void Gallery::bake_fill(BakeJob& job, std::vector<Vec3f>& f, std::vector<Vec3f>& b, std::vector<std::uint8_t>& mf,
+                        std::vector<std::uint8_t>& mb, const std::vector<std::uint64_t>& off,
+                        const std::vector<std::uint32_t>& n, std::uint32_t divisor) {
+    parallel_for(job.tris, 1, [&](std::size_t tb, std::size_t te) {
+        for (std::size_t t = tb; t < te; ++t) {
+            fill_covered_points(f.data() + off[t], mf.data() + off[t], n[t] / divisor);
+            fill_covered_points(b.data() + off[t], mb.data() + off[t], n[t] / divisor);
+        }
+    }, job.threads);
+}
+
+// The final gather over the first pass (front, back), into the direct light's arrays, which
+// become the bake; sparse: onto the gathers' sub-lattice (reused), filled where covered,
+// interpolated. hot_spots: the first pass's bright points leave the lattice the rays look up
+// and light every gather point as lights of their own.
+void Gallery::bake_final_gather_pass(BakeJob& job) {
+    const BakeSettings& s = job.s;
+    const std::uint32_t stride = job.stride;
+    std::vector<std::uint8_t> sub_mask_front, sub_mask_back;
+    if (job.sparse) {
+        std::fill(job.gather_front.begin(), job.gather_front.end(), Vec3f(0, 0, 0));
+        std::fill(job.gather_back.begin(), job.gather_back.end(), Vec3f(0, 0, 0));
+        sub_mask_front.assign(job.sub_offset[job.tris], 0), sub_mask_back.assign(job.sub_offset[job.tris], 0);
+        if (s.fill_covered)
+            for (std::size_t t = 0; t < job.tris; ++t)
+                for (std::uint32_t i = 0; i <= job.n[t]; i += stride)
+                    for (std::uint32_t j = 0; i + j <= job.n[t]; j += stride) {
+                        const std::uint64_t k = job.offset[t] + lattice_index(i, j, job.n[t]);
+                        const std::uint64_t q =
+                            job.sub_offset[t] + lattice_index(i / stride, j / stride, job.n[t] / stride);
+                        sub_mask_front[q] = job.mask_front[k], sub_mask_back[q] = job.mask_back[k];
                     }
-                    for (int side = 0; side < 2; ++side) {
-                        if (!(reachable[t] >> side & 1)) continue;
-                        if (s.fill_covered && (side == 0 ? mask_front : mask_back)[k]) continue;
-                        const Vec3f E = final_gather(p, side == 0 ? N : -N, s.final_gather, front, back, n, offset) +
-                                        hot_irradiance(scene_, hot, p, side == 0 ? N : -N, s.hot_samples,
-                                                       std::fmod(double(2 * k + side) * 0.6180339887498949, 1.0));
-                        if (sparse)
-                            (side == 0 ? gather_front : gather_back)[sub_offset[t] + lattice_index(
-                                i / stride, j / stride, nt / stride)] = E;
-                        else
-                            (side == 0 ? direct_front : direct_back)[k] += E;
-                    }
+    }
+    const HotLattice hot = extract_hot_points(scene_, job.front, job.back, job.offset, job.n, tri_v0_, tri_e1_,
+                                              tri_e2_, s.hot_spots, 4096);
+    stats_.bake_hot_points = hot.position.size();
+    bake_final_gather_rows(job, hot);
+    if (job.sparse) {
+        if (s.fill_covered)
+            bake_fill(job, job.gather_front, job.gather_back, sub_mask_front, sub_mask_back, job.sub_offset, job.n,
+                      stride);
+        bake_interpolate(job, job.gather_front, job.gather_back, job.direct_front, job.direct_back, true);
+    }
+    job.front = std::move(job.direct_front), job.back = std::move(job.direct_back);
+    if (s.fill_covered) bake_fill(job, job.front, job.back, job.mask_front, job.mask_back, job.offset, job.n, 1);
+}
+
+// The final gather's rays and the hot points' lights at every uncovered point side (sparse:
+// every sub-lattice point), row by row.
+void Gallery::bake_final_gather_rows(BakeJob& job, const HotLattice& hot) {
+    const BakeSettings& s = job.s;
+    const std::uint32_t stride = job.stride;
+    const bool sparse = job.sparse;
+    parallel_for(job.rows.size(), 4, [&](std::size_t rb, std::size_t re) {
+        for (std::size_t r = rb; r < re; ++r) {
+            const auto [t, i] = job.rows[r];
+            const std::uint32_t nt = job.n[t];
+            if (!(max_component(scene_.albedo(t)) > 0)) continue;
+            if (sparse && i % stride != 0) continue;
+            const Vec3f N = scene_.normal(t);
+            for (std::uint32_t j = 0; i + j <= nt; j += sparse ? stride : 1) {
+                const std::uint64_t k = job.offset[t] + lattice_index(i, j, nt);
+                const Vec3f p = bake_point(job, t, i, j);
+                for (int side = 0; side < 2; ++side) {
+                    if (!(job.reachable[t] >> side & 1)) continue;
+                    if (s.fill_covered && (side == 0 ? job.mask_front : job.mask_back)[k]) continue;
+                    const Vec3f E =
+                        final_gather(p, side == 0 ? N : -N, s.final_gather, job.front, job.back, job.n, job.offset) +
+                        hot_irradiance(scene_, hot, p, side == 0 ? N : -N, s.hot_samples,
+                                       std::fmod(double(2 * k + side) * 0.6180339887498949, 1.0));
+                    if (sparse)
+                        (side == 0 ? job.gather_front : job.gather_back)[job.sub_offset[t] + lattice_index(
+                            i / stride, j / stride, nt / stride)] = E;
+                    else
+                        (side == 0 ? job.direct_front : job.direct_back)[k] += E;
                 }
             }
-        }, s.threads ? s.threads : lighting_.threads);
-        if (sparse) {
-            if (s.fill_covered)
-                parallel_for(tris, 1, [&](std::size_t tb, std::size_t te) {
-                    for (std::size_t t = tb; t < te; ++t) {
-                        fill_covered_points(gather_front.data() + sub_offset[t], sub_mask_front.data() + sub_offset[t],
-                                            n[t] / stride);
-                        fill_covered_points(gather_back.data() + sub_offset[t], sub_mask_back.data() + sub_offset[t],
-                                            n[t] / stride);
-                    }
-                }, s.threads ? s.threads : lighting_.threads);
-            interpolate(gather_front, gather_back, direct_front, direct_back, true);
         }
-        front = std::move(direct_front), back = std::move(direct_back);
-        if (s.fill_covered) fill(mask_front, mask_back);
-    }
-    stats_.bake_points_covered = covered;
-    if (!fg) stats_.bake_hot_points = 0;
-    bake_n_ = std::move(n);
-    offset.pop_back();
-    bake_offset_ = std::move(offset);
-    bake_front_ = std::move(front), bake_back_ = std::move(back);
-    stats_.bake_seconds = seconds_since(t0);
-    stats_.bake_points = total;
-    stats_.bake_sides_skipped = skipped;
-    stats_.spacing = spacing;
+    }, job.threads);
+}
+
+// The bake becomes the gallery's (baked() from here) and its stats are recorded (but
+// bake_seconds, which bake() sets last).
+void Gallery::bake_commit(BakeJob& job) {
+    stats_.bake_points_covered = job.covered;
+    if (!job.fg) stats_.bake_hot_points = 0;
+    bake_n_ = std::move(job.n);
+    job.offset.pop_back();
+    bake_offset_ = std::move(job.offset);
+    bake_front_ = std::move(job.front), bake_back_ = std::move(job.back);
+    stats_.bake_points = job.total;
+    stats_.bake_sides_skipped = job.skipped;
+    stats_.spacing = job.spacing;
 }
 
 }  // namespace gigascroll

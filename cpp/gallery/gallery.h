@@ -189,6 +189,9 @@ struct DisplayHits {
     float* irradiance = nullptr;   // 3 per pixel: E (W / m^2; pi in "unlit"), 0 where nothing is hit
 };
 
+struct BakeJob;     // bake_job.h: one bake's lattice layout and arrays
+struct HotLattice;  // hot_lattice.h
+
 class Gallery {
 public:
     Gallery() = default;
@@ -310,6 +313,21 @@ private:
     // pass's lattices (front, back; segments, offset per triangle).
     Vec3f final_gather(Vec3f p, Vec3f n, int rays, const std::vector<Vec3f>& front, const std::vector<Vec3f>& back,
                        const std::vector<std::uint32_t>& segments, const std::vector<std::uint64_t>& offset) const;
+    // bake()'s steps in the order they run (gallery.cpp says what each does).
+    void bake_lattice_layout(BakeJob& job) const;
+    void bake_allocate(BakeJob& job);
+    Vec3f bake_point(const BakeJob& job, std::uint32_t t, std::uint32_t i, std::uint32_t j) const;
+    void bake_first_pass(BakeJob& job);
+    void bake_interpolate(BakeJob& job, const std::vector<Vec3f>& sub_f, const std::vector<Vec3f>& sub_b,
+                          std::vector<Vec3f>& out_f, std::vector<Vec3f>& out_b, bool add);
+    void bake_add_indirect(BakeJob& job);
+    void bake_fill_covered(BakeJob& job);
+    void bake_fill(BakeJob& job, std::vector<Vec3f>& f, std::vector<Vec3f>& b, std::vector<std::uint8_t>& mf,
+                   std::vector<std::uint8_t>& mb, const std::vector<std::uint64_t>& off,
+                   const std::vector<std::uint32_t>& n, std::uint32_t divisor);
+    void bake_final_gather_pass(BakeJob& job);
+    void bake_final_gather_rows(BakeJob& job, const HotLattice& hot);
+    void bake_commit(BakeJob& job);
     // The emitters' irradiance at p (normal n) with nothing in between (BakeSettings::analytic_direct).
     Vec3f unoccluded_irradiance(Vec3f p, Vec3f n) const;
     // Whether light can reach side n (= +-normal) of triangle t (BakeSettings::skip_unlit).
