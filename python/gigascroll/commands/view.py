@@ -76,16 +76,17 @@ def run(args) -> int:
     # The default is beside the pack, valid whenever the pack is (checked before the window).
     args.screenshot = (screenshot_pattern(args.screenshot) if args.screenshot is not None
                        else default_screenshot(anchor))
-    if args.pack is not None:  # shots inside the pack would change the pack
-        if not (Path(args.pack) / "manifest.json").is_file():  # the first thing to say
-            raise UserError(f"{args.pack} is not a tile pack (no manifest.json)")
-        from ..outputs import refuse_input
+    # Shots inside the pack would change the pack (a path that is no pack is said later,
+    # after the options: bad options fail first).
+    is_pack = args.pack is not None and (Path(args.pack) / "manifest.json").is_file()
+    from ..outputs import refuse_input
+    if is_pack:
         try:
             refuse_input(Path(args.screenshot.format(n=0)), args.pack, "the pack being viewed")
         except OSError as e:
             raise UserError(f"--screenshot {e}") from None
     args.record_tour = tour_pattern(args.record_tour, anchor)
-    if args.pack is not None:  # nor a recorded tour
+    if is_pack:  # nor a recorded tour
         try:
             refuse_input(Path(args.record_tour.format(n=0)), args.pack, "the pack being viewed")
         except OSError as e:
