@@ -5,6 +5,7 @@ TITLE|N [--distance M]` (a camera in front of one painting: exhibit/cameras.py).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from ..errors import UserError
 
@@ -25,6 +26,18 @@ def add_look_at_options(p) -> None:
     p.add_argument("--distance", type=float, default=None, metavar="M",
                    help="with --look-at: metres from the painting (default: where it fills "
                         "80%% of the view's width or height)")
+
+
+def is_pack_dir(path) -> bool:
+    """Whether `path` is a tile pack's directory (it holds the pack's manifest)."""
+    return (Path(path) / "manifest.json").is_file()
+
+
+def require_pack_dir(path) -> Path:
+    """`path` as a Path; UserError when it is no tile pack's directory."""
+    if not is_pack_dir(path):
+        raise UserError(f"{path} is not a tile pack (no manifest.json)")
+    return Path(path)
 
 
 def open_exhibition(args, pack_option: str = "pack", room_default=None):

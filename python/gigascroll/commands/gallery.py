@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from ..errors import UserError
+from .exhibition_options import require_pack_dir
 
 DEFAULT_SECONDS = 6.0  # the default walk's and --look-at's length
 
@@ -229,8 +230,7 @@ def run(args) -> int:
     check_light_budget(args)
     out = default_out(args)
     if args.pack is not None:  # a walk inside the pack would change the pack
-        if not (Path(args.pack) / "manifest.json").is_file():  # the first thing to say
-            raise UserError(f"{args.pack} is not a tile pack (no manifest.json)")
+        require_pack_dir(args.pack)  # the first thing to say
         try:
             refuse_input(out, args.pack, "the pack being walked")
         except OSError as e:

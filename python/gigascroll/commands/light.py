@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 
 from ..errors import UserError
+from .exhibition_options import require_pack_dir
 
 COMMAND = "light"
 
@@ -231,9 +232,7 @@ def run(args) -> int:
                         "give --exhibition or --lights, not both")
     if show is None and args.pack is None:
         raise UserError("give a PACK (with --room) or --exhibition SHOW")
-    p = Path(args.exhibition if show is not None else args.pack)
-    if show is None and not (p / "manifest.json").is_file():
-        raise UserError(f"{p} is not a tile pack (no manifest.json)")
+    p = Path(args.exhibition) if show is not None else require_pack_dir(args.pack)
     out = Path(args.out) if args.out is not None else beside(p, "light")
     try:
         if show is None:  # a report inside the pack would change the pack

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 from ..errors import UserError
+from .exhibition_options import is_pack_dir, require_pack_dir
 
 
 def register(sub) -> None:
@@ -78,7 +79,7 @@ def run(args) -> int:
                        else default_screenshot(anchor))
     # Shots inside the pack would change the pack (a path that is no pack is said later,
     # after the options: bad options fail first).
-    is_pack = args.pack is not None and (Path(args.pack) / "manifest.json").is_file()
+    is_pack = args.pack is not None and is_pack_dir(args.pack)
     from ..outputs import refuse_input
     if is_pack:
         try:
@@ -106,10 +107,7 @@ def run(args) -> int:
     if show is not None:
         pack, room = show.pack, show.room
     else:
-        p = Path(args.pack)
-        if not (p / "manifest.json").is_file():
-            raise UserError(f"{p} is not a tile pack (no manifest.json)")
-        pack = TilePack(p)
+        pack = TilePack(require_pack_dir(args.pack))
         room = load_room(args.room, pack)
     args.pose = look_at_pose(args, room, show, *headset_view(eye))
     try:
