@@ -96,8 +96,22 @@ def test_pool_segments_keeps_pure_pixels_only():
     s = np.zeros((6, 6), np.int64)
     s[:, 4:] = 1
     s[0, 0] = 2
-    pooled = pool_segments(s, 3)
-    assert pooled.tolist() == [[-1, -1], [0, -1]]
+    assert pool_segments(s, 3, margin=0).tolist() == [[-1, -1], [0, -1]]
+    # with the default margin a pixel also needs its 8 neighbours (inside the image) to agree
+    assert pool_segments(s, 3).tolist() == [[-1, -1], [-1, -1]]
+    big = np.zeros((30, 30), np.int64)
+    big[:, 18:] = 1
+    pooled = pool_segments(big, 3)
+    # brute force: pixel (y, x) kept where every pixel of its 3 x 3 neighbourhood inside the
+    # 10 x 10 image lies wholly on one segment
+    expect = np.full((10, 10), -1)
+    for y in range(10):
+        for x in range(10):
+            cols = range(3 * max(0, x - 1), 3 * min(10, x + 2))
+            segs = {int(big[0, c]) for c in cols}
+            if len(segs) == 1:
+                expect[y, x] = segs.pop()
+    assert pooled.tolist() == expect.tolist()
 
 
 @pytest.fixture(scope="module")
@@ -244,7 +258,17 @@ def test_bench_mottle_writes_figures_and_refuses_bad_options(tmp_path):
     c = r["rooms"]["example"]["configs"][0]
     assert c["photons_log2"] == 12 and c["mottle"]["walls"]["rms"] > 0 and c["mottle"]["walls"]["pixels"] > 0
     assert (out / "error_vs_bake.png").stat().st_size > 0
-    for bad in (["--rooms", "attic"], ["--sigma", "0"], ["--sigma", "nan"], ["--photons", "40"],
+    # the knob's level instead of the grid, re-timed in alternated rounds
+    assert main(base + ["--quality", "draft", "--timing-rounds", "2"]) == 0
+    c = json.loads((out / "results.json").read_text())["rooms"]["example"]["configs"][0]
+    from gigascroll.benchmarks.mottle import room_and_pack
+    from gigascroll.gallery.quality import light_settings
+
+    knob = light_settings(room_and_pack("example", tmp_path / "room")[0], quality="draft")
+    assert c["quality"] == "draft" and 1 << c["photons_log2"] == knob.photons
+    assert c["final_gather"] == knob.final_gather and c["sparse"] == knob.sparse_final_gather
+    assert len(c["light_and_bake_rounds"]) == 2 and c["light_and_bake_over_first"] == 1.0
+    for bad in (["--rooms", "attic"], ["--sparse", "2"], ["--quality", "best"], ["--timing-rounds", "-1"], ["--sigma", "0"], ["--sigma", "nan"], ["--photons", "40"],
                 ["--indirect-filters", "x"], ["--indirect-filters", "-1"], ["--disc", "2"],
                 ["--gather-strides", "3"], ["--radius-factors", "0"], ["--radius-factors", "x"],
                 ["--radius-factors", "nan"], ["--fill-covered", "yes"], ["--width", "0"]):

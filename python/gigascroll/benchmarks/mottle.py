@@ -55,10 +55,19 @@ def add_arguments(parser) -> None:
                         help="bake(indirect_filter=...) values, comma-separated (default 0: the default)")
     parser.add_argument("--final-gathers", default="16",
                         help="bake(final_gather=...) rays per point, comma-separated (default 16: the default)")
+    parser.add_argument("--sparse", default="0",
+                        help="bake(sparse_final_gather=...): 0 and/or 1, comma-separated (default 0; 1 only "
+                             "with a gather stride above 1)")
+    parser.add_argument("--quality", default="",
+                        help="comma-separated quality levels (draft, preview, final): measure the knob's "
+                             "settings for each room (gallery/quality.py) instead of the grid of the options above")
     parser.add_argument("--hot-spots", default="8",
                         help="bake(hot_spots=...) factors, comma-separated (default 8: the default; 0 off)")
     parser.add_argument("--fill-covered", default="1",
                         help="bake(fill_covered=...): 1 and/or 0, comma-separated (default 1)")
+    parser.add_argument("--timing-rounds", type=int, default=0,
+                        help="re-time every configuration's light + bake this many rounds, alternated, and "
+                             "report medians and their ratio to the first configuration's (default 0: off)")
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
     parser.add_argument("--timing-spp", type=int, default=16,
                         help="Mitsuba spp timed in the same run, for time ratios (default 16)")
@@ -131,18 +140,17 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
          "mitsuba_timing": {"spp": args.timing_spp, "seconds": mitsuba_seconds}, "configs": []}
     segments = None
     auto_radius = {}
+    resolved = []
     for cf in configs:
+        if cf["quality"]:
+            cf = knob_config(spec, diag, cf["quality"])
         photons, n, samples = cf["photons"], cf["diagonal_over"], cf["bake_samples"]
         if photons not in auto_radius:
             auto_radius[photons] = gal.light(vt, photons=1 << photons)["radius"]
         radius = None if cf["radius_factor"] == 1 else cf["radius_factor"] * auto_radius[photons]
-        t0 = time.perf_counter()
-        st = gal.light(vt, photons=1 << photons, radius=radius, disc=cf["disc"])
-        t1 = time.perf_counter()
-        bst = gal.bake(spacing=diag / n, light_samples=samples, gather_stride=cf["gather_stride"],
-                       fill_covered=cf["fill_covered"], indirect_filter=cf["indirect_filter"],
-                       final_gather=cf["final_gather"], hot_spots=cf["hot_spots"])
-        t2 = time.perf_counter()
+        cf = {**cf, "radius": radius, "spacing": cf.get("spacing", diag / n)}
+        resolved.append(cf)
+        t0, t1, t2, st, bst = _light_and_bake(gal, vt, cf)
         img, hits = gal.render_display(cam, vt, lighting="baked", hits=True)
         if segments is None:
             segments, seg_class = surface_segments(spec, hits["position"], hits["slot"])
@@ -151,13 +159,51 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
         img = img.reshape(args.height, k, args.width, k, 3).mean(axis=(1, 3))
         c = {"photons_log2": photons, "diagonal_over": n, "spacing_m": bst["spacing"], "bake_samples": samples,
              "radius_factor": cf["radius_factor"], "disc": cf["disc"], "gather_stride": cf["gather_stride"],
-             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "final_gather": cf["final_gather"], "hot_spots": cf["hot_spots"], "hot_points": bst["bake_hot_points"], "points_covered": bst["bake_points_covered"],
+             "fill_covered": cf["fill_covered"], "indirect_filter": cf["indirect_filter"], "final_gather": cf["final_gather"], "sparse": cf["sparse"], "quality": cf["quality"], "hot_spots": cf["hot_spots"], "hot_points": bst["bake_hot_points"], "points_covered": bst["bake_points_covered"],
              "radius_m": st["radius"], "light_seconds": t1 - t0, "bake_seconds": t2 - t1,
              "bake_points": bst["bake_points"],
              "light_and_bake_over_mitsuba": (t2 - t0) / mitsuba_seconds,
              "mottle": measure(img, ref, segments, seg_class, args.sigma), **image_errors(img, ref)}
         r["configs"].append(c)
+    if args.timing_rounds:
+        # light + bake re-timed in rounds, the configurations in turn (every other round in
+        # reverse), so that the machine's load falls on all alike; medians, and each over the
+        # first configuration's.
+        times = [[] for _ in resolved]
+        for rnd in range(args.timing_rounds):
+            order = list(range(len(resolved)))
+            for i in (order if rnd % 2 == 0 else order[::-1]):
+                t0, _, t2, _, _ = _light_and_bake(gal, vt, resolved[i])
+                times[i].append(t2 - t0)
+        first = float(np.median(times[0]))
+        for c, t in zip(r["configs"], times):
+            c["light_and_bake_median_s"] = float(np.median(t))
+            c["light_and_bake_over_first"] = float(np.median(t)) / first
+            c["light_and_bake_rounds"] = t
     return r
+
+
+def _light_and_bake(gal, vt, cf: dict):
+    """Gallery.light then bake at one configuration: (t0, t1, t2, light stats, bake stats)."""
+    t0 = time.perf_counter()
+    st = gal.light(vt, photons=1 << cf["photons"], radius=cf["radius"], disc=cf["disc"])
+    t1 = time.perf_counter()
+    bst = gal.bake(spacing=cf["spacing"], light_samples=cf["bake_samples"], gather_stride=cf["gather_stride"],
+                   fill_covered=cf["fill_covered"], indirect_filter=cf["indirect_filter"],
+                   final_gather=cf["final_gather"], hot_spots=cf["hot_spots"], sparse_final_gather=cf["sparse"])
+    return t0, t1, time.perf_counter(), st, bst
+
+
+def knob_config(spec, diag: float, level: str) -> dict:
+    """The quality knob's settings for this room at `level`, as one configuration of the grid
+    (the bake's other settings its defaults)."""
+    from ..gallery.quality import light_settings
+
+    ls = light_settings(spec, quality=level)
+    return dict(photons=int(math.log2(ls.photons)), diagonal_over=round(diag / ls.spacing),
+                bake_samples=ls.light_samples, radius_factor=1.0, disc=False, gather_stride=ls.gather_stride,
+                fill_covered=True, indirect_filter=0.0, final_gather=ls.final_gather, hot_spots=8.0,
+                sparse=ls.sparse_final_gather, quality=level, spacing=ls.spacing)
 
 
 def _pixel_size(position: np.ndarray, cam, k: int) -> float:
@@ -199,6 +245,8 @@ def run(args) -> int:
     for r in rooms:
         if r not in ROOMS:
             raise UserError(f"unknown room {r!r} (measured: {', '.join(ROOMS)})")
+    if not 0 <= args.timing_rounds <= 1000:
+        raise UserError(f"--timing-rounds must be in [0, 1000], got {args.timing_rounds}")
     if min(args.width, args.height, args.supersample, args.reference_spp, args.timing_spp) < 1:
         raise UserError("--width, --height, --supersample, --reference-spp and --timing-spp must be >= 1")
     if not (math.isfinite(args.sigma) and 0.3 <= args.sigma <= 16):
@@ -213,7 +261,7 @@ def run(args) -> int:
     if not factors or not all(0 < f <= 16 for f in factors):
         raise UserError(f"--radius-factors are multiples in (0, 16], got {args.radius_factors!r}")
     flags = {}
-    for what in ("disc", "fill_covered"):
+    for what in ("disc", "fill_covered", "sparse"):
         text = getattr(args, what)
         if not set(text.split(",")) <= {"0", "1"}:
             raise UserError(f"--{what.replace('_', '-')} takes 0 and/or 1, got {text!r}")
@@ -240,11 +288,18 @@ def run(args) -> int:
     if not set(strides) <= {1, 2, 4, 8}:
         raise UserError("--gather-strides takes 1, 2, 4, 8")
     configs = [dict(photons=p, diagonal_over=n, bake_samples=s, radius_factor=f, disc=d, gather_stride=st,
-                    fill_covered=fc, indirect_filter=fi, final_gather=fg, hot_spots=h)
+                    fill_covered=fc, indirect_filter=fi, final_gather=fg, hot_spots=h, sparse=sp, quality=None)
                for p in photons for n in _ints(args.spacings, "--spacings")
                for s in _ints(args.bake_samples, "--bake-samples") for f in factors for d in flags["disc"]
                for st in strides for fc in flags["fill_covered"] for fi in filters
-               for fg in gathers for h in hots]
+               for fg in gathers for h in hots for sp in flags["sparse"] if st > 1 or not sp]
+    if args.quality:
+        from ..gallery.quality import check_quality
+
+        try:
+            configs = [dict(quality=check_quality(q)) for q in args.quality.split(",")]
+        except ValueError as e:
+            raise UserError(str(e)) from None
     try:
         import mitsuba as mi
     except ImportError:
@@ -254,7 +309,8 @@ def run(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     results = {"settings": {k: getattr(args, k) for k in (
         "width", "height", "supersample", "sigma", "photons", "spacings", "bake_samples", "radius_factors", "disc",
-        "gather_strides", "fill_covered", "indirect_filters", "final_gathers", "hot_spots", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
+        "gather_strides", "fill_covered", "indirect_filters", "final_gathers", "hot_spots", "sparse", "quality",
+        "timing_rounds", "reference_spp", "timing_spp")}, "load_average": os.getloadavg(), "rooms": {}}
     with tempfile.TemporaryDirectory(prefix="gigascroll-bench-mottle-") as scratch:
         for name in rooms:
             results["rooms"][name] = measure_room(mi, name, args, Path(scratch), configs)
@@ -272,6 +328,10 @@ def _print_room(name: str, r: dict) -> None:
                  if c["mottle"].get(cl)]
         print(f"{name}: 2^{c['photons_log2']} photons, r x {c['radius_factor']:g}{' disc' if c['disc'] else ''}, "
               f"diag/{c['diagonal_over']}, {c['bake_samples']} samples, stride {c['gather_stride']}, "
-              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}, final gather {c['final_gather']}, hot {c['hot_spots']:g} ({c['hot_points']}): "
+              f"fill {int(c['fill_covered'])}, filter {c['indirect_filter']:g}, final gather {c['final_gather']}"
+              f"{' sparse' if c.get('sparse') else ''}, hot {c['hot_spots']:g} ({c['hot_points']})"
+              f"{' = ' + c['quality'] if c.get('quality') else ''}: "
               f"{', '.join(parts)}; light+bake {c['light_seconds'] + c['bake_seconds']:.2f} s "
-              f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)")
+              f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)"
+              + (f"; median of {len(c['light_and_bake_rounds'])} {c['light_and_bake_median_s']:.3f} s = "
+                 f"{c['light_and_bake_over_first']:.2f}x the first" if "light_and_bake_median_s" in c else ""))

@@ -148,13 +148,31 @@ def surface_segments(spec, position: np.ndarray, slot: np.ndarray, chunk: int = 
     return out.reshape(np.asarray(slot).shape), seg_class
 
 
-def pool_segments(segments: np.ndarray, k: int) -> np.ndarray:
+def pool_segments(segments: np.ndarray, k: int, margin: int = 1) -> np.ndarray:
     """Segments of a k x k supersampled hits pass to pixels: a pixel's segment where all its
-    k^2 samples agree, else -1 (an edge pixel mixes surfaces)."""
+    k^2 samples agree and every pixel within `margin` of it (inside the image) has the same
+    segment, else -1.
+
+    The first rule leaves out pixels whose samples mix surfaces; the margin, pixels that only
+    look pure. A reference pixel is the mean over the pixel's whole box, which reaches up to
+    1 / (2k) of a pixel beyond our outermost samples, and there a surface's edge shows what
+    the light does at the millimetre scale (a painting 1 mm above a table: the contact shadow
+    in the gap, seen at a grazing angle). In the hall seen from above its table, the edge row
+    of a 2.7 cm painting was 12% darker in the reference than in a 15 x 15-sample image of
+    ours, and the painting's interior rows agreed within 0.2%: that is geometry, not the
+    light's mottle."""
     h, w = segments.shape[0] // k, segments.shape[1] // k
     blocks = segments[:h * k, :w * k].reshape(h, k, w, k).transpose(0, 2, 1, 3).reshape(h, w, k * k)
     first = blocks[..., 0]
-    return np.where((blocks == first[..., None]).all(-1), first, -1)
+    pooled = np.where((blocks == first[..., None]).all(-1), first, -1)
+    if margin <= 0:
+        return pooled
+    padded = np.pad(pooled, margin, mode="edge")  # the image's border is no edge
+    same = np.ones(pooled.shape, bool)
+    for dy in range(-margin, margin + 1):
+        for dx in range(-margin, margin + 1):
+            same &= padded[margin + dy:margin + dy + h, margin + dx:margin + dx + w] == pooled
+    return np.where(same, pooled, -1)
 
 
 def mottle(image: np.ndarray, reference: np.ndarray, segments: np.ndarray, seg_class: dict,
