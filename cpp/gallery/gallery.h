@@ -115,8 +115,10 @@ struct BakeSettings {
     // multiples of s (a sub-lattice of s times the spacing; n is rounded up to a multiple of
     // s), linearly interpolated onto the others: 1 / s^2 of the gathers. The gather already
     // blurs indirect light over its radius, so this loses little while s x spacing stays
-    // below the radius. 1: a gather at every point.
-    int gather_stride = 1;
+    // below the radius. 1: a gather at every point. The default, 2, is the quality knob's
+    // `final` (python/gigascroll/gallery/quality.py), as are final_gather's and
+    // sparse_final_gather's.
+    int gather_stride = 2;
     // Lattice points on a triangle's edges and corners are computed a sixteenth of the
     // lattice spacing inside it (toward its centroid) rather than on the edge itself. The
     // room's edges are where surfaces meet: a point on the floor's edge also lies on the
@@ -153,14 +155,14 @@ struct BakeSettings {
     // albedo x E over that many cosine-distributed rays' hits, E there the lattice of a first
     // pass (direct light plus the photon map's density estimate): the photon noise at each
     // hit averages out over the hemisphere. The rays form a jittered grid when their count is
-    // a square. 0: the density estimate at the point itself. The default, 16 rays, takes the
-    // mottle on walls, floors and paintings below 1% (bench mottle) for about twice the
-    // light + bake time of none.
-    int final_gather = 16;
+    // a square. 0: the density estimate at the point itself.
+    int final_gather = 36;
     // With gather_stride s > 1: the final gather too only on the sub-lattice of every s-th
     // point (1 / s^2 of them; covered ones filled from their neighbours), interpolated between
-    // (the indirect light it finds is smooth): about a quarter of the bake's time at s = 2.
-    bool sparse_final_gather = false;
+    // (the indirect light it finds is smooth). The defaults, 36 rays a point on every other
+    // point each way, take the mottle on walls and floors below 1% and on paintings below
+    // 0.5% (bench mottle) for about 1.5x the light + bake time of no final gather.
+    bool sparse_final_gather = true;
     // With final_gather: first-pass lattice points brighter (albedo x E) than this many times
     // the lattice's mean leave the gather and light each point as small area lights with a
     // shadow ray each, at most hot_samples of them per point (hot_lattice.h). 0: off.

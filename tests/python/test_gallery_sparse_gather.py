@@ -71,7 +71,7 @@ def test_sparse_without_a_stride_is_the_dense_final_gather(pack):
     cam = gal.camera((32, 24))
     images = []
     for sparse in (False, True):
-        gal.bake(spacing=0.2, final_gather=4, sparse_final_gather=sparse, threads=2)
+        gal.bake(spacing=0.2, final_gather=4, gather_stride=1, sparse_final_gather=sparse, threads=2)
         images.append(gal.render_display(cam, vt, lighting="baked"))
     np.testing.assert_array_equal(images[0], images[1])
     with pytest.raises(ValueError, match="sparse_final_gather"):

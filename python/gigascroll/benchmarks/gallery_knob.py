@@ -19,11 +19,24 @@ from ..gallery.quality import LEVEL_STEPS, STEPS, LightSettings, _scaled, room_m
 
 
 def knob_points(spec) -> list[LightSettings]:
-    """The ladder's steps for this room (the levels among them), then the bake's defaults."""
+    """The ladder's steps for this room (the levels among them), then the defaults: the
+    photon pass and bake of Gallery.light() / bake() called without settings (read from
+    their signatures; the spacing's default is the diagonal / 200), the still at the rays per
+    pixel `render --room` uses without options (the default level's)."""
+    import inspect
+
+    from ..gallery import Gallery
+    from ..gallery.quality import DEFAULT_QUALITY
+
     m = room_measures(spec)
     names = {i: level for level, i in LEVEL_STEPS.items()}
     points = [_scaled(step, m, i, names.get(i, f"step {i}"), None) for i, step in enumerate(STEPS)]
-    defaults = LightSettings("defaults", -1, 1 << 19, m.diagonal / 200, 16, 16, 1, 9)
+    light = {k: v.default for k, v in inspect.signature(Gallery.light).parameters.items()}
+    bake = {k: v.default for k, v in inspect.signature(Gallery.bake).parameters.items()}
+    spp = points[LEVEL_STEPS[DEFAULT_QUALITY]].spp
+    defaults = LightSettings("defaults", -1, light["photons"], m.diagonal / 200, bake["light_samples"],
+                             bake["final_gather"], bake["gather_stride"], spp, None,
+                             bake["sparse_final_gather"] and bake["gather_stride"] > 1)
     return points + [defaults]
 
 
@@ -47,7 +60,8 @@ def measure_knob(gal, vt, spec, ref, ladder: list[dict], still, time_mitsuba, ar
         img, st, bst, light_s, bake_s, still_s = run(p)
         c = {"level": p.level, "step": p.step, "photons": p.photons, "spacing_m": p.spacing,
              "diagonal_over": round(math.dist(*gal.bounds) / p.spacing), "light_samples": p.light_samples,
-             "final_gather": p.final_gather, "gather_stride": p.gather_stride, "spp": p.spp,
+             "final_gather": p.final_gather, "sparse_final_gather": p.sparse_final_gather,
+             "gather_stride": p.gather_stride, "spp": p.spp,
              "bake_points": bst["bake_points"], "photon_seconds": st["photon_seconds"],
              "build_seconds": light_s - st["photon_seconds"], "bake_seconds": bake_s,
              "still_seconds": still_s, "total_seconds": light_s + bake_s + still_s,
@@ -87,7 +101,8 @@ def print_knob(name: str, rows: list[dict]) -> None:
         else:
             sp = "-"
         print(f"    {c['level']:9s} 2^{int(math.log2(c['photons'])):<2d} diag/{c['diagonal_over']:<4d} "
-              f"{c['light_samples']:3d} samples fg {c['final_gather']:3d} stride {c['gather_stride']} "
+              f"{c['light_samples']:3d} samples fg {c['final_gather']:3d}{'s' if c.get('sparse_final_gather') else ' '} "
+              f"stride {c['gather_stride']} "
               f"{c['spp']} spp  relMSE {c['relmse']:.2e}  {sp}")
 
 

@@ -4,6 +4,8 @@ renders a still of a gallery room with the pack's paintings (lighting baked or f
 
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 
 from ..errors import UserError
@@ -199,7 +201,11 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
     from .light_quality import light_settings_of
     settings = light_settings_of(args, spec)
-    options = {**options, "spp": options["spp"] or settings.spp}
+    if not options["spp"]:
+        # The knob's rays per pixel, as many of them as fit 2^26 samples (a large still at a
+        # fine level: its light, not its antialiasing, is what the level promises).
+        fit = math.isqrt(max(1, (1 << 26) // (args.width * args.height)))
+        options = {**options, "spp": min(settings.spp, fit * fit)}
     if args.width * args.height * options["spp"] > 1 << 26:
         raise UserError(f"--room: {args.width} x {args.height} pixels x {options['spp']} spp is more "
                         "than 2^26 samples")

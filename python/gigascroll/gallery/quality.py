@@ -48,7 +48,8 @@ MAX_BUDGET_S = 86400.0
 @dataclass(frozen=True)
 class Step:
     """One step of the ladder for a room like the fitted ones: log2 photons, spacing diag / n,
-    emitter samples, final gather rays, gather stride, the still's rays per pixel."""
+    emitter samples, final gather rays, gather stride, the still's rays per pixel, and whether
+    the final gather runs on the gathers' sub-lattice only (bake(sparse_final_gather))."""
 
     photons_log2: int
     diagonal_over: int
@@ -56,15 +57,20 @@ class Step:
     final_gather: int
     gather_stride: int
     spp: int
+    sparse: bool = False
 
 
-# From cheapest to finest; the levels are steps 0, 2 and 4. Budgets pick any step.
-STEPS = (Step(10, 25, 1, 4, 1, 4),      # draft
-         Step(12, 35, 4, 8, 1, 4),
-         Step(14, 50, 4, 16, 1, 9),     # preview
-         Step(16, 100, 16, 16, 2, 9),
-         Step(19, 200, 16, 16, 2, 9),   # final: issue 40's mottle goal
-         Step(20, 250, 16, 32, 1, 9))
+# From cheapest to finest; the levels are steps 0, 2 and 4. Budgets pick any step. From step 3
+# the final gather runs on the gathers' sub-lattice (every other point each way) with more rays
+# a point: the same mottle at 0.6x the bake (docs/light.md). The still's rays per pixel grow
+# with the light's accuracy: at the finer steps the hall's error against Mitsuba was half
+# aliasing at 3 x 3 (relMSE 4.7e-6 at 9 rays a pixel, 2.3e-6 at 49, the same bake).
+STEPS = (Step(10, 25, 1, 4, 1, 9),      # draft
+         Step(12, 50, 4, 4, 1, 9),
+         Step(14, 50, 4, 16, 1, 25),    # preview
+         Step(16, 100, 16, 36, 2, 49, sparse=True),
+         Step(19, 200, 16, 36, 2, 49, sparse=True),   # final: issue 40's mottle goal
+         Step(20, 250, 16, 64, 2, 81, sparse=True))
 LEVEL_STEPS = {"draft": 0, "preview": 2, "final": 4}
 
 
@@ -82,18 +88,21 @@ class LightSettings:
     gather_stride: int
     spp: int
     budget_s: float | None = None
+    sparse_final_gather: bool = False
 
     def light_options(self) -> dict:
         return {"photons": self.photons, "light_samples": self.light_samples}
 
     def bake_options(self) -> dict:
         return {"spacing": self.spacing, "light_samples": self.light_samples,
-                "final_gather": self.final_gather, "gather_stride": self.gather_stride}
+                "final_gather": self.final_gather, "gather_stride": self.gather_stride,
+                "sparse_final_gather": self.sparse_final_gather}
 
     def describe(self) -> str:
         return (f"{self.level} (step {self.step}): 2^{int(math.log2(self.photons))} photons, "
                 f"spacing {self.spacing:.3g} m, {self.light_samples} samples, final gather "
-                f"{self.final_gather}, gather stride {self.gather_stride}, {self.spp} spp")
+                f"{self.final_gather}{' (sparse)' if self.sparse_final_gather else ''}, gather stride "
+                f"{self.gather_stride}, {self.spp} spp")
 
 
 @dataclass(frozen=True)
@@ -142,7 +151,8 @@ def _scaled(step: Step, m: RoomMeasures, index: int, level: str, budget) -> Ligh
     photons = 1 << max(8, min(26, step.photons_log2 + round(math.log2(ratio))))
     samples = step.light_samples * min(4, max(1, math.ceil(m.lights / 2)))
     return LightSettings(level, index, photons, m.diagonal / step.diagonal_over, samples,
-                         step.final_gather, step.gather_stride, step.spp, budget)
+                         step.final_gather, step.gather_stride, step.spp, budget,
+                         step.sparse and step.gather_stride > 1)
 
 
 def check_quality(quality) -> str:
@@ -168,9 +178,11 @@ SECONDS_PER_POINT_RAY = 1.0e-7
 def predicted_seconds(s: LightSettings, m: RoomMeasures) -> float:
     """A rough light + bake time of the settings (the cost model above): photons, plus the
     lattice's points (about 2 area / spacing^2, both sides) times the rays each casts (its
-    emitter samples, its final gather, its first pass's photon gather)."""
+    emitter samples, its final gather (sparse: on a stride^2-th of the points), its first
+    pass's photon gather)."""
     points = 2 * m.area / s.spacing ** 2
-    rays = s.light_samples + 2 * s.final_gather + 16 / s.gather_stride ** 2
+    gathered = s.final_gather / (s.gather_stride ** 2 if s.sparse_final_gather else 1)
+    rays = s.light_samples + 2 * gathered + 16 / s.gather_stride ** 2
     return SECONDS_PER_PHOTON * s.photons + SECONDS_PER_POINT_RAY * points * rays
 
 
@@ -197,11 +209,13 @@ def light_settings(spec, quality: str | None = None, budget: float | None = None
 def apply_settings(gallery, settings: LightSettings, vt=None, threads: int = 0, seed: int = 0,
                    progress: bool = False, bake: bool = True, **overrides) -> dict:
     """Lights the gallery (and bakes, with `bake`) at `settings`; `overrides` replace fields of
-    it (photons, spacing, light_samples, final_gather, gather_stride; None: not given). vt:
+    it (photons, spacing, light_samples, final_gather, gather_stride, sparse_final_gather;
+    None: not given). vt:
     any VirtualTexture of the gallery's pack (None: a small one; the photons read the
     paintings' pinned coarse levels). Returns the gallery's stats."""
     given = {k: v for k, v in overrides.items() if v is not None}
-    unknown = set(given) - {"photons", "spacing", "light_samples", "final_gather", "gather_stride"}
+    unknown = set(given) - {"photons", "spacing", "light_samples", "final_gather", "gather_stride",
+                            "sparse_final_gather"}
     if unknown:
         raise ValueError(f"unknown light settings: {', '.join(sorted(unknown))}")
     if not isinstance(settings, LightSettings):

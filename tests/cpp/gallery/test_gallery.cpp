@@ -141,6 +141,8 @@ TEST(Gallery, BakedIrradianceEqualsFullAtLatticeCorners) {
     bs.light_samples = ls.light_samples;  // the same estimator as lighting "full"
     bs.stratified = false;
     bs.inset_edges = false;  // the corners themselves, where "full" is evaluated
+    bs.gather_stride = 1;    // a photon gather at every point, as "full" does: no final gather
+    bs.final_gather = 0;
     room.gallery.bake(bs);
     for (Vec3f corner : {Vec3f(-1, 0, -1), Vec3f(-1, 0, 1), Vec3f(1, 0, 1)}) {
         Hit h;
