@@ -214,22 +214,24 @@ def _pixel_size(position: np.ndarray, cam, k: int) -> float:
 
 
 def plot(results: dict, path: Path) -> None:
-    """RMS mottle against light + bake time (over Mitsuba's timing run): colour per room,
-    marker per surface kind, one line per photon count through its other settings (in the
-    order run, e.g. final gathers of 0, 16 and 64 rays)."""
+    """RMS mottle against light + bake time (over Mitsuba's timing run; the alternated median
+    where --timing-rounds gave one): colour per room, marker per surface kind, one point per
+    configuration (the photon counts below the largest hollow)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 5))
     for room_index, (name, r) in enumerate(results["rooms"].items()):
         colour = f"C{room_index}"
+        mitsuba = r["mitsuba_timing"]["seconds"]
+        most = max(c["photons_log2"] for c in r["configs"])
         for photons in sorted({c["photons_log2"] for c in r["configs"]}):
             same = [c for c in r["configs"] if c["photons_log2"] == photons]
             for cl, marker in (("walls", "o"), ("floor", "s"), ("paintings", "^"), ("other", "x")):
-                pts = [(c["light_and_bake_over_mitsuba"], c["mottle"][cl]["rms"]) for c in same if c["mottle"].get(cl)]
+                pts = sorted((c.get("light_and_bake_median_s", c["light_seconds"] + c["bake_seconds"]) / mitsuba,
+                              c["mottle"][cl]["rms"]) for c in same if c["mottle"].get(cl))
                 if pts:
                     x, y = zip(*pts)
-                    ax.plot(x, np.array(y) * 100, marker=marker, color=colour, lw=0.8,
-                            ls="-" if photons == max(c["photons_log2"] for c in r["configs"]) else ":",
-                            label=f"{name} {cl}, 2^{photons}")
+                    ax.plot(x, np.array(y) * 100, marker=marker, color=colour, ls="none",
+                            mfc=colour if photons == most else "none", label=f"{name} {cl}, 2^{photons}")
     ax.axhline(1.0, color="grey", ls="--", lw=0.8)
     ax.axhline(0.5, color="grey", ls=":", lw=0.8)
     ax.set_xscale("log")
