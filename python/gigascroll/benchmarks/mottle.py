@@ -50,14 +50,14 @@ def add_arguments(parser) -> None:
                         help="gather radii as multiples of the automatic one, comma-separated (default 1)")
     parser.add_argument("--disc", default="0",
                         help="gather over the sphere (0) and/or the surface disc (1), comma-separated (default 0)")
-    parser.add_argument("--gather-strides", default="1", help="bake gather strides (default 1)")
+    parser.add_argument("--gather-strides", default="2", help="bake gather strides (default 2: the default)")
     parser.add_argument("--indirect-filters", default="0",
                         help="bake(indirect_filter=...) values, comma-separated (default 0: the default)")
-    parser.add_argument("--final-gathers", default="16",
-                        help="bake(final_gather=...) rays per point, comma-separated (default 16: the default)")
-    parser.add_argument("--sparse", default="0",
-                        help="bake(sparse_final_gather=...): 0 and/or 1, comma-separated (default 0; 1 only "
-                             "with a gather stride above 1)")
+    parser.add_argument("--final-gathers", default="36",
+                        help="bake(final_gather=...) rays per point, comma-separated (default 36: the default)")
+    parser.add_argument("--sparse", default="1",
+                        help="bake(sparse_final_gather=...): 0 and/or 1, comma-separated (default 1: the "
+                             "default; 1 counts only with a gather stride above 1)")
     parser.add_argument("--quality", default="",
                         help="comma-separated quality levels (draft, preview, final): measure the knob's "
                              "settings for each room (gallery/quality.py) instead of the grid of the options above")
@@ -294,7 +294,7 @@ def run(args) -> int:
                for p in photons for n in _ints(args.spacings, "--spacings")
                for s in _ints(args.bake_samples, "--bake-samples") for f in factors for d in flags["disc"]
                for st in strides for fc in flags["fill_covered"] for fi in filters
-               for fg in gathers for h in hots for sp in flags["sparse"] if st > 1 or not sp]
+               for fg in gathers for h in hots for sp in (flags["sparse"] if st > 1 and fg > 0 else [False])]
     if args.quality:
         from ..gallery.quality import check_quality
 
