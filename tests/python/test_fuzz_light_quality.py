@@ -15,7 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import gigascroll as g
-from gigascroll.gallery.quality import (QUALITY_LEVELS, STEPS, LightSettings, apply_settings,
+from gigascroll.gallery.quality import (QUALITY_LEVELS, STEPS, LightSettings, apply_settings, still_spp,
                                         light_settings, predicted_seconds, room_measures)
 from gigascroll.room.spec import RoomSpec, Surface
 
@@ -149,6 +149,30 @@ def test_the_knob_reaches_the_still(fork_worker, files, tmp_path, option):
     s = light_settings(spec, *(("draft",) if option[0] == "--quality" else ()),
                        **({"budget": 0.01} if option[0] == "--light-budget" else {}))
     assert f"({s.photons} emitted" in o.stdout and s.level in o.stdout, o.stdout
+
+
+def test_the_still_takes_the_levels_rays_per_pixel(fork_worker, files, tmp_path):
+    """render --room at final without --spp: the level's rays a pixel (49), said on the output."""
+    argv = commands(files, tmp_path / "out")["render"] + ["--quality", "final"]
+    o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=120)
+    assert o.code == 0, o.describe()
+    assert light_settings(load_example(files), "final").spp == 49
+    assert "12x9, 49 spp, lighting" in o.stdout, o.stdout
+
+
+@pytest.mark.parametrize("spp", [1, 4, 9, 49, 81])
+def test_the_levels_rays_per_pixel_are_capped_at_2_26_samples(spp):
+    """still_spp against brute force: the largest square k^2 <= the level's with width x height x
+    k^2 <= 2^26, at least 1."""
+    for w, h in [(1, 1), (12, 9), (1280, 720), (1600, 1000), (1920, 1080), (4096, 4096), (8192, 8192), (3, 7)]:
+        best = max([k * k for k in range(1, 10) if k * k <= spp and w * h * k * k <= 1 << 26], default=1)
+        assert still_spp(spp, w, h) == best, (spp, w, h)
+
+
+def load_example(files):
+    from gigascroll.room.files import load_room
+
+    return load_room(files / "room.glb", g.TilePack(files / "ex.pack"))
 
 
 @fuzz_settings(10)

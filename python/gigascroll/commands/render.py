@@ -201,11 +201,13 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
                             eye=cam[:3] if cam else None, target=cam[3:6] if cam else None)
     from .light_quality import light_settings_of
     settings = light_settings_of(args, spec)
-    if not options["spp"]:
-        # The knob's rays per pixel, as many of them as fit 2^26 samples (a large still at a
-        # fine level: its light, not its antialiasing, is what the level promises).
-        fit = math.isqrt(max(1, (1 << 26) // (args.width * args.height)))
-        options = {**options, "spp": min(settings.spp, fit * fit)}
+    capped = ""
+    if not options["spp"]:  # the level's rays per pixel, as many as fit 2^26 samples
+        from ..gallery.quality import still_spp
+
+        options = {**options, "spp": still_spp(settings.spp, args.width, args.height)}
+        if options["spp"] < settings.spp:
+            capped = f" (the level's {settings.spp}, capped at 2^26 samples)"
     if args.width * args.height * options["spp"] > 1 << 26:
         raise UserError(f"--room: {args.width} x {args.height} pixels x {options['spp']} spp is more "
                         "than 2^26 samples")
@@ -221,7 +223,7 @@ def _still(args, out: Path, pack, spec, options: dict, show=None, gallery=None) 
     st = gallery.stats
     ms = lambda s: f"{1000 * s:9.1f} ms"  # noqa: E731
     print(f"room {spec.name}: {gallery.triangle_count} triangles, {gallery.painting_count} paintings, "
-          f"{args.width}x{args.height}, {options['spp']} spp, lighting {args.lighting or 'baked'}")
+          f"{args.width}x{args.height}, {options['spp']} spp{capped}, lighting {args.lighting or 'baked'}")
     if gallery.lit:
         print(f"light     {settings.describe()}")
     if gallery.lit and args.no_indirect:

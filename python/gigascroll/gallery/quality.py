@@ -33,7 +33,7 @@ import numpy as np
 
 __all__ = ["LightSettings", "QUALITY_LEVELS", "DEFAULT_QUALITY", "ERROR_TARGETS", "STEPS",
            "RoomMeasures", "room_measures", "light_settings", "apply_settings", "check_quality",
-           "check_budget", "predicted_seconds"]
+           "check_budget", "predicted_seconds", "still_spp", "MAX_STILL_SAMPLES"]
 
 QUALITY_LEVELS = ("draft", "preview", "final")
 DEFAULT_QUALITY = "final"
@@ -184,6 +184,18 @@ def predicted_seconds(s: LightSettings, m: RoomMeasures) -> float:
     gathered = s.final_gather / (s.gather_stride ** 2 if s.sparse_final_gather else 1)
     rays = s.light_samples + 2 * gathered + 16 / s.gather_stride ** 2
     return SECONDS_PER_PHOTON * s.photons + SECONDS_PER_POINT_RAY * points * rays
+
+
+# The most camera samples a still takes at a level's rays per pixel (render's limit).
+MAX_STILL_SAMPLES = 1 << 26
+
+
+def still_spp(spp: int, width: int, height: int) -> int:
+    """A level's rays per pixel (a square) for a width x height still: the largest square up to
+    `spp` whose samples stay within MAX_STILL_SAMPLES, at least 1 (a large still at a fine
+    level: its light, not its antialiasing, is what the level promises)."""
+    k = min(math.isqrt(spp), math.isqrt(max(1, MAX_STILL_SAMPLES // max(1, width * height))))
+    return max(1, k) ** 2
 
 
 def light_settings(spec, quality: str | None = None, budget: float | None = None) -> LightSettings:
