@@ -56,3 +56,16 @@ def gradient_pack(path, size=(256, 128), tile_size=32, border=2):
     img[..., 1] = 60
     img[..., 2] = (40 + 200 * y)[:, None]
     return build_pack([img], path, tile_size=tile_size, border=border, names=["gradient"])
+
+
+def example_room_files(d):
+    """The example glTF room (d / "room.glb") and a pack of its two paintings in flat colours at a
+    tenth of their size (d / "ex.pack"). Returns d."""
+    from gigascroll import TilePack
+    from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
+
+    images = [np.full((h // 10, w // 10, 3), c, np.uint8)
+              for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]
+    build_pack(images, d / "ex.pack", tile_size=32, border=2, names=list(EXAMPLE_PAINTINGS))
+    write_example_room(d / "room.glb", TilePack(d / "ex.pack"))
+    return d

@@ -19,7 +19,7 @@ from gigascroll.gallery.quality import (QUALITY_LEVELS, STEPS, LightSettings, ap
                                         light_settings, predicted_seconds, room_measures)
 from gigascroll.room.spec import RoomSpec, Surface
 
-from gallery_checks import box_room
+from gallery_checks import box_room, example_room_files
 
 HOSTILE_BUDGETS = ["nan", "inf", "-inf", "-1", "0", "1e308", "1e-320", "x", ""]
 
@@ -101,14 +101,7 @@ def test_rooms_without_extent_and_bad_overrides_are_value_errors(tmp_path):
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
-
-    d = tmp_path_factory.mktemp("quality")
-    images = [np.full((h // 10, w // 10, 3), c, np.uint8)
-              for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]
-    g.build_pack(images, d / "ex.pack", tile_size=32, border=2, names=list(EXAMPLE_PAINTINGS))
-    write_example_room(d / "room.glb", g.TilePack(d / "ex.pack"))
-    return d
+    return example_room_files(tmp_path_factory.mktemp("quality"))
 
 
 def commands(d, out):
@@ -143,10 +136,7 @@ def test_the_knob_reaches_the_still(fork_worker, files, tmp_path, option):
     argv = commands(files, tmp_path / "out")["render"] + option
     o = fork_worker.run({"kind": "cli", "argv": argv}, timeout=120)
     assert o.code == 0, o.describe()
-    from gigascroll.room.files import load_room
-
-    spec = load_room(files / "room.glb", g.TilePack(files / "ex.pack"))
-    s = light_settings(spec, *(("draft",) if option[0] == "--quality" else ()),
+    s = light_settings(load_example(files), *(("draft",) if option[0] == "--quality" else ()),
                        **({"budget": 0.01} if option[0] == "--light-budget" else {}))
     assert f"({s.photons} emitted" in o.stdout and s.level in o.stdout, o.stdout
 
@@ -167,6 +157,19 @@ def test_the_levels_rays_per_pixel_are_capped_at_2_26_samples(spp):
     for w, h in [(1, 1), (12, 9), (1280, 720), (1600, 1000), (1920, 1080), (4096, 4096), (8192, 8192), (3, 7)]:
         best = max([k * k for k in range(1, 10) if k * k <= spp and w * h * k * k <= 1 << 26], default=1)
         assert still_spp(spp, w, h) == best, (spp, w, h)
+
+
+@fuzz_settings(200)
+@given(k=st.integers(1, 12), w=st.integers(1, 1 << 20), h=st.integers(1, 1 << 20))
+def test_random_still_sizes_keep_within_2_26_samples(k, w, h):
+    """Any size, huge ones included: a square of at least 1, at most the level's, within 2^26
+    samples unless even one ray a pixel is over, and no larger square would fit."""
+    count_case("light quality")
+    s = still_spp(k * k, w, h)
+    r = math.isqrt(s)
+    assert r * r == s and 1 <= r <= k
+    assert w * h * s <= 1 << 26 or s == 1
+    assert r == k or w * h * (r + 1) ** 2 > 1 << 26
 
 
 def load_example(files):

@@ -21,9 +21,8 @@ from hypothesis import strategies as st
 
 import gigascroll as g
 from gigascroll.gallery import Gallery
-from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
 
-from gallery_checks import box_room, gradient_pack
+from gallery_checks import box_room, example_room_files, gradient_pack
 
 LIGHT = 5.0  # box_room's light: radiance 5, a 1 m square at y = 2.999 facing down
 
@@ -120,12 +119,7 @@ def test_spp_must_be_a_square(pack):
 
 @pytest.fixture(scope="module")
 def room_files(tmp_path_factory):
-    d = tmp_path_factory.mktemp("cli")
-    images = [np.full((h // 10, w // 10, 3), c, np.uint8)
-              for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]
-    g.build_pack(images, d / "ex.pack", tile_size=32, border=2, names=list(EXAMPLE_PAINTINGS))
-    write_example_room(d / "room.glb", g.TilePack(d / "ex.pack"))
-    return d
+    return example_room_files(tmp_path_factory.mktemp("cli"))
 
 
 BASE = ["--width", "24", "--height", "18", "--photons", "3000", "--threads", "1"]

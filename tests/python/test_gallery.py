@@ -9,7 +9,7 @@ import pytest
 import gigascroll as g
 from gigascroll.gallery import PAINTING_REFLECTANCE, Gallery, PaintingSlot, RoomSpec, Surface, painting_albedo
 
-from gallery_checks import box_room, quad, uniform_pack
+from gallery_checks import box_room, example_room_files, quad, uniform_pack
 
 RED = (230, 30, 20)
 
@@ -246,12 +246,7 @@ def test_stream_makes_the_views_tiles_resident(tmp_path):
 
 
 def test_render_cli_renders_the_example_room_file(tmp_path, gigascroll_cli):
-    from gigascroll.room.example import EXAMPLE_PAINTINGS, write_example_room
-
-    images = [np.full((h // 10, w // 10, 3), c, np.uint8)
-              for (w, h), c in zip(EXAMPLE_PAINTINGS.values(), [(200, 60, 40), (40, 80, 200)])]
-    pack = g.build_pack(images, tmp_path / "ex.pack", tile_size=32, border=2, names=list(EXAMPLE_PAINTINGS))
-    room = write_example_room(tmp_path / "room.glb", pack)
+    room = example_room_files(tmp_path) / "room.glb"
     out = tmp_path / "still.png"
     r = gigascroll_cli("render", "--room", room, "--pack", tmp_path / "ex.pack", "--width", 40, "--height", 30,
                        "--photons", 20000, "--lighting", "unlit", "-o", out)
