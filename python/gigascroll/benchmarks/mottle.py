@@ -67,7 +67,8 @@ def add_arguments(parser) -> None:
                         help="bake(fill_covered=...): 1 and/or 0, comma-separated (default 1)")
     parser.add_argument("--timing-rounds", type=int, default=0,
                         help="re-time every configuration's light + bake this many rounds, alternated, and "
-                             "report medians and their ratio to the first configuration's (default 0: off)")
+                             "report medians (of light + bake and of the bake alone) and their ratios to the "
+                             "first configuration's (default 0: off)")
     parser.add_argument("--reference-spp", type=int, default=4096, help="Mitsuba reference spp (default 4096)")
     parser.add_argument("--timing-spp", type=int, default=16,
                         help="Mitsuba spp timed in the same run, for time ratios (default 16)")
@@ -169,17 +170,18 @@ def measure_room(mi, name: str, args, scratch: Path, configs: list[tuple]) -> di
         # light + bake re-timed in rounds, the configurations in turn (every other round in
         # reverse), so that the machine's load falls on all alike; medians, and each over the
         # first configuration's.
-        times = [[] for _ in resolved]
+        times = [[] for _ in resolved]  # (light + bake, bake) per round
         for rnd in range(args.timing_rounds):
             order = list(range(len(resolved)))
             for i in (order if rnd % 2 == 0 else order[::-1]):
-                t0, _, t2, _, _ = _light_and_bake(gal, vt, resolved[i])
-                times[i].append(t2 - t0)
-        first = float(np.median(times[0]))
+                t0, t1, t2, _, _ = _light_and_bake(gal, vt, resolved[i])
+                times[i].append((t2 - t0, t2 - t1))
+        first = np.median(np.array(times[0]), axis=0)
         for c, t in zip(r["configs"], times):
-            c["light_and_bake_median_s"] = float(np.median(t))
-            c["light_and_bake_over_first"] = float(np.median(t)) / first
-            c["light_and_bake_rounds"] = t
+            both, bake = np.median(np.array(t), axis=0)
+            c["light_and_bake_median_s"], c["bake_median_s"] = float(both), float(bake)
+            c["light_and_bake_over_first"], c["bake_over_first"] = float(both / first[0]), float(bake / first[1])
+            c["light_and_bake_rounds"] = [a for a, _ in t]
     return r
 
 
@@ -196,14 +198,19 @@ def _light_and_bake(gal, vt, cf: dict):
 
 def knob_config(spec, diag: float, level: str) -> dict:
     """The quality knob's settings for this room at `level`, as one configuration of the grid
-    (the bake's other settings its defaults)."""
+    (the bake's other settings its defaults, read from Gallery.bake's signature)."""
+    import inspect
+
+    from ..gallery import Gallery
     from ..gallery.quality import light_settings
 
     ls = light_settings(spec, quality=level)
+    bake = {k: v.default for k, v in inspect.signature(Gallery.bake).parameters.items()}
     return dict(photons=int(math.log2(ls.photons)), diagonal_over=round(diag / ls.spacing),
                 bake_samples=ls.light_samples, radius_factor=1.0, disc=False, gather_stride=ls.gather_stride,
-                fill_covered=True, indirect_filter=0.0, final_gather=ls.final_gather, hot_spots=8.0,
-                sparse=ls.sparse_final_gather, quality=level, spacing=ls.spacing)
+                fill_covered=bake["fill_covered"], indirect_filter=bake["indirect_filter"],
+                final_gather=ls.final_gather, hot_spots=bake["hot_spots"], sparse=ls.sparse_final_gather,
+                quality=level, spacing=ls.spacing)
 
 
 def _pixel_size(position: np.ndarray, cam, k: int) -> float:
@@ -336,4 +343,5 @@ def _print_room(name: str, r: dict) -> None:
               f"{', '.join(parts)}; light+bake {c['light_seconds'] + c['bake_seconds']:.2f} s "
               f"({c['light_and_bake_over_mitsuba']:.2f}x Mitsuba {r['mitsuba_timing']['spp']} spp)"
               + (f"; median of {len(c['light_and_bake_rounds'])} {c['light_and_bake_median_s']:.3f} s = "
-                 f"{c['light_and_bake_over_first']:.2f}x the first" if "light_and_bake_median_s" in c else ""))
+                 f"{c['light_and_bake_over_first']:.2f}x the first (the bake alone {c['bake_median_s']:.3f} s = "
+                 f"{c['bake_over_first']:.2f}x)" if "light_and_bake_median_s" in c else ""))
